@@ -1,0 +1,35 @@
+/// @file config.hpp
+/// @brief Version, the real-time marker and the set-up error type shared by every module.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+/// @brief Major version of glovepose.
+#define GLOVEPOSE_VERSION_MAJOR 0
+/// @brief Minor version of glovepose.
+#define GLOVEPOSE_VERSION_MINOR 1
+/// @brief Patch version of glovepose.
+#define GLOVEPOSE_VERSION_PATCH 0
+
+/// @brief Marks a per-frame entry point: it is `noexcept`, never allocates, never locks, and reports
+/// bad input through a status value. Functions without the marker are set-up code: they may allocate
+/// and throw glovepose::Error. The marker expands to nothing; it is there for readers and for grep.
+#define GLOVEPOSE_REALTIME
+
+namespace glovepose {
+
+/// @brief The library version as "major.minor.patch".
+inline constexpr const char* kVersion = "0.1.0";
+
+/// @brief The one exception type of set-up code (loading, configuring, training).
+///
+/// Its message names what is wrong and what was expected, e.g.
+/// "TraceLayout: cell 7 uses bottom trace 15, expected an index below 15".
+class Error : public std::runtime_error {
+ public:
+  /// @brief Creates an error with a message that names the problem and the expectation.
+  explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+}  // namespace glovepose

@@ -1,0 +1,164 @@
+/// @file kinematics.hpp
+/// @brief Forward kinematics of the reference hand model's chain: each phalanx's transform from
+/// the 25 finger angles.
+///
+/// Source: Tkach et al. 2017, public repository anastasia-tkach/honline-cpp-public
+/// (tracker/HModel/Model.cpp for the chain and the order of rotations, data/models/anastasia/I.txt
+/// for the rest pose), as summarised in shared/reference/hand_model.md.
+///
+/// Frames: millimetres, in the model's root frame (the palm's frame at rest). Each phalanx's bone
+/// points along its local +Y; X is the flexion axis, Z abduction, Y twist. The global pose
+/// (theta 0..5) and the wrist (theta 7, 8) cannot be sensed by the glove; a caller may pass a root
+/// transform instead.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "../config.hpp"
+#include "dofs.hpp"
+
+namespace glovepose::hand {
+
+/// @brief Phalanx ids of the reference model (also the index into a Skeleton).
+enum class Phalanx : int {
+  Hand = 0,
+  Thumb1, Thumb2, Thumb3,
+  Pinky1, Pinky2, Pinky3,
+  Ring1, Ring2, Ring3,
+  Middle1, Middle2, Middle3,
+  Index1, Index2, Index3,
+  Wrist,
+  Position,
+};
+
+/// @brief Number of phalanxes (frames) in the reference chain.
+inline constexpr std::size_t kPhalanxCount = 18;
+
+/// @brief Parent of each phalanx (-1 for the root, Position). Reference: 17 -> 0; 0 -> {1, 4, 7, 10,
+/// 13, 16}; each finger is a chain base -> middle -> tip.
+inline constexpr std::array<int, kPhalanxCount> kParent{17, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14, 0, -1};
+
+/// @brief The order in which frames are composed: every parent before its children.
+inline constexpr std::array<int, kPhalanxCount> kChainOrder{17, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+
+/// @brief A rigid rest transform typed in from the reference: rotation (row-major) and translation (mm).
+struct RestTransform {
+  std::array<double, 9> rotation;     ///< Row-major 3x3.
+  std::array<double, 3> translation;  ///< Millimetres, in the parent's frame.
+};
+
+/// @brief Rest matrices of the template hand, one per phalanx id, relative to the parent.
+///
+/// Typed in from honline-cpp-public data/models/anastasia/I.txt (shared/reference/hmodel_rest_pose_I.txt,
+/// stored there column-major; here row-major). tests/test_kinematics.cpp checks this table against
+/// that file and the posed chain against the template's sphere centres (C.txt).
+inline constexpr std::array<RestTransform, kPhalanxCount> kReferenceRest{{
+    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 0 hand (palm)
+    {{-0.305523, 0.319439, 0.897003, -0.766703, 0.4761, -0.430691, -0.564642, -0.819321, 0.0994552}, {9.72575, 3.87206, -7.16046}},  // 1 thumb base
+    {{0.997074, -0.0749142, -0.0151859, 0.0764379, 0.977199, 0.198088, 0, -0.198669, 0.980067}, {0, 37.1409, 0}},  // 2 thumb middle
+    {{0.998709, 0.0497797, 0.0100908, -0.0507922, 0.978802, 0.198413, 0, -0.198669, 0.980067}, {0, 28.436, 0}},  // 3 thumb tip
+    {{-0.900232, -0.376838, 0.218117, -0.395267, 0.917393, -0.0464125, -0.182609, -0.127996, -0.974818}, {-18.1006, 44.8872, 6.8978}},  // 4 pinky base
+    {{0.998521, -0.0543646, 0, 0.0543646, 0.998521, 0, 0, 0, 1}, {0, 31.9997, 0}},  // 5 pinky middle
+    {{0.996917, -0.0784591, 0, 0.0784591, 0.996917, 0, 0, 0, 1}, {0, 19.1319, 0}},  // 6 pinky tip
+    {{-0.98734, -0.158012, 0.0138762, -0.15862, 0.983554, -0.0863733, 0, -0.0874808, -0.996166}, {-5.93253, 49.1046, 10.7991}},  // 7 ring base
+    {{0.999922, -0.012492, 0, 0.012492, 0.999922, 0, 0, 0, 1}, {0, 37.9263, 0}},  // 8 ring middle
+    {{0.996917, -0.0784591, 0, 0.0784591, 0.996917, 0, 0, 0, 1}, {0, 23.9032, 0}},  // 9 ring tip
+    {{-0.992608, -0.0159037, -0.120316, -0.0199468, 0.999274, 0.0324749, 0.119712, 0.0346348, -0.992204}, {8.13206, 52.8925, 10.5463}},  // 10 middle base
+    {{0.996917, 0.0784591, 0, -0.0784591, 0.996917, 0, 0, 0, 1}, {0, 40.4944, 0}},  // 11 middle middle
+    {{0.999891, -0.0147668, 0, 0.0147668, 0.999891, 0, 0, 0, 1}, {0, 23.2687, 0}},  // 12 middle tip
+    {{-0.95871, 0.151187, -0.240868, 0.13524, 0.987454, 0.081515, 0.25017, 0.0455744, -0.967129}, {25.3963, 50.8191, 5.28707}},  // 13 index base
+    {{0.99978, 0.0209711, 0, -0.0209711, 0.99978, 0, 0, 0, 1}, {0, 37.0552, 0}},  // 14 index middle
+    {{0.996802, 0.0799147, 0, -0.0799147, 0.996802, 0, 0, 0, 1}, {0, 20.5967, 0}},  // 15 index tip
+    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 16 wrist
+    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 17 position (root)
+}};
+
+/// @brief Length (mm) of each finger's distal phalanx, which has no child frame to end it.
+/// Thumb, index, middle, ring, pinky; shared/reference/hand_model.md, "Phalanx lengths".
+inline constexpr std::array<double, kFingerCount> kReferenceTipLength{14.032, 12.833, 15.907, 13.601, 12.821};
+
+/// @brief Phalanx id of each finger's base (proximal) phalanx, fingers in pose-map order.
+inline constexpr std::array<Phalanx, kFingerCount> kFingerBase{Phalanx::Thumb1, Phalanx::Index1, Phalanx::Middle1,
+                                                              Phalanx::Ring1, Phalanx::Pinky1};
+
+/// @brief Global transform (root frame, mm) of every phalanx, indexed by phalanx id.
+using Skeleton = std::array<Eigen::Affine3d, kPhalanxCount>;
+
+/// @brief A hand's rest geometry: rest transform of each phalanx relative to its parent, and the
+/// distal phalanx lengths. The default is the reference template hand; the simulator scales it.
+struct HandModel {
+  std::array<Eigen::Affine3d, kPhalanxCount> rest;       ///< Per phalanx id, relative to the parent.
+  std::array<double, kFingerCount> tip_length{};         ///< Distal phalanx lengths, mm.
+
+  /// @brief The reference template hand (kReferenceRest, kReferenceTipLength).
+  static HandModel reference() {
+    HandModel model;
+    for (std::size_t p = 0; p < kPhalanxCount; ++p) {
+      const RestTransform& r = kReferenceRest[p];
+      Eigen::Matrix3d rotation;
+      rotation << r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3], r.rotation[4], r.rotation[5],
+          r.rotation[6], r.rotation[7], r.rotation[8];
+      model.rest[p] = Eigen::Affine3d::Identity();
+      model.rest[p].linear() = rotation;
+      model.rest[p].translation() = Eigen::Vector3d(r.translation[0], r.translation[1], r.translation[2]);
+    }
+    for (std::size_t f = 0; f < kFingerCount; ++f) model.tip_length[f] = kReferenceTipLength[f];
+    return model;
+  }
+};
+
+/// @brief Forward kinematics: angles -> the global transform of every phalanx.
+///
+/// Local transform of phalanx p: rest[p] * Rx(flexion) * Rz(abduction) * Ry(twist), the reference
+/// tracker's order (it right-multiplies all flexions, then all abductions, then all twists); a
+/// phalanx without a DoF on an axis gets the identity there. Global = parent global * local.
+class Kinematics {
+ public:
+  /// @brief Kinematics of the given hand (default: the reference template hand).
+  explicit Kinematics(HandModel model = HandModel::reference()) : model_(std::move(model)) {
+    flexion_.fill(-1);
+    abduction_.fill(-1);
+    twist_.fill(-1);
+    for (std::size_t i = 0; i < kDofCount; ++i) {
+      const auto p = static_cast<std::size_t>(kDofs[i].phalanx);
+      auto& slot = kDofs[i].axis == Axis::X ? flexion_ : (kDofs[i].axis == Axis::Z ? abduction_ : twist_);
+      slot[p] = static_cast<int>(i);
+    }
+  }
+
+  /// @brief The hand geometry in use.
+  const HandModel& model() const noexcept { return model_; }
+
+  /// @brief Global transform of every phalanx for the given angles (radians, kDofs order), with the
+  /// root (Position) frame at `root`.
+  GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out,
+                               const Eigen::Affine3d& root = Eigen::Affine3d::Identity()) const noexcept {
+    for (int p : kChainOrder) {
+      const auto i = static_cast<std::size_t>(p);
+      Eigen::Affine3d local = model_.rest[i];
+      if (flexion_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(flexion_[i])], Eigen::Vector3d::UnitX()));
+      if (abduction_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(abduction_[i])], Eigen::Vector3d::UnitZ()));
+      if (twist_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(twist_[i])], Eigen::Vector3d::UnitY()));
+      out[i] = kParent[i] < 0 ? root * local : out[static_cast<std::size_t>(kParent[i])] * local;
+    }
+  }
+
+  /// @brief End point of a finger's distal phalanx (its tip), in the root frame.
+  GLOVEPOSE_REALTIME Eigen::Vector3d fingertip(const Skeleton& skeleton, Finger finger) const noexcept {
+    const auto f = static_cast<std::size_t>(finger);
+    const auto tip = static_cast<std::size_t>(static_cast<int>(kFingerBase[f]) + 2);
+    return skeleton[tip] * Eigen::Vector3d(0.0, model_.tip_length[f], 0.0);
+  }
+
+ private:
+  HandModel model_;
+  std::array<int, kPhalanxCount> flexion_{};    // DoF index rotating phalanx p about X, or -1
+  std::array<int, kPhalanxCount> abduction_{};  // ... about Z
+  std::array<int, kPhalanxCount> twist_{};      // ... about Y
+};
+
+}  // namespace glovepose::hand

@@ -1,0 +1,183 @@
+#include <glovepose/sensor/readout.hpp>
+
+#include <doctest/doctest.h>
+
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "alloc_counter.hpp"
+
+using namespace glovepose;
+using namespace glovepose::sensor;
+
+namespace {
+std::shared_ptr<const GloveSolver> glove_solver() {
+  static const auto solver = std::make_shared<const GloveSolver>(TraceLayout::glauser2019());
+  return solver;
+}
+constexpr double kRowPeriod = 1.0 / (60.0 * 180.0);  // 180 rows per frame, 60 frames per second
+
+// Measurements of frame f: M times cells that drift linearly with f.
+GloveSolver::Measurements frame_measurements(int f) {
+  const GloveSolver::Capacitances cells = GloveSolver::Capacitances::LinSpaced(10.0, 20.0).array() + 0.1 * f;
+  return glove_solver()->measurement_matrix() * cells;
+}
+}  // namespace
+
+TEST_CASE("readout: a whole frame is solved at once") {
+  GloveReadout readout(glove_solver());
+  CHECK(readout.push_frame(frame_measurements(0), 0.0) == Status::Solved);
+  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 20.0);
+  CHECK((readout.frame().cells - truth).cwiseAbs().maxCoeff() < 1e-10);
+  CHECK(readout.frame().sequence == 1);
+  CHECK(readout.frame().oldest_age == 0.0);
+}
+
+TEST_CASE("readout: rows one at a time, NotReady until every row was read, then a solve every 16 updates") {
+  GloveReadout readout(glove_solver());
+  int solves = 0, not_ready = 0;
+  std::vector<int> solve_positions;
+  for (int f = 0; f < 3; ++f) {
+    const auto cm = frame_measurements(f);
+    for (int r = 0; r < 180; ++r) {
+      const int k = f * 180 + r;
+      const Status s = readout.push_row(r, cm(r), k * kRowPeriod);
+      if (s == Status::NotReady) ++not_ready;
+      if (s == Status::Solved) {
+        ++solves;
+        solve_positions.push_back(k);
+      }
+    }
+  }
+  CHECK(not_ready == 179);  // the first 179 rows: some row still unread
+  REQUIRE(solves >= 2);
+  for (std::size_t i = 1; i < solve_positions.size(); ++i) CHECK(solve_positions[i] - solve_positions[i - 1] == 16);
+  // Every 16th reading from the start (indices 15, 31, ...) once all rows were seen (index 179):
+  // 191, 207, ..., 527.
+  CHECK(solve_positions.front() == 191);
+  CHECK(solves == 22);
+}
+
+TEST_CASE("readout: the solve uses the mean of each row's last 5 readings, and reports the oldest reading's age") {
+  ReadoutConfig config;
+  config.mean_window = 5;
+  config.solve_every = 16;
+  GloveReadout readout(glove_solver(), config);
+  // Stream 12 frames row by row; stop right after a solve in the last frame.
+  Status last = Status::Ok;
+  int stop_f = -1, stop_r = -1;
+  for (int f = 0; f < 12 && stop_f < 0; ++f) {
+    const auto cm = frame_measurements(f);
+    for (int r = 0; r < 180; ++r) {
+      last = readout.push_row(r, cm(r), (f * 180 + r) * kRowPeriod);
+      if (f == 11 && last == Status::Solved) {
+        stop_f = f;
+        stop_r = r;
+        break;
+      }
+    }
+  }
+  REQUIRE(stop_f == 11);
+  // Row q <= stop_r holds frames f-4..f, row q > stop_r holds frames f-5..f-1.
+  GloveSolver::Measurements expected_mean;
+  for (int q = 0; q < 180; ++q) {
+    const int newest = q <= stop_r ? stop_f : stop_f - 1;
+    double sum = 0.0;
+    for (int k = 0; k < 5; ++k) sum += frame_measurements(newest - k)(q);
+    expected_mean(q) = sum / 5.0;
+  }
+  CHECK((readout.filtered_measurements() - expected_mean).cwiseAbs().maxCoeff() < 1e-9);
+  GloveSolver::Capacitances expected_cells;
+  REQUIRE(glove_solver()->solve(expected_mean, expected_cells) == Status::Ok);
+  CHECK((readout.frame().cells - expected_cells).cwiseAbs().maxCoeff() < 1e-9);
+  // The oldest reading used is row stop_r + 1 of frame stop_f - 5.
+  const double newest_time = (stop_f * 180 + stop_r) * kRowPeriod;
+  const double oldest_time = ((stop_f - 5) * 180 + stop_r + 1) * kRowPeriod;
+  CHECK(readout.frame().timestamp == doctest::Approx(newest_time));
+  CHECK(readout.frame().oldest_age == doctest::Approx(newest_time - oldest_time));
+  CHECK(readout.frame().oldest_age == doctest::Approx((5 * 180 - 1) * kRowPeriod));  // ~83 ms at 60 Hz
+}
+
+TEST_CASE("readout: window and solve interval are configurable") {
+  ReadoutConfig config;
+  config.mean_window = 1;
+  config.solve_every = 180;
+  GloveReadout readout(glove_solver(), config);
+  int solves = 0;
+  for (int f = 0; f < 4; ++f) {
+    const auto cm = frame_measurements(f);
+    for (int r = 0; r < 180; ++r) solves += readout.push_row(r, cm(r), (f * 180 + r) * kRowPeriod) == Status::Solved;
+  }
+  CHECK(solves == 4);  // once at the end of every full cycle
+  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 20.0).array() + 0.1 * 3;
+  CHECK((readout.frame().cells - truth).cwiseAbs().maxCoeff() < 1e-9);  // window 1: no averaging
+  config.mean_window = 0;
+  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("mean_window 0, expected at least 1"), Error);
+  config.mean_window = 5;
+  config.solve_every = 0;
+  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("solve_every 0, expected at least 1"), Error);
+  CHECK_THROWS_WITH_AS(GloveReadout(nullptr), doctest::Contains("no solver"), Error);
+}
+
+TEST_CASE("readout: bad readings get a status, are not mixed in, and the next good rows are used normally") {
+  GloveReadout clean(glove_solver());
+  GloveReadout dirty(glove_solver());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::uint32_t injected = 0;
+  for (int f = 0; f < 6; ++f) {
+    const auto cm = frame_measurements(f);
+    for (int r = 0; r < 180; ++r) {
+      const double t = (f * 180 + r) * kRowPeriod;
+      const Status expected = clean.push_row(r, cm(r), t);
+      if (f >= 2 && r % 20 == 7) {  // inject every bad kind between good rows
+        CHECK(dirty.push_row(r, nan, t) == Status::NonFinite);
+        CHECK(dirty.push_row(r, inf, t) == Status::NonFinite);
+        CHECK(dirty.push_row(r, cm(r), nan) == Status::NonFinite);
+        CHECK(dirty.push_row(r, -1.0, t) == Status::Negative);
+        CHECK(dirty.push_row(-1, cm(r), t) == Status::UnknownIndex);
+        CHECK(dirty.push_row(180, cm(r), t) == Status::UnknownIndex);
+        CHECK(dirty.push_row(r, 1e6, t - 1.0) == Status::TimestampBackwards);
+        injected += 7;
+      }
+      CHECK(dirty.push_row(r, cm(r), t) == expected);
+    }
+  }
+  CHECK(dirty.frame().sequence == clean.frame().sequence);
+  CHECK(dirty.frame().cells == clean.frame().cells);  // bit-identical: nothing bad was mixed in
+  CHECK(dirty.frame().oldest_age == clean.frame().oldest_age);
+  CHECK(injected > 0);
+
+  // A whole frame: bad rows are skipped and counted, the rest is solved.
+  GloveReadout framed(glove_solver());
+  REQUIRE(framed.push_frame(frame_measurements(0), 0.0) == Status::Solved);
+  auto cm = frame_measurements(1);
+  cm(3) = nan;
+  cm(4) = -2.0;
+  CHECK(framed.push_frame(cm, 1.0 / 60) == Status::Solved);
+  CHECK(framed.frame().rejected == 2);
+  CHECK(std::isfinite(framed.frame().cells.sum()));
+  CHECK(framed.push_frame(cm, 0.0) == Status::TimestampBackwards);
+  CHECK(framed.push_frame(cm, inf) == Status::NonFinite);
+  CHECK(framed.frame().sequence == 2);
+}
+
+TEST_CASE("readout: reset forgets all readings") {
+  GloveReadout readout(glove_solver());
+  REQUIRE(readout.push_frame(frame_measurements(0), 5.0) == Status::Solved);
+  readout.reset();
+  CHECK(readout.push_row(0, 1.0, 0.0) == Status::NotReady);  // earlier timestamp accepted after reset
+}
+
+TEST_CASE("readout: per-reading calls allocate nothing") {
+  GloveReadout readout(glove_solver());
+  const auto cm = frame_measurements(0);
+  const std::size_t allocations = test::allocations_during([&] {
+    for (int f = 0; f < 3; ++f)
+      for (int r = 0; r < 180; ++r) (void)readout.push_row(r, cm(r), (f * 180 + r) * kRowPeriod);
+    (void)readout.push_frame(cm, 1.0);
+    (void)readout.push_row(-5, std::numeric_limits<double>::quiet_NaN(), 0.0);
+  });
+  CHECK(allocations == 0);
+}
