@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -169,14 +170,10 @@ class CalibrationRange {
 
   template <typename Fail>
   static double parse_number(const std::string& text, const Fail& fail) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(text, &used);
-    } catch (const std::exception&) {
+    double value = 0.0;  // from_chars: independent of the host process's locale
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (result.ec != std::errc() || result.ptr != text.data() + text.size())
       throw fail("'" + text + "' is not a number, expected a decimal number");
-    }
-    if (used != text.size()) throw fail("'" + text + "' is not a number, expected a decimal number");
     return value;
   }
 

@@ -1,0 +1,69 @@
+// Google Benchmark cases for the U-Net forward (run: build/bench/glovepose_bench --benchmark_filter=UNet).
+// Names: BM_UNetForward[F16]/<width>/<batch>[/threads:N]. Random weights with BN statistics: the
+// time does not depend on the values.
+#include <glovepose/nn/unet.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <mutex>
+#include <random>
+#include <vector>
+
+using namespace glovepose::nn;
+
+namespace {
+TensorMap random_tensors(int width) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-0.05f, 0.05f);
+  TensorMap out;
+  for (const auto& [name, shape] : UNet<>::expected_tensors(width)) {
+    Tensor t{shape, {}};
+    t.values.resize(static_cast<std::size_t>(t.element_count()));
+    const bool variance = name.find("running_var") != std::string::npos;
+    for (float& v : t.values) v = variance ? 1.0f + u(rng) : u(rng);
+    out[name] = std::move(t);
+  }
+  return out;
+}
+
+// Networks are built once per (width, storage) and shared by the benchmark threads.
+const UNet<>& network(int width, WeightStorage storage) {
+  static std::map<std::pair<int, int>, UNet<>> cache;
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  const auto key = std::make_pair(width, static_cast<int>(storage));
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, UNet<>::from_tensors(random_tensors(width), width, 1e-5, storage)).first;
+  return it->second;
+}
+
+void run(benchmark::State& state, WeightStorage storage) {
+  const int width = static_cast<int>(state.range(0));
+  const int batch = static_cast<int>(state.range(1));
+  const UNet<>& net = network(width, storage);
+  // Frames of a batch go through in chunks that keep the activations in cache.
+  const int chunk = std::min(batch, 32);
+  auto ws = net.make_workspace(chunk);
+  std::mt19937 rng(static_cast<unsigned>(state.thread_index()) + 5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> in(static_cast<std::size_t>(batch) * kUNetInputs), out(static_cast<std::size_t>(batch) * kUNetOutputs);
+  for (float& v : in) v = u(rng);
+  for (auto _ : state) {
+    for (int f = 0; f < batch; f += chunk)
+      benchmark::DoNotOptimize(net.forward(in.data() + static_cast<long>(f) * kUNetInputs, out.data() + static_cast<long>(f) * kUNetOutputs,
+                                           std::min(chunk, batch - f), ws));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * batch);
+  state.counters["weight_MB"] = static_cast<double>(net.weight_bytes()) / 1e6;
+}
+}  // namespace
+
+static void BM_UNetForward(benchmark::State& state) { run(state, WeightStorage::F32); }
+static void BM_UNetForwardF16(benchmark::State& state) { run(state, WeightStorage::F16); }
+
+BENCHMARK(BM_UNetForward)->ArgNames({"", ""})->Args({48, 1})->Args({64, 1})->Args({100, 1})->Args({196, 1})->Args({64, 1024})->UseRealTime();
+BENCHMARK(BM_UNetForward)->Args({64, 1024})->Threads(2)->UseRealTime();
+BENCHMARK(BM_UNetForwardF16)->Args({48, 1})->Args({64, 1})->Args({100, 1})->Args({64, 1024})->UseRealTime();
+BENCHMARK(BM_UNetForwardF16)->Args({64, 1024})->Threads(2)->UseRealTime();

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs what the peer benchmark (bench/peers/run.sh) needs, skipping what is already present:
+#   Debian: python3-torch, python3-numpy (the reference model, ONNX export, PyTorch timing; always run
+#           with /usr/bin/python3), libopenblas0-pthread (Debian's torch is built against the generic
+#           libblas.so.3; without OpenBLAS that is netlib's reference BLAS and PyTorch's transposed
+#           convolutions run several times slower than PyTorch normally does), nodejs + npm if missing.
+#   npm:    onnxruntime-node (version pinned in package.json / package-lock.json) into
+#           bench/peers/node_modules, with --ignore-scripts: its CPU binary ships inside the package,
+#           the postinstall script would only fetch optional GPU binaries.
+# torch.onnx.export of PyTorch 1.13 needs no `onnx` Python module, so python3-onnx is not installed.
+# Nothing is downloaded at run time.
+set -euo pipefail
+cd "$(dirname "$0")"
+packages=(python3-torch python3-numpy libopenblas0-pthread)
+command -v node >/dev/null || packages+=(nodejs)
+command -v npm >/dev/null || packages+=(npm)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "peers/setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+want=$(node -p "require('./package.json').dependencies['onnxruntime-node']")
+have=$(node -p "try { require('./node_modules/onnxruntime-node/package.json').version } catch (e) { '' }")
+if [ "$have" != "$want" ]; then
+  echo "peers/setup: npm ci --ignore-scripts (onnxruntime-node $want)"
+  npm ci --ignore-scripts --no-audit --no-fund
+fi
+node -e "require('onnxruntime-node')" || { echo "peers/setup: onnxruntime-node does not load" >&2; exit 1; }
+/usr/bin/python3 -c "import torch, numpy" || { echo "peers/setup: /usr/bin/python3 cannot import torch/numpy" >&2; exit 1; }
+echo "peers/setup: ready (onnxruntime-node $want, torch $(/usr/bin/python3 -c 'import torch; print(torch.__version__)'))"

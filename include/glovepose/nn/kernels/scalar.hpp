@@ -1,0 +1,64 @@
+/// @file scalar.hpp
+/// @brief The scalar reference kernels: plain loops, the definition the SIMD kernels are tested
+/// against (tests/test_kernels.cpp).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "../../config.hpp"
+#include "weight_load.hpp"
+
+namespace glovepose::nn::kernels {
+
+/// @brief Position of W(row, col) of a k x n matrix packed in column panels of `panel` columns:
+/// panel p = col / panel starts at k * p * panel and holds k rows of min(panel, n - p * panel) values.
+constexpr long panel_index(int row, int col, int k, int n, int panel) noexcept {
+  const int p = col / panel;
+  const int width = n - p * panel < panel ? n - p * panel : panel;
+  return static_cast<long>(k) * p * panel + static_cast<long>(row) * width + (col - p * panel);
+}
+
+/// @brief Plain C++ kernels.
+struct ScalarBackend {
+  /// @brief Name for reports.
+  static constexpr const char* name = "scalar";
+  /// @brief Output channels are padded to a multiple of this (1: no padding needed).
+  static constexpr int lanes = 1;
+  /// @brief Width of the column panels weights are packed in (see panel_index()).
+  static constexpr int panel = 8;
+
+  /// @brief Row-gathered matrix product: for every row r, y[r][0..n) += x[r][0..k) * W, where the
+  /// k x n matrix W is packed in column panels of `panel` columns (the last one narrower), each
+  /// panel k rows of its width, row-major (panel_index()).
+  template <typename W>
+  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
+                                           int n) noexcept {
+    for (int r = 0; r < rows; ++r)
+      for (int kk = 0; kk < k; ++kk) {
+        const float xv = x[r][kk];
+        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_value(w[panel_index(kk, j, k, n, panel)]);
+      }
+  }
+
+  /// @brief For `frames` frames f: sums[f] = sum over terms i of x[i][f * x_stride + 0..k[i]) .
+  /// w[i][0..k[i]): one output channel gathered over all its taps and skip sources, for frames
+  /// whose rows lie x_stride floats apart.
+  template <typename W>
+  GLOVEPOSE_REALTIME static void dot_terms(const float* const* x, long x_stride, const W* const* w, const int* k, int terms,
+                                           int frames, float* sums) noexcept {
+    for (int f = 0; f < frames; ++f) {
+      float sum = 0.0f;
+      for (int i = 0; i < terms; ++i)
+        for (int kk = 0; kk < k[i]; ++kk) sum += x[i][f * x_stride + kk] * weight_value(w[i][kk]);
+      sums[f] = sum;
+    }
+  }
+
+  /// @brief In-place max(0, v).
+  GLOVEPOSE_REALTIME static void relu(float* data, int count) noexcept {
+    for (int i = 0; i < count; ++i) data[i] = std::max(data[i], 0.0f);
+  }
+};
+
+}  // namespace glovepose::nn::kernels

@@ -1,0 +1,205 @@
+/// @file simd.hpp
+/// @brief The xsimd kernels, for the instruction set the including code is compiled for
+/// (xsimd::default_arch: AVX-512 on the development machine with GLOVEPOSE_NATIVE, SSE2 on baseline
+/// x86-64). Same contracts as ScalarBackend, which is their reference.
+///
+/// The product y[r] += x[r] W is blocked as R rows x V SIMD vectors of output channels, the
+/// R * V accumulators held in registers while k runs: each weight vector is loaded once per block
+/// and used R times. R * V is kept >= 8 so that enough independent FMA chains hide the FMA latency
+/// (4 cycles, 2 per cycle) even when a tap joins a single row, as in the 4x4 layers at batch 1.
+#pragma once
+
+#include <algorithm>
+
+#include <xsimd/xsimd.hpp>
+
+#include "../../config.hpp"
+#include "weight_load.hpp"
+
+namespace glovepose::nn::kernels {
+
+/// @brief xsimd kernels for xsimd's default architecture.
+struct SimdBackend {
+  /// @brief The SIMD architecture compiled for.
+  using Arch = xsimd::default_arch;
+  /// @brief A vector of floats.
+  using Batch = xsimd::batch<float, Arch>;
+  /// @brief Name for reports.
+  static constexpr const char* name = "simd";
+  /// @brief Floats per vector; output channels are padded to a multiple of it.
+  static constexpr int lanes = static_cast<int>(Batch::size);
+
+  /// @brief Width of the column panels weights are packed in: 8 vectors.
+  static constexpr int panel = 8 * lanes;
+
+  /// @brief See ScalarBackend::gemm_rows. Requires n to be a multiple of `lanes`.
+  template <typename W>
+  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
+                                           int n) noexcept {
+    // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches): 6 x 4.
+    const int max_rows = rows <= 12 ? rows : 6;
+    for (int p0 = 0; p0 < n; p0 += panel) {
+      const int width = std::min(panel, n - p0);  // this panel's row length
+      const W* wp = w + static_cast<long>(k) * p0;
+      for (int j = 0; j < width;) {
+        const int v = vectors_for(max_rows, (width - j) / lanes);  // the same column block for all rows
+        for (int r = 0; r < rows; r += max_rows)
+          dispatch(std::min(max_rows, rows - r), v, x + r, y + r, wp + j, k, width, p0 + j);
+        j += v * lanes;
+      }
+    }
+  }
+
+  /// @brief See ScalarBackend::dot_terms. Frames go in blocks of up to 8: each weight vector is
+  /// loaded once per block, the block's accumulators are independent chains, and each frame needs a
+  /// single horizontal sum at the end.
+  template <typename W>
+  GLOVEPOSE_REALTIME static void dot_terms(const float* const* x, long x_stride, const W* const* w, const int* k, int terms,
+                                           int frames, float* sums) noexcept {
+    int f = 0;
+    for (; f + 8 <= frames; f += 8) dot_block<8>(x, x_stride, f, w, k, terms, sums + f);
+    for (; f + 4 <= frames; f += 4) dot_block<4>(x, x_stride, f, w, k, terms, sums + f);
+    for (; f < frames; ++f) sums[f] = dot_single(x, x_stride, f, w, k, terms);
+  }
+
+  /// @brief In-place max(0, v); count must be a multiple of `lanes`.
+  GLOVEPOSE_REALTIME static void relu(float* data, int count) noexcept {
+    const Batch zero(0.0f);
+    // max(zero, v), in this order, passes a NaN v through (as the scalar max does), so a numeric
+    // failure is detected at the output instead of being hidden.
+    for (int i = 0; i < count; i += lanes) xsimd::max(zero, Batch::load_unaligned(data + i)).store_unaligned(data + i);
+  }
+
+ private:
+  // Column vectors per block: enough accumulators (R * V >= 8), at most 32 registers in use
+  // (V = 8 for R = 1, V <= 4 for R <= 6, V <= 2 for R <= 12). dispatch() computes any (R, V)
+  // correctly, splitting a column block it has no register budget for.
+  static int vectors_for(int rows, int vectors_left) noexcept {
+    const int wanted = rows == 1 ? 8 : (rows <= 6 ? 4 : 2);
+    int v = wanted;
+    while (v > vectors_left) v /= 2;
+    return std::max(v, 1);
+  }
+
+  // One frame: four rotating accumulators hide the FMA latency.
+  template <typename W>
+  static float dot_single(const float* const* x, long x_stride, int frame, const W* const* w, const int* k, int terms) noexcept {
+    Batch acc[4] = {Batch(0.0f), Batch(0.0f), Batch(0.0f), Batch(0.0f)};
+    float tail = 0.0f;
+    for (int i = 0; i < terms; ++i) {
+      const float* xi = x[i] + frame * x_stride;
+      const int full = k[i] / lanes * lanes;
+      int kk = 0;
+      for (; kk + 4 * lanes <= full; kk += 4 * lanes)
+#pragma GCC unroll 4
+        for (int c = 0; c < 4; ++c)
+          acc[c] = xsimd::fma(Batch::load_unaligned(xi + kk + c * lanes), load_weights<Arch>(w[i] + kk + c * lanes), acc[c]);
+      for (int c = 0; kk < full; kk += lanes, ++c) acc[c] = xsimd::fma(Batch::load_unaligned(xi + kk), load_weights<Arch>(w[i] + kk), acc[c]);
+      for (; kk < k[i]; ++kk) tail += xi[kk] * weight_value(w[i][kk]);
+    }
+    return xsimd::hadd((acc[0] + acc[1]) + (acc[2] + acc[3])) + tail;
+  }
+
+  template <int F, typename W>
+  static void dot_block(const float* const* x, long x_stride, int first, const W* const* w, const int* k, int terms,
+                        float* sums) noexcept {
+    Batch acc[F];
+#pragma GCC unroll 8
+    for (int f = 0; f < F; ++f) acc[f] = Batch(0.0f);
+    float tail[F] = {};
+    for (int i = 0; i < terms; ++i) {
+      const float* xi = x[i] + first * x_stride;
+      const int full = k[i] / lanes * lanes;
+      int kk = 0;
+      for (; kk < full; kk += lanes) {
+        const Batch wv = load_weights<Arch>(w[i] + kk);
+#pragma GCC unroll 8
+        for (int f = 0; f < F; ++f) acc[f] = xsimd::fma(Batch::load_unaligned(xi + f * x_stride + kk), wv, acc[f]);
+      }
+      for (; kk < k[i]; ++kk)
+        for (int f = 0; f < F; ++f) tail[f] += xi[f * x_stride + kk] * weight_value(w[i][kk]);
+    }
+    for (int f = 0; f < F; ++f) sums[f] = xsimd::hadd(acc[f]) + tail[f];
+  }
+
+  template <int R, int V, typename W>
+  static void block(const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
+    // The R x V accumulators must live in registers: the loops over r and v are unrolled fully.
+    Batch acc[R][V];
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r)
+#pragma GCC unroll 8
+      for (int v = 0; v < V; ++v) acc[r][v] = Batch(0.0f);
+    const float* xr[R];
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) xr[r] = x[r];
+    for (int kk = 0; kk < k; ++kk) {
+      const W* wk = w + static_cast<long>(kk) * ldw;
+      Batch wv[V];
+#pragma GCC unroll 8
+      for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
+#pragma GCC unroll 16
+      for (int r = 0; r < R; ++r) {
+        const Batch xb(xr[r][kk]);
+#pragma GCC unroll 8
+        for (int v = 0; v < V; ++v) acc[r][v] = xsimd::fma(xb, wv[v], acc[r][v]);
+      }
+    }
+    for (int r = 0; r < R; ++r)
+      for (int v = 0; v < V; ++v) {
+        float* out = y[r] + col + v * lanes;
+        (Batch::load_unaligned(out) + acc[r][v]).store_unaligned(out);
+      }
+  }
+
+  template <int V, typename W>
+  static void dispatch_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
+    switch (rows) {
+      case 1: block<1, V>(x, y, w, k, ldw, col); break;
+      case 2: block<2, V>(x, y, w, k, ldw, col); break;
+      case 3: block<3, V>(x, y, w, k, ldw, col); break;
+      case 4: block<4, V>(x, y, w, k, ldw, col); break;
+      case 5: block<5, V>(x, y, w, k, ldw, col); break;
+      case 6: block<6, V>(x, y, w, k, ldw, col); break;
+      default:
+        if constexpr (V > 2) {  // 7..12 rows hold at most 2 vectors of accumulators each: two halves
+          dispatch_many_rows<2>(rows, x, y, w, k, ldw, col);
+          dispatch_many_rows<2>(rows, x, y, w + 2 * lanes, k, ldw, col + 2 * lanes);
+        } else {
+          dispatch_many_rows<V>(rows, x, y, w, k, ldw, col);
+        }
+        break;
+    }
+  }
+
+  template <int V, typename W>
+  static void dispatch_many_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
+    switch (rows) {
+      case 7: block<7, V>(x, y, w, k, ldw, col); break;
+      case 8: block<8, V>(x, y, w, k, ldw, col); break;
+      case 9: block<9, V>(x, y, w, k, ldw, col); break;
+      case 10: block<10, V>(x, y, w, k, ldw, col); break;
+      case 11: block<11, V>(x, y, w, k, ldw, col); break;
+      default: block<12, V>(x, y, w, k, ldw, col); break;
+    }
+  }
+
+  template <typename W>
+  static void dispatch(int rows, int v, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
+    switch (v) {
+      case 8:  // vectors_for() chooses 8 for single rows; any other row count as two halves of 4
+        if (rows == 1) {
+          block<1, 8>(x, y, w, k, ldw, col);
+        } else {
+          dispatch_rows<4>(rows, x, y, w, k, ldw, col);
+          dispatch_rows<4>(rows, x, y, w + 4 * lanes, k, ldw, col + 4 * lanes);
+        }
+        break;
+      case 4: dispatch_rows<4>(rows, x, y, w, k, ldw, col); break;
+      case 2: dispatch_rows<2>(rows, x, y, w, k, ldw, col); break;
+      default: dispatch_rows<1>(rows, x, y, w, k, ldw, col); break;
+    }
+  }
+};
+
+}  // namespace glovepose::nn::kernels

@@ -1,0 +1,112 @@
+/// @file model.hpp
+/// @brief A model file: the U-Net plus the metadata the estimator needs (weights_format.md).
+#pragma once
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../config.hpp"
+#include "unet.hpp"
+#include "weights.hpp"
+
+namespace glovepose::nn {
+
+/// @brief The metadata of a model file.
+struct ModelInfo {
+  std::string architecture;                            ///< "unet".
+  int width = 0;                                       ///< U-Net base width.
+  std::string glove;                                   ///< Sensor layout id the model was trained for.
+  double bn_eps = 1e-5;                                ///< Batch-norm epsilon.
+  std::vector<double> joint_limits_min;                ///< Per DoF, radians: what output -1 means.
+  std::vector<double> joint_limits_max;                ///< Per DoF, radians: what output +1 means.
+  std::optional<std::vector<double>> calibration_min;  ///< Per cell, training-set minimum (optional).
+  std::optional<std::vector<double>> calibration_max;  ///< Per cell, training-set maximum (optional).
+
+  /// @brief Reads and checks the metadata; throws glovepose::Error naming the key that is missing or wrong.
+  static ModelInfo from(const WeightFile& file) {
+    ModelInfo info;
+    if (file.meta("format") != "glovepose-model")
+      throw Error("metadata 'format' is '" + file.meta("format") + "', expected 'glovepose-model'");
+    if (file.meta("format_version") != "1")
+      throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
+    info.architecture = file.meta("architecture");
+    if (info.architecture != "unet") throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet'");
+    info.width = parse_int(file.meta("width"), "width");
+    info.glove = file.meta("glove");
+    info.bn_eps = parse_double(file.meta("bn_eps"), "bn_eps");
+    info.joint_limits_min = file.meta_numbers("joint_limits_min");
+    info.joint_limits_max = file.meta_numbers("joint_limits_max");
+    if (info.joint_limits_min.size() != 25 || info.joint_limits_max.size() != 25)
+      throw Error("metadata 'joint_limits_min'/'joint_limits_max' hold " + std::to_string(info.joint_limits_min.size()) + "/" +
+                  std::to_string(info.joint_limits_max.size()) + " numbers, expected 25 each");
+    if (file.metadata.count("calibration_min") || file.metadata.count("calibration_max")) {
+      info.calibration_min = file.meta_numbers("calibration_min");
+      info.calibration_max = file.meta_numbers("calibration_max");
+      if (info.calibration_min->size() != info.calibration_max->size())
+        throw Error("metadata 'calibration_min' and 'calibration_max' differ in length");
+    }
+    return info;
+  }
+
+  /// @brief Writes the metadata into a file's metadata map.
+  void to(WeightFile& file) const {
+    file.metadata["format"] = "glovepose-model";
+    file.metadata["format_version"] = "1";
+    file.metadata["architecture"] = architecture;
+    file.metadata["width"] = std::to_string(width);
+    file.metadata["glove"] = glove;
+    char eps[32];
+    std::snprintf(eps, sizeof eps, "%.17g", bn_eps);
+    file.metadata["bn_eps"] = eps;
+    file.metadata["joint_limits_min"] = WeightFile::format_numbers(joint_limits_min);
+    file.metadata["joint_limits_max"] = WeightFile::format_numbers(joint_limits_max);
+    if (calibration_min) file.metadata["calibration_min"] = WeightFile::format_numbers(*calibration_min);
+    if (calibration_max) file.metadata["calibration_max"] = WeightFile::format_numbers(*calibration_max);
+  }
+
+ private:
+  static int parse_int(const std::string& text, const char* key) {
+    std::size_t used = 0;
+    int v = 0;
+    try {
+      v = std::stoi(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || v < 1 || v > kMaxWidth)
+      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected an integer 1.." + std::to_string(kMaxWidth));
+    return v;
+  }
+  static double parse_double(const std::string& text, const char* key) {
+    double v = 0;
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), v);  // locale-independent
+    if (result.ec != std::errc() || result.ptr != text.data() + text.size() || !(v > 0) || !std::isfinite(v))
+      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected a positive number");
+    return v;
+  }
+};
+
+/// @brief A loaded model: the network and its metadata.
+template <typename Backend = kernels::SimdBackend>
+struct Model {
+  ModelInfo info;      ///< Metadata.
+  UNet<Backend> unet;  ///< The network.
+
+  /// @brief Loads a model file, with weights kept as `storage`.
+  static Model load(const std::string& path, WeightStorage storage = WeightStorage::F32) {
+    const WeightFile file = WeightFile::read(path);
+    try {
+      ModelInfo info = ModelInfo::from(file);
+      UNet<Backend> net = UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
+      return Model{std::move(info), std::move(net)};
+    } catch (const Error& e) {
+      throw Error("model file '" + path + "': " + e.what());
+    }
+  }
+};
+
+}  // namespace glovepose::nn

@@ -1,0 +1,79 @@
+/// @file tensor.hpp
+/// @brief Aligned storage for weights and activations.
+#pragma once
+
+#include <cstddef>
+#include <cstdlib>
+#include <limits>
+#include <new>
+#include <vector>
+
+namespace glovepose::nn {
+
+/// @brief Alignment of every weight and activation buffer: one cache line, enough for AVX-512.
+inline constexpr std::size_t kAlignment = 64;
+
+/// @brief Minimal allocator returning kAlignment-aligned memory (set-up code only).
+template <typename T>
+struct AlignedAllocator {
+  /// @brief Element type.
+  using value_type = T;
+  AlignedAllocator() noexcept = default;
+  /// @brief Rebinding constructor.
+  template <typename U>
+  AlignedAllocator(const AlignedAllocator<U>&) noexcept {}
+  /// @brief Allocates n elements aligned to kAlignment.
+  T* allocate(std::size_t n) {
+    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_alloc();
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{kAlignment}));
+  }
+  /// @brief Frees memory from allocate().
+  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t{kAlignment}); }
+  /// @brief All instances are interchangeable.
+  template <typename U>
+  bool operator==(const AlignedAllocator<U>&) const noexcept { return true; }
+  /// @brief All instances are interchangeable.
+  template <typename U>
+  bool operator!=(const AlignedAllocator<U>&) const noexcept { return false; }
+};
+
+/// @brief A contiguous, kAlignment-aligned vector.
+template <typename T>
+using AlignedVector = std::vector<T, AlignedAllocator<T>>;
+
+/// @brief Rounds n up to a multiple of m.
+constexpr int round_up(int n, int m) noexcept { return (n + m - 1) / m * m; }
+
+}  // namespace glovepose::nn
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace glovepose::nn {
+
+/// @brief A named tensor as read from or written to a weight file: shape and values, row-major,
+/// widened to float (set-up code).
+struct Tensor {
+  std::vector<std::int64_t> shape;  ///< Dimensions, outermost first.
+  std::vector<float> values;        ///< product(shape) values, row-major.
+
+  /// @brief Number of elements implied by the shape.
+  std::int64_t element_count() const noexcept {
+    std::int64_t n = 1;
+    for (std::int64_t d : shape) n *= d;
+    return n;
+  }
+};
+
+/// @brief Tensors by name (PyTorch state_dict names).
+using TensorMap = std::map<std::string, Tensor>;
+
+/// @brief "[a, b, c]" for messages.
+inline std::string shape_string(const std::vector<std::int64_t>& shape) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+}  // namespace glovepose::nn

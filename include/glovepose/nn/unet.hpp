@@ -1,0 +1,580 @@
+/// @file unet.hpp
+/// @brief The paper's U-Net (Table 6; our reading in weights_format.md): 2x5x5 stretch maps ->
+/// 1x5x5 pose map, on fixed grids.
+///
+/// Load time: every batch norm is folded into the convolution before it, each layer's weights are
+/// packed per useful tap (conv_plan.hpp; taps that only meet zero padding are dropped), output
+/// channels are padded to the SIMD width, and the weights are stored as F32 (exact) or F16 (half
+/// the bytes to stream at batch 1; converted to F32 in registers). The loaded model is immutable
+/// and may be shared by any number of threads; each stream owns a Workspace.
+///
+/// Activations live as [position][frame][channel]: a layer is, per useful tap and per skip
+/// source, one matrix product of the (frame x channel) rows it joins with the tap's weight block,
+/// which is also how concatenation costs nothing (each source is its own block of input channels).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "../config.hpp"
+#include "../status.hpp"
+#include "conv_plan.hpp"
+#include "half.hpp"
+#include "kernels/scalar.hpp"
+#include "kernels/simd.hpp"
+#include "tensor.hpp"
+
+namespace glovepose::nn {
+
+/// @brief How the weights are kept in memory.
+enum class WeightStorage : unsigned char {
+  F32,  ///< Exact: the file's values (with BN folded) in float.
+  F16,  ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
+};
+
+/// @brief Named widths: the paper's three sizes (Tables 4/5: about 3M, 13M, 50M parameters) and w = 64.
+struct UNetPreset {
+  const char* name;  ///< Preset name.
+  int width;         ///< Base width w.
+};
+/// @brief The presets.
+inline constexpr std::array<UNetPreset, 4> kUNetPresets{{{"paper3m", 48}, {"w64", 64}, {"paper13m", 100}, {"paper50m", 196}}};
+
+/// @brief Largest base width accepted (w = 4096 is already ~22G parameters).
+inline constexpr int kMaxWidth = 4096;
+/// @brief Largest batch a workspace may hold.
+inline constexpr int kMaxBatch = 1 << 16;
+
+/// @brief Values in one network input (2 x 5 x 5, channel-major).
+inline constexpr int kUNetInputs = 50;
+/// @brief Values in one network output (1 x 5 x 5).
+inline constexpr int kUNetOutputs = 25;
+
+/// @brief The U-Net.
+/// @tparam Backend kernels::SimdBackend (default) or kernels::ScalarBackend (the reference).
+template <typename Backend = kernels::SimdBackend>
+class UNet {
+ public:
+  /// @brief Builds the network of width `width` from PyTorch-named tensors (weights_format.md).
+  /// Throws glovepose::Error naming the tensor when one is missing, extra, of the wrong shape, or
+  /// not finite.
+  static UNet from_tensors(const TensorMap& tensors, int width, double bn_eps = 1e-5,
+                           WeightStorage storage = WeightStorage::F32) {
+    if (width < 1 || width > kMaxWidth)
+      throw Error("UNet: width " + std::to_string(width) + ", expected 1.." + std::to_string(kMaxWidth));
+    if (!(bn_eps > 0.0)) throw Error("UNet: bn_eps must be > 0");
+    UNet net;
+    net.width_ = width;
+    net.storage_ = storage;
+    net.define_buffers();
+    const std::vector<LayerSpec> specs = layer_specs(width);
+    check_tensor_names(tensors, specs, width);
+    for (const LayerSpec& spec : specs) net.layers_.push_back(net.pack(spec, tensors, bn_eps));
+    for (const auto& [name, t] : tensors)
+      if (name.find("running_") == std::string::npos) net.parameter_count_ += static_cast<std::size_t>(t.element_count());
+    return net;
+  }
+
+  /// @brief The tensor names and shapes a network of width `width` is made of.
+  static std::map<std::string, std::vector<std::int64_t>> expected_tensors(int width) {
+    std::map<std::string, std::vector<std::int64_t>> shapes;
+    for (const LayerSpec& s : layer_specs(width)) {
+      const std::int64_t in = s.in_channels(width), out = s.out_channels;
+      const std::int64_t k = s.geometry.kernel;
+      shapes[s.conv + ".weight"] = s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k}
+                                                         : std::vector<std::int64_t>{out, in, k, k};
+      shapes[s.conv + ".bias"] = {out};
+      if (!s.bn.empty())
+        for (const char* part : {".weight", ".bias", ".running_mean", ".running_var"}) shapes[s.bn + part] = {out};
+    }
+    return shapes;
+  }
+
+  /// @brief Base width w.
+  int width() const noexcept { return width_; }
+  /// @brief Weight storage chosen at load.
+  WeightStorage storage() const noexcept { return storage_; }
+  /// @brief Trainable parameters of the PyTorch model (conv weights and biases, BN scale and shift).
+  std::size_t parameter_count() const noexcept { return parameter_count_; }
+  /// @brief Weights kept after folding BN and dropping taps that only meet padding (unpadded count).
+  std::size_t stored_weight_count() const noexcept {
+    std::size_t n = 0;
+    for (const PackedLayer& l : layers_) n += l.stored_weights;
+    return n;
+  }
+  /// @brief Multiply-adds per frame that meet real input (padding skipped; im2col's zero taps and
+  /// channel padding not counted): the arithmetic floor of a forward.
+  std::size_t mac_count() const noexcept {
+    std::size_t n = 0;
+    for (const PackedLayer& l : layers_) {
+      const std::size_t cout = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].channels);
+      std::size_t cin = 0;
+      for (int s : l.sources) cin += static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].channels);
+      std::size_t pairs = 0;
+      if (l.mode == Mode::Im2col) {
+        for (int source : l.receptive) pairs += source >= 0;
+      } else {
+        for (const PackedTap& t : l.taps) pairs += t.out_positions.size();
+      }
+      n += pairs * cin * cout;
+    }
+    return n;
+  }
+
+  /// @brief Bytes of packed weights streamed per forward at batch 1 (channel padding included).
+  std::size_t weight_bytes() const noexcept {
+    std::size_t n = 0;
+    for (const PackedLayer& l : layers_) n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t);
+    return n;
+  }
+
+  /// @brief Per-stream activations and scratch for batches of up to `capacity` frames.
+  class Workspace {
+   public:
+    /// @brief Largest batch this workspace serves.
+    int capacity() const noexcept { return capacity_; }
+
+   private:
+    friend class UNet;
+    int capacity_ = 0;
+    int width_ = 0;  // the network it was made for: buffer sizes follow from width and capacity
+    std::vector<AlignedVector<float>> buffers;
+    std::vector<const float*> x_rows;
+    std::vector<float*> y_rows;
+    std::vector<const float*> w32_terms;          // Gather: weight block per term (F32 storage)
+    std::vector<const std::uint16_t*> w16_terms;  // ... (F16 storage)
+    std::vector<int> k_terms;          // Gather: length per term
+    AlignedVector<float> columns;      // Im2col: receptive fields, one row per (position, frame)
+    std::vector<float> sums;           // Gather: one output per frame
+  };
+
+  /// @brief A workspace for batches of up to `capacity` frames (set-up: allocates).
+  Workspace make_workspace(int capacity = 1) const {
+    if (capacity < 1 || capacity > kMaxBatch)
+      throw Error("UNet::make_workspace: capacity " + std::to_string(capacity) + ", expected 1.." + std::to_string(kMaxBatch));
+    Workspace ws;
+    ws.capacity_ = capacity;
+    ws.width_ = width_;
+    for (const BufferSpec& b : buffers_)
+      ws.buffers.emplace_back(static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(capacity) *
+                                  static_cast<std::size_t>(b.stride),
+                              0.0f);
+    std::size_t rows = 0, columns = 0, terms = 0;
+    for (const PackedLayer& l : layers_) {
+      const BufferSpec& out = buffers_[static_cast<std::size_t>(l.out_buffer)];
+      const std::size_t outputs = static_cast<std::size_t>(out.positions) * static_cast<std::size_t>(capacity);
+      for (const PackedTap& t : l.taps) rows = std::max(rows, t.out_positions.size() * static_cast<std::size_t>(capacity));
+      if (l.mode == Mode::Im2col) {
+        rows = std::max(rows, outputs);
+        columns = std::max(columns, outputs * static_cast<std::size_t>(l.kernel_taps) *
+                                        static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.sources[0])].channels));
+      }
+      for (const auto& list : l.terms) terms = std::max(terms, list.size() * l.sources.size());
+    }
+    rows = std::max(rows, terms);
+    ws.x_rows.resize(rows);
+    ws.y_rows.resize(rows);
+    ws.w32_terms.resize(terms);
+    ws.w16_terms.resize(terms);
+    ws.k_terms.resize(terms);
+    ws.columns.resize(columns);
+    ws.sums.resize(static_cast<std::size_t>(capacity));
+    return ws;
+  }
+
+  /// @brief One frame: `input` 2x5x5 (channel, row, column) -> `output` 1x5x5 in (-1, 1).
+  /// Returns Status::NonFinite (output untouched) for a NaN or infinite input or result,
+  /// Status::SizeMismatch for a workspace of another network or too small; never allocates.
+  GLOVEPOSE_REALTIME Status forward(const std::array<float, kUNetInputs>& input, std::array<float, kUNetOutputs>& output,
+                                    Workspace& ws) const noexcept {
+    return forward(input.data(), output.data(), 1, ws);
+  }
+
+  /// @brief `frames` frames (each 2x5x5 in, 1x5x5 out, PyTorch's NCHW order), frames <= capacity.
+  GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws) const noexcept {
+    if (frames < 1 || frames > ws.capacity_ || ws.width_ != width_ || ws.buffers.size() != buffers_.size()) return Status::SizeMismatch;
+    for (long i = 0; i < static_cast<long>(frames) * kUNetInputs; ++i)
+      if (!std::isfinite(input[i])) return Status::NonFinite;
+    // NCHW -> [position][frame][channel]
+    float* in = ws.buffers[0].data();
+    for (int f = 0; f < frames; ++f)
+      for (int c = 0; c < 2; ++c)
+        for (int p = 0; p < 25; ++p) in[(p * frames + f) * 2 + c] = input[f * kUNetInputs + c * 25 + p];
+    for (const PackedLayer& layer : layers_) run(layer, frames, ws);
+    const float* out = ws.buffers.back().data();
+    for (long i = 0; i < static_cast<long>(frames) * kUNetOutputs; ++i)
+      if (!std::isfinite(out[i])) return Status::NonFinite;  // an overflow inside the network: output untouched
+    for (int f = 0; f < frames; ++f)
+      for (int p = 0; p < 25; ++p) output[f * kUNetOutputs + p] = out[p * frames + f];
+    return Status::Ok;
+  }
+
+  /// @brief Many frames for evaluation: splits them over `threads` threads, each with its own
+  /// workspace, in chunks of `chunk` frames. Set-up code: allocates; throws glovepose::Error naming
+  /// the first frame with a non-finite input.
+  void forward_batch(const float* input, float* output, long frames, int threads = 1, int chunk = 32) const {
+    if (frames <= 0) return;
+    if (threads < 1 || chunk < 1) throw Error("UNet::forward_batch: threads and chunk must be >= 1");
+    for (long i = 0; i < frames * kUNetInputs; ++i)
+      if (!std::isfinite(input[i])) throw Error("UNet::forward_batch: frame " + std::to_string(i / kUNetInputs) + " has a non-finite input");
+    chunk = std::min(chunk, kMaxBatch);
+    std::mutex failure_mutex;
+    std::exception_ptr failure;
+    const auto work = [&](long begin, long end) {
+      try {
+        Workspace ws = make_workspace(chunk);
+        for (long f = begin; f < end; f += chunk) {
+          const int n = static_cast<int>(std::min<long>(chunk, end - f));
+          if (forward(input + f * kUNetInputs, output + f * kUNetOutputs, n, ws) != Status::Ok)
+            throw Error("UNet::forward_batch: frames " + std::to_string(f) + ".." + std::to_string(f + n - 1) +
+                        " overflowed inside the network (non-finite result)");
+        }
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    };
+    std::vector<std::thread> pool;
+    const long per = (frames + threads - 1) / threads;
+    try {
+      for (int t = 1; t < threads; ++t) {
+        const long begin = t * per, end = std::min(frames, begin + per);
+        if (begin < end) pool.emplace_back(work, begin, end);
+      }
+    } catch (...) {
+      for (std::thread& th : pool) th.join();
+      throw;
+    }
+    work(0, std::min(frames, per));  // the calling thread takes the first share
+    for (std::thread& th : pool) th.join();
+    if (failure) std::rethrow_exception(failure);
+  }
+
+ private:
+  enum class Activation : unsigned char { Relu, Tanh };
+
+  struct BufferSpec {
+    int channels;
+    int stride;  // channels padded to the SIMD width (the network input is never padded)
+    int size;    // grid side
+    int positions;
+  };
+
+  struct LayerSpec {
+    std::string conv, bn;
+    ConvGeometry geometry;
+    std::vector<int> sources;  // buffer ids, concatenated in this order
+    int out_buffer;
+    int out_channels;
+    Activation activation;
+    int in_channels(int width) const {
+      int c = 0;
+      for (int s : sources) c += buffer_channels(s, width);
+      return c;
+    }
+  };
+
+  struct PackedTap {
+    std::vector<int> out_positions, in_positions;
+  };
+
+  // How a layer's products are organised (see run()).
+  enum class Mode : unsigned char {
+    Taps,    // per useful tap and source: one product of the rows it joins with the tap's block
+    Im2col,  // few input channels: gather each output's whole receptive field, one product with K = taps x channels
+    Gather,  // one output channel: per output, one sum of dot products over its taps and sources
+  };
+
+  struct PackedLayer {
+    std::vector<PackedTap> taps;
+    std::vector<int> sources;
+    int out_buffer = 0;
+    Mode mode = Mode::Taps;
+    int kernel_taps = 0;                            // kernel * kernel (Im2col row length = kernel_taps * channels)
+    std::vector<int> receptive;                     // Im2col: [out position][tap] -> input position or -1
+    std::vector<std::vector<std::pair<int, int>>> terms;  // Gather: [out position] -> (tap index, input position)
+    Activation activation = Activation::Relu;
+    AlignedVector<float> bias;   // padded output channels
+    AlignedVector<float> w32;    // per (tap, source): in channels x padded out channels, in column panels
+    AlignedVector<std::uint16_t> w16;
+    std::vector<std::size_t> block;  // offset of (tap, source) block
+    std::size_t stored_weights = 0;
+  };
+
+  // Buffers: 0 input, 1 e1, 2 e2, 3 e3, 4 e4, 5 d1, 6 d2, 7 d3, 8 output.
+  static int buffer_channels(int id, int w) {
+    constexpr int factor[] = {0, 1, 2, 4, 8, 4, 2, 1, 0};
+    return id == 0 ? 2 : (id == 8 ? 1 : factor[id] * w);
+  }
+  static int buffer_size(int id) {
+    constexpr int size[] = {5, 5, 3, 2, 1, 2, 3, 5, 5};
+    return size[id];
+  }
+
+  void define_buffers() {
+    for (int id = 0; id <= 8; ++id) {
+      const int c = buffer_channels(id, width_);
+      const int stride = (id == 0 || id == 8) ? c : round_up(c, Backend::lanes);
+      buffers_.push_back({c, stride, buffer_size(id), buffer_size(id) * buffer_size(id)});
+    }
+  }
+
+  static std::vector<LayerSpec> layer_specs(int w) {
+    const auto R = Activation::Relu;
+    return {
+        {"enc1", "", {5, 5, 5, 1, 2, false}, {0}, 1, w, R},
+        {"enc2", "bn2", {5, 3, 3, 2, 1, false}, {1}, 2, 2 * w, R},
+        {"enc3", "bn3", {3, 2, 3, 2, 1, false}, {2}, 3, 4 * w, R},
+        {"enc4", "bn4", {2, 1, 4, 2, 1, false}, {3}, 4, 8 * w, R},
+        {"dec1", "dbn1", {1, 2, 4, 2, 1, true}, {4}, 5, 4 * w, R},
+        {"dec2", "dbn2", {2, 3, 3, 2, 1, true}, {5, 3}, 6, 2 * w, R},
+        {"dec3", "dbn3", {3, 5, 3, 2, 1, true}, {6, 2}, 7, w, R},
+        {"out", "", {5, 5, 5, 1, 2, false}, {7, 1}, 8, 1, Activation::Tanh},
+    };
+  }
+
+  static void check_tensor_names(const TensorMap& tensors, const std::vector<LayerSpec>& specs, int width) {
+    const auto expected = expected_tensors(width);
+    for (const auto& [name, shape] : expected) {
+      const auto it = tensors.find(name);
+      if (it == tensors.end())
+        throw Error("UNet: tensor '" + name + "' is missing, expected shape " + shape_string(shape) + " (width " +
+                    std::to_string(width) + ")");
+      if (it->second.shape != shape)
+        throw Error("UNet: tensor '" + name + "' has shape " + shape_string(it->second.shape) + ", expected " +
+                    shape_string(shape) + " (width " + std::to_string(width) + ")");
+      if (static_cast<std::int64_t>(it->second.values.size()) != it->second.element_count())
+        throw Error("UNet: tensor '" + name + "' holds " + std::to_string(it->second.values.size()) + " values for shape " +
+                    shape_string(it->second.shape));
+      for (float v : it->second.values)
+        if (!std::isfinite(v)) throw Error("UNet: tensor '" + name + "' contains NaN or infinity, expected finite weights");
+    }
+    for (const auto& [name, t] : tensors)
+      if (!expected.count(name)) throw Error("UNet: tensor '" + name + "' is not part of a width-" + std::to_string(width) + " U-Net");
+    (void)specs;
+  }
+
+  PackedLayer pack(const LayerSpec& spec, const TensorMap& tensors, double eps) const {
+    spec.geometry.validate(spec.conv);
+    const BufferSpec& out = buffers_[static_cast<std::size_t>(spec.out_buffer)];
+    const int cin = spec.in_channels(width_), cout = spec.out_channels, k = spec.geometry.kernel;
+    PackedLayer layer;
+    layer.sources = spec.sources;
+    layer.out_buffer = spec.out_buffer;
+    layer.activation = spec.activation;
+    const int first_channels = buffers_[static_cast<std::size_t>(spec.sources[0])].channels;
+    layer.mode = cout == 1 ? Mode::Gather : (spec.sources.size() == 1 && first_channels * k * k <= 64 ? Mode::Im2col : Mode::Taps);
+    layer.kernel_taps = k * k;
+
+    // Fold BN (inference) into per-output-channel scale and shift, in double.
+    std::vector<double> scale(static_cast<std::size_t>(cout), 1.0), shift(static_cast<std::size_t>(cout), 0.0);
+    const std::vector<float>& bias = tensors.at(spec.conv + ".bias").values;
+    for (int o = 0; o < cout; ++o) shift[static_cast<std::size_t>(o)] = bias[static_cast<std::size_t>(o)];
+    if (!spec.bn.empty()) {
+      const auto& gamma = tensors.at(spec.bn + ".weight").values;
+      const auto& beta = tensors.at(spec.bn + ".bias").values;
+      const auto& mean = tensors.at(spec.bn + ".running_mean").values;
+      const auto& var = tensors.at(spec.bn + ".running_var").values;
+      for (std::size_t o = 0; o < static_cast<std::size_t>(cout); ++o) {
+        if (!(var[o] >= 0.0f))
+          throw Error("UNet: tensor '" + spec.bn + ".running_var' has a negative variance at channel " + std::to_string(o));
+        scale[o] = gamma[o] / std::sqrt(static_cast<double>(var[o]) + eps);
+        shift[o] = (shift[o] - mean[o]) * scale[o] + beta[o];
+      }
+    }
+    layer.bias.assign(static_cast<std::size_t>(out.stride), 0.0f);
+    for (int o = 0; o < cout; ++o) layer.bias[static_cast<std::size_t>(o)] = static_cast<float>(shift[static_cast<std::size_t>(o)]);
+
+    // Pack the useful taps: block (tap, source) = source channels x ldw, BN scale applied.
+    const std::vector<float>& weight = tensors.at(spec.conv + ".weight").values;
+    const auto w_at = [&](int ci, int co, int tap) -> double {
+      const std::size_t kk = static_cast<std::size_t>(k) * static_cast<std::size_t>(k);
+      const std::size_t idx = spec.geometry.transposed
+                                  ? (static_cast<std::size_t>(ci) * static_cast<std::size_t>(cout) + static_cast<std::size_t>(co)) * kk
+                                  : (static_cast<std::size_t>(co) * static_cast<std::size_t>(cin) + static_cast<std::size_t>(ci)) * kk;
+      return weight[idx + static_cast<std::size_t>(tap)];
+    };
+    std::vector<float> packed;
+    const std::vector<TapPairs> plan = plan_taps(spec.geometry);
+    if (layer.mode == Mode::Im2col) {  // one dense (taps x channels) x stride block over the whole kernel
+      const int cs = first_channels, rows = layer.kernel_taps * cs;
+      packed.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(out.stride), 0.0f);
+      for (int tap = 0; tap < layer.kernel_taps; ++tap)
+        for (int ci = 0; ci < cs; ++ci)
+          for (int co = 0; co < cout; ++co)
+            packed[static_cast<std::size_t>(kernels::panel_index(tap * cs + ci, co, rows, out.stride, Backend::panel))] =
+                static_cast<float>(w_at(ci, co, tap) * scale[static_cast<std::size_t>(co)]);
+      layer.receptive.assign(static_cast<std::size_t>(out.positions * layer.kernel_taps), -1);
+      for (const TapPairs& t : plan)
+        for (std::size_t j = 0; j < t.out_positions.size(); ++j)
+          layer.receptive[static_cast<std::size_t>(t.out_positions[j] * layer.kernel_taps + t.tap)] = t.in_positions[j];
+      layer.stored_weights = plan.size() * static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);  // useful taps only
+      layer.block.push_back(0);
+    }
+    if (layer.mode == Mode::Gather) {
+      for (int source : spec.sources)
+        if (buffers_[static_cast<std::size_t>(source)].stride != buffers_[static_cast<std::size_t>(spec.sources[0])].stride)
+          throw Error("UNet: layer " + spec.conv + " concatenates sources of different padded widths");  // layer_specs() never does
+      layer.terms.resize(static_cast<std::size_t>(out.positions));
+      for (std::size_t t = 0; t < plan.size(); ++t)
+        for (std::size_t j = 0; j < plan[t].out_positions.size(); ++j)
+          layer.terms[static_cast<std::size_t>(plan[t].out_positions[j])].push_back({static_cast<int>(t), plan[t].in_positions[j]});
+    }
+    for (const TapPairs& t : plan) {
+      if (layer.mode == Mode::Im2col) break;
+      layer.taps.push_back({t.out_positions, t.in_positions});
+      int channel_base = 0;
+      for (int source : spec.sources) {
+        const int cs = buffers_[static_cast<std::size_t>(source)].channels;
+        layer.block.push_back(packed.size());
+        if (layer.mode == Mode::Gather) {
+          for (int ci = 0; ci < cs; ++ci) packed.push_back(static_cast<float>(w_at(channel_base + ci, 0, t.tap) * scale[0]));
+        } else {  // cs x stride, in the backend's column panels (kernels::panel_index)
+          const std::size_t base = packed.size();
+          packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(out.stride), 0.0f);
+          for (int ci = 0; ci < cs; ++ci)
+            for (int co = 0; co < cout; ++co)
+              packed[base + static_cast<std::size_t>(kernels::panel_index(ci, co, cs, out.stride, Backend::panel))] =
+                  static_cast<float>(w_at(channel_base + ci, co, t.tap) * scale[static_cast<std::size_t>(co)]);
+        }
+        layer.stored_weights += static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);
+        channel_base += cs;
+      }
+    }
+    // Folding can scale weights far beyond what the file held (a tiny running variance); refuse what
+    // the chosen storage cannot represent rather than compute with infinities.
+    const float limit = storage_ == WeightStorage::F32 ? std::numeric_limits<float>::max() : 65504.0f;
+    for (float v : packed)
+      if (!(std::abs(v) <= limit))
+        throw Error("UNet: layer " + spec.conv + (spec.bn.empty() ? "" : " with " + spec.bn + " folded in") + " has a weight of " +
+                    std::to_string(v) + ", expected magnitudes up to " + std::to_string(limit) + " for " +
+                    (storage_ == WeightStorage::F32 ? "F32" : "F16 storage (load as F32 instead)"));
+    for (float v : layer.bias)
+      if (!std::isfinite(v)) throw Error("UNet: layer " + spec.conv + " has a non-finite folded bias");
+    if (storage_ == WeightStorage::F32) {
+      layer.w32.assign(packed.begin(), packed.end());
+    } else {
+      layer.w16.resize(packed.size());
+      for (std::size_t i = 0; i < packed.size(); ++i) layer.w16[i] = float_to_f16(packed[i]);
+    }
+    return layer;
+  }
+
+  template <typename W>
+  void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+    const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
+    float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
+    const std::size_t sources = layer.sources.size();
+    for (std::size_t t = 0; t < layer.taps.size(); ++t) {
+      const PackedTap& tap = layer.taps[t];
+      for (std::size_t s = 0; s < sources; ++s) {
+        const int id = layer.sources[s];
+        const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(id)];
+        const float* in = ws.buffers[static_cast<std::size_t>(id)].data();
+        int rows = 0;
+        for (std::size_t j = 0; j < tap.out_positions.size(); ++j)
+          for (int f = 0; f < frames; ++f, ++rows) {
+            ws.x_rows[static_cast<std::size_t>(rows)] = in + (static_cast<long>(tap.in_positions[j]) * frames + f) * in_spec.stride;
+            ws.y_rows[static_cast<std::size_t>(rows)] = out + (static_cast<long>(tap.out_positions[j]) * frames + f) * out_spec.stride;
+          }
+        const W* block = weights + layer.block[t * sources + s];
+        Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
+      }
+    }
+  }
+
+  template <typename W>
+  void run_im2col(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+    const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[0])];
+    const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
+    const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[0])].data();
+    float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
+    const int cs = in_spec.channels, row = layer.kernel_taps * cs, rows = out_spec.positions * frames;
+    float* col = ws.columns.data();
+    for (int p = 0; p < out_spec.positions; ++p)
+      for (int f = 0; f < frames; ++f) {
+        const long r = static_cast<long>(p) * frames + f;
+        float* dst = col + r * row;
+        for (int tap = 0; tap < layer.kernel_taps; ++tap) {
+          const int source = layer.receptive[static_cast<std::size_t>(p * layer.kernel_taps + tap)];
+          for (int c = 0; c < cs; ++c) dst[tap * cs + c] = source < 0 ? 0.0f : in[(static_cast<long>(source) * frames + f) * in_spec.stride + c];
+        }
+        ws.x_rows[static_cast<std::size_t>(r)] = dst;
+        ws.y_rows[static_cast<std::size_t>(r)] = out + r * out_spec.stride;
+      }
+    Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, weights, row, out_spec.stride);
+  }
+
+  template <typename W>
+  void run_gather(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+    const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
+    float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
+    const std::size_t sources = layer.sources.size();
+    const W** terms = nullptr;  // the workspace's pointer array of this weight type
+    if constexpr (std::is_same_v<W, float>) terms = ws.w32_terms.data();
+    else terms = ws.w16_terms.data();
+    const float* base[2] = {nullptr, nullptr};  // layer_specs(): at most two (concatenated) sources
+    long stride[2] = {0, 0};
+    int channels[2] = {0, 0};
+    for (std::size_t s = 0; s < sources && s < 2; ++s) {
+      base[s] = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
+      stride[s] = buffers_[static_cast<std::size_t>(layer.sources[s])].stride;
+      channels[s] = buffers_[static_cast<std::size_t>(layer.sources[s])].channels;
+    }
+    // Per output position, all frames at once: the terms' rows for frame f lie f * stride further.
+    for (int p = 0; p < out_spec.positions; ++p) {
+      int n = 0;
+      for (const auto& [t, in_pos] : layer.terms[static_cast<std::size_t>(p)])
+        for (std::size_t s = 0; s < sources && s < 2; ++s, ++n) {
+          ws.x_rows[static_cast<std::size_t>(n)] = base[s] + static_cast<long>(in_pos) * frames * stride[s];
+          terms[n] = weights + layer.block[static_cast<std::size_t>(t) * sources + s];
+          ws.k_terms[static_cast<std::size_t>(n)] = channels[s];
+        }
+      // All sources of a layer share one padded stride (layer_specs(): same-width skips).
+      float* sums = ws.sums.data();
+      Backend::dot_terms(ws.x_rows.data(), stride[0], terms, ws.k_terms.data(), n, frames, sums);
+      for (int f = 0; f < frames; ++f) out[(static_cast<long>(p) * frames + f) * out_spec.stride] += sums[f];
+    }
+  }
+
+  template <typename W>
+  void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+    if (layer.mode == Mode::Im2col) run_im2col(layer, weights, frames, ws);
+    else if (layer.mode == Mode::Gather) run_gather(layer, weights, frames, ws);
+    else run_taps(layer, weights, frames, ws);
+  }
+
+  void run(const PackedLayer& layer, int frames, Workspace& ws) const noexcept {
+    const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
+    float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
+    const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
+    for (int r = 0; r < rows; ++r)
+      std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
+    if (storage_ == WeightStorage::F32)
+      run_products(layer, layer.w32.data(), frames, ws);
+    else
+      run_products(layer, layer.w16.data(), frames, ws);
+    if (layer.activation == Activation::Relu)
+      Backend::relu(out, rows * out_spec.stride);
+    else
+      for (int r = 0; r < rows; ++r) out[r] = std::tanh(out[r]);
+  }
+
+  UNet() = default;
+
+  int width_ = 0;
+  WeightStorage storage_ = WeightStorage::F32;
+  std::vector<BufferSpec> buffers_;
+  std::vector<PackedLayer> layers_;
+  std::size_t parameter_count_ = 0;
+};
+
+}  // namespace glovepose::nn

@@ -1,0 +1,207 @@
+#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/hand/dofs.hpp>
+#include <glovepose/nn/model.hpp>
+
+#include <doctest/doctest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <random>
+
+#include "alloc_counter.hpp"
+#include "unet_reference.hpp"
+
+using namespace glovepose;
+using namespace glovepose::nn;
+
+namespace {
+std::vector<float> random_inputs(int frames, unsigned seed, float range = 1.0f) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-range, range);  // calibrated stretch maps lie in [-1, 1]
+  std::vector<float> x(static_cast<std::size_t>(frames * kUNetInputs));
+  for (float& v : x) v = u(rng);
+  return x;
+}
+
+template <typename Backend>
+double max_difference_to_reference(const TensorMap& tensors, int width, int frames, unsigned seed) {
+  const auto net = UNet<Backend>::from_tensors(tensors, width);
+  auto ws = net.make_workspace(frames);
+  const std::vector<float> x = random_inputs(frames, seed);
+  std::vector<float> y(static_cast<std::size_t>(frames * kUNetOutputs));
+  REQUIRE(net.forward(x.data(), y.data(), frames, ws) == Status::Ok);
+  double worst = 0.0;
+  for (int f = 0; f < frames; ++f) {
+    const std::vector<double> expected = test::unet_reference(tensors, x.data() + f * kUNetInputs);
+    for (int i = 0; i < kUNetOutputs; ++i) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(f * kUNetOutputs + i)]));
+  }
+  return worst;
+}
+
+std::size_t paper_parameter_count(std::size_t w) {
+  // Conv weights (Table 6 with concatenating skips) + conv biases + BN scale and shift.
+  const std::size_t weights = 2 * w * 25 + w * 2 * w * 9 + 2 * w * 4 * w * 9 + 4 * w * 8 * w * 16 + 8 * w * 4 * w * 16 +
+                              8 * w * 2 * w * 9 + 4 * w * w * 9 + 2 * w * 25;
+  return weights + (22 * w + 1) + 2 * (2 * w + 4 * w + 8 * w + 4 * w + 2 * w + w);
+}
+}  // namespace
+
+TEST_CASE("unet: presets have the paper's sizes; the fixed 5x5 grid lets most 4x4 taps go unread") {
+  for (const UNetPreset& p : kUNetPresets) {
+    const auto tensors = UNet<>::expected_tensors(p.width);
+    std::size_t count = 0;
+    for (const auto& [name, shape] : tensors) {
+      if (name.find("running_") != std::string::npos) continue;
+      std::size_t n = 1;
+      for (auto d : shape) n *= static_cast<std::size_t>(d);
+      count += n;
+    }
+    MESSAGE(std::string(p.name) << " (w = " << p.width << "): " << count << " parameters");
+    CHECK(count == paper_parameter_count(static_cast<std::size_t>(p.width)));
+  }
+  CHECK(paper_parameter_count(48) == doctest::Approx(3.0e6).epsilon(0.02));
+  CHECK(paper_parameter_count(64) == doctest::Approx(5.3e6).epsilon(0.01));
+  CHECK(paper_parameter_count(100) == doctest::Approx(13.0e6).epsilon(0.01));
+  CHECK(paper_parameter_count(196) == doctest::Approx(50.0e6).epsilon(0.01));
+  const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(64), 1), 64);
+  CHECK(net.parameter_count() == paper_parameter_count(64));
+  MESSAGE("w = 64: " << net.stored_weight_count() << " weights can meet a 5x5 input; " << net.weight_bytes()
+                     << " bytes packed (F32)");
+  CHECK(net.stored_weight_count() == doctest::Approx(2.2e6).epsilon(0.03));
+  // Multiply-adds per frame, counted by hand from the tap plans (docs/performance.md):
+  // enc1 361*2w, enc2 49*w*2w, enc3 16*2w*4w, enc4 4*4w*8w, dec1 4*8w*4w, dec2 16*8w*2w, dec3 49*4w*w, out 361*2w.
+  const std::size_t w = 64;
+  const std::size_t macs = 361 * 2 * w + 49 * w * 2 * w + 16 * 2 * w * 4 * w + 4 * 4 * w * 8 * w + 4 * 8 * w * 4 * w +
+                           16 * 8 * w * 2 * w + 49 * 4 * w * w + 361 * 2 * w;
+  MESSAGE("w = 64: " << net.mac_count() << " multiply-adds per frame");
+  CHECK(net.mac_count() == macs);
+}
+
+TEST_CASE("unet: the SIMD and scalar backends equal an independent reference forward (random weights, BN included)") {
+  // Widths 1..3 and 4 exercise the im2col path in enc4/enc3/enc2 and output channels narrower than
+  // a vector; 13 padded channels; 64 the paper's network.
+  for (int width : {1, 2, 3, 4, 13, 64}) {
+    CAPTURE(width);
+    const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 100 + static_cast<unsigned>(width));
+    const double simd = max_difference_to_reference<kernels::SimdBackend>(tensors, width, 6, 7);
+    const double scalar = max_difference_to_reference<kernels::ScalarBackend>(tensors, width, 6, 7);
+    MESSAGE("w = " << width << ": max |simd - reference| = " << simd << ", max |scalar - reference| = " << scalar);
+    CHECK(simd <= 1e-5);
+    CHECK(scalar <= 1e-5);
+  }
+}
+
+TEST_CASE("unet: a batch gives the same outputs as frames one at a time; forward_batch on threads too") {
+  const int width = 16, frames = 37;
+  const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(width), 3), width);
+  const std::vector<float> x = random_inputs(frames, 11);
+  std::vector<float> batched(static_cast<std::size_t>(frames * kUNetOutputs)), single = batched, threaded = batched;
+  auto ws = net.make_workspace(frames), one = net.make_workspace(1);
+  REQUIRE(net.forward(x.data(), batched.data(), frames, ws) == Status::Ok);
+  for (int f = 0; f < frames; ++f) REQUIRE(net.forward(x.data() + f * kUNetInputs, single.data() + f * kUNetOutputs, 1, one) == Status::Ok);
+  net.forward_batch(x.data(), threaded.data(), frames, 2, 8);
+  for (std::size_t i = 0; i < batched.size(); ++i) {
+    CHECK(batched[i] == doctest::Approx(single[i]).epsilon(1e-6).scale(1.0));
+    CHECK(threaded[i] == doctest::Approx(single[i]).epsilon(1e-6).scale(1.0));
+  }
+}
+
+TEST_CASE("unet: bad input gets a status and the single-frame forward allocates nothing") {
+  const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(64), 9), 64);
+  auto ws = net.make_workspace();
+  std::array<float, kUNetInputs> in{};
+  std::array<float, kUNetOutputs> out{};
+  out.fill(5.0f);
+  in[17] = std::numeric_limits<float>::quiet_NaN();
+  CHECK(net.forward(in, out, ws) == Status::NonFinite);
+  CHECK(out[0] == 5.0f);
+  in[17] = 0.5f;
+  CHECK(net.forward(in.data(), out.data(), 2, ws) == Status::SizeMismatch);  // capacity 1
+  const auto other = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(4), 9), 4);
+  auto small = other.make_workspace();
+  CHECK(net.forward(in, out, small) == Status::SizeMismatch);  // a workspace of another network
+  CHECK_THROWS_WITH_AS((void)net.make_workspace(0), doctest::Contains("capacity 0, expected 1.."), Error);
+  CHECK(test::allocations_during([&] { (void)net.forward(in, out, ws); }) == 0);
+  for (float v : out) CHECK(std::abs(v) < 1.0f);
+}
+
+TEST_CASE("unet: 16-bit weights stay within 0.1 degree of the exact F32 path on calibrated inputs") {
+  const int width = 64, frames = 256;
+  const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 21);
+  const auto exact = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F32);
+  const auto half = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F16);
+  CHECK(half.weight_bytes() * 2 == exact.weight_bytes());
+  auto ws = exact.make_workspace(frames), ws16 = half.make_workspace(frames);
+  const std::vector<float> x = random_inputs(frames, 4);
+  std::vector<float> a(static_cast<std::size_t>(frames * kUNetOutputs)), b = a;
+  REQUIRE(exact.forward(x.data(), a.data(), frames, ws) == Status::Ok);
+  REQUIRE(half.forward(x.data(), b.data(), frames, ws16) == Status::Ok);
+  // Pose-map slot -> DoF, and the angle a unit of output is worth: (max - min) / 2 (dofs.hpp).
+  const auto slots = grid::GridMap::paper_pose_slots();
+  double worst_degrees = 0.0;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    const double radians_per_unit = 0.5 * (hand::kDofs[d].max - hand::kDofs[d].min);
+    for (int f = 0; f < frames; ++f) {
+      const std::size_t i = static_cast<std::size_t>(f * kUNetOutputs + slots[d].flat());
+      worst_degrees = std::max(worst_degrees, std::abs(a[i] - b[i]) * radians_per_unit * 180.0 / 3.14159265358979);
+    }
+  }
+  MESSAGE("F16 weights vs F32: largest angle difference " << worst_degrees << " degrees over " << frames << " frames");
+  CHECK(worst_degrees < 0.1);
+}
+
+TEST_CASE("unet: folded weights the storage cannot hold are refused, naming the layer") {
+  TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(16), 12);
+  tensors["bn3.weight"].values.assign(64, 1e4f);
+  tensors["bn3.running_var"].values.assign(64, 0.0f);  // valid, but scales enc3 by 1e4 / sqrt(1e-5)
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::F16),
+                       doctest::Contains("layer enc3 with bn3 folded in has a weight of"), Error);
+  CHECK_NOTHROW(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::F32));
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 0), doctest::Contains("width 0, expected 1..4096"), Error);
+}
+
+TEST_CASE("unet: equals PyTorch on the committed fixtures (width 4)") {
+  const std::string dir = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/";
+  const auto model = Model<>::load(dir + "unet_w4.safetensors");
+  const WeightFile io = WeightFile::read(dir + "unet_w4_io.safetensors");
+  const Tensor& x = io.tensors.at("input");
+  const Tensor& y = io.tensors.at("output");
+  const int frames = static_cast<int>(x.shape[0]);
+  REQUIRE(frames > 0);
+  auto ws = model.unet.make_workspace(frames);
+  std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
+  REQUIRE(model.unet.forward(x.values.data(), out.data(), frames, ws) == Status::Ok);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < out.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(out[i] - y.values[i])));
+  MESSAGE("fixture: " << frames << " frames, max |C++ - PyTorch| = " << worst);
+  CHECK(worst <= 1e-5);
+}
+
+TEST_CASE("unet: equals PyTorch for every preset (fixtures regenerated with PyTorch when it is installed)") {
+  const std::string python = "/usr/bin/python3";
+  if (std::system((python + " -c 'import torch' > /dev/null 2>&1").c_str()) != 0) {
+    const char* required = std::getenv("GLOVEPOSE_REQUIRE_TORCH");
+    if (required && std::string(required) == "1") FAIL("PyTorch is not installed and GLOVEPOSE_REQUIRE_TORCH=1");
+    MESSAGE("NOT CHECKED: PyTorch (Debian python3-torch) is not installed, so the presets were not compared with it");
+    return;
+  }
+  for (const UNetPreset& p : kUNetPresets) {
+    INFO("preset " << p.name);
+    const std::string base = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/torch_" + p.name;
+    const std::string cmd = python + " " + GLOVEPOSE_SOURCE_DIR + "/tools/python/make_fixtures.py --width " + std::to_string(p.width) +
+                            " --seed 7 --batch 8 --out-model " + base + ".safetensors --out-io " + base + "_io.safetensors";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    const auto model = Model<>::load(base + ".safetensors");
+    const WeightFile io = WeightFile::read(base + "_io.safetensors");
+    const int frames = static_cast<int>(io.tensors.at("input").shape[0]);
+    auto ws = model.unet.make_workspace(frames);
+    std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
+    REQUIRE(model.unet.forward(io.tensors.at("input").values.data(), out.data(), frames, ws) == Status::Ok);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < out.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(out[i] - io.tensors.at("output").values[i])));
+    MESSAGE(std::string(p.name) << " (w = " << p.width << "): max |C++ - PyTorch| = " << worst);
+    CHECK(worst <= 1e-5);
+    std::remove((base + ".safetensors").c_str());
+    std::remove((base + "_io.safetensors").c_str());
+  }
+}

@@ -1,0 +1,144 @@
+// The glovepose command-line tool.
+//   glovepose predict --model FILE [--in CSV] [--f16] [--no-header]
+//       rows of 44 calibrated cell values (comma-separated, in [-1, 1]) in, 25 joint angles in
+//       radians out (theta 9..33 of the hand model), one row per input row.
+//   glovepose info --model FILE
+//       what a model file holds.
+#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/hand/dofs.hpp>
+#include <glovepose/nn/model.hpp>
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace glovepose;
+
+namespace {
+
+struct Options {
+  std::string command, model, input;
+  bool f16 = false, header = true;
+};
+
+[[noreturn]] void usage(const std::string& problem) {
+  std::cerr << "glovepose: " << problem << "\n"
+            << "usage: glovepose predict --model FILE [--in CSV] [--f16] [--no-header]\n"
+            << "       glovepose info --model FILE\n";
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  if (argc < 2) usage("no command given");
+  Options o;
+  o.command = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--model") o.model = value();
+    else if (a == "--in") o.input = value();
+    else if (a == "--f16") o.f16 = true;
+    else if (a == "--no-header") o.header = false;
+    else usage("unknown option " + a);
+  }
+  if (o.command != "predict" && o.command != "info") usage("unknown command " + o.command);
+  if (o.model.empty()) usage("--model FILE is required");
+  return o;
+}
+
+// One row of `count` numbers; throws Error naming the line and column.
+std::vector<double> parse_row(const std::string& line, std::size_t line_no, std::size_t count) {
+  std::vector<double> values;
+  std::stringstream fields(line);
+  std::string cell;
+  while (std::getline(fields, cell, ',')) {
+    const std::size_t first = cell.find_first_not_of(" \t\r"), last = cell.find_last_not_of(" \t\r");
+    const std::string text = first == std::string::npos ? "" : cell.substr(first, last - first + 1);
+    double v = 0.0;  // from_chars: independent of the locale
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size() || !std::isfinite(v))
+      throw Error("line " + std::to_string(line_no) + ", column " + std::to_string(values.size() + 1) + ": '" + text +
+                  "' is not a finite number");
+    values.push_back(v);
+  }
+  if (values.size() != count)
+    throw Error("line " + std::to_string(line_no) + ": " + std::to_string(values.size()) + " values, expected " + std::to_string(count) +
+                " (one calibrated value per sensor cell)");
+  return values;
+}
+
+int predict(const Options& o) {
+  const auto model = nn::Model<>::load(o.model, o.f16 ? nn::WeightStorage::F16 : nn::WeightStorage::F32);
+  hand::Angles lo{}, hi{};
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    lo[d] = model.info.joint_limits_min[d];
+    hi[d] = model.info.joint_limits_max[d];
+  }
+  const hand::JointLimits limits(lo, hi);
+  const grid::GridMap map = grid::GridMap::glauser2019();
+  if (model.info.glove != "glauser2019-44")
+    throw Error("model '" + o.model + "' was trained for glove '" + model.info.glove +
+                "', expected 'glauser2019-44' (the built-in 44-cell layout this command maps)");
+  auto ws = model.unet.make_workspace();
+
+  std::ifstream file;
+  if (!o.input.empty()) {
+    file.open(o.input);
+    if (!file) throw Error("cannot open input '" + o.input + "'");
+  }
+  std::istream& in = o.input.empty() ? std::cin : file;
+  if (o.header) {
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%s", d ? "," : "", hand::kDofs[d].name);
+    std::printf("\n");
+  }
+  std::string line;
+  std::size_t line_no = 0;
+  const auto cells = static_cast<std::size_t>(map.cell_count());
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    const std::vector<double> values = parse_row(line, line_no, cells);
+    std::array<float, grid::kStretchValues> maps{};
+    std::array<float, grid::kMapSlots> pose{};
+    if (map.to_stretch_maps(values.data(), maps) != Status::Ok) throw Error("line " + std::to_string(line_no) + ": non-finite value");
+    if (model.unet.forward(maps, pose, ws) != Status::Ok) throw Error("line " + std::to_string(line_no) + ": the network refused the input");
+    hand::Angles normalized{};
+    map.from_pose_map(pose, normalized);
+    const hand::Angles angles = limits.denormalize(normalized);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%.9g", d ? "," : "", angles[d]);
+    std::printf("\n");
+  }
+  return 0;
+}
+
+int info(const Options& o) {
+  const auto model = nn::Model<>::load(o.model);
+  std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\nweights that can meet a 5x5 input: %zu\n"
+              "packed weight bytes (F32): %zu\nmultiply-adds per frame: %zu\ntraining-set calibration: %s\n",
+              model.info.architecture.c_str(), model.info.width, model.info.glove.c_str(), model.unet.parameter_count(),
+              model.unet.stored_weight_count(), model.unet.weight_bytes(), model.unet.mac_count(),
+              model.info.calibration_min ? "yes" : "no");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  try {
+    return o.command == "predict" ? predict(o) : info(o);
+  } catch (const Error& e) {
+    std::cerr << "glovepose " << o.command << ": " << e.what() << "\n";
+    return 2;
+  }
+}
