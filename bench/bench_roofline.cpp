@@ -40,5 +40,5 @@ static void BM_StreamBytes(benchmark::State& state) {
   }
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes));
 }
-// The w = 64 network's packed weights: 8.6 MB in F32, 4.3 MB in F16.
-BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584);
+// The packed weights of w = 64 (4.3 MB F16, 8.6 MB F32) and w = 100 (10.8 MB F16, 21.5 MB F32).
+BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584)->Arg(10757200)->Arg(21514400);

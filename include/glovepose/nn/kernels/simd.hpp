@@ -125,31 +125,46 @@ struct SimdBackend {
   template <int R, int V, typename W>
   static void block(const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
     // The R x V accumulators must live in registers: the loops over r and v are unrolled fully.
-    Batch acc[R][V];
-#pragma GCC unroll 16
-    for (int r = 0; r < R; ++r)
+    // With fewer than 8 of them (a narrow panel remainder, a single row), U sets take turns over k
+    // so that 8 independent FMA chains still hide the FMA latency.
+    constexpr int U = R * V >= 8 ? 1 : (8 + R * V - 1) / (R * V);
+    Batch acc[U][R][V];
 #pragma GCC unroll 8
-      for (int v = 0; v < V; ++v) acc[r][v] = Batch(0.0f);
+    for (int u = 0; u < U; ++u)
+#pragma GCC unroll 16
+      for (int r = 0; r < R; ++r)
+#pragma GCC unroll 8
+        for (int v = 0; v < V; ++v) acc[u][r][v] = Batch(0.0f);
     const float* xr[R];
 #pragma GCC unroll 16
     for (int r = 0; r < R; ++r) xr[r] = x[r];
-    for (int kk = 0; kk < k; ++kk) {
-      const W* wk = w + static_cast<long>(kk) * ldw;
-      Batch wv[V];
+    int kk = 0;
+    for (; kk + U <= k; kk += U)
 #pragma GCC unroll 8
-      for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
-#pragma GCC unroll 16
-      for (int r = 0; r < R; ++r) {
-        const Batch xb(xr[r][kk]);
-#pragma GCC unroll 8
-        for (int v = 0; v < V; ++v) acc[r][v] = xsimd::fma(xb, wv[v], acc[r][v]);
-      }
-    }
+      for (int u = 0; u < U; ++u) step<R, V>(acc[u], xr, w, kk + u, ldw);
+    for (; kk < k; ++kk) step<R, V>(acc[0], xr, w, kk, ldw);
     for (int r = 0; r < R; ++r)
       for (int v = 0; v < V; ++v) {
+        Batch sum = acc[0][r][v];
+        for (int u = 1; u < U; ++u) sum += acc[u][r][v];
         float* out = y[r] + col + v * lanes;
-        (Batch::load_unaligned(out) + acc[r][v]).store_unaligned(out);
+        (Batch::load_unaligned(out) + sum).store_unaligned(out);
       }
+  }
+
+  // One k of a block: V weight vectors, each used by R rows.
+  template <int R, int V, typename W>
+  static void step(Batch (&acc)[R][V], const float* const (&xr)[R], const W* w, int kk, int ldw) noexcept {
+    const W* wk = w + static_cast<long>(kk) * ldw;
+    Batch wv[V];
+#pragma GCC unroll 8
+    for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) {
+      const Batch xb(xr[r][kk]);
+#pragma GCC unroll 8
+      for (int v = 0; v < V; ++v) acc[r][v] = xsimd::fma(xb, wv[v], acc[r][v]);
+    }
   }
 
   template <int V, typename W>
