@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages glovepose needs to build and test, skipping those already present.
+# Usage: tools/setup.sh [EXTRA_PACKAGE ...]   (extra Debian packages to ensure as well)
 set -euo pipefail
 # python3-torch: the PyTorch reference the numerics tests compare with (Debian's, for /usr/bin/python3).
-packages=(cmake make g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy)
+packages=(cmake make g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -11,20 +11,10 @@
 # Nothing is downloaded at run time.
 set -euo pipefail
 cd "$(dirname "$0")"
-packages=(python3-torch python3-numpy libopenblas0-pthread)
-command -v node >/dev/null || packages+=(nodejs)
-command -v npm >/dev/null || packages+=(npm)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "peers/setup: installing ${missing[*]}"
-  sudo=""
-  [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+extra=(libopenblas0-pthread)
+command -v node >/dev/null || extra+=(nodejs)
+command -v npm >/dev/null || extra+=(npm)
+bash ../../tools/setup.sh "${extra[@]}"  # the build's packages (python3-torch, numpy among them) plus these
 want=$(node -p "require('./package.json').dependencies['onnxruntime-node']")
 have=$(node -p "try { require('./node_modules/onnxruntime-node/package.json').version } catch (e) { '' }")
 if [ "$have" != "$want" ]; then
