@@ -6,6 +6,7 @@
 #include "status.hpp"
 #include "hand/dofs.hpp"
 #include "hand/kinematics.hpp"
+#include "hand/collision.hpp"
 #include "sensor/layout.hpp"
 #include "sensor/solver.hpp"
 #include "sensor/readout.hpp"
