@@ -76,7 +76,7 @@ class UNet {
     net.storage_ = storage;
     net.define_buffers();
     const std::vector<LayerSpec> specs = layer_specs(width);
-    check_tensor_names(tensors, specs, width);
+    check_tensor_names(tensors, width);
     for (const LayerSpec& spec : specs) net.layers_.push_back(net.pack(spec, tensors, bn_eps));
     for (const auto& [name, t] : tensors)
       if (name.find("running_") == std::string::npos) net.parameter_count_ += static_cast<std::size_t>(t.element_count());
@@ -341,7 +341,7 @@ class UNet {
     };
   }
 
-  static void check_tensor_names(const TensorMap& tensors, const std::vector<LayerSpec>& specs, int width) {
+  static void check_tensor_names(const TensorMap& tensors, int width) {
     const auto expected = expected_tensors(width);
     for (const auto& [name, shape] : expected) {
       const auto it = tensors.find(name);
@@ -359,7 +359,6 @@ class UNet {
     }
     for (const auto& [name, t] : tensors)
       if (!expected.count(name)) throw Error("UNet: tensor '" + name + "' is not part of a width-" + std::to_string(width) + " U-Net");
-    (void)specs;
   }
 
   PackedLayer pack(const LayerSpec& spec, const TensorMap& tensors, double eps) const {

@@ -11,8 +11,8 @@
 /// a finger towards the thumb.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
-#include <random>
 #include <string>
 #include <vector>
 
