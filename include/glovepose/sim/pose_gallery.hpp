@@ -63,24 +63,31 @@ inline hand::Angles make_pose(const ThumbShape& t, const FingerShape& index, con
   return hand::JointLimits().clamp(a);
 }
 
+/// @brief The reference template's kinematics, shared.
+inline const hand::Kinematics& reference_kinematics() {
+  static const hand::Kinematics fk;
+  return fk;
+}
+
 /// @brief Settles a designed pose the way the tracker behind the paper's data would have seen it:
 /// coordinate descent on the thumb's five angles and the four finger abductions (within the limits),
 /// minimising collision energy + stiffness x squared departure from the design (radians) and, when
 /// `target` is a finger other than the thumb, the squared gap of the thumb tip beyond contact with
 /// that fingertip (contact: the two tips' radii apart). Writes the final thumb-to-target gap (mm).
+/// `fk` and `radius` give the hand (default: the reference template), `first_step` the largest
+/// change tried (rad; small for poses that are already nearly settled).
 inline hand::Angles settle_pose(const hand::Angles& design, const hand::Finger target = hand::Finger::Thumb,
-                                double* gap = nullptr) {
-  static const hand::Kinematics fk;
+                                double* gap = nullptr, const hand::Kinematics& fk = reference_kinematics(),
+                                const std::array<double, 16>& radius = hand::kReferenceDistalRadius, double first_step = 0.4) {
   const hand::JointLimits limits;
   hand::Skeleton s;
   constexpr double kStiffness = 200.0;  // mm^2 per rad^2: a 0.1 rad change costs as much as a 1.4 mm penetration
   const bool oppose = target != hand::Finger::Thumb;
-  const double contact = hand::kReferenceDistalRadius[3] +
-                         hand::kReferenceDistalRadius[static_cast<std::size_t>(hand::kFingerBase[static_cast<std::size_t>(target)]) + 2];
+  const double contact = radius[3] + radius[static_cast<std::size_t>(hand::kFingerBase[static_cast<std::size_t>(target)]) + 2];
   const auto tip_gap = [&]() { return (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, target)).norm(); };
   const auto cost = [&](const hand::Angles& a) {
     fk.pose(a, s);
-    double c = hand::collision_energy(fk, s);
+    double c = hand::collision_energy(fk, s, radius);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) c += kStiffness * (a[d] - design[d]) * (a[d] - design[d]);
     if (oppose) {
       const double beyond = std::max(0.0, tip_gap() - contact);
@@ -91,7 +98,7 @@ inline hand::Angles settle_pose(const hand::Angles& design, const hand::Finger t
   const int free_thetas[] = {9, 10, 11, 12, 29, 13, 17, 21, 25};
   hand::Angles pose = design;
   double best = cost(pose);
-  for (double step = 0.4; step > 1e-3; step *= 0.5) {
+  for (double step = first_step; step > 1e-3; step *= 0.5) {
     for (bool improved = true; improved;) {
       improved = false;
       for (int theta : free_thetas) {

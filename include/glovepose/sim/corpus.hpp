@@ -1,0 +1,162 @@
+/// @file corpus.hpp
+/// @brief The paper's capture protocol as a synthetic corpus (Sec. 5.1): each subject records five
+/// sessions of five minutes with the first glove, the glove kept on through the first three
+/// ("intra-session") and taken off and on again before each of the other two ("inter-session"),
+/// every session preceded by a short calibration sequence of extreme poses; a second glove ("Glove
+/// II", Table 3) is recorded in sessions of its own, each with a fresh donning.
+///
+/// Every session is an independent job whose random streams derive from (seed, subject, glove,
+/// session): the corpus is identical for any number of threads.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <exception>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "../config.hpp"
+#include "glove.hpp"
+#include "motion.hpp"
+#include "pose_gallery.hpp"
+#include "recorder.hpp"
+#include "subject.hpp"
+
+namespace glovepose::sim {
+
+/// @brief What to simulate. Defaults: the paper's protocol.
+struct CorpusConfig {
+  std::uint64_t seed = 1;             ///< Everything derives from it.
+  int subjects = 10;                  ///< Paper: 10 people.
+  int sessions = 5;                   ///< Per subject with the first glove (paper: 5).
+  int intra_sessions = 3;             ///< Of those, recorded without taking the glove off (paper: 3).
+  double minutes = 5.0;               ///< Per session (paper: about 5).
+  int gloves = 2;                     ///< Gloves simulated; gloves after the first record `other_glove_sessions`.
+  int other_glove_sessions = 2;       ///< Sessions per subject with each further glove.
+  double calibration_seconds = 30.0;  ///< Calibration sequence before every session (0: none).
+  int threads = 0;                    ///< 0: all hardware threads.
+  RecordingConfig recording{};        ///< Readout settings (raw rows, noise).
+
+  /// @brief Throws glovepose::Error naming the first setting out of range.
+  void validate() const {
+    const auto need = [](bool ok, const std::string& what) {
+      if (!ok) throw Error("simulate: " + what);
+    };
+    need(subjects >= 1, "--subjects " + std::to_string(subjects) + ", expected at least 1");
+    need(sessions >= 1, "--sessions " + std::to_string(sessions) + ", expected at least 1");
+    need(intra_sessions >= 1, "intra sessions " + std::to_string(intra_sessions) + ", expected at least 1");
+    need(minutes > 0.0 && minutes <= 600.0, "--minutes " + std::to_string(minutes) + ", expected 0 < minutes <= 600");
+    need(gloves >= 1 && gloves <= 16, "--gloves " + std::to_string(gloves) + ", expected 1..16");
+    need(other_glove_sessions >= 0, "sessions with other gloves " + std::to_string(other_glove_sessions) + ", expected >= 0");
+    need(calibration_seconds >= 0.0, "calibration seconds " + std::to_string(calibration_seconds) + ", expected >= 0");
+  }
+};
+
+/// @brief Recording kinds.
+enum class RecordingKind : std::uint8_t { Session = 0, Calibration = 1 };
+
+/// @brief One recorded sequence and who, with which glove and donning, recorded it.
+struct SessionRecording {
+  int subject = 0;   ///< Subject id.
+  int glove = 0;     ///< Glove id.
+  int session = 0;   ///< Session index within (subject, glove).
+  int donning = 0;   ///< Index of the donning within (subject, glove): sessions kept on share it.
+  RecordingKind kind = RecordingKind::Session;  ///< Session or its calibration sequence.
+  Recording recording;  ///< The frames.
+};
+
+/// @brief The poses a calibration sequence goes through: the extremes of every cell ("freely
+/// explore different extreme poses", paper Sec. 4.3).
+inline std::vector<KeyPose> calibration_gallery(const std::vector<KeyPose>& gallery) {
+  const char* names[] = {"flat", "spread", "fist", "claw", "thumbs_up", "wave", "flat_bent", "pinch_index", "pinch_pinky", "point"};
+  std::vector<KeyPose> out;
+  for (const char* n : names)
+    for (const KeyPose& k : gallery)
+      if (k.name == n) out.push_back(k);
+  return out;
+}
+
+/// @brief The sessions of the protocol in a fixed order: subject, glove, session; each session's
+/// calibration sequence just before it.
+inline std::vector<SessionRecording> plan_corpus(const CorpusConfig& config) {
+  config.validate();
+  std::vector<SessionRecording> plan;
+  for (int s = 0; s < config.subjects; ++s)
+    for (int g = 0; g < config.gloves; ++g) {
+      const int sessions = g == 0 ? config.sessions : config.other_glove_sessions;
+      for (int k = 0; k < sessions; ++k) {
+        SessionRecording r;
+        r.subject = s;
+        r.glove = g;
+        r.session = k;
+        // First glove: sessions 0..intra-1 share donning 0; each later session is a new donning.
+        r.donning = g == 0 ? std::max(0, k - config.intra_sessions + 1) : k;
+        if (config.calibration_seconds > 0.0) {
+          SessionRecording c = r;
+          c.kind = RecordingKind::Calibration;
+          plan.push_back(c);
+        }
+        plan.push_back(r);
+      }
+    }
+  return plan;
+}
+
+/// @brief Simulates the corpus. Deterministic in config.seed for any thread count.
+inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config) {
+  std::vector<SessionRecording> plan = plan_corpus(config);
+  const std::vector<Subject> subjects = make_subjects(config.subjects, config.seed);
+  const std::vector<KeyPose> gallery = pose_gallery();
+  const std::vector<KeyPose> extremes = calibration_gallery(gallery);
+  std::vector<Glove> gloves;
+  for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed));
+
+  const auto run = [&](SessionRecording& job) {
+    const Subject& subject = subjects[static_cast<std::size_t>(job.subject)];
+    const auto id = [&](std::uint64_t purpose, int index) {
+      return derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
+                                       static_cast<std::uint64_t>(index)});
+    };
+    Rng fit_rng(id(3, job.donning));
+    const GloveFit fit = don_glove(subject, fit_rng);
+    const GlovePhysics physics(subject, gloves[static_cast<std::size_t>(job.glove)], fit);
+    const bool calibration = job.kind == RecordingKind::Calibration;
+    MotionConfig motion_config;
+    if (calibration) {  // quick, wide movements between extremes, no blends
+      motion_config.explore = 0.0;
+      motion_config.pace = 1.5;
+      motion_config.dwell = 0.5;
+    }
+    const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
+    const int stream = 2 * job.session + (calibration ? 1 : 0);
+    const MotionSequence motion(subject, calibration ? extremes : gallery, seconds, id(4, stream), motion_config);
+    job.recording = record(physics, motion, subject.distal_radius(), id(5, stream), config.recording);
+  };
+
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = std::min<unsigned>(config.threads > 0 ? static_cast<unsigned>(config.threads) : hardware,
+                                              static_cast<unsigned>(plan.size()));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto worker = [&] {
+    try {
+      for (std::size_t i = next++; i < plan.size(); i = next++) run(plan[i]);
+    } catch (...) {  // hand the first failure to the caller instead of terminating
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      next = plan.size();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  return plan;
+}
+
+}  // namespace glovepose::sim

@@ -1,0 +1,397 @@
+/// @file glove.hpp
+/// @brief The simulated glove: fabrication (one glove's spread of base capacitances and direction
+/// selectivity), fit (how the cells sit on a hand each time the glove is put on) and the sensor
+/// physics from the posed hand to the 44 cell capacitances C_c.
+///
+/// Physics, per cell, from the posed hand's geometry:
+///  - strain along the digit: the skin over a flexing joint lengthens by about r * angle (r: the
+///    skin's distance from the joint axis, the template's sphere radius there, scaled to the hand);
+///    a cell catches the share of that lengthening that falls under it (its length against a bend
+///    zone of width 1.2 r centred on the joint: a shifted cell catches less), plus a little from the
+///    digit's neighbouring joints (the skin slides along the finger). Back-of-hand cells catch the
+///    knuckles' lengthening with an exponential fall-off over their distance from the knuckle line.
+///  - strain across: finger cells see the girth grow over a flexed joint and the web pull when the
+///    finger abducts against its neighbours; web (abduction) cells see the change of the distance
+///    between the two digits' proximal phalanxes; back-of-hand cells see the spread of the dorsal
+///    knuckle points and the thumb's distance from the index knuckle, with distance fall-off.
+///  - pre-stretch: the glove's sheet is relaxed on a hand of kGloveRelaxedLength x Width x Height;
+///    a bigger hand stretches every cell before any motion, a smaller one leaves slack that the first
+///    motion only takes up (the textile carries no compression: a smooth ramp of width kSlackWidth).
+///  - the textile stiffens at large stretch: strain saturates as kSaturation * tanh(s / kSaturation).
+///  - the cuts beside each cell make it compliant along them (paper Sec. 3.1): the other direction
+///    reaches the cell attenuated by the glove's cross gain (about kCrossGain).
+///  - area ratio A/A0 = lambda_along * lambda_across, and C = C0 (A/A0)^2 (paper eq. 1, volume
+///    conservation), C0 = eps_r eps_0 A0 / d for the cell's size (5 x 7.5 or 5 x 11.5 mm, Sec. 3.3).
+/// Every constant below says where its value comes from; those marked "assumption" are ours.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "../config.hpp"
+#include "../hand/dofs.hpp"
+#include "../hand/kinematics.hpp"
+#include "../sensor/layout.hpp"
+#include "random.hpp"
+#include "subject.hpp"
+
+namespace glovepose::sim {
+
+/// @brief Cells of the simulated glove (the paper's layout, sensor::TraceLayout::glauser2019()).
+inline constexpr int kCells = sensor::kGlauser2019Cells;
+/// @brief One value per cell.
+using CellArray = std::array<double, kCells>;
+
+/// @brief Hand the glove's sheet is relaxed on (mm), length: assumption, the medium glove's 20 cm
+/// outline (paper Sec. 5.2) less the wrist strap and seams, so that the paper's 17 cm hands wear it
+/// with a little slack and its 20.5 cm hand with 17% pre-stretch.
+inline constexpr double kGloveRelaxedLength = 175.0;
+/// @brief Width (mm) of the hand the sheet is relaxed on: assumption, the 12.5 cm outline less the
+/// textile margins; the paper's 9-11 cm hands span -5..+16% across pre-stretch.
+inline constexpr double kGloveRelaxedWidth = 95.0;
+/// @brief Height (mm) of the hand the sheet is relaxed on (assumption, the paper's smallest, 4 cm).
+inline constexpr double kGloveRelaxedHeight = 40.0;
+/// @brief Cell widths and lengths (mm): paper Sec. 3.3, "5 x 7.5 mm and 5 x 11.5"; the longer ones
+/// are the main-joint cells ("longer sensors directly correspond to the main joints", Sec. 3.1).
+inline constexpr double kCellWidth = 5.0, kShortCellLength = 7.5, kLongCellLength = 11.5;
+/// @brief Relative permittivity of the silicone dielectric (assumption: typical of PDMS-class
+/// silicones, 2.7-3.0).
+inline constexpr double kPermittivity = 2.8;
+/// @brief Dielectric thickness (mm), assumption: the 0.85 mm sheet less two 0.22 mm conductive
+/// layers (paper Sec. 3.2) and two shielding layers.
+inline constexpr double kDielectricThickness = 0.2;
+/// @brief Vacuum permittivity in pF/mm.
+inline constexpr double kEpsilon0 = 8.8541878128e-3;
+/// @brief Fabrication spread of C0 (relative SD): assumption, hand-cast layers of tape-controlled
+/// thickness (Sec. 3.2) vary by a few percent.
+inline constexpr double kBaseCapacitanceSpread = 0.05;
+/// @brief Share of the stretch across a cell's cuts that reaches it (assumption; paper Sec. 3.1:
+/// the joint cells are "much less sensitive" to girth), and its spread between cells.
+inline constexpr double kCrossGain = 0.2, kCrossGainSpread = 0.05;
+/// @brief Width of the bend zone over a joint, in units of the skin radius r (assumption).
+inline constexpr double kBendZone = 1.2;
+/// @brief Share of a neighbouring joint's skin lengthening that reaches a joint cell (assumption).
+inline constexpr double kNeighbourJointSpill = 0.08;
+/// @brief Extension (negative flexion) stretches the dorsal skin less than flexion compresses the
+/// palmar side; the dorsal skin's response to extension is this share (assumption).
+inline constexpr double kExtensionShare = 0.3;
+/// @brief Girth strain per radian of flexion of the joint under a finger cell (assumption).
+inline constexpr double kGirthPerFlexion = 0.06;
+/// @brief Girth strain per radian of abduction against the neighbours, proximal cells (assumption).
+inline constexpr double kGirthPerAbduction = 0.15;
+/// @brief Fall-off length (mm) of the knuckles' stretch over the back of the hand (assumption).
+inline constexpr double kKnuckleFalloff = 12.0;
+/// @brief Fall-off length (mm) of the thumb's pull over the back of the hand (assumption).
+inline constexpr double kThumbFalloff = 25.0;
+/// @brief Share of a neighbouring digit's knuckle lengthening a back-of-hand cell sees (assumption:
+/// the sheet passes strain sideways).
+inline constexpr double kNeighbourKnuckleShare = 0.25;
+/// @brief Skin spans (mm) over which a distance change between digits spreads: finger webs, the
+/// thumb web, the back of the hand across knuckles, the thumb over the back (assumption).
+inline constexpr double kFingerWebSpan = 10.0, kThumbWebSpan = 25.0, kKnuckleSpan = 15.0, kThumbBackSpan = 40.0;
+/// @brief Distal slide (mm per radian) of the glove over a finger's back as the joints proximal to a
+/// cell flex: the textile is pulled towards the fingertip when the finger curls (assumption).
+inline constexpr double kSlidePerFlexion = 1.5;
+/// @brief Share of the mean knuckle lengthening of the other digits that reaches every finger cell
+/// through the tension of the one-piece sheet (assumption).
+inline constexpr double kSheetTension = 0.05;
+/// @brief Width of the slack ramp (strain): the textile takes up slack smoothly (assumption).
+inline constexpr double kSlackWidth = 0.01;
+/// @brief Strain at which the textile locks up (assumption: elastane jersey, paper Sec. 3.2).
+inline constexpr double kSaturation = 0.6;
+/// @brief Donning: SD (mm) of the whole glove's shift along the fingers, of each cell's own shift, and
+/// the relative SD of each cell's pre-stretch (assumption: "shifts of a few millimetres"; the wrist
+/// strap of Sec. 3.2 bounds them).
+inline constexpr double kDonningShift = 1.5, kCellShift = 1.0, kPreStretchSpread = 0.02;
+
+/// @brief Where a cell is and how it couples to the hand (derived from the layout, plus the
+/// back-of-hand cells' distances from the knuckle line, our reading of Fig. 4).
+struct CellSite {
+  int digit = 0;                   ///< Pose-map digit (thumb 0 .. pinky 4).
+  sensor::Segment segment{};       ///< Place along the digit.
+  bool along = true;               ///< Cut direction: senses along the digit best.
+  double length = kShortCellLength;  ///< mm along the digit.
+  double knuckle_distance = 0.0;   ///< Back of the hand: mm from the knuckle line (toward the wrist).
+  double thumb_distance = 0.0;     ///< Back of the hand: mm from the thumb's web.
+  int flexion_dof = -1;            ///< Finger cells: DoF index of the joint under the cell.
+};
+
+/// @brief The 44 sites of the paper's glove.
+inline std::array<CellSite, kCells> glauser2019_sites() {
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  // Back of the hand, knuckle-line distance (mm): the knuckle-side column of the stretch maps
+  // (11-15 along; 2, 4, 7, 10, 19 across) at 12 mm, the wrist-side one (3, 5, 6 along; 17, 18
+  // across) at 30 mm. Thumb distance: from the thumb web across the back, digit by digit.
+  const auto back_distance = [](int cell) { return (cell == 3 || cell == 5 || cell == 6 || cell == 17 || cell == 18) ? 30.0 : 12.0; };
+  constexpr std::array<double, 5> thumb_distance{0.0, 20.0, 38.0, 55.0, 70.0};
+  std::array<CellSite, kCells> sites{};
+  for (int c = 0; c < kCells; ++c) {
+    const sensor::Cell& cell = layout.cells()[static_cast<std::size_t>(c)];
+    CellSite& s = sites[static_cast<std::size_t>(c)];
+    s.digit = static_cast<int>(cell.digit);
+    s.segment = cell.segment;
+    s.along = cell.direction == sensor::Direction::Along;
+    s.length = cell.category == sensor::Category::MainJoint ? kLongCellLength : kShortCellLength;
+    s.thumb_distance = thumb_distance[static_cast<std::size_t>(s.digit)];
+    if (cell.segment == sensor::Segment::Metacarpal) s.knuckle_distance = back_distance(c);
+    // The joint under a finger cell. The thumb's main joints are MCP and IP (theta 11, 12): its
+    // "proximal" cells sit over theta 11 and its "middle" ones over theta 12.
+    hand::Motion motion = hand::Motion::BaseFlexion;
+    if (cell.segment == sensor::Segment::Middle) motion = hand::Motion::MiddleFlexion;
+    if (cell.segment == sensor::Segment::Distal) motion = hand::Motion::TipFlexion;
+    if (s.digit == 0 && cell.segment == sensor::Segment::Proximal) motion = hand::Motion::MiddleFlexion;
+    if (s.digit == 0 && cell.segment == sensor::Segment::Middle) motion = hand::Motion::TipFlexion;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (static_cast<int>(hand::kDofs[d].finger) == s.digit && hand::kDofs[d].motion == motion) s.flexion_dof = static_cast<int>(d);
+  }
+  return sites;
+}
+
+/// @brief One fabricated glove: its cells' base capacitances and cross-direction gains.
+struct Glove {
+  int id = 0;                 ///< 0-based.
+  CellArray base_capacitance{};  ///< C0 (pF) of each cell.
+  CellArray cross_gain{};        ///< Share of the stretch across the cuts that reaches each cell.
+};
+
+/// @brief Glove `id` from `seed`: nominal C0 = eps_r eps_0 A0 / d with the fabrication spread.
+inline Glove make_glove(int id, std::uint64_t seed) {
+  Rng rng(derive_seed(seed, {2, static_cast<std::uint64_t>(id)}));
+  const auto sites = glauser2019_sites();
+  Glove g;
+  g.id = id;
+  for (int c = 0; c < kCells; ++c) {
+    const auto i = static_cast<std::size_t>(c);
+    const double nominal = kPermittivity * kEpsilon0 * kCellWidth * sites[i].length / kDielectricThickness;
+    g.base_capacitance[i] = nominal * std::max(0.8, rng.normal(1.0, kBaseCapacitanceSpread));
+    g.cross_gain[i] = std::clamp(rng.normal(kCrossGain, kCrossGainSpread), 0.05, 0.4);
+  }
+  return g;
+}
+
+/// @brief How the glove sits on one hand for one donning.
+struct GloveFit {
+  CellArray shift{};        ///< mm along the digit (towards the fingertip positive) of each cell.
+  CellArray pre_along{};    ///< Stretch ratio along each cell before any motion.
+  CellArray pre_across{};   ///< Stretch ratio across each cell before any motion.
+};
+
+/// @brief Puts the glove on a hand: the pre-stretch follows the hand's size against the glove's
+/// relaxed size, and every donning shifts the cells and varies their pre-stretch a little.
+inline GloveFit don_glove(const Subject& subject, Rng& rng) {
+  const auto sites = glauser2019_sites();
+  GloveFit fit;
+  const double global_shift = rng.normal(0.0, kDonningShift);
+  const double global_pre = rng.normal(1.0, kPreStretchSpread / 2.0);
+  const double girth = std::sqrt(subject.size.width / kGloveRelaxedWidth * subject.size.height / kGloveRelaxedHeight);
+  for (int c = 0; c < kCells; ++c) {
+    const auto i = static_cast<std::size_t>(c);
+    const CellSite& s = sites[i];
+    const bool on_finger = s.segment != sensor::Segment::Metacarpal;
+    const double length = subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
+    const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / kGloveRelaxedWidth;
+    fit.shift[i] = global_shift + rng.normal(0.0, kCellShift);
+    fit.pre_along[i] = length * global_pre * rng.normal(1.0, kPreStretchSpread);
+    fit.pre_across[i] = across * global_pre * rng.normal(1.0, kPreStretchSpread);
+  }
+  return fit;
+}
+
+/// @brief The sensor physics of one glove on one hand in one fit: pose -> cell capacitances.
+/// Immutable after construction; the per-pose calls are noexcept and allocation-free.
+class GlovePhysics {
+ public:
+  /// @brief Physics for `glove` worn by `subject` as `fit` describes.
+  GlovePhysics(const Subject& subject, const Glove& glove, const GloveFit& fit)
+      : kinematics_(subject.hand_model()), glove_(glove), fit_(fit), sites_(glauser2019_sites()), radius_(subject.distal_radius()) {
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) knuckle_radius_[f] = subject.knuckle_radius(static_cast<hand::Finger>(f));
+    hand::Skeleton rest;
+    kinematics_.pose(hand::Angles{}, rest);
+    reference_ = distances(rest);
+  }
+
+  /// @brief The hand's kinematic chain.
+  const hand::Kinematics& kinematics() const noexcept { return kinematics_; }
+
+  /// @brief Stretch ratios (along, across) of every cell in the pose, after pre-stretch, slack,
+  /// saturation and the cuts' direction selectivity.
+  GLOVEPOSE_REALTIME void stretch(const hand::Angles& a, CellArray& along, CellArray& across) const noexcept {
+    hand::Skeleton s;
+    kinematics_.pose(a, s);
+    const Distances now = distances(s);
+    for (int c = 0; c < kCells; ++c) {
+      const auto i = static_cast<std::size_t>(c);
+      const CellSite& site = sites_[i];
+      double strain_along = 0.0, strain_across = 0.0;
+      if (site.segment == sensor::Segment::Metacarpal) {
+        strain_along = back_along(site, a, fit_.shift[i]);
+        strain_across = back_across(site, now, fit_.shift[i]);
+      } else if (site.segment == sensor::Segment::Web) {
+        strain_across = (now.web[static_cast<std::size_t>(site.digit)] - reference_.web[static_cast<std::size_t>(site.digit)]) /
+                        (site.digit == 0 ? kThumbWebSpan : kFingerWebSpan);
+        strain_along = 0.3 * knuckle_lengthening(site.digit, a) / site.length;
+      } else {
+        strain_along = (joint_lengthening(site, a, fit_.shift[i] + slide(site, a)) + sheet_tension(site.digit, a)) / site.length;
+        strain_across = girth_strain(site, a);
+      }
+      const double s_along = textile(fit_.pre_along[i] * (1.0 + strain_along) - 1.0);
+      const double s_across = textile(fit_.pre_across[i] * (1.0 + strain_across) - 1.0);
+      along[i] = 1.0 + (site.along ? 1.0 : glove_.cross_gain[i]) * s_along;
+      across[i] = 1.0 + (site.along ? glove_.cross_gain[i] : 1.0) * s_across;
+    }
+  }
+
+  /// @brief Cell capacitances C_c (pF) in the pose: C0 (A/A0)^2 with A/A0 = along * across.
+  GLOVEPOSE_REALTIME void capacitances(const hand::Angles& a, CellArray& out) const noexcept {
+    CellArray along, across;
+    stretch(a, along, across);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const double area = along[i] * across[i];
+      out[i] = glove_.base_capacitance[i] * area * area;
+    }
+  }
+
+ private:
+  // Distances between skin points that the web and back-of-hand cells see (mm).
+  struct Distances {
+    std::array<double, hand::kFingerCount> web{};      // digit d to its neighbour towards the pinky (thumb: to index)
+    std::array<double, hand::kFingerCount> knuckle{};  // dorsal knuckle points, d to its ulnar neighbour (pinky: to ring)
+    double thumb_back = 0.0;                           // dorsal thumb metacarpal to the index knuckle
+  };
+
+  Distances distances(const hand::Skeleton& s) const noexcept {
+    Distances d;
+    std::array<Eigen::Vector3d, hand::kFingerCount> web_point, knuckle_point;
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      const auto base = static_cast<std::size_t>(hand::kFingerBase[f]);
+      // Finger webs: 40% along the proximal phalanx; thumb: just past its MCP (Thumb2's origin).
+      const std::size_t web_frame = f == 0 ? base + 1 : base;
+      const double along = f == 0 ? 5.0 : 0.4 * kinematics_.model().rest[base + 1].translation().y();
+      web_point[f] = s[web_frame] * Eigen::Vector3d(0.0, along, 0.0);
+      // Dorsal skin over the knuckle: local -z is the back of the finger (flexion turns +y to +z).
+      knuckle_point[f] = s[base] * Eigen::Vector3d(0.0, 6.0, -knuckle_radius_[f]);
+    }
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      const std::size_t next = f == 4 ? 3 : f + 1;  // towards the pinky; the pinky pairs with the ring
+      d.web[f] = (web_point[f] - web_point[next]).norm();
+      d.knuckle[f] = (knuckle_point[f] - knuckle_point[next]).norm();
+    }
+    const auto thumb = static_cast<std::size_t>(hand::Phalanx::Thumb1);
+    const double metacarpal = kinematics_.model().rest[thumb + 1].translation().y();
+    d.thumb_back = (s[thumb] * Eigen::Vector3d(0.0, 0.6 * metacarpal, -knuckle_radius_[0] * 0.5) - knuckle_point[1]).norm();
+    return d;
+  }
+
+  // Dorsal skin's response to a joint angle: flexion lengthens it fully, extension a little.
+  static double bend(double angle) noexcept { return angle >= 0.0 ? angle : kExtensionShare * angle; }
+
+  // Skin radius at the joint a DoF rotates: the knuckle sphere for a digit's base joint, else the
+  // distal sphere of the parent phalanx.
+  double joint_radius(int dof) const noexcept {
+    const auto& d = hand::kDofs[static_cast<std::size_t>(dof)];
+    const int parent = hand::kParent[static_cast<std::size_t>(d.phalanx)];
+    return parent == 0 ? knuckle_radius_[static_cast<std::size_t>(d.finger)] : radius_[static_cast<std::size_t>(parent)];
+  }
+
+  // Lengthening (mm) of the dorsal skin over a digit's base joint.
+  double knuckle_lengthening(int digit, const hand::Angles& a) const noexcept {
+    const int dof = flexion_dof(digit, hand::Motion::BaseFlexion);
+    return joint_radius(dof) * bend(a[static_cast<std::size_t>(dof)]);
+  }
+
+  static int flexion_dof(int digit, hand::Motion motion) noexcept {
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (static_cast<int>(hand::kDofs[d].finger) == digit && hand::kDofs[d].motion == motion) return static_cast<int>(d);
+    return -1;
+  }
+
+  // Finger cells: the share of the joint's skin lengthening under the cell, plus the neighbours'.
+  double joint_lengthening(const CellSite& site, const hand::Angles& a, double shift) const noexcept {
+    const int dof = site.flexion_dof;
+    const double r = joint_radius(dof);
+    const double zone = kBendZone * r;
+    // The cell spans [shift - L/2, shift + L/2] around the joint; the bend zone [-zone/2, zone/2].
+    const double overlap = std::max(0.0, std::min(shift + site.length / 2, zone / 2) - std::max(shift - site.length / 2, -zone / 2));
+    double lengthening = overlap / zone * r * bend(a[static_cast<std::size_t>(dof)]);
+    for (int other = dof - 1; other <= dof + 1; other += 2) {  // the digit's neighbouring flexion joints
+      if (other < 0 || other >= static_cast<int>(hand::kDofCount)) continue;
+      const auto& o = hand::kDofs[static_cast<std::size_t>(other)];
+      const bool flexion = o.motion == hand::Motion::BaseFlexion || o.motion == hand::Motion::MiddleFlexion || o.motion == hand::Motion::TipFlexion;
+      if (flexion && static_cast<int>(o.finger) == site.digit)
+        lengthening += kNeighbourJointSpill * joint_radius(other) * bend(a[static_cast<std::size_t>(other)]);
+    }
+    return lengthening;
+  }
+
+  // How far the glove has slid towards the fingertip over a cell: the flexion of the joints between
+  // the cell and the palm pulls the textile.
+  double slide(const CellSite& site, const hand::Angles& a) const noexcept {
+    double flexion = 0.0;
+    for (int d = flexion_dof(site.digit, hand::Motion::BaseFlexion); d < site.flexion_dof; ++d) flexion += std::max(0.0, a[static_cast<std::size_t>(d)]);
+    return kSlidePerFlexion * flexion;
+  }
+
+  // The sheet's tension: the other digits' knuckle lengthening, shared.
+  double sheet_tension(int digit, const hand::Angles& a) const noexcept {
+    double sum = 0.0;
+    for (int d = 0; d < static_cast<int>(hand::kFingerCount); ++d)
+      if (d != digit) sum += knuckle_lengthening(d, a);
+    return kSheetTension * sum / (hand::kFingerCount - 1);
+  }
+
+  // Finger cells across: girth over the flexed joint; proximal cells also the abduction's pull.
+  double girth_strain(const CellSite& site, const hand::Angles& a) const noexcept {
+    double strain = kGirthPerFlexion * std::max(0.0, a[static_cast<std::size_t>(site.flexion_dof)]);
+    if (site.segment == sensor::Segment::Proximal && site.digit > 0) {
+      const auto abduction = [&](int digit) { return a[static_cast<std::size_t>(flexion_dof(digit, hand::Motion::Abduction))]; };
+      double neighbours = 0.0;
+      int count = 0;
+      for (int n = site.digit - 1; n <= site.digit + 1; n += 2)
+        if (n >= 1 && n <= 4) {
+          neighbours += abduction(n);
+          ++count;
+        }
+      strain += kGirthPerAbduction * std::abs(abduction(site.digit) - neighbours / count);
+    }
+    return strain;
+  }
+
+  // Back of the hand, along: the knuckles' lengthening with fall-off from the knuckle line.
+  double back_along(const CellSite& site, const hand::Angles& a, double shift) const noexcept {
+    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / kKnuckleFalloff);
+    double lengthening = knuckle_lengthening(site.digit, a);
+    for (int n = site.digit - 1; n <= site.digit + 1; n += 2)
+      if (n >= 1 && n <= 4 && site.digit >= 1) lengthening += kNeighbourKnuckleShare * knuckle_lengthening(n, a);
+    if (site.digit == 0)  // the thumb's metacarpal cell: its CMC flexion and abduction
+      lengthening += 0.5 * knuckle_radius_[0] * bend(a[static_cast<std::size_t>(flexion_dof(0, hand::Motion::Abduction))]);
+    return falloff * lengthening / site.length;
+  }
+
+  // Back of the hand, across: knuckle spread with fall-off, and the thumb's pull with its own.
+  double back_across(const CellSite& site, const Distances& now, double shift) const noexcept {
+    const auto d = static_cast<std::size_t>(site.digit);
+    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / kKnuckleFalloff);
+    const double knuckles = site.digit == 0 ? 0.0 : (now.knuckle[d] - reference_.knuckle[d]) / kKnuckleSpan;
+    const double thumb = std::exp(-site.thumb_distance / kThumbFalloff) * (now.thumb_back - reference_.thumb_back) / kThumbBackSpan;
+    return falloff * knuckles + thumb;
+  }
+
+  // Pre-stretched strain -> what the cell sees: slack taken up smoothly, saturation at large strain.
+  static double textile(double strain) noexcept {
+    const double x = strain / kSlackWidth;
+    const double taut = x > 30.0 ? strain : kSlackWidth * std::log1p(std::exp(x));  // softplus
+    return kSaturation * std::tanh(taut / kSaturation);
+  }
+
+  hand::Kinematics kinematics_;
+  Glove glove_;
+  GloveFit fit_;
+  std::array<CellSite, kCells> sites_;
+  std::array<double, 16> radius_;
+  std::array<double, hand::kFingerCount> knuckle_radius_{};
+  Distances reference_;
+};
+
+}  // namespace glovepose::sim

@@ -1,0 +1,181 @@
+/// @file motion.hpp
+/// @brief Natural hand motion for one recording: the subject goes from pose to pose of the gallery
+/// (each visit formed in the person's own style and a little differently every time, sometimes a
+/// blend of two poses as the paper's participants "explore the space of hand poses"), with
+/// minimum-jerk transitions at human speed, dwell times, the couplings of real hands and a little
+/// drift and physiological tremor while holding.
+///
+/// Sources: minimum-jerk point-to-point movements (Flash & Hogan 1985); finger enslaving, the
+/// involuntary flexion of neighbouring fingers (Häger-Ross & Schieber 2000; 10-30% of the
+/// instructed finger's motion); the distal joint's coupling to the middle joint (kTipCoupling,
+/// pose_gallery.hpp); physiological tremor at 8-12 Hz (Elble 1996). Transition times of 0.3-1.6 s and
+/// dwell times of a fraction of a second to a few seconds are our choice for the paper's free
+/// exploration with a printed gallery.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "../config.hpp"
+#include "../hand/collision.hpp"
+#include "../hand/dofs.hpp"
+#include "../hand/kinematics.hpp"
+#include "pose_gallery.hpp"
+#include "random.hpp"
+#include "subject.hpp"
+
+namespace glovepose::sim {
+
+/// @brief Settings of the motion generator.
+struct MotionConfig {
+  double visit_spread = 0.06;      ///< SD (rad) of a visit's departure from the person's pose (abduction/twist: half).
+  double explore = 0.35;           ///< Probability that a target blends two gallery poses.
+  double drift_amplitude = 0.025;  ///< Amplitude (rad) of slow wandering (0.1-0.5 Hz) while holding and moving.
+  double tremor_amplitude = 0.003; ///< Amplitude (rad) of physiological tremor (8-12 Hz).
+  double tip_spread = 0.05;        ///< SD (rad) of tip flexion around kTipCoupling x middle flexion.
+  double pace = 1.0;               ///< Multiplies the subject's speed (calibration sequences move faster).
+  double dwell = 1.0;              ///< Multiplies the subject's mean dwell time.
+};
+
+/// @brief One stretch of the motion: a transition to `to`, then a hold.
+struct MotionSegment {
+  double start = 0.0;    ///< Seconds since the recording started.
+  double move = 0.0;     ///< Transition duration, s.
+  double hold = 0.0;     ///< Dwell at `to`, s.
+  hand::Angles from{};   ///< Pose at `start`.
+  hand::Angles to{};     ///< Pose reached at `start + move`.
+  int key = -1;          ///< Gallery index of the target (the first one when blended).
+};
+
+/// @brief The motion of one recording as a function of time. Immutable once made.
+class MotionSequence {
+ public:
+  /// @brief `duration` seconds of motion of `subject` through `gallery`, from `seed`. Starts at the
+  /// gallery's first pose ("flat" for the built-in gallery). Throws glovepose::Error for an empty
+  /// gallery or a non-positive duration.
+  MotionSequence(const Subject& subject, const std::vector<KeyPose>& gallery, double duration, std::uint64_t seed,
+                 const MotionConfig& config = {})
+      : duration_(duration) {
+    if (gallery.empty()) throw Error("MotionSequence: empty gallery, expected at least one key pose");
+    if (!(duration > 0.0)) throw Error("MotionSequence: duration " + std::to_string(duration) + " s, expected > 0");
+    Rng rng(seed);
+    const hand::Kinematics fk(subject.hand_model());
+    const std::array<double, 16> radius = subject.distal_radius();
+    hand::Skeleton skeleton;
+    hand::Angles current = shape(gallery.front().angles, subject, config, rng);
+    double t = 0.0;
+    while (t <= duration) {
+      MotionSegment seg;
+      seg.start = t;
+      seg.from = current;
+      seg.key = rng.index(static_cast<int>(gallery.size()));
+      hand::Angles target = gallery[static_cast<std::size_t>(seg.key)].angles;
+      if (rng.bernoulli(config.explore)) {
+        const hand::Angles& other = gallery[static_cast<std::size_t>(rng.index(static_cast<int>(gallery.size())))].angles;
+        const double w = rng.uniform(0.25, 0.75);
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] = w * target[d] + (1.0 - w) * other[d];
+      }
+      seg.to = shape(target, subject, config, rng);
+      // As the paper's tracker would have reported it: interpenetrating fingers give way.
+      fk.pose(seg.to, skeleton);
+      if (hand::collision_energy(fk, skeleton, radius) > 0.0) seg.to = settle_pose(seg.to, hand::Finger::Thumb, nullptr, fk, radius, 0.1);
+      double largest = 0.0;
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) largest = std::max(largest, std::abs(seg.to[d] - seg.from[d]));
+      seg.move = std::clamp((0.3 + 0.5 * largest) / (subject.speed * config.pace), 0.25, 1.6);
+      seg.hold = std::max(0.1, rng.exponential(subject.dwell * config.dwell));
+      segments_.push_back(seg);
+      current = seg.to;
+      t += seg.move + seg.hold;
+    }
+    // Slow wandering and tremor: two sinusoids per band and DoF, random frequencies and phases.
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;
+      for (int k = 0; k < 2; ++k) {
+        drift_[d][static_cast<std::size_t>(k)] = {config.drift_amplitude * (small ? 0.5 : 1.0) * rng.uniform(0.5, 1.0),
+                                                  6.283185307179586 * rng.uniform(0.1, 0.5), 6.283185307179586 * rng.uniform()};
+        tremor_[d][static_cast<std::size_t>(k)] = {config.tremor_amplitude * rng.uniform(0.5, 1.0),
+                                                   6.283185307179586 * rng.uniform(8.0, 12.0), 6.283185307179586 * rng.uniform()};
+      }
+    }
+  }
+
+  /// @brief Seconds of motion.
+  double duration() const noexcept { return duration_; }
+  /// @brief The transitions and holds.
+  const std::vector<MotionSegment>& segments() const noexcept { return segments_; }
+
+  /// @brief The pose at time t (seconds; clamped to the recording), inside the joint limits, tip
+  /// flexion following middle flexion.
+  GLOVEPOSE_REALTIME hand::Angles at(double t) const noexcept {
+    t = std::clamp(t, 0.0, duration_);
+    // The last segment starting at or before t.
+    const auto it = std::upper_bound(segments_.begin(), segments_.end(), t, [](double v, const MotionSegment& s) { return v < s.start; });
+    const MotionSegment& seg = *(it == segments_.begin() ? it : it - 1);
+    const double s = std::clamp((t - seg.start) / seg.move, 0.0, 1.0);
+    const double w = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));  // minimum jerk
+    hand::Angles a{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      double wobble = 0.0;
+      for (const Wave& v : drift_[d]) wobble += v.amplitude * std::sin(v.omega * t + v.phase);
+      for (const Wave& v : tremor_[d]) wobble += v.amplitude * std::sin(v.omega * t + v.phase);
+      a[d] = seg.from[d] + (seg.to[d] - seg.from[d]) * w + wobble;
+    }
+    for (std::size_t f = 1; f < hand::kFingerCount; ++f) {  // the tip keeps following the middle joint
+      const std::size_t base = abduction_dof(static_cast<int>(f));
+      const double target_offset = (seg.from[base + 3] - kTipCoupling * seg.from[base + 2]) * (1.0 - w) +
+                                   (seg.to[base + 3] - kTipCoupling * seg.to[base + 2]) * w;
+      a[base + 3] = kTipCoupling * a[base + 2] + target_offset;
+    }
+    return limits_.clamp(a);
+  }
+
+ private:
+  // DoF index of a long finger's abduction (theta 13 + 4 (finger - 1)); base, middle and tip
+  // flexion follow it in kDofs.
+  static constexpr std::size_t abduction_dof(int finger) noexcept { return static_cast<std::size_t>(4 * finger); }
+
+  struct Wave {
+    double amplitude, omega, phase;
+  };
+
+  // A visit of a key pose: the person's style, this visit's variation, finger enslaving, the tip
+  // coupling, the joint limits.
+  static hand::Angles shape(const hand::Angles& key, const Subject& subject, const MotionConfig& config, Rng& rng) {
+    hand::Angles q = key;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;
+      q[d] += subject.style[d] + rng.normal(0.0, small ? config.visit_spread / 2 : config.visit_spread);
+    }
+    // Enslaving: base and middle flexion of each long finger move towards their neighbours' mean.
+    const hand::Angles designed = q;
+    for (int column = 1; column <= 2; ++column)
+      for (int f = 1; f <= 4; ++f) {
+        const auto dof = [&](int finger) { return abduction_dof(finger) + static_cast<std::size_t>(column); };
+        double neighbours = 0.0;
+        int count = 0;
+        for (int n = f - 1; n <= f + 1; n += 2)
+          if (n >= 1 && n <= 4) {
+            neighbours += designed[dof(n)];
+            ++count;
+          }
+        q[dof(f)] += subject.coupling * (neighbours / count - designed[dof(f)]);
+      }
+    for (int f = 1; f <= 4; ++f) {
+      const std::size_t middle = abduction_dof(f) + 2;
+      q[middle + 1] = kTipCoupling * q[middle] + rng.normal(0.0, config.tip_spread);
+    }
+    return hand::JointLimits().clamp(q);
+  }
+
+  double duration_;
+  std::vector<MotionSegment> segments_;
+  std::array<std::array<Wave, 2>, hand::kDofCount> drift_{};
+  std::array<std::array<Wave, 2>, hand::kDofCount> tremor_{};
+  hand::JointLimits limits_;
+};
+
+}  // namespace glovepose::sim

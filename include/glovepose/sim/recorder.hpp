@@ -1,0 +1,157 @@
+/// @file recorder.hpp
+/// @brief The time-multiplexed readout of a simulated glove: the 180 compound rows of M measured one
+/// after another (each at the hand pose of its own instant), with measurement noise and rare
+/// glitches, fed through the real-time sensor::Readout (5-frame mean, a solve every 16 rows, paper
+/// Sec. 3.1); one frame of solved C_c, ground-truth angles and outlier flag per 60 Hz cycle.
+///
+/// The textile composite relaxes: a cell's reading lags partly behind its stretch (a share of
+/// kCreepShare follows a first-order lag of kCreepTime), the "material hysteresis" the paper names
+/// among its error sources (Sec. 6); share and time are assumptions.
+///
+/// Noise figures are assumptions (the paper gives none): a compound reading's SD of 0.3 pF against
+/// compound values of 20-80 pF (charging-time jitter of the micro-controller's timer); spikes
+/// (+5..50 pF, e.g. a touch or a contact bounce) in 1 of 50,000 readings; dropped readings (a row
+/// lost on the serial link, delivered as NaN and rejected by the readout) in 1 of 10,000; a
+/// per-session common gain with 0.5% SD (skin temperature and humidity change the dielectric).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "../hand/collision.hpp"
+#include "../sensor/layout.hpp"
+#include "../sensor/readout.hpp"
+#include "../sensor/solver.hpp"
+#include "glove.hpp"
+#include "motion.hpp"
+#include "random.hpp"
+
+namespace glovepose::sim {
+
+/// @brief Rows of the simulated glove's readout.
+inline constexpr int kRows = sensor::kGlauser2019Rows;
+
+/// @brief Share of a cell's reading that follows the lagging (relaxing) stretch.
+inline constexpr double kCreepShare = 0.15;
+/// @brief Time constant (s) of the textile's relaxation.
+inline constexpr double kCreepTime = 1.0;
+
+/// @brief Measurement imperfections of the readout (see the file comment for the sources).
+struct ReadoutNoise {
+  double row_sd = 0.3;                ///< SD (pF) of one compound reading.
+  double spike_probability = 2e-5;    ///< Per reading.
+  double spike_min = 5.0;             ///< pF.
+  double spike_max = 50.0;            ///< pF.
+  double drop_probability = 1e-4;     ///< Per reading.
+  double session_gain_sd = 0.005;     ///< Relative SD of the session's common gain.
+};
+
+/// @brief What to record.
+struct RecordingConfig {
+  double cycle_rate = 60.0;            ///< Full 180-row cycles per second (paper: about 60 Hz).
+  sensor::ReadoutConfig readout{};     ///< Mean window 5, solve every 16 (paper Sec. 3.1).
+  ReadoutNoise noise{};                ///< Imperfections.
+  bool raw_rows = false;               ///< Keep each cycle's 180 readings.
+  int warmup_cycles = 5;               ///< Cycles read before t = 0 so the mean window is full.
+  /// Poses per cycle at which the physics is evaluated; the rows between two of them take C_c
+  /// linearly interpolated (12: every 1.4 ms, where a hand at human speed moves by far less than
+  /// the readout noise; tests/test_sim.cpp bounds the difference to the exact evaluation). kRows
+  /// evaluates at every row's own instant.
+  int physics_steps = 12;
+};
+
+/// @brief One recording, frames at the ends of the readout cycles.
+struct Recording {
+  int frames = 0;                    ///< Number of frames.
+  std::vector<float> cells;          ///< frames x 44: solved C_c (pF) of the latest solve.
+  std::vector<float> raw_rows;       ///< frames x 180: the cycle's readings (NaN: dropped); empty unless asked.
+  std::vector<float> angles;         ///< frames x 25: ground truth at the frame's time (rad).
+  std::vector<double> timestamps;    ///< Seconds since the recording started (cycle ends).
+  std::vector<double> oldest_age;    ///< Age (s) at the frame's time of the oldest reading behind its C_c.
+  std::vector<std::uint8_t> outlier; ///< 1 when the true pose's collision energy exceeds hand::kCollisionOutlierThreshold.
+};
+
+/// @brief Records `motion` through the glove physics. Deterministic in `seed`.
+inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii,
+                        std::uint64_t seed, const RecordingConfig& config = {}) {
+  static const std::shared_ptr<const sensor::GloveSolver> solver =
+      std::make_shared<const sensor::GloveSolver>(sensor::TraceLayout::glauser2019());
+  // Cells each row sums (M's ones).
+  static const std::vector<std::vector<int>> row_cells = [] {
+    const Eigen::MatrixXd m = sensor::TraceLayout::glauser2019().measurement_matrix();
+    std::vector<std::vector<int>> rows(static_cast<std::size_t>(m.rows()));
+    for (int r = 0; r < m.rows(); ++r)
+      for (int c = 0; c < m.cols(); ++c)
+        if (m(r, c) != 0.0) rows[static_cast<std::size_t>(r)].push_back(c);
+    return rows;
+  }();
+  Rng rng(seed);
+  const ReadoutNoise& noise = config.noise;
+  const double gain = rng.normal(1.0, noise.session_gain_sd);
+  sensor::GloveReadout readout(solver, config.readout);
+  const int cycles = static_cast<int>(std::floor(motion.duration() * config.cycle_rate));
+
+  Recording rec;
+  rec.frames = cycles;
+  rec.cells.reserve(static_cast<std::size_t>(cycles) * kCells);
+  rec.angles.reserve(static_cast<std::size_t>(cycles) * hand::kDofCount);
+  if (config.raw_rows) rec.raw_rows.reserve(static_cast<std::size_t>(cycles) * kRows);
+  std::array<float, kRows> cycle_rows{};
+  const int steps = std::clamp(config.physics_steps, 1, kRows);
+  std::vector<CellArray> knots(static_cast<std::size_t>(steps) + 1);  // C_c at the cycle's step boundaries
+  const auto cycle_time = [&](int k, double fraction) { return (static_cast<double>(k) + fraction) / config.cycle_rate; };
+  physics.capacitances(motion.at(cycle_time(-config.warmup_cycles, 0.0)), knots[0]);
+  CellArray relaxed = knots[0];  // the lagging part of each cell's reading
+  const double relax = 1.0 - std::exp(-1.0 / (config.cycle_rate * steps * kCreepTime));
+  hand::Skeleton skeleton;
+  bool solved = false;
+  for (int k = -config.warmup_cycles; k < cycles; ++k) {
+    if (k > -config.warmup_cycles) knots[0] = knots[static_cast<std::size_t>(steps)];
+    for (int j = 1; j <= steps; ++j) {
+      CellArray& knot = knots[static_cast<std::size_t>(j)];
+      physics.capacitances(motion.at(cycle_time(k, static_cast<double>(j) / steps)), knot);
+      for (std::size_t c = 0; c < knot.size(); ++c) {
+        relaxed[c] += relax * (knot[c] - relaxed[c]);
+        knot[c] += kCreepShare * (relaxed[c] - knot[c]);
+      }
+    }
+    for (int r = 0; r < kRows; ++r) {
+      // Row r of cycle k completes at the end of its slot.
+      const double fraction = static_cast<double>(r + 1) / kRows;
+      const double t = cycle_time(k, fraction);
+      const int j = std::min(steps - 1, static_cast<int>(fraction * steps));
+      const double w = fraction * steps - j;
+      const CellArray& lo = knots[static_cast<std::size_t>(j)];
+      const CellArray& hi = knots[static_cast<std::size_t>(j) + 1];
+      double value = 0.0;
+      for (int c : row_cells[static_cast<std::size_t>(r)]) {
+        const auto i = static_cast<std::size_t>(c);
+        value += lo[i] + w * (hi[i] - lo[i]);
+      }
+      value = value * gain + rng.normal(0.0, noise.row_sd);
+      if (rng.bernoulli(noise.spike_probability)) value += rng.uniform(noise.spike_min, noise.spike_max);
+      if (rng.bernoulli(noise.drop_probability)) value = std::numeric_limits<double>::quiet_NaN();
+      cycle_rows[static_cast<std::size_t>(r)] = static_cast<float>(value);
+      if (readout.push_row(r, value, t) == Status::Solved) solved = true;
+    }
+    if (k < 0) continue;
+    const double t_end = (static_cast<double>(k) + 1.0) / config.cycle_rate;
+    const auto& frame = readout.frame();
+    for (int c = 0; c < kCells; ++c) rec.cells.push_back(solved ? static_cast<float>(frame.cells(c)) : 0.0f);
+    const hand::Angles truth = motion.at(t_end);
+    for (double a : truth) rec.angles.push_back(static_cast<float>(a));
+    rec.timestamps.push_back(t_end);
+    rec.oldest_age.push_back(t_end - frame.timestamp + frame.oldest_age);
+    physics.kinematics().pose(truth, skeleton);
+    rec.outlier.push_back(hand::collision_energy(physics.kinematics(), skeleton, radii) > hand::kCollisionOutlierThreshold ? 1 : 0);
+    if (config.raw_rows) rec.raw_rows.insert(rec.raw_rows.end(), cycle_rows.begin(), cycle_rows.end());
+  }
+  return rec;
+}
+
+}  // namespace glovepose::sim
