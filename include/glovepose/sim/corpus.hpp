@@ -105,35 +105,59 @@ inline std::vector<SessionRecording> plan_corpus(const CorpusConfig& config) {
   return plan;
 }
 
+/// @brief Everything the corpus is made of that does not depend on the session.
+struct CorpusWorld {
+  std::vector<Subject> subjects;   ///< By subject id.
+  std::vector<Glove> gloves;       ///< By glove id.
+  std::vector<KeyPose> gallery;    ///< The pose gallery of the sessions.
+  std::vector<KeyPose> extremes;   ///< The poses of the calibration sequences.
+
+  /// @brief The subjects, gloves and galleries of `config`.
+  explicit CorpusWorld(const CorpusConfig& config)
+      : subjects(make_subjects(config.subjects, config.seed)), gallery(pose_gallery()), extremes(calibration_gallery(gallery)) {
+    for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed));
+  }
+};
+
+/// @brief One planned recording made ready to run: the physics of its donning, its motion, the seed
+/// of its readout noise.
+struct SessionSetup {
+  GlovePhysics physics;    ///< The glove on the hand in this donning.
+  MotionSequence motion;   ///< What the hand does.
+  std::uint64_t noise_seed;  ///< Seed of the readout's noise and glitches.
+};
+
+/// @brief The setup of a planned recording; depends only on (seed, subject, glove, donning/session).
+inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld& world, const SessionRecording& job) {
+  const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
+  const auto id = [&](std::uint64_t purpose, int index) {
+    return derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
+                                     static_cast<std::uint64_t>(index)});
+  };
+  Rng fit_rng(id(3, job.donning));
+  const GloveFit fit = don_glove(subject, fit_rng);
+  const bool calibration = job.kind == RecordingKind::Calibration;
+  MotionConfig motion_config;
+  if (calibration) {  // quick, wide movements between extremes, no blends
+    motion_config.explore = 0.0;
+    motion_config.pace = 1.5;
+    motion_config.dwell = 0.5;
+  }
+  const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
+  const int stream = 2 * job.session + (calibration ? 1 : 0);
+  return SessionSetup{GlovePhysics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit),
+                      MotionSequence(subject, calibration ? world.extremes : world.gallery, seconds, id(4, stream), motion_config),
+                      id(5, stream)};
+}
+
 /// @brief Simulates the corpus. Deterministic in config.seed for any thread count.
 inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config) {
   std::vector<SessionRecording> plan = plan_corpus(config);
-  const std::vector<Subject> subjects = make_subjects(config.subjects, config.seed);
-  const std::vector<KeyPose> gallery = pose_gallery();
-  const std::vector<KeyPose> extremes = calibration_gallery(gallery);
-  std::vector<Glove> gloves;
-  for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed));
-
+  const CorpusWorld world(config);
   const auto run = [&](SessionRecording& job) {
-    const Subject& subject = subjects[static_cast<std::size_t>(job.subject)];
-    const auto id = [&](std::uint64_t purpose, int index) {
-      return derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
-                                       static_cast<std::uint64_t>(index)});
-    };
-    Rng fit_rng(id(3, job.donning));
-    const GloveFit fit = don_glove(subject, fit_rng);
-    const GlovePhysics physics(subject, gloves[static_cast<std::size_t>(job.glove)], fit);
-    const bool calibration = job.kind == RecordingKind::Calibration;
-    MotionConfig motion_config;
-    if (calibration) {  // quick, wide movements between extremes, no blends
-      motion_config.explore = 0.0;
-      motion_config.pace = 1.5;
-      motion_config.dwell = 0.5;
-    }
-    const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
-    const int stream = 2 * job.session + (calibration ? 1 : 0);
-    const MotionSequence motion(subject, calibration ? extremes : gallery, seconds, id(4, stream), motion_config);
-    job.recording = record(physics, motion, subject.distal_radius(), id(5, stream), config.recording);
+    const SessionSetup setup = setup_session(config, world, job);
+    job.recording = record(setup.physics, setup.motion, world.subjects[static_cast<std::size_t>(job.subject)].distal_radius(),
+                           setup.noise_seed, config.recording);
   };
 
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());

@@ -22,7 +22,9 @@
 ///    reaches the cell attenuated by the glove's cross gain (about kCrossGain).
 ///  - area ratio A/A0 = lambda_along * lambda_across, and C = C0 (A/A0)^2 (paper eq. 1, volume
 ///    conservation), C0 = eps_r eps_0 A0 / d for the cell's size (5 x 7.5 or 5 x 11.5 mm, Sec. 3.3).
-/// Every constant below says where its value comes from; those marked "assumption" are ours.
+/// Every constant below says where its value comes from; those marked "assumption" are ours. The
+/// coupling coefficients are the population's; each subject multiplies them by its own
+/// SkinMechanics (subject.hpp).
 #pragma once
 
 #include <algorithm>
@@ -205,7 +207,12 @@ class GlovePhysics {
  public:
   /// @brief Physics for `glove` worn by `subject` as `fit` describes.
   GlovePhysics(const Subject& subject, const Glove& glove, const GloveFit& fit)
-      : kinematics_(subject.hand_model()), glove_(glove), fit_(fit), sites_(glauser2019_sites()), radius_(subject.distal_radius()) {
+      : kinematics_(subject.hand_model()),
+        glove_(glove),
+        fit_(fit),
+        skin_(subject.skin),
+        sites_(glauser2019_sites()),
+        radius_(subject.distal_radius()) {
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) knuckle_radius_[f] = subject.knuckle_radius(static_cast<hand::Finger>(f));
     hand::Skeleton rest;
     kinematics_.pose(hand::Angles{}, rest);
@@ -311,7 +318,7 @@ class GlovePhysics {
   double joint_lengthening(const CellSite& site, const hand::Angles& a, double shift) const noexcept {
     const int dof = site.flexion_dof;
     const double r = joint_radius(dof);
-    const double zone = kBendZone * r;
+    const double zone = kBendZone * skin_.bend_zone * r;
     // The cell spans [shift - L/2, shift + L/2] around the joint; the bend zone [-zone/2, zone/2].
     const double overlap = std::max(0.0, std::min(shift + site.length / 2, zone / 2) - std::max(shift - site.length / 2, -zone / 2));
     double lengthening = overlap / zone * r * bend(a[static_cast<std::size_t>(dof)]);
@@ -320,7 +327,7 @@ class GlovePhysics {
       const auto& o = hand::kDofs[static_cast<std::size_t>(other)];
       const bool flexion = o.motion == hand::Motion::BaseFlexion || o.motion == hand::Motion::MiddleFlexion || o.motion == hand::Motion::TipFlexion;
       if (flexion && static_cast<int>(o.finger) == site.digit)
-        lengthening += kNeighbourJointSpill * joint_radius(other) * bend(a[static_cast<std::size_t>(other)]);
+        lengthening += kNeighbourJointSpill * skin_.joint_spill * joint_radius(other) * bend(a[static_cast<std::size_t>(other)]);
     }
     return lengthening;
   }
@@ -330,7 +337,7 @@ class GlovePhysics {
   double slide(const CellSite& site, const hand::Angles& a) const noexcept {
     double flexion = 0.0;
     for (int d = flexion_dof(site.digit, hand::Motion::BaseFlexion); d < site.flexion_dof; ++d) flexion += std::max(0.0, a[static_cast<std::size_t>(d)]);
-    return kSlidePerFlexion * flexion;
+    return kSlidePerFlexion * skin_.slide * flexion;
   }
 
   // The sheet's tension: the other digits' knuckle lengthening, shared.
@@ -338,12 +345,12 @@ class GlovePhysics {
     double sum = 0.0;
     for (int d = 0; d < static_cast<int>(hand::kFingerCount); ++d)
       if (d != digit) sum += knuckle_lengthening(d, a);
-    return kSheetTension * sum / (hand::kFingerCount - 1);
+    return kSheetTension * skin_.sheet_tension * sum / (hand::kFingerCount - 1);
   }
 
   // Finger cells across: girth over the flexed joint; proximal cells also the abduction's pull.
   double girth_strain(const CellSite& site, const hand::Angles& a) const noexcept {
-    double strain = kGirthPerFlexion * std::max(0.0, a[static_cast<std::size_t>(site.flexion_dof)]);
+    double strain = kGirthPerFlexion * skin_.girth_flexion * std::max(0.0, a[static_cast<std::size_t>(site.flexion_dof)]);
     if (site.segment == sensor::Segment::Proximal && site.digit > 0) {
       const auto abduction = [&](int digit) { return a[static_cast<std::size_t>(flexion_dof(digit, hand::Motion::Abduction))]; };
       double neighbours = 0.0;
@@ -353,17 +360,17 @@ class GlovePhysics {
           neighbours += abduction(n);
           ++count;
         }
-      strain += kGirthPerAbduction * std::abs(abduction(site.digit) - neighbours / count);
+      strain += kGirthPerAbduction * skin_.girth_abduction * std::abs(abduction(site.digit) - neighbours / count);
     }
     return strain;
   }
 
   // Back of the hand, along: the knuckles' lengthening with fall-off from the knuckle line.
   double back_along(const CellSite& site, const hand::Angles& a, double shift) const noexcept {
-    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / kKnuckleFalloff);
+    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / (kKnuckleFalloff * skin_.knuckle_falloff));
     double lengthening = knuckle_lengthening(site.digit, a);
     for (int n = site.digit - 1; n <= site.digit + 1; n += 2)
-      if (n >= 1 && n <= 4 && site.digit >= 1) lengthening += kNeighbourKnuckleShare * knuckle_lengthening(n, a);
+      if (n >= 1 && n <= 4 && site.digit >= 1) lengthening += kNeighbourKnuckleShare * skin_.knuckle_share * knuckle_lengthening(n, a);
     if (site.digit == 0)  // the thumb's metacarpal cell: its CMC flexion and abduction
       lengthening += 0.5 * knuckle_radius_[0] * bend(a[static_cast<std::size_t>(flexion_dof(0, hand::Motion::Abduction))]);
     return falloff * lengthening / site.length;
@@ -372,9 +379,9 @@ class GlovePhysics {
   // Back of the hand, across: knuckle spread with fall-off, and the thumb's pull with its own.
   double back_across(const CellSite& site, const Distances& now, double shift) const noexcept {
     const auto d = static_cast<std::size_t>(site.digit);
-    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / kKnuckleFalloff);
+    const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / (kKnuckleFalloff * skin_.knuckle_falloff));
     const double knuckles = site.digit == 0 ? 0.0 : (now.knuckle[d] - reference_.knuckle[d]) / kKnuckleSpan;
-    const double thumb = std::exp(-site.thumb_distance / kThumbFalloff) * (now.thumb_back - reference_.thumb_back) / kThumbBackSpan;
+    const double thumb = std::exp(-site.thumb_distance / (kThumbFalloff * skin_.thumb_falloff)) * (now.thumb_back - reference_.thumb_back) / kThumbBackSpan;
     return falloff * knuckles + thumb;
   }
 
@@ -388,6 +395,7 @@ class GlovePhysics {
   hand::Kinematics kinematics_;
   Glove glove_;
   GloveFit fit_;
+  SkinMechanics skin_;
   std::array<CellSite, kCells> sites_;
   std::array<double, 16> radius_;
   std::array<double, hand::kFingerCount> knuckle_radius_{};

@@ -56,6 +56,25 @@ inline constexpr std::array<HandSize, 10> kPaperHands{{{190, 110, 45},
                                                        {200, 100, 40},
                                                        {170, 90, 40}}};
 
+/// @brief How one person's skin and soft tissue pass a motion to the glove, as multipliers of the
+/// population's coefficients in glove.hpp (1 = typical). Skin elasticity and subcutaneous tissue
+/// differ between people (age, body mass), so the same joint angle stretches the same cell
+/// differently: lognormal with a log-SD of kSkinSpread (assumption).
+struct SkinMechanics {
+  double bend_zone = 1.0;         ///< Width of the bend zone over a joint.
+  double joint_spill = 1.0;       ///< Neighbouring joints' lengthening reaching a joint cell.
+  double sheet_tension = 1.0;     ///< Other digits' pull through the sheet.
+  double slide = 1.0;             ///< Distal slide of the glove as the finger curls.
+  double girth_flexion = 1.0;     ///< Girth growth over a flexed joint.
+  double girth_abduction = 1.0;   ///< Girth pull of abduction.
+  double knuckle_share = 1.0;     ///< Neighbouring knuckles' stretch on the back of the hand.
+  double knuckle_falloff = 1.0;   ///< Reach of the knuckles' stretch over the back of the hand.
+  double thumb_falloff = 1.0;     ///< Reach of the thumb's pull over the back of the hand.
+};
+
+/// @brief Log-SD of the per-person skin multipliers (assumption: a factor of 1.4 either way is one SD).
+inline constexpr double kSkinSpread = 0.35;
+
 /// @brief One simulated participant: hand geometry and movement habits.
 struct Subject {
   int id = 0;                                          ///< 0-based.
@@ -65,6 +84,7 @@ struct Subject {
   double speed = 1.0;     ///< Movement speed factor (1 = the population's mean).
   double dwell = 0.7;     ///< Mean time (s) held at a pose.
   double coupling = 0.2;  ///< Share of a finger's flexion its neighbours follow (finger enslaving).
+  SkinMechanics skin{};   ///< How this person's skin passes motion to the glove.
 
   /// @brief Length scale against the template.
   double length_scale() const noexcept { return size.length / kTemplateLength; }
@@ -138,6 +158,9 @@ inline std::vector<Subject> make_subjects(int count, std::uint64_t seed) {
     s.speed = rng.uniform(0.75, 1.3);
     s.dwell = rng.uniform(0.4, 1.0);
     s.coupling = rng.uniform(0.1, 0.3);
+    for (double* m : {&s.skin.bend_zone, &s.skin.joint_spill, &s.skin.sheet_tension, &s.skin.slide, &s.skin.girth_flexion,
+                      &s.skin.girth_abduction, &s.skin.knuckle_share, &s.skin.knuckle_falloff, &s.skin.thumb_falloff})
+      *m = std::exp(rng.normal(0.0, kSkinSpread));
     subjects.push_back(s);
   }
   return subjects;
