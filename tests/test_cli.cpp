@@ -1,12 +1,16 @@
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
+#include <glovepose/train/dataset.hpp>
 
 #include <doctest/doctest.h>
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <set>
+#include <tuple>
 #include <sstream>
 
 using namespace glovepose;
@@ -101,4 +105,59 @@ TEST_CASE("cli: bad input and bad models are refused with the line, column or fi
   r = run("info --model " + kModel);
   CHECK(r.status == 0);
   CHECK(r.out.find("width: 4") != std::string::npos);
+}
+
+namespace {
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose simulate writes the protocol as one dataset file, byte-identical for a seed") {
+  const std::string small = "--subjects 2 --sessions 4 --minutes 0.05 --gloves 2 --calibration-seconds 1 --raw-rows";
+  const Run a = run("simulate --seed 3 " + small + " --threads 1 --out " + temp("sim_a.safetensors") + " --csv " + temp("sim_a.csv"));
+  INFO(a.out);
+  REQUIRE(a.status == 0);
+  const Run b = run("simulate --seed 3 " + small + " --threads 2 --out " + temp("sim_b.safetensors"));
+  REQUIRE(b.status == 0);
+  const Run c = run("simulate --seed 4 " + small + " --out " + temp("sim_c.safetensors"));
+  REQUIRE(c.status == 0);
+  const std::string bytes = slurp(temp("sim_a.safetensors"));
+  CHECK(bytes.size() > 100000);
+  CHECK(bytes == slurp(temp("sim_b.safetensors")));  // same seed, other thread count: same bytes
+  CHECK(bytes != slurp(temp("sim_c.safetensors")));
+
+  const train::Dataset d = train::Dataset::read(temp("sim_a.safetensors"));
+  // Per subject: 4 sessions with glove 0 and 2 with glove 1, 3 s each at 60 Hz, each after a 1 s
+  // calibration sequence.
+  CHECK(d.frames() == 2u * 6u * (180u + 60u));
+  CHECK(d.cell_count == 44u);
+  CHECK(d.row_count == 180u);
+  CHECK(d.glove_layout() == "glauser2019-44");
+  CHECK(d.metadata.at("seed") == "3");
+  std::set<std::tuple<int, int, int, int>> sessions;  // subject, glove, session, donning
+  for (std::size_t f = 0; f < d.frames(); ++f)
+    if (d.kind[f] == train::kKindRecording) sessions.insert({d.subject[f], d.glove[f], d.session[f], d.donning[f]});
+  CHECK(sessions.count({0, 0, 2, 0}) == 1);  // the glove kept on for sessions 0..2
+  CHECK(sessions.count({0, 0, 3, 1}) == 1);  // then taken off and on
+  CHECK(sessions.count({1, 1, 1, 1}) == 1);  // glove II, a fresh donning per session
+  // The CSV export holds the same frames.
+  const train::Dataset from_csv = train::Dataset::read_csv(temp("sim_a.csv"), d.glove_layout(), 60.0);
+  CHECK(from_csv.frames() == d.frames());
+  CHECK(from_csv.cells == d.cells);
+
+  const Run bad = run("simulate --minutes 0 --out " + temp("sim_bad.safetensors"));
+  CHECK(bad.status == 2);
+  CHECK(bad.out.find("--minutes") != std::string::npos);
+  CHECK(run("simulate --subjects x --out y").status == 2);
+}
+
+TEST_CASE("cli: glovepose simulate --report prints every section of the realism report") {
+  const Run r = run("simulate --report --seed 2 --subjects 3 --sessions 2 --minutes 0.3");
+  INFO(r.out);
+  REQUIRE(r.status == 0);
+  for (const char* part : {"Per-cell signal", "cell 43 (index distal, across", "Per-DoF coverage", "pinky_base_twist", "Re-donning vs pose change",
+                           "Oldest reading behind each frame", "Outlier frames", "leave-one-subject-out"})
+    CHECK(r.out.find(part) != std::string::npos);
 }

@@ -56,6 +56,7 @@ TEST_CASE("weights: F16 and BF16 files are accepted and widened") {
     CHECK(b.tensors.at("a").values[i] == bf16_to_float(float_to_bf16(v)));
   }
   CHECK(h.tensors.at("a").values[1] == -2.5f);  // exactly representable
+  CHECK_THROWS_WITH_AS(f.serialize(DType::I32), doctest::Contains("WeightFile: dtype I32, expected F32, F16 or BF16"), Error);
 }
 
 TEST_CASE("weights: every malformed file is an Error naming the tensor or byte and what was expected") {

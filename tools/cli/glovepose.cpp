@@ -4,6 +4,8 @@
 //       radians out (theta 9..33 of the hand model), one row per input row.
 //   glovepose info --model FILE
 //       what a model file holds.
+//   glovepose simulate ...
+//       the simulated glove corpus (simulate.cpp).
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -19,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "commands.hpp"
+
 using namespace glovepose;
 
 namespace {
@@ -31,7 +35,8 @@ struct Options {
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose: " << problem << "\n"
             << "usage: glovepose predict --model FILE [--in CSV] [--f16] [--no-header]\n"
-            << "       glovepose info --model FILE\n";
+            << "       glovepose info --model FILE\n"
+            << "       glovepose simulate --help\n";
   std::exit(2);
 }
 
@@ -134,6 +139,7 @@ int info(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string(argv[1]) == "simulate") return cli::simulate(argc, argv);
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);

@@ -1,0 +1,63 @@
+/// @file corpus_dataset.hpp
+/// @brief A simulated corpus as one dataset file (train::Dataset, the container of weights_format.md).
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "../train/dataset.hpp"
+#include "corpus.hpp"
+
+namespace glovepose::sim {
+
+/// @brief The recordings, in plan order, as one dataset; the metadata records how it was made.
+inline train::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const CorpusConfig& config) {
+  const bool raw = config.recording.raw_rows;
+  train::Dataset out(kCells, raw ? kRows : 0, sensor::TraceLayout::glauser2019().id(), config.recording.cycle_rate);
+  std::size_t total = 0;
+  for (const SessionRecording& s : corpus) total += static_cast<std::size_t>(s.recording.frames);
+  out.cells.reserve(total * kCells);
+  out.angles.reserve(total * hand::kDofCount);
+  if (raw) out.raw_rows.reserve(total * kRows);
+  // A session's clock starts with its calibration sequence: the recording that follows continues it.
+  double offset = 0.0;
+  const SessionRecording* previous = nullptr;
+  for (const SessionRecording& s : corpus) {
+    const Recording& r = s.recording;
+    const bool continues = previous && previous->kind == RecordingKind::Calibration && s.kind == RecordingKind::Session &&
+                           previous->subject == s.subject && previous->glove == s.glove && previous->session == s.session;
+    offset = continues && !previous->recording.timestamps.empty() ? previous->recording.timestamps.back() : 0.0;
+    previous = &s;
+    out.cells.insert(out.cells.end(), r.cells.begin(), r.cells.end());
+    out.angles.insert(out.angles.end(), r.angles.begin(), r.angles.end());
+    if (raw) out.raw_rows.insert(out.raw_rows.end(), r.raw_rows.begin(), r.raw_rows.end());
+    for (double t : r.timestamps) out.timestamps.push_back(offset + t);
+    out.outlier.insert(out.outlier.end(), r.outlier.begin(), r.outlier.end());
+    const auto n = static_cast<std::size_t>(r.frames);
+    out.subject.insert(out.subject.end(), n, s.subject);
+    out.session.insert(out.session.end(), n, s.session);
+    out.glove.insert(out.glove.end(), n, s.glove);
+    out.donning.insert(out.donning.end(), n, s.donning);
+    out.kind.insert(out.kind.end(), n, s.kind == RecordingKind::Calibration ? train::kKindCalibration : train::kKindRecording);
+  }
+  char minutes[32];
+  std::snprintf(minutes, sizeof minutes, "%g", config.minutes);
+  out.metadata["generator"] = "glovepose simulate";
+  out.metadata["seed"] = std::to_string(config.seed);
+  out.metadata["subjects"] = std::to_string(config.subjects);
+  out.metadata["sessions"] = std::to_string(config.sessions);
+  out.metadata["intra_sessions"] = std::to_string(config.intra_sessions);
+  out.metadata["minutes"] = minutes;
+  out.metadata["gloves"] = std::to_string(config.gloves);
+  out.metadata["other_glove_sessions"] = std::to_string(config.other_glove_sessions);
+  out.metadata["calibration_seconds"] = std::to_string(config.calibration_seconds);
+  std::string sizes = "[";
+  for (const Subject& s : make_subjects(config.subjects, config.seed))
+    sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " + std::to_string(s.size.height) + "]";
+  out.metadata["subject_sizes_mm"] = sizes + "]";
+  out.validate();
+  return out;
+}
+
+}  // namespace glovepose::sim
