@@ -1,5 +1,6 @@
 // The simulator: subjects, glove physics, motion, timed readout, the corpus protocol.
 #include <glovepose/sim/corpus.hpp>
+#include <glovepose/sim/report.hpp>
 
 #include <doctest/doctest.h>
 
@@ -254,4 +255,28 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   CHECK(one[0].recording.frames == 60);   // the 1 s calibration sequence
   config.minutes = 0.0;
   CHECK_THROWS_WITH_AS(simulate_corpus(config), doctest::Contains("--minutes"), Error);
+}
+
+TEST_CASE("sim report: realistic readout age, outliers and signal; re-donning below pose change; not linearly solvable across people") {
+  CorpusConfig config;
+  config.seed = 11;
+  config.subjects = 5;
+  config.sessions = 2;
+  config.minutes = 2.5;
+  config.gloves = 1;
+  config.calibration_seconds = 20.0;
+  const RealismReport r = make_report(config);
+  MESSAGE(format_report(r));
+  CHECK(r.age_median >= 0.045);
+  CHECK(r.age_median <= 0.090);
+  CHECK(r.outlier_share < 0.05);
+  CHECK(r.redonning_change < 0.6 * r.pose_change);
+  CHECK(r.redonning_change > 0.02);  // a donning does change the readings
+  for (const auto& c : r.cells) CHECK(c.snr > 10.0);
+  for (std::size_t d = 0; d < hand::kDofCount; ++d)
+    if (hand::kDofs[d].motion != hand::Motion::Twist) CHECK(r.dofs[d].coverage > 0.4);
+  // The cross-person problem is not trivially linear: leaving a subject out costs clearly more than
+  // fitting within the session.
+  CHECK(r.linear_cross_deg > 1.4 * r.linear_same_deg);
+  CHECK(r.linear_same_deg > 1.0);  // nor is one session linear
 }
