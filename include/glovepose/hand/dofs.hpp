@@ -78,6 +78,20 @@ inline constexpr std::array<Dof, kDofCount> kDofs{{
     {"pinky_base_twist", 33, Finger::Pinky, Motion::Twist, 4, Axis::Y, -0.10, 0.05},
 }};
 
+/// @brief Position in kDofs of each (finger, motion) pair: the pose map is finger x motion, so every
+/// pair names exactly one DoF.
+inline constexpr std::array<std::array<std::size_t, kFingerCount>, kFingerCount> kDofIndex = [] {
+  std::array<std::array<std::size_t, kFingerCount>, kFingerCount> index{};
+  for (std::size_t i = 0; i < kDofCount; ++i)
+    index[static_cast<std::size_t>(kDofs[i].finger)][static_cast<std::size_t>(kDofs[i].motion)] = i;
+  return index;
+}();
+
+/// @brief Position in kDofs of the DoF of `finger` doing `motion`.
+constexpr std::size_t dof_of(Finger finger, Motion motion) noexcept {
+  return kDofIndex[static_cast<std::size_t>(finger)][static_cast<std::size_t>(motion)];
+}
+
 /// @brief 25 joint angles in radians, in the order of kDofs.
 using Angles = std::array<double, kDofCount>;
 

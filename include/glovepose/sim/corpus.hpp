@@ -127,6 +127,14 @@ struct SessionSetup {
   std::uint64_t noise_seed;  ///< Seed of the readout's noise and glitches.
 };
 
+/// @brief How `subject` wears glove `glove` in its donning `donning`: the same for every recording
+/// that shares the donning.
+inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, int glove, int donning) {
+  Rng rng(derive_seed(config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove),
+                                    static_cast<std::uint64_t>(donning)}));
+  return don_glove(subject, rng);
+}
+
 /// @brief The setup of a planned recording; depends only on (seed, subject, glove, donning/session).
 inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld& world, const SessionRecording& job) {
   const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
@@ -134,8 +142,7 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
     return derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
                                      static_cast<std::uint64_t>(index)});
   };
-  Rng fit_rng(id(3, job.donning));
-  const GloveFit fit = don_glove(subject, fit_rng);
+  const GloveFit fit = donning_fit(config, subject, job.glove, job.donning);
   const bool calibration = job.kind == RecordingKind::Calibration;
   MotionConfig motion_config;
   if (calibration) {  // quick, wide movements between extremes, no blends

@@ -145,8 +145,7 @@ inline std::array<CellSite, kCells> glauser2019_sites() {
     if (cell.segment == sensor::Segment::Distal) motion = hand::Motion::TipFlexion;
     if (s.digit == 0 && cell.segment == sensor::Segment::Proximal) motion = hand::Motion::MiddleFlexion;
     if (s.digit == 0 && cell.segment == sensor::Segment::Middle) motion = hand::Motion::TipFlexion;
-    for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      if (static_cast<int>(hand::kDofs[d].finger) == s.digit && hand::kDofs[d].motion == motion) s.flexion_dof = static_cast<int>(d);
+    s.flexion_dof = static_cast<int>(hand::dof_of(static_cast<hand::Finger>(s.digit), motion));
   }
   return sites;
 }
@@ -309,9 +308,7 @@ class GlovePhysics {
   }
 
   static int flexion_dof(int digit, hand::Motion motion) noexcept {
-    for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      if (static_cast<int>(hand::kDofs[d].finger) == digit && hand::kDofs[d].motion == motion) return static_cast<int>(d);
-    return -1;
+    return static_cast<int>(hand::dof_of(static_cast<hand::Finger>(digit), motion));
   }
 
   // Finger cells: the share of the joint's skin lengthening under the cell, plus the neighbours'.

@@ -125,19 +125,15 @@ class MotionSequence {
       a[d] = seg.from[d] + (seg.to[d] - seg.from[d]) * w + wobble;
     }
     for (std::size_t f = 1; f < hand::kFingerCount; ++f) {  // the tip keeps following the middle joint
-      const std::size_t base = abduction_dof(static_cast<int>(f));
-      const double target_offset = (seg.from[base + 3] - kTipCoupling * seg.from[base + 2]) * (1.0 - w) +
-                                   (seg.to[base + 3] - kTipCoupling * seg.to[base + 2]) * w;
-      a[base + 3] = kTipCoupling * a[base + 2] + target_offset;
+      const auto finger = static_cast<hand::Finger>(f);
+      const std::size_t middle = hand::dof_of(finger, hand::Motion::MiddleFlexion), tip = hand::dof_of(finger, hand::Motion::TipFlexion);
+      const double target_offset = (seg.from[tip] - kTipCoupling * seg.from[middle]) * (1.0 - w) + (seg.to[tip] - kTipCoupling * seg.to[middle]) * w;
+      a[tip] = kTipCoupling * a[middle] + target_offset;
     }
     return limits_.clamp(a);
   }
 
  private:
-  // DoF index of a long finger's abduction (theta 13 + 4 (finger - 1)); base, middle and tip
-  // flexion follow it in kDofs.
-  static constexpr std::size_t abduction_dof(int finger) noexcept { return static_cast<std::size_t>(4 * finger); }
-
   struct Wave {
     double amplitude, omega, phase;
   };
@@ -154,7 +150,7 @@ class MotionSequence {
     const hand::Angles designed = q;
     for (int column = 1; column <= 2; ++column)
       for (int f = 1; f <= 4; ++f) {
-        const auto dof = [&](int finger) { return abduction_dof(finger) + static_cast<std::size_t>(column); };
+        const auto dof = [&](int finger) { return hand::dof_of(static_cast<hand::Finger>(finger), static_cast<hand::Motion>(column)); };
         double neighbours = 0.0;
         int count = 0;
         for (int n = f - 1; n <= f + 1; n += 2)
@@ -165,8 +161,9 @@ class MotionSequence {
         q[dof(f)] += subject.coupling * (neighbours / count - designed[dof(f)]);
       }
     for (int f = 1; f <= 4; ++f) {
-      const std::size_t middle = abduction_dof(f) + 2;
-      q[middle + 1] = kTipCoupling * q[middle] + rng.normal(0.0, config.tip_spread);
+      const auto finger = static_cast<hand::Finger>(f);
+      q[hand::dof_of(finger, hand::Motion::TipFlexion)] =
+          kTipCoupling * q[hand::dof_of(finger, hand::Motion::MiddleFlexion)] + rng.normal(0.0, config.tip_spread);
     }
     return hand::JointLimits().clamp(q);
   }

@@ -173,8 +173,7 @@ inline RealismReport make_report(const CorpusConfig& config) {
     for (const Subject& subject : world.subjects) {
       std::array<std::vector<CellArray>, 2> readings;
       for (int donning = 0; donning < 2; ++donning) {
-        Rng rng(derive_seed(config.seed, {3, static_cast<std::uint64_t>(subject.id), 0, static_cast<std::uint64_t>(donning)}));
-        const GlovePhysics physics(subject, world.gloves[0], don_glove(subject, rng));
+        const GlovePhysics physics(subject, world.gloves[0], donning_fit(config, subject, 0, donning));
         for (const KeyPose& k : world.gallery) {
           CellArray c{};
           physics.capacitances(k.angles, c);
