@@ -160,7 +160,7 @@ def test_container_errors() -> None:
     expect_error(lambda: d(b"\x01\0\0\0\0\0\0\0{"), E, "at least 2")
     expect_error(lambda: d(struct.pack("<Q", 100) + b"{}"), E, "only 2 bytes")
     expect_error(lambda: d(make([])), E, "expected an object")
-    expect_error(lambda: d(make({"x": {"dtype": "F64", "shape": [1], "data_offsets": [0, 8]}}, bytes(8))), E, "'x'")
+    expect_error(lambda: d(make({"x": {"dtype": "C64", "shape": [1], "data_offsets": [0, 8]}}, bytes(8))), E, "'x'")
     expect_error(lambda: d(make({"x": {"dtype": "F32", "shape": [-1], "data_offsets": [0, 4]}}, bytes(4))), E, "shape")
     expect_error(lambda: d(make({"x": {"dtype": "F32", "shape": [2], "data_offsets": [0, 4]}}, bytes(4))), E, "expected 8")
     expect_error(lambda: d(make({"x": {"dtype": "F32", "shape": [1], "data_offsets": [0, 8]}}, bytes(4))), E, "data_offsets")

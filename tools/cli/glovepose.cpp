@@ -6,6 +6,8 @@
 //       what a model file holds.
 //   glovepose simulate ...
 //       the simulated glove corpus (simulate.cpp).
+//   glovepose train | finetune | eval ...
+//       train, fine-tune and evaluate models on dataset files (train.cpp).
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -36,7 +38,8 @@ struct Options {
   std::cerr << "glovepose: " << problem << "\n"
             << "usage: glovepose predict --model FILE [--in CSV] [--f16] [--no-header]\n"
             << "       glovepose info --model FILE\n"
-            << "       glovepose simulate --help\n";
+            << "       glovepose simulate --help\n"
+            << "       glovepose train | finetune | eval --help\n";
   std::exit(2);
 }
 
@@ -140,6 +143,8 @@ int info(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "simulate") return cli::simulate(argc, argv);
+  if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval"))
+    return cli::train_tools(argc, argv);
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);

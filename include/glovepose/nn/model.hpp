@@ -17,9 +17,12 @@ namespace glovepose::nn {
 
 /// @brief The metadata of a model file.
 struct ModelInfo {
-  std::string architecture;                            ///< "unet".
-  int width = 0;                                       ///< U-Net base width.
+  std::string architecture;                            ///< "unet", "fcn" (the paper's fully connected baseline) or "linear".
+  int width = 0;                                       ///< U-Net base width, FCN hidden width; 0 for linear.
+  int inputs = 44;                                     ///< Cell values per frame the model takes.
   std::string glove;                                   ///< Sensor layout id the model was trained for.
+  std::string glove_description;                      ///< The glove as data (grid/glove_description.hpp JSON); empty: the built-in glove `glove`.
+  std::string calibration = "onthefly";                ///< How inputs were normalised in training: none, training or onthefly.
   double bn_eps = 1e-5;                                ///< Batch-norm epsilon.
   std::vector<double> joint_limits_min;                ///< Per DoF, radians: what output -1 means.
   std::vector<double> joint_limits_max;                ///< Per DoF, radians: what output +1 means.
@@ -34,8 +37,14 @@ struct ModelInfo {
     if (file.meta("format_version") != "1")
       throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
     info.architecture = file.meta("architecture");
-    if (info.architecture != "unet") throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet'");
-    info.width = parse_int(file.meta("width"), "width");
+    if (info.architecture != "unet" && info.architecture != "fcn" && info.architecture != "linear")
+      throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet', 'fcn' or 'linear'");
+    if (info.architecture != "linear") info.width = parse_int(file.meta("width"), "width");
+    if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs");
+    if (file.metadata.count("glove_description")) info.glove_description = file.meta("glove_description");
+    if (file.metadata.count("calibration")) info.calibration = file.meta("calibration");
+    if (info.calibration != "none" && info.calibration != "training" && info.calibration != "onthefly")
+      throw Error("metadata 'calibration' is '" + info.calibration + "', expected none, training or onthefly");
     info.glove = file.meta("glove");
     info.bn_eps = parse_double(file.meta("bn_eps"), "bn_eps");
     info.joint_limits_min = file.meta_numbers("joint_limits_min");
@@ -57,8 +66,11 @@ struct ModelInfo {
     file.metadata["format"] = "glovepose-model";
     file.metadata["format_version"] = "1";
     file.metadata["architecture"] = architecture;
-    file.metadata["width"] = std::to_string(width);
+    if (architecture != "linear") file.metadata["width"] = std::to_string(width);
+    file.metadata["inputs"] = std::to_string(inputs);
     file.metadata["glove"] = glove;
+    if (!glove_description.empty()) file.metadata["glove_description"] = glove_description;
+    file.metadata["calibration"] = calibration;
     char eps[32];
     std::snprintf(eps, sizeof eps, "%.17g", bn_eps);
     file.metadata["bn_eps"] = eps;
@@ -101,6 +113,8 @@ struct Model {
     const WeightFile file = WeightFile::read(path);
     try {
       ModelInfo info = ModelInfo::from(file);
+      if (info.architecture != "unet")
+        throw Error("architecture '" + info.architecture + "' is not a U-Net; train::load_predictor reads every architecture");
       UNet<Backend> net = UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
       return Model{std::move(info), std::move(net)};
     } catch (const Error& e) {

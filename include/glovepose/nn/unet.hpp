@@ -31,6 +31,7 @@
 #include "kernels/scalar.hpp"
 #include "kernels/simd.hpp"
 #include "tensor.hpp"
+#include "unet_topology.hpp"
 
 namespace glovepose::nn {
 
@@ -75,7 +76,7 @@ class UNet {
     net.width_ = width;
     net.storage_ = storage;
     net.define_buffers();
-    const std::vector<LayerSpec> specs = layer_specs(width);
+    const std::vector<LayerSpec> specs = unet_layers(width);
     check_tensor_names(tensors, width);
     for (const LayerSpec& spec : specs) net.layers_.push_back(net.pack(spec, tensors, bn_eps));
     for (const auto& [name, t] : tensors)
@@ -84,19 +85,7 @@ class UNet {
   }
 
   /// @brief The tensor names and shapes a network of width `width` is made of.
-  static std::map<std::string, std::vector<std::int64_t>> expected_tensors(int width) {
-    std::map<std::string, std::vector<std::int64_t>> shapes;
-    for (const LayerSpec& s : layer_specs(width)) {
-      const std::int64_t in = s.in_channels(width), out = s.out_channels;
-      const std::int64_t k = s.geometry.kernel;
-      shapes[s.conv + ".weight"] = s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k}
-                                                         : std::vector<std::int64_t>{out, in, k, k};
-      shapes[s.conv + ".bias"] = {out};
-      if (!s.bn.empty())
-        for (const char* part : {".weight", ".bias", ".running_mean", ".running_var"}) shapes[s.bn + part] = {out};
-    }
-    return shapes;
-  }
+  static std::map<std::string, std::vector<std::int64_t>> expected_tensors(int width) { return unet_tensor_shapes(width); }
 
   /// @brief Base width w.
   int width() const noexcept { return width_; }
@@ -259,8 +248,6 @@ class UNet {
   }
 
  private:
-  enum class Activation : unsigned char { Relu, Tanh };
-
   struct BufferSpec {
     int channels;
     int stride;  // channels padded to the SIMD width (the network input is never padded)
@@ -268,19 +255,7 @@ class UNet {
     int positions;
   };
 
-  struct LayerSpec {
-    std::string conv, bn;
-    ConvGeometry geometry;
-    std::vector<int> sources;  // buffer ids, concatenated in this order
-    int out_buffer;
-    int out_channels;
-    Activation activation;
-    int in_channels(int width) const {
-      int c = 0;
-      for (int s : sources) c += buffer_channels(s, width);
-      return c;
-    }
-  };
+  using LayerSpec = UNetLayer;
 
   struct PackedTap {
     std::vector<int> out_positions, in_positions;
@@ -309,36 +284,12 @@ class UNet {
     std::size_t stored_weights = 0;
   };
 
-  // Buffers: 0 input, 1 e1, 2 e2, 3 e3, 4 e4, 5 d1, 6 d2, 7 d3, 8 output.
-  static int buffer_channels(int id, int w) {
-    constexpr int factor[] = {0, 1, 2, 4, 8, 4, 2, 1, 0};
-    return id == 0 ? 2 : (id == 8 ? 1 : factor[id] * w);
-  }
-  static int buffer_size(int id) {
-    constexpr int size[] = {5, 5, 3, 2, 1, 2, 3, 5, 5};
-    return size[id];
-  }
-
   void define_buffers() {
-    for (int id = 0; id <= 8; ++id) {
-      const int c = buffer_channels(id, width_);
+    for (int id = 0; id < kUNetBufferCount; ++id) {
+      const int c = unet_buffer_channels(id, width_);
       const int stride = (id == 0 || id == 8) ? c : round_up(c, Backend::lanes);
-      buffers_.push_back({c, stride, buffer_size(id), buffer_size(id) * buffer_size(id)});
+      buffers_.push_back({c, stride, unet_buffer_size(id), unet_buffer_size(id) * unet_buffer_size(id)});
     }
-  }
-
-  static std::vector<LayerSpec> layer_specs(int w) {
-    const auto R = Activation::Relu;
-    return {
-        {"enc1", "", {5, 5, 5, 1, 2, false}, {0}, 1, w, R},
-        {"enc2", "bn2", {5, 3, 3, 2, 1, false}, {1}, 2, 2 * w, R},
-        {"enc3", "bn3", {3, 2, 3, 2, 1, false}, {2}, 3, 4 * w, R},
-        {"enc4", "bn4", {2, 1, 4, 2, 1, false}, {3}, 4, 8 * w, R},
-        {"dec1", "dbn1", {1, 2, 4, 2, 1, true}, {4}, 5, 4 * w, R},
-        {"dec2", "dbn2", {2, 3, 3, 2, 1, true}, {5, 3}, 6, 2 * w, R},
-        {"dec3", "dbn3", {3, 5, 3, 2, 1, true}, {6, 2}, 7, w, R},
-        {"out", "", {5, 5, 5, 1, 2, false}, {7, 1}, 8, 1, Activation::Tanh},
-    };
   }
 
   static void check_tensor_names(const TensorMap& tensors, int width) {
@@ -421,7 +372,7 @@ class UNet {
     if (layer.mode == Mode::Gather) {
       for (int source : spec.sources)
         if (buffers_[static_cast<std::size_t>(source)].stride != buffers_[static_cast<std::size_t>(spec.sources[0])].stride)
-          throw Error("UNet: layer " + spec.conv + " concatenates sources of different padded widths");  // layer_specs() never does
+          throw Error("UNet: layer " + spec.conv + " concatenates sources of different padded widths");  // unet_layers() never does
       layer.terms.resize(static_cast<std::size_t>(out.positions));
       for (std::size_t t = 0; t < plan.size(); ++t)
         for (std::size_t j = 0; j < plan[t].out_positions.size(); ++j)
@@ -520,7 +471,7 @@ class UNet {
     const W** terms = nullptr;  // the workspace's pointer array of this weight type
     if constexpr (std::is_same_v<W, float>) terms = ws.w32_terms.data();
     else terms = ws.w16_terms.data();
-    const float* base[2] = {nullptr, nullptr};  // layer_specs(): at most two (concatenated) sources
+    const float* base[2] = {nullptr, nullptr};  // unet_layers(): at most two (concatenated) sources
     long stride[2] = {0, 0};
     int channels[2] = {0, 0};
     for (std::size_t s = 0; s < sources && s < 2; ++s) {
@@ -537,7 +488,7 @@ class UNet {
           terms[n] = weights + layer.block[static_cast<std::size_t>(t) * sources + s];
           ws.k_terms[static_cast<std::size_t>(n)] = channels[s];
         }
-      // All sources of a layer share one padded stride (layer_specs(): same-width skips).
+      // All sources of a layer share one padded stride (unet_layers(): same-width skips).
       float* sums = ws.sums.data();
       Backend::dot_terms(ws.x_rows.data(), stride[0], terms, ws.k_terms.data(), n, frames, sums);
       for (int f = 0; f < frames; ++f) out[(static_cast<long>(p) * frames + f) * out_spec.stride] += sums[f];

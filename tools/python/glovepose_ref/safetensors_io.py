@@ -29,11 +29,17 @@ PathLike = Union[str, Path]
 
 #: dtype name -> (torch dtype, little-endian numpy dtype of the raw bytes, bytes per element).
 #: BF16 has no numpy dtype: its bytes are read as little-endian int16 and reinterpreted by torch.
+#: The set is the container's (weights_format.md): F64, F32, F16, BF16, I64, I32, U8. Model files
+#: use only the float types F32/F16/BF16; F64 holds reference values (grad fixtures, timestamps),
+#: the integer types dataset columns.
 DTYPES: Dict[str, Tuple[torch.dtype, str, int]] = {
+    "F64": (torch.float64, "<f8", 8),
     "F32": (torch.float32, "<f4", 4),
     "F16": (torch.float16, "<f2", 2),
     "BF16": (torch.bfloat16, "<i2", 2),
     "I64": (torch.int64, "<i8", 8),  # datasets only; glovepose refuses it in model files
+    "I32": (torch.int32, "<i4", 4),
+    "U8": (torch.uint8, "<u1", 1),
 }
 
 _TORCH_TO_NAME: Dict[torch.dtype, str] = {v[0]: k for k, v in DTYPES.items()}
@@ -46,7 +52,7 @@ class FormatError(ValueError):
 
 
 def dtype_name(dtype: torch.dtype) -> str:
-    """The container's name of a torch dtype ('F32', 'F16', 'BF16', 'I64'); raises for others."""
+    """The container's name of a torch dtype (a key of DTYPES); raises for others."""
     try:
         return _TORCH_TO_NAME[dtype]
     except KeyError:

@@ -1,0 +1,349 @@
+/// @file glove_description.hpp
+/// @brief A glove described by data: its id, its sensor cells (how many, their names, where each sits
+/// in the 2x5x5 stretch maps) and where each of the 25 DoFs sits in the 5x5 pose map; read from and
+/// written to a small JSON file, so a glove with another layout needs no code.
+///
+/// File format ("glovepose-glove", version 1; also in weights_format.md, "Glove description files"):
+///
+/// ```
+/// {
+///   "format": "glovepose-glove",
+///   "version": 1,
+///   "id": "glauser2019-44",
+///   "cells": [
+///     {"name": "cell_0", "channel": 0, "row": 0, "col": 2},
+///     ...
+///   ],
+///   "dofs": [
+///     {"name": "thumb_base_abduction", "row": 0, "col": 0},
+///     ...
+///   ]
+/// }
+/// ```
+///
+/// - `cells`: one entry per sensor cell, in cell-id order (cell i of a frame is entry i). `channel` 0
+///   is the map of stretch along the fingers, 1 across; `row`, `col` 0..4. 1 to 50 cells (the slots of
+///   the two maps), unique non-empty names, one cell per slot.
+/// - `dofs`: the 25 DoFs, each named by its hand::kDofs name, in any order, each exactly once, one DoF
+///   per slot of the single pose map (`row`, `col` 0..4).
+/// - Every listed key is required and no other key is accepted (a misspelt key is an error, not a
+///   silently ignored field); numbers are non-negative integers written without fraction or exponent.
+///
+/// Set-up code: every malformed input is a glovepose::Error naming the field, cell or DoF and what
+/// was expected.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstddef>
+#include <fstream>
+#include <initializer_list>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../config.hpp"
+#include "../hand/dofs.hpp"
+#include "../nn/json.hpp"
+#include "grid_map.hpp"
+
+namespace glovepose::grid {
+
+/// @brief Value of the file's "format" key.
+inline constexpr const char* kGloveFormat = "glovepose-glove";
+/// @brief The file version this build reads and writes.
+inline constexpr int kGloveFormatVersion = 1;
+/// @brief Largest glove description file read() accepts, bytes (a 50-cell glove takes about 4 KiB).
+inline constexpr std::size_t kMaxGloveFileBytes = 1 << 20;
+
+/// @brief A glove: id, cell names (one per sensor cell, in cell-id order) and its GridMap.
+/// Immutable and validated on construction.
+class GloveDescription {
+ public:
+  /// @brief Describes a glove. Throws glovepose::Error when the id is empty, the number of names is
+  /// not the map's cell count, or a name is empty or used twice.
+  GloveDescription(std::string id, std::vector<std::string> cell_names, GridMap map)
+      : id_(std::move(id)), cell_names_(std::move(cell_names)), map_(std::move(map)) {
+    if (id_.empty()) throw Error("GloveDescription: empty id, expected a glove id such as 'glauser2019-44'");
+    if (static_cast<int>(cell_names_.size()) != map_.cell_count())
+      throw Error("GloveDescription '" + id_ + "': " + std::to_string(cell_names_.size()) + " cell names, expected " +
+                  std::to_string(map_.cell_count()) + " (one per cell of the grid map)");
+    for (std::size_t c = 0; c < cell_names_.size(); ++c) {
+      if (cell_names_[c].empty())
+        throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " has an empty name, expected a name");
+      for (std::size_t earlier = 0; earlier < c; ++earlier)
+        if (cell_names_[earlier] == cell_names_[c])
+          throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " is named '" + cell_names_[c] +
+                      "' like cell " + std::to_string(earlier) + ", expected unique cell names");
+    }
+  }
+
+  /// @brief The 44-cell glove of Glauser et al. 2019: id "glauser2019-44", GridMap::glauser2019(),
+  /// cells named "cell_0".."cell_43" (the cell ids of the paper's Fig. 4, as in the dataset CSV columns).
+  static GloveDescription glauser2019() {
+    GridMap map = GridMap::glauser2019();
+    std::vector<std::string> names;
+    for (int c = 0; c < map.cell_count(); ++c) names.push_back("cell_" + std::to_string(c));
+    return GloveDescription("glauser2019-44", std::move(names), std::move(map));
+  }
+
+  /// @brief Glove id (e.g. the "glove" of a model file's metadata).
+  const std::string& id() const noexcept { return id_; }
+  /// @brief Name of each cell, in cell-id order.
+  const std::vector<std::string>& cell_names() const noexcept { return cell_names_; }
+  /// @brief Where the cells and DoFs go in the maps.
+  const GridMap& map() const noexcept { return map_; }
+  /// @brief Number of sensor cells.
+  int cell_count() const noexcept { return map_.cell_count(); }
+
+  /// @brief Cell id of the cell called `name`; throws glovepose::Error if no cell has that name.
+  /// (Selects the columns of a bigger glove's data for a glove made of some of its cells.)
+  int cell_index(const std::string& name) const {
+    const auto it = std::find(cell_names_.begin(), cell_names_.end(), name);
+    if (it == cell_names_.end())
+      throw Error("GloveDescription '" + id_ + "': no cell named '" + name + "', expected one of its " +
+                  std::to_string(cell_names_.size()) + " cell names (e.g. '" + cell_names_.front() + "')");
+    return static_cast<int>(it - cell_names_.begin());
+  }
+
+  /// @brief Same id, cell names and slots.
+  friend bool operator==(const GloveDescription& a, const GloveDescription& b) noexcept {
+    if (a.id_ != b.id_ || a.cell_names_ != b.cell_names_) return false;
+    const auto same = [](const Slot& s, const Slot& t) { return s.channel == t.channel && s.row == t.row && s.col == t.col; };
+    for (std::size_t c = 0; c < a.cell_names_.size(); ++c)
+      if (!same(a.map_.cell_slots()[c], b.map_.cell_slots()[c])) return false;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (!same(a.map_.dof_slots()[d], b.map_.dof_slots()[d])) return false;
+    return true;
+  }
+  /// @brief Not operator==.
+  friend bool operator!=(const GloveDescription& a, const GloveDescription& b) noexcept { return !(a == b); }
+
+  /// @brief The description as JSON text (the file format above): one cell or DoF per line, DoFs in
+  /// hand::kDofs order, ending with a newline.
+  std::string to_json() const {
+    std::string out = "{\n  \"format\": " + nn::json::quote(kGloveFormat) +
+                      ",\n  \"version\": " + std::to_string(kGloveFormatVersion) + ",\n  \"id\": " + nn::json::quote(id_) +
+                      ",\n  \"cells\": [\n";
+    for (std::size_t c = 0; c < cell_names_.size(); ++c) {
+      const Slot& s = map_.cell_slots()[c];
+      out += "    {\"name\": " + nn::json::quote(cell_names_[c]) + ", \"channel\": " + std::to_string(s.channel) +
+             ", \"row\": " + std::to_string(s.row) + ", \"col\": " + std::to_string(s.col) + "}";
+      out += c + 1 < cell_names_.size() ? ",\n" : "\n";
+    }
+    out += "  ],\n  \"dofs\": [\n";
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const Slot& s = map_.dof_slots()[d];
+      out += "    {\"name\": " + nn::json::quote(hand::kDofs[d].name) + ", \"row\": " + std::to_string(s.row) +
+             ", \"col\": " + std::to_string(s.col) + "}";
+      out += d + 1 < hand::kDofCount ? ",\n" : "\n";
+    }
+    return out + "  ]\n}\n";
+  }
+
+  /// @brief Parses JSON text in the file format above. Throws glovepose::Error naming the field,
+  /// cell or DoF that is wrong and what was expected.
+  static GloveDescription from_json(const std::string& text) {
+    nn::json::Value root;
+    try {
+      root = nn::json::Parser::parse(text);
+    } catch (const Error& e) {
+      throw fail(std::string("not valid JSON (") + e.what() + "), expected a JSON object");
+    }
+    if (root.kind != nn::json::Value::Kind::Object) throw fail("the text is not a JSON object, expected {\"format\": ...}");
+    const std::string format = string_field(root, "format", "the top-level object");
+    if (format != kGloveFormat)
+      throw fail("'format' is '" + format + "', expected '" + kGloveFormat + "' (is this a glove description file?)");
+    const nn::json::Value& version = field(root, "version", "the top-level object");
+    if (version.kind != nn::json::Value::Kind::Number || version.text != std::to_string(kGloveFormatVersion))
+      throw fail("'version' is " + describe(version) + ", expected " + std::to_string(kGloveFormatVersion) +
+                 " (the version this build of glovepose reads)");
+    // After format and version: another file or version is named as such, not by its first unknown key.
+    check_keys(root, {"format", "version", "id", "cells", "dofs"}, "the top-level object");
+    const std::string id = string_field(root, "id", "the top-level object");
+    if (id.empty()) throw fail("'id' is empty, expected a glove id such as 'glauser2019-44'");
+
+    // Cells: names and slots, checked here so that messages name the cell (GridMap checks again).
+    const nn::json::Value& cells = field(root, "cells", "the top-level object");
+    if (cells.kind != nn::json::Value::Kind::Array) throw fail("'cells' is " + describe(cells) + ", expected an array of cells");
+    if (cells.items.empty()) throw fail("'cells' is empty, expected at least one cell");
+    if (cells.items.size() > static_cast<std::size_t>(kStretchValues))
+      throw fail("'cells' lists " + std::to_string(cells.items.size()) + " cells, but the stretch maps (" +
+                 std::to_string(kStretchChannels) + " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) +
+                 ") have only " + std::to_string(kStretchValues) + " slots, expected at most " +
+                 std::to_string(kStretchValues) + " cells");
+    std::vector<std::string> names;
+    std::vector<Slot> cell_slots;
+    std::array<int, kStretchValues> cell_owner{};
+    cell_owner.fill(-1);
+    for (std::size_t c = 0; c < cells.items.size(); ++c) {
+      const nn::json::Value& cell = cells.items[c];
+      std::string where = "cells[" + std::to_string(c) + "]";
+      if (cell.kind != nn::json::Value::Kind::Object)
+        throw fail(where + " is " + describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
+      check_keys(cell, {"name", "channel", "row", "col"}, where);
+      const std::string name = string_field(cell, "name", where);
+      if (name.empty()) throw fail(where + ": 'name' is empty, expected a cell name");
+      where += " ('" + name + "')";
+      for (std::size_t earlier = 0; earlier < c; ++earlier)
+        if (names[earlier] == name)
+          throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
+      const Slot slot{index_field(cell, "channel", kStretchChannels, where), index_field(cell, "row", kGridSize, where),
+                      index_field(cell, "col", kGridSize, where)};
+      int& owner = cell_owner[static_cast<std::size_t>(slot.flat())];
+      if (owner >= 0)
+        throw fail(where + " is placed at " + describe(slot, true) + ", the slot of cells[" + std::to_string(owner) +
+                   "] ('" + names[static_cast<std::size_t>(owner)] + "'), expected one cell per slot");
+      owner = static_cast<int>(c);
+      names.push_back(name);
+      cell_slots.push_back(slot);
+    }
+
+    // DoFs: by name, any order, each exactly once.
+    const nn::json::Value& dofs = field(root, "dofs", "the top-level object");
+    if (dofs.kind != nn::json::Value::Kind::Array)
+      throw fail("'dofs' is " + describe(dofs) + ", expected an array of the " + std::to_string(hand::kDofCount) + " DoFs");
+    std::array<Slot, hand::kDofCount> dof_slots{};
+    std::array<int, hand::kDofCount> dof_entry{};  // which entry of 'dofs' placed each DoF
+    dof_entry.fill(-1);
+    std::array<int, kMapSlots> dof_owner{};  // which DoF holds each pose-map slot
+    dof_owner.fill(-1);
+    for (std::size_t e = 0; e < dofs.items.size(); ++e) {
+      const nn::json::Value& entry = dofs.items[e];
+      std::string where = "dofs[" + std::to_string(e) + "]";
+      if (entry.kind != nn::json::Value::Kind::Object)
+        throw fail(where + " is " + describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
+      check_keys(entry, {"name", "row", "col"}, where);
+      const std::string name = string_field(entry, "name", where);
+      const std::size_t d = dof_named(name, where);
+      where += " ('" + name + "')";
+      if (dof_entry[d] >= 0)
+        throw fail(where + " repeats the DoF of dofs[" + std::to_string(dof_entry[d]) + "], expected each of the " +
+                   std::to_string(hand::kDofCount) + " DoFs exactly once");
+      const Slot slot{0, index_field(entry, "row", kGridSize, where), index_field(entry, "col", kGridSize, where)};
+      int& owner = dof_owner[static_cast<std::size_t>(slot.flat())];
+      if (owner >= 0)
+        throw fail(where + " is placed at " + describe(slot, false) + ", the slot of DoF '" +
+                   hand::kDofs[static_cast<std::size_t>(owner)].name + "', expected one DoF per slot");
+      owner = static_cast<int>(d);
+      dof_entry[d] = static_cast<int>(e);
+      dof_slots[d] = slot;
+    }
+    std::string missing;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (dof_entry[d] < 0) missing += std::string(missing.empty() ? "" : ", ") + hand::kDofs[d].name;
+    if (!missing.empty())
+      throw fail("'dofs' lacks " + missing + ", expected each of the " + std::to_string(hand::kDofCount) +
+                 " DoFs exactly once");
+
+    try {
+      return GloveDescription(id, std::move(names), GridMap(std::move(cell_slots), dof_slots));
+    } catch (const Error& e) {
+      throw fail(e.what());  // not reached for a file that passed the checks above; kept for safety
+    }
+  }
+
+  /// @brief Reads a glove description file; messages start with "glove description file '<path>': ".
+  static GloveDescription read(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw Error("glove description file '" + path + "': cannot open, expected a readable file");
+    std::string text;
+    char buffer[4096];
+    while (file.read(buffer, sizeof buffer) || file.gcount() > 0) {
+      text.append(buffer, static_cast<std::size_t>(file.gcount()));
+      if (text.size() > kMaxGloveFileBytes)
+        throw Error("glove description file '" + path + "': larger than " + std::to_string(kMaxGloveFileBytes) +
+                    " bytes, expected a small JSON file");
+    }
+    if (file.bad()) throw Error("glove description file '" + path + "': read error, expected a readable file");
+    try {
+      return from_json(text);
+    } catch (const Error& e) {
+      throw Error("glove description file '" + path + "': " + e.what());
+    }
+  }
+
+  /// @brief Writes to_json() to `path`; throws glovepose::Error if the file cannot be written.
+  void write(const std::string& path) const {
+    std::ofstream file(path, std::ios::binary);
+    if (!file) throw Error("glove description file '" + path + "': cannot open for writing");
+    file << to_json();
+    if (!file.flush()) throw Error("glove description file '" + path + "': cannot write");
+  }
+
+  /// @brief The description as a metadata string of a model or dataset file: the JSON text.
+  std::string to_metadata() const { return to_json(); }
+  /// @brief Parses a metadata string written by to_metadata() (same rules and messages as from_json()).
+  static GloveDescription from_metadata(const std::string& text) { return from_json(text); }
+
+ private:
+  static Error fail(const std::string& what) { return Error("glove description: " + what); }
+
+  static std::string describe(const nn::json::Value& v) {
+    switch (v.kind) {
+      case nn::json::Value::Kind::Null: return "null";
+      case nn::json::Value::Kind::Bool: return v.boolean ? "true" : "false";
+      case nn::json::Value::Kind::Number: return v.text;
+      case nn::json::Value::Kind::String: return nn::json::quote(v.text);
+      case nn::json::Value::Kind::Array: return "an array";
+      case nn::json::Value::Kind::Object: return "an object";
+    }
+    return "a value";
+  }
+
+  static std::string describe(const Slot& s, bool with_channel) {
+    return std::string("(") + (with_channel ? "channel " + std::to_string(s.channel) + ", " : "") + "row " +
+           std::to_string(s.row) + ", column " + std::to_string(s.col) + ")";
+  }
+
+  // Refuses keys outside `allowed`: a misspelt optional key would otherwise pass unnoticed.
+  static void check_keys(const nn::json::Value& object, std::initializer_list<const char*> allowed, const std::string& where) {
+    for (const auto& member : object.members) {
+      bool known = false;
+      for (const char* key : allowed) known = known || member.first == key;
+      if (!known) {
+        std::string list;
+        for (const char* key : allowed) list += std::string(list.empty() ? "" : ", ") + "'" + key + "'";
+        throw fail(where + " has the unknown key '" + member.first + "', expected only " + list);
+      }
+    }
+  }
+
+  static const nn::json::Value& field(const nn::json::Value& object, const char* key, const std::string& where) {
+    const nn::json::Value* v = object.find(key);
+    if (!v) throw fail(where + " lacks the key '" + key + "'");
+    return *v;
+  }
+
+  static std::string string_field(const nn::json::Value& object, const char* key, const std::string& where) {
+    const nn::json::Value& v = field(object, key, where);
+    if (v.kind != nn::json::Value::Kind::String)
+      throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a string");
+    return v.text;
+  }
+
+  // A non-negative integer below `limit` (a channel, row or column index).
+  static int index_field(const nn::json::Value& object, const char* key, int limit, const std::string& where) {
+    const nn::json::Value& v = field(object, key, where);
+    long long value = -1;
+    if (v.is_unsigned_integer()) std::from_chars(v.text.data(), v.text.data() + v.text.size(), value);
+    if (value < 0 || value >= limit)
+      throw fail(where + ": '" + key + "' is " + describe(v) + ", expected an integer 0.." + std::to_string(limit - 1));
+    return static_cast<int>(value);
+  }
+
+  static std::size_t dof_named(const std::string& name, const std::string& where) {
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (name == hand::kDofs[d].name) return d;
+    std::string list;
+    for (const hand::Dof& dof : hand::kDofs) list += std::string(list.empty() ? "" : ", ") + dof.name;
+    throw fail(where + ": unknown DoF '" + name + "', expected one of the names of hand::kDofs: " + list);
+  }
+
+  std::string id_;
+  std::vector<std::string> cell_names_;
+  GridMap map_;
+};
+
+}  // namespace glovepose::grid

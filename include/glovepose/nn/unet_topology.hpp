@@ -1,0 +1,83 @@
+/// @file unet_topology.hpp
+/// @brief The U-Net's layers as data (the paper's Table 6; our reading in weights_format.md): which
+/// buffers each layer reads and writes, its geometry, batch norm and activation, and the tensors a
+/// width-w network is made of. Shared by the inference network (unet.hpp) and the trainer
+/// (train/trainable_unet.hpp), so the two cannot disagree about the architecture.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "conv_plan.hpp"
+
+namespace glovepose::nn {
+
+/// @brief Activation after a layer.
+enum class Activation : unsigned char { Relu, Tanh };
+
+/// @brief Activation buffers: 0 input, 1 e1, 2 e2, 3 e3, 4 e4, 5 d1, 6 d2, 7 d3, 8 output.
+inline constexpr int kUNetBufferCount = 9;
+
+/// @brief Channels of buffer `id` in a width-`w` network.
+inline int unet_buffer_channels(int id, int w) noexcept {
+  constexpr int factor[] = {0, 1, 2, 4, 8, 4, 2, 1, 0};
+  return id == 0 ? 2 : (id == 8 ? 1 : factor[id] * w);
+}
+
+/// @brief Grid side of buffer `id` (5x5 in, 3x3, 2x2, 1x1 at the bottom, back to 5x5).
+inline int unet_buffer_size(int id) noexcept {
+  constexpr int size[] = {5, 5, 3, 2, 1, 2, 3, 5, 5};
+  return size[id];
+}
+
+/// @brief One layer: convolution (or transposed convolution), optional batch norm, activation.
+struct UNetLayer {
+  std::string conv;          ///< State-dict prefix of the convolution.
+  std::string bn;            ///< State-dict prefix of its batch norm; empty: none.
+  ConvGeometry geometry;     ///< Sizes, kernel, stride, padding.
+  std::vector<int> sources;  ///< Buffers read, concatenated along channels in this order.
+  int out_buffer;            ///< Buffer written.
+  int out_channels;          ///< Output channels.
+  Activation activation;     ///< Activation after the batch norm.
+
+  /// @brief Input channels (sum over the concatenated sources).
+  int in_channels(int width) const noexcept {
+    int c = 0;
+    for (int s : sources) c += unet_buffer_channels(s, width);
+    return c;
+  }
+};
+
+/// @brief The layers of a width-`w` U-Net in forward order.
+inline std::vector<UNetLayer> unet_layers(int w) {
+  const auto R = Activation::Relu;
+  return {
+      {"enc1", "", {5, 5, 5, 1, 2, false}, {0}, 1, w, R},
+      {"enc2", "bn2", {5, 3, 3, 2, 1, false}, {1}, 2, 2 * w, R},
+      {"enc3", "bn3", {3, 2, 3, 2, 1, false}, {2}, 3, 4 * w, R},
+      {"enc4", "bn4", {2, 1, 4, 2, 1, false}, {3}, 4, 8 * w, R},
+      {"dec1", "dbn1", {1, 2, 4, 2, 1, true}, {4}, 5, 4 * w, R},
+      {"dec2", "dbn2", {2, 3, 3, 2, 1, true}, {5, 3}, 6, 2 * w, R},
+      {"dec3", "dbn3", {3, 5, 3, 2, 1, true}, {6, 2}, 7, w, R},
+      {"out", "", {5, 5, 5, 1, 2, false}, {7, 1}, 8, 1, Activation::Tanh},
+  };
+}
+
+/// @brief The tensor names and shapes (PyTorch state_dict) a width-`w` network is made of.
+inline std::map<std::string, std::vector<std::int64_t>> unet_tensor_shapes(int w) {
+  std::map<std::string, std::vector<std::int64_t>> shapes;
+  for (const UNetLayer& s : unet_layers(w)) {
+    const std::int64_t in = s.in_channels(w), out = s.out_channels;
+    const std::int64_t k = s.geometry.kernel;
+    shapes[s.conv + ".weight"] = s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k}
+                                                       : std::vector<std::int64_t>{out, in, k, k};
+    shapes[s.conv + ".bias"] = {out};
+    if (!s.bn.empty())
+      for (const char* part : {".weight", ".bias", ".running_mean", ".running_var"}) shapes[s.bn + part] = {out};
+  }
+  return shapes;
+}
+
+}  // namespace glovepose::nn

@@ -1,0 +1,475 @@
+/// @file metrics.hpp
+/// @brief Joint-angle error metrics as the paper reports them: mean absolute angle error in degrees
+/// over all 25 DoFs and frames (Glauser et al. 2019, Table 1), per DoF, per finger, and the cumulative
+/// error curve (Fig. 14: share of angles with an error below a threshold; the paper quotes 92% below
+/// 15 degrees), plus RMS, median, 95th percentile and maximum.
+///
+/// Evaluation is offline set-up code: it may allocate and throws glovepose::Error on misuse.
+///
+/// How the figures are resolved:
+/// - Means, RMS and maxima are exact up to a fixed-point quantum of 2^-32 degree (about 2e-10
+///   degree) per angle error. The sums are kept in 128-bit fixed point, so they do not depend on the
+///   order of add() calls or on how frames were split across accumulators before merge(): a merged
+///   report is bit-identical to one accumulated sequentially.
+/// - The cumulative curve and the share under 15 degrees are exact counts (errors strictly below
+///   whole-degree thresholds).
+/// - Percentiles (median, 95th) use the nearest-rank definition (the ceil(q n)-th smallest error)
+///   and are resolved by a histogram of 1/128-degree bins below 180 degrees: the reported value is
+///   the centre of the bin holding that error, clamped to the observed minimum and maximum, so it is
+///   within 1/256 degree of the exact value. Errors of 180 degrees or more are kept individually and
+///   their percentiles are exact.
+/// - No wrap-around: the error of an angle is |predicted - true|, since joint angles are not
+///   periodic within their limits.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../config.hpp"
+#include "../hand/dofs.hpp"
+
+namespace glovepose::train {
+
+/// @brief Degrees per radian.
+inline constexpr double kDegreesPerRadian = 57.295779513082320876798;
+/// @brief Width of a histogram bin used for percentiles, degrees (a power of two, so every whole
+/// degree is a bin edge and binning is exact).
+inline constexpr double kPercentileResolutionDeg = 1.0 / 128.0;
+/// @brief Errors at or above this many degrees are kept individually rather than in the histogram.
+inline constexpr double kHistogramLimitDeg = 180.0;
+/// @brief Largest threshold of the cumulative error curve, degrees; the curve holds 0, 1, ..., 45.
+inline constexpr int kCurveMaxDeg = 45;
+/// @brief Number of points of the cumulative error curve (thresholds 0..kCurveMaxDeg).
+inline constexpr std::size_t kCurvePoints = static_cast<std::size_t>(kCurveMaxDeg) + 1;
+/// @brief The threshold the paper quotes in Fig. 14 (92% of angles below it), degrees.
+inline constexpr int kPaperThresholdDeg = 15;
+
+/// @brief Lower-case name of a digit, e.g. "index".
+inline const char* finger_name(hand::Finger finger) noexcept {
+  constexpr const char* names[hand::kFingerCount] = {"thumb", "index", "middle", "ring", "pinky"};
+  return names[static_cast<std::size_t>(finger)];
+}
+
+/// @brief Error statistics of one group of angles (one DoF, one finger), degrees.
+struct ErrorSummary {
+  double mean_deg = 0;  ///< Mean absolute error.
+  double rms_deg = 0;   ///< Root of the mean squared error.
+  double max_deg = 0;   ///< Largest absolute error.
+};
+
+/// @brief One DoF's errors.
+struct DofError {
+  const char* name = "";  ///< hand::kDofs name, e.g. "index_base_flexion".
+  int theta = 0;          ///< Index in the reference model's 34 parameters (9..33).
+  ErrorSummary error;     ///< Over all valid frames.
+};
+
+/// @brief One finger's errors, over the frames and the finger's 5 DoFs.
+struct FingerError {
+  const char* name = "";  ///< finger_name(), e.g. "thumb".
+  ErrorSummary error;     ///< Over all valid frames and the finger's DoFs.
+};
+
+/// @brief One point of the cumulative error curve (paper Fig. 14).
+struct CurvePoint {
+  int threshold_deg = 0;  ///< Threshold, whole degrees.
+  double share = 0;       ///< Share (0..1) of angles whose error is strictly below the threshold.
+};
+
+/// @brief What AngleErrorAccumulator::report() measured. Always from at least one valid frame.
+struct AngleErrorReport {
+  std::size_t frames = 0;          ///< Valid frames evaluated.
+  std::size_t skipped_frames = 0;  ///< Frames left out because an angle (predicted or true) was not finite.
+  std::size_t angles = 0;          ///< Angle errors evaluated: frames x 25.
+  ErrorSummary overall;            ///< Over all angles; overall.mean_deg is the paper's "mean angle error".
+  double median_deg = 0;           ///< Nearest-rank median of all angle errors (see percentile_resolution_deg).
+  double p95_deg = 0;              ///< Nearest-rank 95th percentile of all angle errors.
+  double percentile_resolution_deg = kPercentileResolutionDeg;  ///< Histogram bin width behind the percentiles.
+  double share_under_15deg = 0;    ///< Share of angles with error below 15 degrees (paper Fig. 14: 92%).
+  std::array<FingerError, hand::kFingerCount> fingers{};  ///< By hand::Finger.
+  std::array<DofError, hand::kDofCount> dofs{};           ///< In hand::kDofs order.
+  std::array<CurvePoint, kCurvePoints> curve{};           ///< Thresholds 0, 1, ..., kCurveMaxDeg degrees.
+};
+
+namespace detail {
+
+// An unsigned 128-bit sum of 64-bit terms: integer addition is associative, so the total does not
+// depend on the order frames arrive in or on how accumulators are merged.
+struct FixedSum {
+  std::uint64_t low = 0;
+  std::uint64_t high = 0;
+
+  void add(std::uint64_t term) noexcept {
+    low += term;
+    if (low < term) ++high;  // carry
+  }
+  void add(const FixedSum& other) noexcept {
+    add(other.low);
+    high += other.high;
+  }
+  // The sum in units of 2^-32.
+  double value() const noexcept {
+    return (static_cast<double>(high) * 0x1p64 + static_cast<double>(low)) * 0x1p-32;
+  }
+};
+
+// A value in [0, 2^31) in units of 2^-32, rounded to nearest; scaling by a power of two is exact.
+inline std::uint64_t to_fixed(double value) noexcept {
+  return static_cast<std::uint64_t>(std::llround(value * 0x1p32));
+}
+
+// Sum of values in ascending order: a deterministic total for a set, whatever order it was built in.
+inline double sorted_sum(std::vector<double> values, bool squares) {
+  std::sort(values.begin(), values.end());
+  double sum = 0.0;
+  for (double v : values) sum += squares ? v * v : v;
+  return sum;
+}
+
+// Shortest text that reads back to the same double; JSON has no NaN or infinity, so those are null.
+inline std::string json_number(double value) {
+  if (!std::isfinite(value)) return "null";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+}  // namespace detail
+
+/// @brief Accumulates predicted-against-true joint-angle errors frame by frame or in blocks, and
+/// reports them the way the paper does (see the file comment for how each figure is resolved).
+///
+/// A frame is 25 angles in radians in hand::kDofs order. A frame with any non-finite angle, predicted
+/// or true (or whose error overflows a double), is not evaluated but counted in skipped_frames(), so
+/// missing ground truth never poisons the mean. For threads, give each its own accumulator and
+/// merge() them: the result equals sequential accumulation exactly, whatever the split.
+///
+/// Memory: a histogram of 23040 counters (about 180 KB), plus 16 bytes per angle error of 180
+/// degrees or more (kept individually; only a broken model or angles outside the joint limits make
+/// them).
+class AngleErrorAccumulator {
+ public:
+  /// @brief An accumulator with no frames.
+  AngleErrorAccumulator() : histogram_(kHistogramBins, 0) {}
+
+  /// @brief Adds one frame: `predicted` and `truth` each point to 25 angles (radians, hand::kDofs
+  /// order). Returns false, and counts the frame as skipped, when an angle is not finite. Throws
+  /// glovepose::Error when a pointer is null.
+  bool add(const double* predicted, const double* truth) {
+    check_pointers(predicted, truth, 1, "add");
+    return add_frame(predicted, truth);
+  }
+
+  /// @brief Adds one frame given as hand::Angles; see add(const double*, const double*).
+  bool add(const hand::Angles& predicted, const hand::Angles& truth) { return add_frame(predicted.data(), truth.data()); }
+
+  /// @brief Adds `frames` frames stored row-major (frames x 25, radians, hand::kDofs order), e.g. a
+  /// network's output block against train::Dataset::angles. Returns the number of frames skipped
+  /// because an angle was not finite. Throws glovepose::Error when a pointer is null and frames > 0.
+  std::size_t add_batch(const float* predicted, const float* truth, std::size_t frames) {
+    return add_rows(predicted, truth, frames);
+  }
+
+  /// @brief Double-precision form of add_batch(const float*, const float*, std::size_t).
+  std::size_t add_batch(const double* predicted, const double* truth, std::size_t frames) {
+    return add_rows(predicted, truth, frames);
+  }
+
+  /// @brief Adds the frames of `other` to this accumulator. The result does not depend on the order
+  /// of merges and equals accumulating all frames in one accumulator.
+  void merge(const AngleErrorAccumulator& other) {
+    if (&other == this) {  // appending a vector to itself would read what it writes
+      const AngleErrorAccumulator copy(other);
+      merge(copy);
+      return;
+    }
+    frames_ += other.frames_;
+    skipped_ += other.skipped_;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      dofs_[d].sum.add(other.dofs_[d].sum);
+      dofs_[d].sum_squares.add(other.dofs_[d].sum_squares);
+      dofs_[d].max = std::max(dofs_[d].max, other.dofs_[d].max);
+    }
+    for (std::size_t b = 0; b < kHistogramBins; ++b) histogram_[b] += other.histogram_[b];
+    in_histogram_ += other.in_histogram_;
+    large_.insert(large_.end(), other.large_.begin(), other.large_.end());
+    min_ = std::min(min_, other.min_);
+  }
+
+  /// @brief Forgets every frame.
+  void clear() { *this = AngleErrorAccumulator(); }
+
+  /// @brief Valid frames added so far.
+  std::size_t frames() const noexcept { return frames_; }
+  /// @brief Frames left out because an angle was not finite.
+  std::size_t skipped_frames() const noexcept { return skipped_; }
+  /// @brief Whether no valid frame was added (report() would throw).
+  bool empty() const noexcept { return frames_ == 0; }
+
+  /// @brief Share (0..1) of angle errors strictly below `threshold_deg`. Exact for thresholds that
+  /// are multiples of kPercentileResolutionDeg (every whole degree) and for any threshold of
+  /// kHistogramLimitDeg or more; other thresholds are rounded down to a bin edge. Throws
+  /// glovepose::Error when there are no valid frames or the threshold is NaN.
+  double share_below(double threshold_deg) const {
+    require_frames("share_below");
+    if (std::isnan(threshold_deg)) throw Error("AngleErrorAccumulator::share_below: threshold is NaN, expected a number of degrees");
+    const double total = static_cast<double>(angles());
+    if (threshold_deg <= 0.0) return 0.0;
+    if (threshold_deg < kHistogramLimitDeg) {
+      const auto edge = static_cast<std::size_t>(std::floor(threshold_deg / kPercentileResolutionDeg));
+      std::uint64_t below = 0;
+      for (std::size_t b = 0; b < edge; ++b) below += histogram_[b];
+      return static_cast<double>(below) / total;
+    }
+    std::uint64_t below = in_histogram_;
+    for (const auto& entry : large_)
+      if (entry.second < threshold_deg) ++below;
+    return static_cast<double>(below) / total;
+  }
+
+  /// @brief Nearest-rank percentile of all angle errors, degrees: the ceil(q n)-th smallest of the n
+  /// errors (the smallest for q = 0), histogram-resolved below kHistogramLimitDeg (within 1/256
+  /// degree, see the file comment). Throws glovepose::Error when there are no valid frames or q is
+  /// outside [0, 1].
+  double percentile(double q) const {
+    require_frames("percentile");
+    if (!(q >= 0.0 && q <= 1.0))
+      throw Error("AngleErrorAccumulator::percentile: q = " + std::to_string(q) + ", expected a share in [0, 1]");
+    const std::uint64_t n = angles();
+    // Guard against q * n landing a rounding error above a whole number (0.95 * 20 = 19.000...04).
+    const double position = q * static_cast<double>(n);
+    auto rank = static_cast<std::uint64_t>(std::ceil(position - 4.0 * std::numeric_limits<double>::epsilon() * position));
+    rank = std::clamp<std::uint64_t>(rank, 1, n);
+    if (rank > in_histogram_) {
+      std::vector<double> large;
+      large.reserve(large_.size());
+      for (const auto& entry : large_) large.push_back(entry.second);
+      const auto nth = large.begin() + static_cast<std::ptrdiff_t>(rank - in_histogram_ - 1);
+      std::nth_element(large.begin(), nth, large.end());
+      return *nth;
+    }
+    std::uint64_t seen = 0;
+    std::size_t bin = 0;
+    for (; bin < kHistogramBins; ++bin) {
+      seen += histogram_[bin];
+      if (seen >= rank) break;
+    }
+    const double centre = (static_cast<double>(bin) + 0.5) * kPercentileResolutionDeg;
+    return std::clamp(centre, min_, max_error());
+  }
+
+  /// @brief The report of every valid frame so far. Throws glovepose::Error when there is none (all
+  /// frames skipped, or none added): a mean of nothing is not a figure to print.
+  AngleErrorReport report() const {
+    require_frames("report");
+    AngleErrorReport r;
+    r.frames = frames_;
+    r.skipped_frames = skipped_;
+    r.angles = static_cast<std::size_t>(angles());
+
+    // Errors of 180 degrees or more, by DoF, summed in ascending order for a deterministic total.
+    std::array<std::vector<double>, hand::kDofCount> large_by_dof;
+    for (const auto& entry : large_) large_by_dof[entry.first].push_back(entry.second);
+    std::array<double, hand::kDofCount> sum{}, sum_squares{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      sum[d] = dofs_[d].sum.value() + detail::sorted_sum(large_by_dof[d], false);
+      sum_squares[d] = dofs_[d].sum_squares.value() + detail::sorted_sum(large_by_dof[d], true);
+    }
+
+    const double per_dof = static_cast<double>(frames_);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      r.dofs[d].name = hand::kDofs[d].name;
+      r.dofs[d].theta = hand::kDofs[d].theta;
+      r.dofs[d].error = summary(sum[d], sum_squares[d], dofs_[d].max, per_dof);
+    }
+
+    // Fingers and the whole hand: fixed-point sums added exactly, large errors over the group sorted.
+    const auto group = [&](auto member) {
+      detail::FixedSum fixed, fixed_squares;
+      std::vector<double> large;
+      double max = 0.0;
+      std::size_t count = 0;
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+        if (!member(d)) continue;
+        fixed.add(dofs_[d].sum);
+        fixed_squares.add(dofs_[d].sum_squares);
+        large.insert(large.end(), large_by_dof[d].begin(), large_by_dof[d].end());
+        max = std::max(max, dofs_[d].max);
+        ++count;
+      }
+      return summary(fixed.value() + detail::sorted_sum(large, false), fixed_squares.value() + detail::sorted_sum(large, true), max,
+                     per_dof * static_cast<double>(count));
+    };
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      r.fingers[f].name = finger_name(static_cast<hand::Finger>(f));
+      r.fingers[f].error = group([f](std::size_t d) { return static_cast<std::size_t>(hand::kDofs[d].finger) == f; });
+    }
+    r.overall = group([](std::size_t) { return true; });
+
+    r.median_deg = percentile(0.5);
+    r.p95_deg = percentile(0.95);
+    r.share_under_15deg = share_below(kPaperThresholdDeg);
+    for (int t = 0; t <= kCurveMaxDeg; ++t) r.curve[static_cast<std::size_t>(t)] = CurvePoint{t, share_below(t)};
+    return r;
+  }
+
+ private:
+  static constexpr std::size_t kHistogramBins = static_cast<std::size_t>(kHistogramLimitDeg / kPercentileResolutionDeg);
+
+  struct DofSums {
+    detail::FixedSum sum;          // errors below kHistogramLimitDeg, degrees, fixed point
+    detail::FixedSum sum_squares;  // their squares, degrees^2, fixed point
+    double max = 0.0;              // largest error, any size
+  };
+
+  std::uint64_t angles() const noexcept { return static_cast<std::uint64_t>(frames_) * hand::kDofCount; }
+
+  double max_error() const noexcept {
+    double max = 0.0;
+    for (const DofSums& dof : dofs_) max = std::max(max, dof.max);
+    return max;
+  }
+
+  static ErrorSummary summary(double sum, double sum_squares, double max, double count) noexcept {
+    return ErrorSummary{sum / count, std::sqrt(sum_squares / count), max};
+  }
+
+  template <typename T>
+  static void check_pointers(const T* predicted, const T* truth, std::size_t frames, const char* what) {
+    if (frames > 0 && (predicted == nullptr || truth == nullptr))
+      throw Error(std::string("AngleErrorAccumulator::") + what + ": " + (predicted == nullptr ? "predicted" : "truth") +
+                  " is null, expected 25 angles per frame");
+  }
+
+  void require_frames(const char* what) const {
+    if (frames_ == 0)
+      throw Error(std::string("AngleErrorAccumulator::") + what + ": no valid frames (" + std::to_string(skipped_) +
+                  " skipped for non-finite angles), expected at least one frame with finite predicted and true angles");
+  }
+
+  template <typename T>
+  std::size_t add_rows(const T* predicted, const T* truth, std::size_t frames) {
+    check_pointers(predicted, truth, frames, "add_batch");
+    std::size_t skipped = 0;
+    for (std::size_t f = 0; f < frames; ++f)
+      if (!add_frame(predicted + f * hand::kDofCount, truth + f * hand::kDofCount)) ++skipped;
+    return skipped;
+  }
+
+  template <typename T>
+  bool add_frame(const T* predicted, const T* truth) {
+    // Check the whole frame before touching any sum, so a skipped frame leaves no trace.
+    std::array<double, hand::kDofCount> error{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const auto p = static_cast<double>(predicted[d]);
+      const auto t = static_cast<double>(truth[d]);
+      error[d] = std::abs(p - t) * kDegreesPerRadian;
+      if (!std::isfinite(p) || !std::isfinite(t) || !std::isfinite(error[d])) {
+        ++skipped_;
+        return false;
+      }
+    }
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const double e = error[d];
+      DofSums& dof = dofs_[d];
+      dof.max = std::max(dof.max, e);
+      min_ = std::min(min_, e);
+      if (e < kHistogramLimitDeg) {
+        dof.sum.add(detail::to_fixed(e));
+        dof.sum_squares.add(detail::to_fixed(e * e));
+        // e / 2^-7 is exact, so the bin edges fall exactly on multiples of 1/128 degree.
+        ++histogram_[std::min(kHistogramBins - 1, static_cast<std::size_t>(e / kPercentileResolutionDeg))];
+        ++in_histogram_;
+      } else {
+        large_.emplace_back(d, e);
+      }
+    }
+    ++frames_;
+    return true;
+  }
+
+  std::size_t frames_ = 0;
+  std::size_t skipped_ = 0;
+  std::array<DofSums, hand::kDofCount> dofs_{};
+  std::vector<std::uint64_t> histogram_;  // counts of errors in [b/128, (b+1)/128) degrees
+  std::uint64_t in_histogram_ = 0;        // errors below kHistogramLimitDeg
+  std::vector<std::pair<std::size_t, double>> large_;  // (DoF, error) of errors >= kHistogramLimitDeg
+  double min_ = std::numeric_limits<double>::infinity();  // smallest error, to clamp percentiles
+};
+
+/// @brief The report as one JSON object with stable keys, numbers in shortest round-trip form:
+/// "format" ("glovepose-angle-errors"), "version" (1), "frames", "skipped_frames", "angles",
+/// "mean_deg", "rms_deg", "max_deg", "median_deg", "p95_deg", "percentile_resolution_deg",
+/// "share_under_15deg", "fingers" (array of {"finger", "mean_deg", "rms_deg", "max_deg"}),
+/// "dofs" (array of {"dof", "theta", "mean_deg", "rms_deg", "max_deg"}) and "cumulative"
+/// ({"threshold_deg": [0..45], "share": [...]}). Non-finite numbers are written as null.
+inline std::string to_json(const AngleErrorReport& r) {
+  const auto number = detail::json_number;
+  const auto summary = [&](const ErrorSummary& e) {
+    return "\"mean_deg\": " + number(e.mean_deg) + ", \"rms_deg\": " + number(e.rms_deg) + ", \"max_deg\": " + number(e.max_deg);
+  };
+  std::string out = "{\n";
+  out += "  \"format\": \"glovepose-angle-errors\",\n  \"version\": 1,\n";
+  out += "  \"frames\": " + std::to_string(r.frames) + ",\n";
+  out += "  \"skipped_frames\": " + std::to_string(r.skipped_frames) + ",\n";
+  out += "  \"angles\": " + std::to_string(r.angles) + ",\n";
+  out += "  " + summary(r.overall) + ",\n";
+  out += "  \"median_deg\": " + number(r.median_deg) + ",\n";
+  out += "  \"p95_deg\": " + number(r.p95_deg) + ",\n";
+  out += "  \"percentile_resolution_deg\": " + number(r.percentile_resolution_deg) + ",\n";
+  out += "  \"share_under_15deg\": " + number(r.share_under_15deg) + ",\n";
+  out += "  \"fingers\": [\n";
+  for (std::size_t f = 0; f < r.fingers.size(); ++f)
+    out += std::string("    {\"finger\": \"") + r.fingers[f].name + "\", " + summary(r.fingers[f].error) + "}" +
+           (f + 1 < r.fingers.size() ? ",\n" : "\n");
+  out += "  ],\n  \"dofs\": [\n";
+  for (std::size_t d = 0; d < r.dofs.size(); ++d)
+    out += std::string("    {\"dof\": \"") + r.dofs[d].name + "\", \"theta\": " + std::to_string(r.dofs[d].theta) + ", " +
+           summary(r.dofs[d].error) + "}" + (d + 1 < r.dofs.size() ? ",\n" : "\n");
+  out += "  ],\n  \"cumulative\": {\n    \"threshold_deg\": [";
+  for (std::size_t i = 0; i < r.curve.size(); ++i) out += (i ? ", " : "") + std::to_string(r.curve[i].threshold_deg);
+  out += "],\n    \"share\": [";
+  for (std::size_t i = 0; i < r.curve.size(); ++i) out += (i ? ", " : "") + number(r.curve[i].share);
+  out += "]\n  }\n}\n";
+  return out;
+}
+
+/// @brief The report as a plain-text table: frames (and skipped frames), the overall line, one line
+/// per finger, one per DoF, and the cumulative curve at 5, 10, 15, 20 and 30 degrees.
+inline std::string format_table(const AngleErrorReport& r) {
+  std::string out;
+  char line[256];
+  const auto add = [&](const char* format, auto... args) {
+    std::snprintf(line, sizeof line, format, args...);
+    out += line;
+  };
+  add("Angle errors (degrees): %zu frames x 25 angles", r.frames);
+  if (r.skipped_frames > 0) add(", %zu frame%s skipped (non-finite angles)", r.skipped_frames, r.skipped_frames == 1 ? "" : "s");
+  out += "\n";
+  add("%-24s %8s %8s %8s %8s %8s %9s\n", "", "mean", "rms", "max", "median", "p95", "<15 deg");
+  add("%-24s %8.3f %8.3f %8.3f %8.3f %8.3f %8.1f%%\n", "all", r.overall.mean_deg, r.overall.rms_deg, r.overall.max_deg, r.median_deg,
+      r.p95_deg, 100.0 * r.share_under_15deg);
+  add("  (median and p95: nearest rank, resolved to %.4f degree)\n\n", r.percentile_resolution_deg);
+  add("%-24s %8s %8s %8s\n", "finger", "mean", "rms", "max");
+  for (const FingerError& f : r.fingers) add("%-24s %8.3f %8.3f %8.3f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
+  add("\n%-24s %8s %8s %8s\n", "DoF", "mean", "rms", "max");
+  for (const DofError& d : r.dofs) add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
+  out += "\nShare of angles with error below:";
+  for (int t : {5, 10, 15, 20, 30}) {
+    const std::size_t i = static_cast<std::size_t>(t);
+    if (i < r.curve.size()) add("  %d deg %.1f%%", r.curve[i].threshold_deg, 100.0 * r.curve[i].share);
+  }
+  out += "\n";
+  return out;
+}
+
+}  // namespace glovepose::train

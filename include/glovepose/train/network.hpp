@@ -1,0 +1,57 @@
+/// @file network.hpp
+/// @brief What the trainer trains: a network from calibrated cell values (C per frame) to the 25
+/// normalised DoF values (hand::kDofs order, [-1, 1] within the joint limits), with the L2 loss.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "../hand/dofs.hpp"
+#include "parameters.hpp"
+#include "thread_pool.hpp"
+
+namespace glovepose::train {
+
+/// @brief Values per frame a network predicts.
+inline constexpr int kTargets = static_cast<int>(hand::kDofCount);
+
+/// @brief A network with a forward pass in training or evaluation mode and a backward pass.
+class TrainableNetwork {
+ public:
+  virtual ~TrainableNetwork() = default;
+  /// @brief "unet" or "fcn" (the weight file's metadata).
+  virtual std::string architecture() const = 0;
+  /// @brief Its size parameter (U-Net base width, FCN hidden width).
+  virtual int width() const = 0;
+  /// @brief Cell values per frame.
+  virtual int inputs() const = 0;
+  /// @brief Largest batch forward() accepts.
+  virtual int max_batch() const = 0;
+  /// @brief Forward pass of `frames` frames (cells: frames x inputs()); training mode uses batch
+  /// statistics in batch norm and updates the running ones, evaluation mode uses the running ones.
+  virtual void forward(const float* cells, int frames, bool training, ThreadPool& pool) = 0;
+  /// @brief The last forward's output, frames x kTargets.
+  virtual const float* output() const = 0;
+  /// @brief Backward pass of the last (training-mode) forward: sets every trainable tensor's grad
+  /// to dLoss/dvalue given dLoss/doutput (frames x kTargets).
+  virtual void backward(const float* output_grad, ThreadPool& pool) = 0;
+  /// @brief The tensors (PyTorch names).
+  virtual ParameterSet& parameters() = 0;
+  /// @brief The tensors (PyTorch names).
+  virtual const ParameterSet& parameters() const = 0;
+};
+
+/// @brief Mean squared error over n values (torch.nn.functional.mse_loss, mean reduction); writes
+/// its gradient 2 (y - t) / n into `grad`. Accumulated in double.
+inline double mse_loss(const float* y, const float* target, long n, float* grad) noexcept {
+  double sum = 0.0;
+  const float scale = 2.0f / static_cast<float>(n);
+  for (long i = 0; i < n; ++i) {
+    const double d = static_cast<double>(y[i]) - static_cast<double>(target[i]);
+    sum += d * d;
+    grad[i] = scale * (y[i] - target[i]);
+  }
+  return sum / static_cast<double>(n);
+}
+
+}  // namespace glovepose::train

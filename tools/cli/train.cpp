@@ -1,0 +1,324 @@
+// glovepose train    --data FILE --model unet:W|fcn[:H]|linear --out FILE [selection] [training options]
+// glovepose finetune --model FILE --data FILE --out FILE [selection] [training options]
+// glovepose eval     --model FILE --data FILE [selection] [--calibration none|training|onthefly] [--json]
+//   Trains, fine-tunes and evaluates models on dataset files (train/dataset.hpp), on all cores.
+//   Selection: --subjects / --exclude-subjects / --sessions / --gloves take lists like "0-3,7".
+#include <glovepose/train/linear_fit.hpp>
+#include <glovepose/train/metrics.hpp>
+#include <glovepose/train/model_file.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "commands.hpp"
+
+namespace glovepose::cli {
+namespace {
+
+std::atomic<bool> interrupted{false};
+extern "C" void on_interrupt(int) { interrupted.store(true); }
+
+[[noreturn]] void usage(const std::string& command, const std::string& problem) {
+  std::cerr << "glovepose " << command << ": " << problem << "\n"
+            << "usage: glovepose train --data FILE --model unet:W|fcn[:H]|linear --out FILE [options]\n"
+            << "       glovepose finetune --model FILE --data FILE --out FILE [options]\n"
+            << "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly] [--json] [selection]\n"
+            << "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
+            << "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
+            << "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n";
+  std::exit(2);
+}
+
+template <typename T>
+T number(const std::string& command, const std::string& option, const std::string& text) {
+  T v{};
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size()) usage(command, option + " '" + text + "' is not a number");
+  return v;
+}
+
+std::vector<int> id_list(const std::string& command, const std::string& option, const std::string& text) {
+  std::vector<int> ids;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    const std::size_t dash = item.find('-');
+    const int lo = number<int>(command, option, dash == std::string::npos ? item : item.substr(0, dash));
+    const int hi = dash == std::string::npos ? lo : number<int>(command, option, item.substr(dash + 1));
+    if (lo < 0 || hi < lo || hi - lo > 100000) usage(command, option + " '" + text + "': expected ids like 0-3,7");
+    for (int v = lo; v <= hi; ++v) ids.push_back(v);
+    start = comma + 1;
+  }
+  return ids;
+}
+
+struct Options {
+  std::string command, data, model, out, glove_file;
+  std::string calibration;  // empty: the default of the command
+  train::FrameFilter filter;
+  std::vector<int> exclude_subjects;
+  int stride = 1, threads = 0;
+  train::TrainConfig training;
+  double validation = 0.1;
+  bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  o.command = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(o.command, a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--data") o.data = value();
+    else if (a == "--model") o.model = value();
+    else if (a == "--out") o.out = value();
+    else if (a == "--glove") o.glove_file = value();
+    else if (a == "--calibration") o.calibration = value();
+    else if (a == "--subjects") o.filter.subjects = id_list(o.command, a, value());
+    else if (a == "--exclude-subjects") o.exclude_subjects = id_list(o.command, a, value());
+    else if (a == "--sessions") o.filter.sessions = id_list(o.command, a, value());
+    else if (a == "--gloves") o.filter.gloves = id_list(o.command, a, value());
+    else if (a == "--stride") o.stride = number<int>(o.command, a, value());
+    else if (a == "--threads") o.threads = number<int>(o.command, a, value());
+    else if (a == "--epochs") o.training.epochs = number<int>(o.command, a, value()), o.epochs_set = true;
+    else if (a == "--batch") o.training.batch = number<int>(o.command, a, value()), o.batch_set = true;
+    else if (a == "--lr") o.training.optimizer.learning_rate = number<double>(o.command, a, value()), o.lr_set = true;
+    else if (a == "--seed") o.training.seed = number<std::uint64_t>(o.command, a, value());
+    else if (a == "--validation") o.validation = number<double>(o.command, a, value());
+    else if (a == "--max-minutes") o.training.max_seconds = 60.0 * number<double>(o.command, a, value());
+    else if (a == "--optimizer") {
+      const std::string v = value();
+      if (v != "adam" && v != "sgd") usage(o.command, "--optimizer '" + v + "', expected adam or sgd");
+      o.training.optimizer.kind = v == "adam" ? train::OptimizerKind::Adam : train::OptimizerKind::Sgd;
+    } else if (a == "--json") o.json = true;
+    else if (a == "--quiet") o.quiet = true;
+    else usage(o.command, "unknown option " + a);
+  }
+  if (o.data.empty()) usage(o.command, "--data FILE is required");
+  if (o.model.empty()) usage(o.command, "--model is required");
+  if (o.command != "eval" && o.out.empty()) usage(o.command, "--out FILE is required");
+  if (o.threads <= 0) o.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return o;
+}
+
+// Subjects present in the data minus the excluded ones, when --exclude-subjects is given.
+void apply_exclusions(Options& o, const train::Dataset& data) {
+  if (o.exclude_subjects.empty()) return;
+  if (o.filter.subjects.empty())
+    for (std::size_t i = 0; i < data.frames(); ++i)
+      if (std::find(o.filter.subjects.begin(), o.filter.subjects.end(), data.subject[i]) == o.filter.subjects.end())
+        o.filter.subjects.push_back(data.subject[i]);
+  std::vector<int> kept;
+  for (int s : o.filter.subjects)
+    if (std::find(o.exclude_subjects.begin(), o.exclude_subjects.end(), s) == o.exclude_subjects.end()) kept.push_back(s);
+  if (kept.empty()) throw Error("--exclude-subjects leaves no subject");
+  o.filter.subjects = kept;
+}
+
+std::string duration(double seconds) {
+  char text[32];
+  const long s = static_cast<long>(seconds + 0.5);
+  if (s >= 3600) std::snprintf(text, sizeof text, "%ldh%02ldm", s / 3600, s / 60 % 60);
+  else std::snprintf(text, sizeof text, "%ldm%02lds", s / 60, s % 60);
+  return text;
+}
+
+// A progress bar on stderr: redrawn in place on a terminal, a line per epoch otherwise.
+std::function<void(const train::Progress&)> progress_bar(bool quiet) {
+  if (quiet) return {};
+  const bool terminal = isatty(2) != 0;
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>();
+  return [terminal, last](const train::Progress& p) {
+    const bool epoch_end = p.step == p.steps_per_epoch;
+    const auto now = std::chrono::steady_clock::now();
+    if (!epoch_end && (!terminal || now - *last < std::chrono::milliseconds(250))) return;
+    *last = now;
+    const double done = (p.epoch + static_cast<double>(p.step) / static_cast<double>(p.steps_per_epoch)) / p.epochs;
+    char bar[21];
+    for (int i = 0; i < 20; ++i) bar[i] = i < static_cast<int>(done * 20.0) ? '#' : '-';
+    bar[20] = 0;
+    char best[32] = "-";
+    if (std::isfinite(p.best_validation_deg)) std::snprintf(best, sizeof best, "%.2f deg", p.best_validation_deg);
+    std::fprintf(stderr, "%sepoch %d/%d [%s] %3.0f%%  %.0f samples/s  loss %.5f  best val %s  ETA %s%s", terminal ? "\r" : "", p.epoch + 1,
+                 p.epochs, bar, 100.0 * done, p.samples_per_second, p.loss, best, duration(p.eta_seconds).c_str(),
+                 terminal ? "   " : "\n");
+    if (terminal && epoch_end) std::fprintf(stderr, "\n");
+  };
+}
+
+grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
+  const grid::GloveDescription glove = o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file);
+  if (data.glove_layout() != glove.id())
+    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "' but the glove description is '" + glove.id() +
+                "'; pass its description with --glove FILE");
+  if (static_cast<std::size_t>(glove.cell_count()) != data.cell_count)
+    throw Error("the glove description has " + std::to_string(glove.cell_count()) + " cells, the dataset " + std::to_string(data.cell_count));
+  return glove;
+}
+
+std::string command_line(int argc, char** argv) {
+  std::string s = "glovepose";
+  for (int i = 1; i < argc; ++i) s += std::string(" ") + argv[i];
+  return s;
+}
+
+// Trains (or fine-tunes) a network, saving the best model so far at every improvement.
+int fit_network(const Options& o, train::TrainableNetwork& net, const nn::ModelInfo& info, const train::Samples& all,
+                std::map<std::string, std::string> provenance) {
+  const auto [training, validation] = train::split_validation(all, o.validation);
+  const hand::JointLimits limits = train::joint_limits(info);
+  train::ThreadPool pool(o.threads);
+  train::TrainConfig config = o.training;
+  config.stop = &interrupted;
+  config.on_progress = progress_bar(o.quiet);
+  provenance["training_frames"] = std::to_string(training.frames());
+  provenance["validation_frames"] = std::to_string(validation.frames());
+  config.on_best = [&](const train::TrainableNetwork& best, const train::EpochRecord& record) {
+    provenance["best_epoch"] = std::to_string(record.epoch);
+    provenance["validation_error_deg"] = std::to_string(record.validation_error_deg);
+    train::save_model(o.out, info, best.parameters().to_tensors(), provenance);
+  };
+  std::signal(SIGINT, on_interrupt);
+  if (!o.quiet)
+    std::fprintf(stderr, "%s %s (%zu parameters): %ld training frames, %ld validation frames, batch %d, %d threads\n", o.command.c_str(),
+                 info.architecture.c_str(), net.parameters().trainable_count(), training.frames(), validation.frames(), o.training.batch,
+                 o.threads);
+  const train::TrainResult result = train::train_network(net, training, validation, limits, config, pool);
+  std::signal(SIGINT, SIG_DFL);
+  std::printf("%s: %ld steps in %s (%.0f samples/s); kept epoch %d, validation error %.3f deg; wrote %s\n",
+              result.stopped ? "stopped" : "done", result.steps, duration(result.seconds).c_str(), result.samples_per_second, result.best_epoch + 1,
+              result.best_validation_error_deg, o.out.c_str());
+  if (result.best_epoch < 0) throw Error("training stopped before the first epoch ended; no model was written");
+  return interrupted.load() ? 130 : 0;
+}
+
+int train_command(Options o, int argc, char** argv) {
+  const train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  const grid::GloveDescription glove = glove_for(o, data);
+  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
+  std::optional<sensor::CalibrationRange> range;
+  if (mode == train::CalibrationMode::Training) range = train::training_range(data, o.filter);
+  const hand::JointLimits limits;
+  const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride);
+  std::string architecture = o.model;
+  int width = 0;
+  const std::size_t colon = o.model.find(':');
+  if (colon != std::string::npos) {
+    architecture = o.model.substr(0, colon);
+    width = number<int>(o.command, "--model", o.model.substr(colon + 1));
+  }
+  if (architecture == "unet" && width == 0) width = 64;
+  if (architecture == "fcn" && width == 0) width = 2048;
+  if (architecture != "unet" && architecture != "fcn" && architecture != "linear")
+    usage(o.command, "--model '" + o.model + "', expected unet:W, fcn[:H] or linear");
+  const nn::ModelInfo info = train::make_model_info(architecture, width, glove, mode, range ? &*range : nullptr);
+  std::map<std::string, std::string> provenance{{"training_command", command_line(argc, argv)},
+                                                {"training_seed", std::to_string(o.training.seed)},
+                                                {"training_data", o.data}};
+  if (architecture == "linear") {
+    const auto [training, validation] = train::split_validation(all, o.validation);
+    const nn::LinearMap map = train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
+    std::vector<float> predicted(static_cast<std::size_t>(validation.frames()) * train::kTargets);
+    map.predict(validation.inputs.data(), predicted.data(), validation.frames());
+    const double error = train::mean_error_degrees(predicted, validation.angles, limits);
+    provenance["training_frames"] = std::to_string(training.frames());
+    provenance["validation_frames"] = std::to_string(validation.frames());
+    provenance["validation_error_deg"] = std::to_string(error);
+    train::save_model(o.out, info, train::linear_tensors(map), provenance);
+    std::printf("done: linear least squares on %ld frames; validation error %.3f deg; wrote %s\n", training.frames(), error, o.out.c_str());
+    return 0;
+  }
+  if (architecture == "fcn" && !o.lr_set && o.training.optimizer.kind == train::OptimizerKind::Sgd)
+    o.training.optimizer.learning_rate = 0.01;  // the paper's SGD rate for the FCN
+  const std::unique_ptr<train::TrainableNetwork> net = train::make_network(info, glove, o.training.batch);
+  if (auto* unet = dynamic_cast<train::TrainableUNet*>(net.get())) unet->initialize(o.training.seed);
+  if (auto* fcn = dynamic_cast<train::TrainableFcn*>(net.get())) fcn->initialize(o.training.seed);
+  return fit_network(o, *net, info, all, provenance);
+}
+
+int finetune_command(Options o, int argc, char** argv) {
+  // The paper's fine-tuning (Sec. 5.2, scenario 5): all parameters, lr 1e-6, batch 64.
+  if (!o.lr_set) o.training.optimizer.learning_rate = 1e-6;
+  if (!o.batch_set) o.training.batch = 64;
+  if (!o.epochs_set) o.training.epochs = 5;
+  train::TrainedModel model = train::load_model(o.model, o.training.batch);
+  if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
+  const train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  if (data.glove_layout() != model.glove.id())
+    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + model.glove.id() + "'");
+  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? model.info.calibration : o.calibration);
+  std::optional<sensor::CalibrationRange> range;
+  if (mode == train::CalibrationMode::Training) range = model.training_range();
+  const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride);
+  std::map<std::string, std::string> provenance = model.metadata;
+  provenance["finetune_command"] = command_line(argc, argv);
+  provenance["finetune_data"] = o.data;
+  return fit_network(o, *model.network, model.info, all, provenance);
+}
+
+int eval_command(Options o) {
+  train::TrainedModel model = train::load_model(o.model, 1024);
+  const train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  if (data.glove_layout() != model.glove.id())
+    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + model.glove.id() + "'");
+  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? model.info.calibration : o.calibration);
+  std::optional<sensor::CalibrationRange> range;
+  if (mode == train::CalibrationMode::Training) range = model.training_range();
+  const hand::JointLimits limits = train::joint_limits(model.info);
+  const train::Samples samples = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride);
+  train::ThreadPool pool(o.threads);
+  const std::vector<float> normalized = model.predict(samples, pool);
+  train::AngleErrorAccumulator errors;
+  std::vector<double> predicted(hand::kDofCount), truth(hand::kDofCount);
+  for (long f = 0; f < samples.frames(); ++f) {
+    hand::Angles n{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
+    const hand::Angles radians = limits.denormalize(n);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      predicted[d] = radians[d];
+      truth[d] = samples.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
+    }
+    errors.add(predicted.data(), truth.data());
+  }
+  const train::AngleErrorReport report = errors.report();
+  if (o.json) {
+    std::printf("%s\n", train::to_json(report).c_str());
+  } else {
+    std::printf("model %s (%s), data %s, calibration %s\n", o.model.c_str(), model.info.architecture.c_str(), o.data.c_str(), train::to_string(mode));
+    std::printf("%s", train::format_table(report).c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int train_tools(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  try {
+    if (o.command == "train") return train_command(o, argc, argv);
+    if (o.command == "finetune") return finetune_command(o, argc, argv);
+    return eval_command(o);
+  } catch (const Error& e) {
+    std::cerr << "glovepose " << o.command << ": " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace glovepose::cli
