@@ -1,10 +1,12 @@
-#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
 #include <glovepose/train/dataset.hpp>
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -160,4 +162,128 @@ TEST_CASE("cli: glovepose simulate --report prints every section of the realism 
   for (const char* part : {"Per-cell signal", "cell 43 (index distal, across", "Per-DoF coverage", "pinky_base_twist", "Re-donning vs pose change",
                            "Oldest reading behind each frame", "Outlier frames", "leave-one-subject-out"})
     CHECK(r.out.find(part) != std::string::npos);
+}
+
+namespace {
+// A small simulated corpus (3 subjects x 2 sessions x 0.5 min), one file per test case: CTest
+// runs the cases as parallel processes.
+std::string small_corpus(const std::string& tag) {
+  const std::string p = temp("train_corpus_" + tag + ".safetensors");
+  const Run r = run("simulate --seed 5 --subjects 3 --sessions 2 --minutes 0.5 --gloves 1 --calibration-seconds 10 --out " + p);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  return p;
+}
+double json_number(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\":");
+  REQUIRE_MESSAGE(at != std::string::npos, key << " in " << json);
+  return std::stod(json.substr(at + key.size() + 3));
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every architecture, model files that load") {
+  const std::string data = small_corpus("train");
+  const std::string unet = temp("t_unet.safetensors"), fcn = temp("t_fcn.safetensors"), lin = temp("t_lin.safetensors"), tuned = temp("t_tuned.safetensors");
+  Run r = run("train --data " + data + " --model unet:8 --exclude-subjects 2 --epochs 2 --batch 256 --seed 3 --out " + unet);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("samples/s") != std::string::npos);  // the progress lines
+  CHECK(r.out.find("kept epoch") != std::string::npos);
+  r = run("eval --model " + unet + " --data " + data + " --subjects 2 --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const double unet_error = json_number(r.out, "mean_deg");
+  CHECK(unet_error > 0.5);
+  CHECK(unet_error < 40.0);
+  const auto model = nn::Model<>::load(unet);  // the inference path reads what training wrote
+  CHECK(model.info.width == 8);
+  CHECK(model.info.calibration == "onthefly");
+  r = run("eval --model " + unet + " --data " + data + " --subjects 2");
+  CHECK(r.out.find("index_base_flexion") != std::string::npos);
+  CHECK(r.out.find("<15 deg") != std::string::npos);
+
+  r = run("train --data " + data + " --model fcn:32 --exclude-subjects 2 --epochs 1 --batch 256 --calibration training --out " + fcn);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + fcn + " --data " + data + " --subjects 2 --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(std::isfinite(json_number(r.out, "mean_deg")));
+  r = run("eval --model " + fcn + " --data " + data + " --subjects 2 --calibration onthefly --json");  // another mode than trained with
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+
+  r = run("train --data " + data + " --model linear --exclude-subjects 2 --out " + lin);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + lin + " --data " + data + " --subjects 2 --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(json_number(r.out, "mean_deg") < 40.0);
+  r = run("finetune --model " + lin + " --data " + data + " --subjects 2 --out " + tuned);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("expected a network (unet or fcn) to fine-tune") != std::string::npos);
+
+  r = run("finetune --model " + unet + " --data " + data + " --subjects 2 --sessions 0 --epochs 1 --out " + tuned);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + tuned + " --data " + data + " --subjects 2 --sessions 1 --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(std::isfinite(json_number(r.out, "mean_deg")));
+
+  r = run("train --data " + data + " --model lstm --out " + temp("x.safetensors"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("expected unet:W, fcn[:H] or linear") != std::string::npos);
+  r = run("eval --model " + unet + " --data " + data + " --subjects 7");
+  CHECK(r.status == 1);
+  CHECK(r.out.find("no recording frame of the dataset passes the selection") != std::string::npos);
+}
+
+TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
+  const std::string data = small_corpus("interrupt"), out = temp("t_interrupted.safetensors");
+  std::remove(out.c_str());
+  const Run r = run("train --data " + data + " --model unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
+  CHECK(r.status == 130);
+  CHECK(r.out.find("stopped") != std::string::npos);
+  const auto model = nn::Model<>::load(out);
+  CHECK(model.info.width == 8);
+}
+
+TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and predicts") {
+  // The paper's Fig. 12 ablation glove: only the 14 main-joint cells along the fingers, cut out of
+  // the 44-cell corpus and placed where the full glove has them.
+  const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42};
+  const std::string corpus = small_corpus("main14");
+  const train::Dataset full = train::Dataset::read(corpus);
+  train::Dataset part(keep.size(), 0, "main14", full.frame_rate());
+  part.timestamps = full.timestamps;
+  part.angles = full.angles;
+  part.subject = full.subject;
+  part.session = full.session;
+  part.glove = full.glove;
+  part.donning = full.donning;
+  part.kind = full.kind;
+  part.outlier = full.outlier;
+  for (std::size_t i = 0; i < full.frames(); ++i)
+    for (int c : keep) part.cells.push_back(full.cells[i * full.cell_count + static_cast<std::size_t>(c)]);
+  const std::string data = temp("main14.safetensors"), glove_file = temp("main14.json"), model_file = temp("t_main14.safetensors");
+  part.write(data);
+  const grid::GridMap paper = grid::GridMap::glauser2019();
+  std::vector<grid::Slot> slots;
+  std::vector<std::string> names;
+  for (int c : keep) {
+    slots.push_back(paper.cell_slots()[static_cast<std::size_t>(c)]);
+    names.push_back("cell_" + std::to_string(c));
+  }
+  grid::GloveDescription("main14", names, grid::GridMap(slots, paper.dof_slots())).write(glove_file);
+
+  Run r = run("train --data " + data + " --model unet:8 --epochs 1 --batch 256 --out " + model_file);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("pass its description with --glove FILE") != std::string::npos);
+  r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --exclude-subjects 2 --epochs 1 --batch 256 --out " + model_file);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + model_file + " --data " + data + " --subjects 2 --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(std::isfinite(json_number(r.out, "mean_deg")));
+  r = run("eval --model " + model_file + " --data " + corpus);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("the model is for 'main14'") != std::string::npos);
+  {
+    std::ofstream rows(temp("main14.csv"));
+    rows << "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,-0.1,-0.2,-0.3,-0.4,-0.5\n";
+  }
+  r = run("predict --model " + model_file + " --in " + temp("main14.csv") + " --no-header");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
 }

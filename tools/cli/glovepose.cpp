@@ -1,6 +1,6 @@
 // The glovepose command-line tool.
 //   glovepose predict --model FILE [--in CSV] [--f16] [--no-header]
-//       rows of 44 calibrated cell values (comma-separated, in [-1, 1]) in, 25 joint angles in
+//       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
 //       radians out (theta 9..33 of the hand model), one row per input row.
 //   glovepose info --model FILE
 //       what a model file holds.
@@ -8,7 +8,7 @@
 //       the simulated glove corpus (simulate.cpp).
 //   glovepose train | finetune | eval ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
-#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
 
@@ -93,10 +93,13 @@ int predict(const Options& o) {
     hi[d] = model.info.joint_limits_max[d];
   }
   const hand::JointLimits limits(lo, hi);
-  const grid::GridMap map = grid::GridMap::glauser2019();
-  if (model.info.glove != "glauser2019-44")
+  // The glove the model was trained for: described in the file, or the built-in one.
+  const grid::GloveDescription glove = model.info.glove_description.empty() ? grid::GloveDescription::glauser2019()
+                                                                            : grid::GloveDescription::from_metadata(model.info.glove_description);
+  if (model.info.glove != glove.id())
     throw Error("model '" + o.model + "' was trained for glove '" + model.info.glove +
-                "', expected 'glauser2019-44' (the built-in 44-cell layout this command maps)");
+                "' and carries no glove_description, expected '" + glove.id() + "' (the built-in 44-cell layout) or a description");
+  const grid::GridMap& map = glove.map();
   auto ws = model.unet.make_workspace();
 
   std::ifstream file;
