@@ -35,7 +35,8 @@ extern "C" void on_interrupt(int) { interrupted.store(true); }
             << "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly] [--json] [selection]\n"
             << "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
             << "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
-            << "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n";
+            << "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
+            << "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n";
   std::exit(2);
 }
 
@@ -71,6 +72,7 @@ struct Options {
   int stride = 1, threads = 0;
   train::TrainConfig training;
   double validation = 0.1;
+  io::DType dtype = io::DType::F32;  // storage of the written model
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
 };
 
@@ -104,6 +106,10 @@ Options parse(int argc, char** argv) {
       const std::string v = value();
       if (v != "adam" && v != "sgd") usage(o.command, "--optimizer '" + v + "', expected adam or sgd");
       o.training.optimizer.kind = v == "adam" ? train::OptimizerKind::Adam : train::OptimizerKind::Sgd;
+    } else if (a == "--dtype") {
+      const std::string v = value();
+      if (v != "f32" && v != "f16" && v != "bf16") usage(o.command, "--dtype '" + v + "', expected f32, f16 or bf16");
+      o.dtype = v == "f32" ? io::DType::F32 : (v == "f16" ? io::DType::F16 : io::DType::BF16);
     } else if (a == "--json") o.json = true;
     else if (a == "--quiet") o.quiet = true;
     else usage(o.command, "unknown option " + a);
@@ -190,7 +196,7 @@ int fit_network(const Options& o, train::TrainableNetwork& net, const nn::ModelI
   config.on_best = [&](const train::TrainableNetwork& best, const train::EpochRecord& record) {
     provenance["best_epoch"] = std::to_string(record.epoch);
     provenance["validation_error_deg"] = std::to_string(record.validation_error_deg);
-    train::save_model(o.out, info, best.parameters().to_tensors(), provenance);
+    train::save_model(o.out, info, best.parameters().to_tensors(), provenance, o.dtype);
   };
   std::signal(SIGINT, on_interrupt);
   if (!o.quiet)
@@ -239,7 +245,7 @@ int train_command(Options o, int argc, char** argv) {
     provenance["training_frames"] = std::to_string(training.frames());
     provenance["validation_frames"] = std::to_string(validation.frames());
     provenance["validation_error_deg"] = std::to_string(error);
-    train::save_model(o.out, info, train::linear_tensors(map), provenance);
+    train::save_model(o.out, info, train::linear_tensors(map), provenance, o.dtype);
     std::printf("done: linear least squares on %ld frames; validation error %.3f deg; wrote %s\n", training.frames(), error, o.out.c_str());
     return 0;
   }

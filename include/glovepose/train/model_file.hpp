@@ -95,15 +95,15 @@ struct TrainedModel {
   }
 };
 
-/// @brief Writes a model file: `info`, the tensors, and `provenance` (extra metadata such as the
-/// command and seed that made it).
+/// @brief Writes a model file: `info`, the tensors (stored as `dtype`: F32, F16 or BF16), and
+/// `provenance` (extra metadata such as the command and seed that made it).
 inline void save_model(const std::string& path, const nn::ModelInfo& info, const nn::TensorMap& tensors,
-                       const std::map<std::string, std::string>& provenance = {}) {
+                       const std::map<std::string, std::string>& provenance = {}, io::DType dtype = io::DType::F32) {
   nn::WeightFile file;
   file.tensors = tensors;
   for (const auto& [key, value] : provenance) file.metadata[key] = value;
   info.to(file);
-  file.write(path);
+  file.write(path, dtype);
 }
 
 /// @brief The tensors of a linear map ("weight" [25, cells], "bias" [25], as torch.nn.Linear).
