@@ -194,7 +194,7 @@ int fit_network(const Options& o, train::TrainableNetwork& net, const nn::ModelI
   provenance["training_frames"] = std::to_string(training.frames());
   provenance["validation_frames"] = std::to_string(validation.frames());
   config.on_best = [&](const train::TrainableNetwork& best, const train::EpochRecord& record) {
-    provenance["best_epoch"] = std::to_string(record.epoch);
+    provenance["best_epoch"] = std::to_string(record.epoch + 1);  // 1-based, as printed
     provenance["validation_error_deg"] = std::to_string(record.validation_error_deg);
     train::save_model(o.out, info, best.parameters().to_tensors(), provenance, o.dtype);
   };

@@ -1,9 +1,10 @@
-"""glovepose_ref: the PyTorch reference of glovepose's U-Net and its weight-file container.
+"""glovepose_ref: the PyTorch reference of glovepose's networks (U-Net, FCN, linear) and their files.
 
 Modules:
     safetensors_io  reader/writer of the safetensors-compatible container (weights_format.md)
     model           the U-Net (paper Table 6) with the tensor names of weights_format.md
-    export          model <-> file with glovepose metadata; random initialisation for tests
+    export          model (UNet, FCN or torch.nn.Linear(inputs, 25)) <-> model file with glovepose
+                    metadata; import_model_with_info also returns the parsed metadata (ModelInfo)
     fcn             the paper's fully connected baseline (appendix A) and its random initialisation
 
 Needs PyTorch from Debian (`python3-torch`): run with /usr/bin/python3.
@@ -12,7 +13,7 @@ Needs PyTorch from Debian (`python3-torch`): run with /usr/bin/python3.
 from .model import PRESETS, UNet, count_parameters, randomize
 from .fcn import FCN, randomize_fcn
 from .safetensors_io import load, save
-from .export import export_model, import_model
+from .export import ModelFileError, ModelInfo, export_model, import_model, import_model_with_info
 
 __all__ = [
     "PRESETS",
@@ -23,6 +24,9 @@ __all__ = [
     "randomize_fcn",
     "load",
     "save",
+    "ModelFileError",
+    "ModelInfo",
     "export_model",
     "import_model",
+    "import_model_with_info",
 ]

@@ -1,27 +1,43 @@
 """Writing and reading glovepose model files (weights_format.md, "Metadata of a model file").
 
-`export_model` stores a UNet's state_dict (without the `num_batches_tracked` training counters) and
-the metadata; `import_model` rebuilds the UNet, loading strictly, and checks the metadata.
+Three architectures, as `glovepose train` writes them:
+
+    unet    glovepose_ref.UNet(width)              metadata width = w
+    fcn     glovepose_ref.FCN(inputs, h, 25)       metadata width = h, inputs = cells
+    linear  torch.nn.Linear(inputs, 25)            tensors `weight` [25, inputs], `bias` [25]; no width
+
+`export_model` stores a module's state_dict (without the `num_batches_tracked` training counters)
+and the metadata; `import_model` rebuilds the module strictly (every tensor present, none extra,
+shapes equal, F32/F16/BF16 widened to float32, all finite) and checks the metadata.
+`import_model_with_info` also returns the parsed metadata (`ModelInfo`, provenance keys included).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, Optional, Sequence, Union
+from typing import Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import torch
+from torch import nn
 
 from . import safetensors_io
+from .fcn import FCN
 from .model import UNet
 
 PathLike = Union[str, Path]
+#: What a model file holds: a UNet, an FCN or a torch.nn.Linear(inputs, 25).
+ModelModule = Union[UNet, FCN, nn.Linear]
 
 FORMAT = "glovepose-model"
 FORMAT_VERSION = "1"
-ARCHITECTURE = "unet"
+ARCHITECTURE = "unet"  # the default architecture (and the only one before fcn/linear files existed)
+ARCHITECTURES = ("unet", "fcn", "linear")
+CALIBRATIONS = ("none", "training", "onthefly")
 DEFAULT_GLOVE = "glauser2019-44"
+DEFAULT_GLOVE_CELLS = 44  # cells of the built-in glove; also the default of metadata `inputs`
 
 # The reference hand model's limits of theta[9..33], radians, in theta order (the order of
 # glovepose::kDofs). Source: shared/reference/hand_model.md, table "The 34 parameters, their order
@@ -47,6 +63,13 @@ DOF_COUNT = 25
 _SAVE_DTYPES = {"F32": torch.float32, "F16": torch.float16, "BF16": torch.bfloat16}
 
 
+#: Metadata keys export_model sets itself (extra_metadata may not set them).
+_FORMAT_KEYS = frozenset({
+    "format", "format_version", "architecture", "width", "inputs", "glove", "glove_description", "calibration",
+    "bn_eps", "joint_limits_min", "joint_limits_max", "calibration_min", "calibration_max",
+})
+
+
 class ModelFileError(ValueError):
     """A model file whose metadata or tensors do not match what glovepose expects."""
 
@@ -62,20 +85,77 @@ def _float_array(values: Sequence[float], what: str, length: Optional[int] = Non
     return json.dumps(vals)
 
 
-def model_tensors(model: UNet) -> Dict[str, torch.Tensor]:
+def _glove_description_cells(text: str, glove: str, what: str, err: type) -> int:
+    """The number of cells of a glove description (JSON text); checks that its id is `glove`.
+
+    Only what the model file needs is checked (a JSON object, `id`, a non-empty `cells` list);
+    the full rules are grid::GloveDescription's (weights_format.md, "Glove description files").
+    """
+    try:
+        desc = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise err(f"{what}glove_description is not valid JSON ({e}), expected a glove description object")
+    if not isinstance(desc, dict) or desc.get("format") != "glovepose-glove":
+        raise err(f"{what}glove_description is not a glove description (format 'glovepose-glove')")
+    cells = desc.get("cells")
+    if not isinstance(cells, list) or not cells:
+        raise err(f"{what}glove_description has no 'cells' list, expected at least one cell")
+    if desc.get("id") != glove:
+        raise err(f"{what}glove_description has id {desc.get('id')!r} but glove is {glove!r}, expected the same id")
+    return len(cells)
+
+
+def model_tensors(model: nn.Module) -> Dict[str, torch.Tensor]:
     """The tensors a model file stores: the state_dict without `num_batches_tracked`."""
     return {k: v.detach().clone() for k, v in model.state_dict().items() if not k.endswith("num_batches_tracked")}
 
 
+def architecture_of(model: nn.Module) -> Tuple[str, Optional[int], Optional[int]]:
+    """(architecture, width, inputs) of a module a model file can hold.
+
+    UNet -> ('unet', width, None: the U-Net does not know its glove's cell count);
+    FCN -> ('fcn', hidden, inputs); torch.nn.Linear(inputs, 25) -> ('linear', None, inputs).
+    Raises TypeError for other modules, ValueError for an FCN or Linear without 25 outputs or a
+    Linear without bias.
+    """
+    if isinstance(model, UNet):
+        return "unet", int(model.width), None
+    if isinstance(model, FCN):
+        if model.fc6.out_features != DOF_COUNT:
+            raise ValueError(f"FCN has {model.fc6.out_features} outputs, expected {DOF_COUNT} (one per DoF)")
+        return "fcn", int(model.fc1.out_features), int(model.fc1.in_features)
+    if isinstance(model, nn.Linear):
+        if model.out_features != DOF_COUNT:
+            raise ValueError(f"Linear has {model.out_features} outputs, expected {DOF_COUNT} (one per DoF)")
+        if model.bias is None:
+            raise ValueError("Linear has no bias, expected torch.nn.Linear(inputs, 25) with bias")
+        return "linear", None, int(model.in_features)
+    raise TypeError(f"cannot export a {type(model).__name__}, expected glovepose_ref.UNet, glovepose_ref.FCN or torch.nn.Linear")
+
+
 def model_metadata(
-    width: int,
+    width: Optional[int],
     glove: str = DEFAULT_GLOVE,
     joint_limits_min: Optional[Sequence[float]] = None,
     joint_limits_max: Optional[Sequence[float]] = None,
     calibration_min: Optional[Sequence[float]] = None,
     calibration_max: Optional[Sequence[float]] = None,
+    *,
+    architecture: str = ARCHITECTURE,
+    inputs: Optional[int] = None,
+    calibration: Optional[str] = None,
+    glove_description: Optional[Union[str, Mapping]] = None,
 ) -> Dict[str, str]:
-    """The metadata dict of a model file; joint limits default to the reference hand model's."""
+    """The metadata dict of a model file; joint limits default to the reference hand model's.
+
+    width: U-Net base width or FCN hidden width; must be None for `linear`.
+    inputs: cells per frame; written when given (readers default to 44). With a glove_description
+    (JSON text or a dict) and no inputs, inputs is the description's cell count.
+    calibration: 'none', 'training' or 'onthefly'; written when given (readers default to
+    'onthefly'); 'training' needs calibration_min/max. calibration_min/max: one value per input.
+    """
+    if architecture not in ARCHITECTURES:
+        raise ValueError(f"architecture {architecture!r}, expected one of {list(ARCHITECTURES)}")
     lo = JOINT_LIMITS_MIN if joint_limits_min is None else joint_limits_min
     hi = JOINT_LIMITS_MAX if joint_limits_max is None else joint_limits_max
     lo_s = _float_array(lo, "joint_limits_min", DOF_COUNT)
@@ -86,25 +166,52 @@ def model_metadata(
     meta = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "architecture": ARCHITECTURE,
-        "width": str(int(width)),
-        "glove": glove,
-        "bn_eps": "1e-05",
-        "joint_limits_min": lo_s,
-        "joint_limits_max": hi_s,
+        "architecture": architecture,
     }
+    if architecture == "linear":
+        if width is not None:
+            raise ValueError(f"width {width} given for a linear model, expected None (linear models have no width)")
+    else:
+        if width is None or int(width) < (2 if architecture == "fcn" else 1):
+            raise ValueError(f"width {width} for architecture {architecture!r}, expected an integer >= {2 if architecture == 'fcn' else 1}")
+        meta["width"] = str(int(width))
+    desc_text: Optional[str] = None
+    if glove_description is not None:
+        desc_text = glove_description if isinstance(glove_description, str) else json.dumps(glove_description)
+        cells = _glove_description_cells(desc_text, glove, "", ValueError)
+        if inputs is None:
+            inputs = cells
+        elif int(inputs) != cells:
+            raise ValueError(f"inputs {inputs} but the glove description has {cells} cells, expected the same")
+    elif glove == DEFAULT_GLOVE and inputs is not None and int(inputs) != DEFAULT_GLOVE_CELLS:
+        raise ValueError(f"inputs {inputs} for the built-in glove {DEFAULT_GLOVE!r}, expected {DEFAULT_GLOVE_CELLS} (or give a glove_description)")
+    if inputs is not None:
+        if int(inputs) < 1:
+            raise ValueError(f"inputs {inputs}, expected >= 1")
+        meta["inputs"] = str(int(inputs))
+    meta["glove"] = glove
+    if desc_text is not None:
+        meta["glove_description"] = desc_text
+    if calibration is not None:
+        if calibration not in CALIBRATIONS:
+            raise ValueError(f"calibration {calibration!r}, expected one of {list(CALIBRATIONS)}")
+        if calibration == "training" and calibration_min is None:
+            raise ValueError("calibration 'training' needs calibration_min and calibration_max (the training-set range)")
+        meta["calibration"] = calibration
+    meta["bn_eps"] = "1e-05"
+    meta["joint_limits_min"] = lo_s
+    meta["joint_limits_max"] = hi_s
     if (calibration_min is None) != (calibration_max is None):
         raise ValueError("calibration_min and calibration_max must be given together")
     if calibration_min is not None and calibration_max is not None:
-        cmin = _float_array(calibration_min, "calibration_min")
-        cmax = _float_array(calibration_max, "calibration_max", len(calibration_min))
-        meta["calibration_min"] = cmin
-        meta["calibration_max"] = cmax
+        n = DEFAULT_GLOVE_CELLS if inputs is None else int(inputs)
+        meta["calibration_min"] = _float_array(calibration_min, "calibration_min", n)
+        meta["calibration_max"] = _float_array(calibration_max, "calibration_max", n)
     return meta
 
 
 def export_model(
-    model: UNet,
+    model: ModelModule,
     path: PathLike,
     glove: str = DEFAULT_GLOVE,
     joint_limits_min: Optional[Sequence[float]] = None,
@@ -112,14 +219,28 @@ def export_model(
     calibration_min: Optional[Sequence[float]] = None,
     calibration_max: Optional[Sequence[float]] = None,
     dtype: str = "F32",
+    *,
+    inputs: Optional[int] = None,
+    calibration: Optional[str] = None,
+    glove_description: Optional[Union[str, Mapping]] = None,
+    extra_metadata: Optional[Mapping[str, str]] = None,
 ) -> None:
-    """Writes `model` to `path` as a glovepose model file.
+    """Writes `model` (a UNet, an FCN, or a torch.nn.Linear(inputs, 25)) to `path` as a model file.
 
-    dtype: 'F32' (default; models are trained in F32), 'F16' or 'BF16' (values rounded on write).
-    Raises ValueError for non-finite weights or bad metadata.
+    The architecture, width (U-Net, FCN) and inputs (FCN, Linear: from the module; U-Net: the
+    `inputs` argument or the glove description's cell count, omitted otherwise) go into the
+    metadata; see model_metadata for the other arguments. dtype: 'F32' (default; models are trained
+    in F32), 'F16' or 'BF16' (values rounded on write). extra_metadata: further string entries
+    (provenance such as `training_command`); the format's own keys are refused.
+    Raises ValueError for non-finite weights or bad metadata, TypeError for another module type.
     """
     if dtype not in _SAVE_DTYPES:
         raise ValueError(f"dtype {dtype!r}, expected one of {sorted(_SAVE_DTYPES)}")
+    architecture, width, module_inputs = architecture_of(model)
+    if module_inputs is not None:
+        if inputs is not None and int(inputs) != module_inputs:
+            raise ValueError(f"inputs {inputs}, but the {architecture} model takes {module_inputs} inputs")
+        inputs = module_inputs
     for m in model.modules():
         if isinstance(m, torch.nn.BatchNorm2d) and m.eps != 1e-5:
             raise ValueError(f"BatchNorm eps {m.eps}, the format fixes bn_eps = 1e-05")
@@ -127,59 +248,166 @@ def export_model(
     for k, v in tensors.items():
         if not torch.isfinite(v).all():
             raise ValueError(f"tensor '{k}' has non-finite values (after conversion to {dtype})")
-    meta = model_metadata(model.width, glove, joint_limits_min, joint_limits_max, calibration_min, calibration_max)
+    meta: Dict[str, str] = {}
+    for k, v in (extra_metadata or {}).items():
+        if not isinstance(k, str) or not isinstance(v, str):
+            raise ValueError(f"extra_metadata must map strings to strings, got {k!r}: {v!r}")
+        if k in _FORMAT_KEYS:
+            raise ValueError(f"extra_metadata key {k!r} is one export_model writes itself")
+        meta[k] = v
+    meta.update(model_metadata(
+        width, glove, joint_limits_min, joint_limits_max, calibration_min, calibration_max,
+        architecture=architecture, inputs=inputs, calibration=calibration, glove_description=glove_description,
+    ))
     safetensors_io.save(path, tensors, meta)
 
 
-def check_metadata(meta: Dict[str, str], source: str = "<model>") -> int:
-    """Validates a model file's metadata; returns the width."""
+@dataclass(frozen=True)
+class ModelInfo:
+    """The parsed metadata of a model file (nn::ModelInfo on the C++ side)."""
+
+    architecture: str                      #: 'unet', 'fcn' or 'linear'
+    width: int                             #: U-Net base width, FCN hidden width; 0 for linear
+    inputs: int                            #: cells per frame (default 44)
+    glove: str                             #: glove id
+    glove_description: Optional[str]       #: the glove as JSON text, None for the built-in glove
+    calibration: str                       #: 'none', 'training' or 'onthefly' (default)
+    bn_eps: float
+    joint_limits_min: Tuple[float, ...]    #: 25 values, radians, hand::kDofs order
+    joint_limits_max: Tuple[float, ...]
+    calibration_min: Optional[Tuple[float, ...]] = None  #: one per input, or None
+    calibration_max: Optional[Tuple[float, ...]] = None
+    metadata: Dict[str, str] = field(default_factory=dict)  #: every entry of the file, provenance included
+
+    def denormalize(self, normalized: torch.Tensor) -> torch.Tensor:
+        """Normalised DoFs [..., 25] (hand::kDofs order, -1 = min, +1 = max) -> radians, float64.
+
+        As hand::JointLimits::denormalize: min + 0.5 * (n + 1) * (max - min), nothing clamped.
+        """
+        n = torch.as_tensor(normalized).to(torch.float64)
+        if n.shape[-1:] != (DOF_COUNT,):
+            raise ValueError(f"normalized has shape {list(n.shape)}, expected [..., {DOF_COUNT}]")
+        lo = torch.tensor(self.joint_limits_min, dtype=torch.float64)
+        hi = torch.tensor(self.joint_limits_max, dtype=torch.float64)
+        return lo + 0.5 * (n + 1.0) * (hi - lo)
+
+
+def parse_metadata(meta: Mapping[str, str], source: str = "<model>") -> ModelInfo:
+    """Validates a model file's metadata (the rules of nn::ModelInfo::from, plus the consistency of
+    inputs with the glove and of the calibration range with inputs); returns it parsed.
+    Raises ModelFileError naming the key.
+    """
     def need(key: str) -> str:
         if key not in meta:
             raise ModelFileError(f"{source}: metadata key '{key}' is missing")
         return meta[key]
 
-    for key, want in (("format", FORMAT), ("format_version", FORMAT_VERSION), ("architecture", ARCHITECTURE)):
+    def integer(key: str, least: int) -> int:
+        text = need(key)
+        try:
+            v = int(text)
+        except ValueError:
+            raise ModelFileError(f"{source}: metadata {key} = {text!r}, expected an integer")
+        if v < least:
+            raise ModelFileError(f"{source}: metadata {key} = {v}, expected >= {least}")
+        return v
+
+    def numbers(key: str, length: Optional[int]) -> Tuple[float, ...]:
+        try:
+            vals = json.loads(need(key))
+        except json.JSONDecodeError:
+            vals = None
+        if not isinstance(vals, list) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in vals
+        ):
+            raise ModelFileError(f"{source}: metadata {key} is not a JSON array of finite numbers")
+        if length is not None and len(vals) != length:
+            raise ModelFileError(f"{source}: metadata {key} holds {len(vals)} numbers, expected {length}")
+        return tuple(float(v) for v in vals)
+
+    for key, want in (("format", FORMAT), ("format_version", FORMAT_VERSION)):
         if need(key) != want:
             raise ModelFileError(f"{source}: metadata {key} = {meta[key]!r}, expected {want!r}")
+    architecture = need("architecture")
+    if architecture not in ARCHITECTURES:
+        raise ModelFileError(f"{source}: metadata architecture = {architecture!r}, expected one of {list(ARCHITECTURES)}")
+    # As the C++ reader: width is ignored for linear models.
+    width = 0 if architecture == "linear" else integer("width", 2 if architecture == "fcn" else 1)
+    inputs = integer("inputs", 1) if "inputs" in meta else DEFAULT_GLOVE_CELLS
+    glove = need("glove")
+    desc = meta.get("glove_description")
+    if desc is not None:
+        cells = _glove_description_cells(desc, glove, f"{source}: metadata ", ModelFileError)
+        if cells != inputs:
+            raise ModelFileError(f"{source}: metadata inputs = {inputs} but the glove description has {cells} cells")
+    elif glove == DEFAULT_GLOVE and inputs != DEFAULT_GLOVE_CELLS:
+        raise ModelFileError(f"{source}: metadata inputs = {inputs} for the built-in glove {DEFAULT_GLOVE!r}, expected {DEFAULT_GLOVE_CELLS}")
+    calibration = meta.get("calibration", "onthefly")
+    if calibration not in CALIBRATIONS:
+        raise ModelFileError(f"{source}: metadata calibration = {calibration!r}, expected one of {list(CALIBRATIONS)}")
     try:
-        width = int(need("width"))
+        bn_eps = float(need("bn_eps"))
     except ValueError:
-        raise ModelFileError(f"{source}: metadata width = {meta['width']!r}, expected an integer")
-    if width < 1:
-        raise ModelFileError(f"{source}: metadata width = {width}, expected >= 1")
-    if float(need("bn_eps")) != 1e-5:
+        bn_eps = float("nan")
+    if not (math.isfinite(bn_eps) and bn_eps > 0):
+        raise ModelFileError(f"{source}: metadata bn_eps = {meta['bn_eps']!r}, expected a positive number")
+    if architecture == "unet" and bn_eps != 1e-5:
         raise ModelFileError(f"{source}: metadata bn_eps = {meta['bn_eps']!r}, expected '1e-05'")
-    need("glove")
-    for key in ("joint_limits_min", "joint_limits_max"):
-        vals = json.loads(need(key))
-        if not isinstance(vals, list) or len(vals) != DOF_COUNT or not all(
-            isinstance(v, (int, float)) and math.isfinite(v) for v in vals
-        ):
-            raise ModelFileError(f"{source}: metadata {key} is not an array of {DOF_COUNT} finite numbers")
-    return width
+    lo = numbers("joint_limits_min", DOF_COUNT)
+    hi = numbers("joint_limits_max", DOF_COUNT)
+    for i, (a, b) in enumerate(zip(lo, hi)):
+        if not a < b:
+            raise ModelFileError(f"{source}: joint limits of DoF {i} (theta {9 + i}): min {a} is not below max {b}")
+    cmin = cmax = None
+    if "calibration_min" in meta or "calibration_max" in meta:
+        cmin = numbers("calibration_min", inputs)
+        cmax = numbers("calibration_max", inputs)
+    if calibration == "training" and cmin is None:
+        raise ModelFileError(f"{source}: metadata calibration = 'training' but calibration_min/max are missing")
+    return ModelInfo(
+        architecture=architecture, width=width, inputs=inputs, glove=glove, glove_description=desc,
+        calibration=calibration, bn_eps=bn_eps, joint_limits_min=lo, joint_limits_max=hi,
+        calibration_min=cmin, calibration_max=cmax, metadata=dict(meta),
+    )
 
 
-def import_model(path: PathLike) -> UNet:
-    """Loads a model file into a UNet in eval mode (strict: no tensor missing or extra, shapes equal).
+def check_metadata(meta: Mapping[str, str], source: str = "<model>") -> int:
+    """Validates a model file's metadata; returns the width (0 for a linear model). See parse_metadata."""
+    return parse_metadata(meta, source).width
 
-    16-bit tensors are widened to float32. Raises ModelFileError on bad metadata, names, shapes or
-    non-finite values.
+
+def make_module(info: ModelInfo) -> ModelModule:
+    """A module of the architecture and sizes `info` names, with PyTorch's default initialisation."""
+    if info.architecture == "unet":
+        return UNet(info.width)
+    if info.architecture == "fcn":
+        return FCN(info.inputs, info.width, DOF_COUNT)
+    return nn.Linear(info.inputs, DOF_COUNT)
+
+
+def import_model_with_info(path: PathLike) -> Tuple[ModelModule, ModelInfo]:
+    """Loads a model file of any architecture: (module in eval mode, its parsed metadata).
+
+    The module is a UNet, an FCN (outputs: normalised DoFs in hand::kDofs order) or a
+    torch.nn.Linear(inputs, 25), loaded strictly (no tensor missing or extra, shapes equal,
+    dtype F32/F16/BF16 widened to float32, all finite). Raises ModelFileError on bad metadata,
+    names, shapes, dtypes or non-finite values.
     """
     tensors, meta = safetensors_io.load(path)
-    width = check_metadata(meta, str(path))
-    model = UNet(width)
+    info = parse_metadata(meta, str(path))
+    model = make_module(info)
     expected = model_tensors(model)
     missing = sorted(set(expected) - set(tensors))
     extra = sorted(set(tensors) - set(expected))
     if missing or extra:
-        raise ModelFileError(f"{path}: tensors missing {missing}, unexpected {extra}")
+        raise ModelFileError(f"{path}: {info.architecture} model: tensors missing {missing}, unexpected {extra}")
     sd = {}
     for k, ref in expected.items():
         t = tensors[k]
         if tuple(t.shape) != tuple(ref.shape):
             raise ModelFileError(f"{path}: tensor '{k}' has shape {list(t.shape)}, expected {list(ref.shape)}")
-        if not t.is_floating_point():
-            raise ModelFileError(f"{path}: tensor '{k}' has dtype {t.dtype}, expected F32, F16 or BF16")
+        if t.dtype not in _SAVE_DTYPES.values():
+            raise ModelFileError(f"{path}: tensor '{k}' has dtype {safetensors_io.dtype_name(t.dtype)}, expected F32, F16 or BF16")
         t = t.to(torch.float32)
         if not torch.isfinite(t).all():
             raise ModelFileError(f"{path}: tensor '{k}' has non-finite values")
@@ -189,4 +417,14 @@ def import_model(path: PathLike) -> UNet:
             sd[k] = torch.zeros_like(v)
     model.load_state_dict(sd, strict=True)
     model.eval()
-    return model
+    return model, info
+
+
+def import_model(path: PathLike) -> ModelModule:
+    """Loads a model file into a UNet, FCN or torch.nn.Linear(inputs, 25) in eval mode.
+
+    Strict: no tensor missing or extra, shapes equal; 16-bit tensors are widened to float32.
+    Raises ModelFileError on bad metadata, names, shapes or non-finite values.
+    Use import_model_with_info for the metadata (joint limits, calibration, provenance).
+    """
+    return import_model_with_info(path)[0]
