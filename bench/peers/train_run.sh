@@ -29,8 +29,15 @@ echo "timing glovepose ..." >&2
 "$bench" --benchmark_filter="^BM_TrainStep/($cases)/real_time\$" --benchmark_repetitions="$reps" \
   --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/train_glovepose.json"
 echo "timing PyTorch ..." >&2
-$py "$here/torch_train_bench.py" --arch "unet:$width" --batch "$batch" --threads "$threads" --reps "$reps" --no-profile > "$out/train_torch_unet.json"
-[ "$fcn" != 0 ] && $py "$here/torch_train_bench.py" --arch "fcn:$fcn:44" --batch "$batch" --threads "$threads" --reps "$reps" --no-profile > "$out/train_torch_fcn.json"
+# PyTorch twice per model: OpenBLAS with as many threads as OpenMP (the default) and with one (on a
+# 2-CPU machine the two pools can oversubscribe the cores); the faster one is compared.
+for arch in unet fcn; do
+  [ "$arch" = fcn ] && [ "$fcn" = 0 ] && continue
+  spec="unet:$width"; [ "$arch" = fcn ] && spec="fcn:$fcn:44"
+  $py "$here/torch_train_bench.py" --arch "$spec" --batch "$batch" --threads "$threads" --reps "$reps" --no-profile > "$out/train_torch_${arch}.json"
+  $py "$here/torch_train_bench.py" --arch "$spec" --batch "$batch" --threads "$threads" --blas-threads 1 --reps "$reps" --no-profile \
+    > "$out/train_torch_${arch}_blas1.json"
+done
 
 $py - "$out" "$width" "$fcn" "$batch" "$threads" <<'PY'
 import json, sys
@@ -39,16 +46,19 @@ ours = {}
 for b in json.load(open(f"{out}/train_glovepose.json"))["benchmarks"]:
     if b.get("aggregate_name") == "median":
         ours[b["run_name"].split("/")[1]] = b["items_per_second"]
-rows = [("U-Net w=" + width, ours.get("0"), f"{out}/train_torch_unet.json")]
+rows = [("U-Net w=" + width, ours.get("0"), "unet")]
 if fcn != "0":
-    rows.append(("FCN h=" + fcn, ours.get("1"), f"{out}/train_torch_fcn.json"))
+    rows.append(("FCN h=" + fcn, ours.get("1"), "fcn"))
 print(f"\nTraining step (forward + L2 loss + backward + Adam), batch {batch}, {threads} threads, median samples/s\n")
-print("| model | glovepose | PyTorch | glovepose / PyTorch |")
-print("|---|---:|---:|---:|")
-for name, g, path in rows:
-    t = json.load(open(path))
-    torch_rate = t["results"][0]["samples_per_s"]
-    if t.get("others_cpu_share", 0) > 0.05:
-        print(f"warning: other processes used {t['others_cpu_share']:.0%} of the CPUs while PyTorch was timed", file=sys.stderr)
-    print(f"| {name} | {g:,.0f} | {torch_rate:,.0f} | {g / torch_rate:.1f}x |")
+print("| model | glovepose | PyTorch (BLAS threads = threads) | PyTorch (BLAS 1 thread) | glovepose / best PyTorch |")
+print("|---|---:|---:|---:|---:|")
+for name, g, arch in rows:
+    rates = []
+    for suffix in ("", "_blas1"):
+        t = json.load(open(f"{out}/train_torch_{arch}{suffix}.json"))
+        share = t.get("others_cpu_share")
+        if share is not None and share > 0.05:
+            print(f"warning: other processes used {share:.0%} of the CPUs while PyTorch ({arch}{suffix}) was timed", file=sys.stderr)
+        rates.append(t["results"][0]["samples_per_s"])
+    print(f"| {name} | {g:,.0f} | {rates[0]:,.0f} | {rates[1]:,.0f} | {g / max(rates):.1f}x |")
 PY
