@@ -257,13 +257,9 @@ int train_command(Options o, int argc, char** argv) {
   return fit_network(o, *net, info, all, provenance);
 }
 
-int finetune_command(Options o, int argc, char** argv) {
-  // The paper's fine-tuning (Sec. 5.2, scenario 5): all parameters, lr 1e-6, batch 64.
-  if (!o.lr_set) o.training.optimizer.learning_rate = 1e-6;
-  if (!o.batch_set) o.training.batch = 64;
-  if (!o.epochs_set) o.training.epochs = 5;
-  train::TrainedModel model = train::load_model(o.model, o.training.batch);
-  if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
+// The selected frames of --data as a loaded model sees them: its glove, its joint limits, and its
+// calibration mode unless --calibration overrides it.
+std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const train::TrainedModel& model) {
   const train::Dataset data = train::Dataset::read(o.data);
   apply_exclusions(o, data);
   if (data.glove_layout() != model.glove.id())
@@ -271,7 +267,17 @@ int finetune_command(Options o, int argc, char** argv) {
   const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? model.info.calibration : o.calibration);
   std::optional<sensor::CalibrationRange> range;
   if (mode == train::CalibrationMode::Training) range = model.training_range();
-  const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride);
+  return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride), mode};
+}
+
+int finetune_command(Options o, int argc, char** argv) {
+  // The paper's fine-tuning (Sec. 5.2, scenario 5): all parameters, lr 1e-6, batch 64.
+  if (!o.lr_set) o.training.optimizer.learning_rate = 1e-6;
+  if (!o.batch_set) o.training.batch = 64;
+  if (!o.epochs_set) o.training.epochs = 5;
+  train::TrainedModel model = train::load_model(o.model, o.training.batch);
+  if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
+  const train::Samples all = samples_for(o, model).first;
   std::map<std::string, std::string> provenance = model.metadata;
   provenance["finetune_command"] = command_line(argc, argv);
   provenance["finetune_data"] = o.data;
@@ -280,15 +286,8 @@ int finetune_command(Options o, int argc, char** argv) {
 
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  const train::Dataset data = train::Dataset::read(o.data);
-  apply_exclusions(o, data);
-  if (data.glove_layout() != model.glove.id())
-    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + model.glove.id() + "'");
-  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? model.info.calibration : o.calibration);
-  std::optional<sensor::CalibrationRange> range;
-  if (mode == train::CalibrationMode::Training) range = model.training_range();
+  const auto [samples, mode] = samples_for(o, model);
   const hand::JointLimits limits = train::joint_limits(model.info);
-  const train::Samples samples = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride);
   train::ThreadPool pool(o.threads);
   const std::vector<float> normalized = model.predict(samples, pool);
   train::AngleErrorAccumulator errors;
