@@ -30,6 +30,7 @@ sys.path.insert(0, str(ROOT / "tools" / "python"))
 import torch  # noqa: E402
 
 from glovepose_ref import import_model  # noqa: E402
+from torch_train_bench import time_steps  # noqa: E402  (the same timing loop; imports no torch itself)
 
 
 def deterministic_input(batch: int, seed: int = 0) -> torch.Tensor:
@@ -39,21 +40,7 @@ def deterministic_input(batch: int, seed: int = 0) -> torch.Tensor:
 
 def time_case(fn: Callable[[torch.Tensor], torch.Tensor], batch: int, reps: int, min_time: float, warmup: float) -> Dict:
     x = deterministic_input(batch)
-    n = 0
-    t0 = time.perf_counter()
-    while True:
-        fn(x)
-        n += 1
-        if time.perf_counter() - t0 >= warmup:
-            break
-    per_run = (time.perf_counter() - t0) / n
-    iters = max(1, round(min_time / per_run))
-    means: List[float] = []
-    for _ in range(reps):
-        t = time.perf_counter()
-        for _ in range(iters):
-            fn(x)
-        means.append((time.perf_counter() - t) / iters)
+    means, iters = time_steps(fn, x, reps, min_time, warmup)
     med = statistics.median(means)
     return {
         "batch": batch,

@@ -20,6 +20,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from .model import seeded_uniform
+
 #: The linear layers, in forward order.
 FC_NAMES = ("fc1", "fc2", "fc3", "fc4", "fc5", "fc6")
 
@@ -61,10 +63,7 @@ def randomize_fcn(model: FCN, seed: int) -> FCN:
     visited in forward order (fc1.weight, fc1.bias, fc2.weight, ...), as `model.randomize` does for
     the U-Net. The values depend only on `seed` and the layer sizes.
     """
-    g = torch.Generator().manual_seed(int(seed))
-
-    def uniform_(t: torch.Tensor, lo: float, hi: float) -> None:
-        t.copy_(torch.rand(t.shape, generator=g, dtype=torch.float64).mul_(hi - lo).add_(lo).to(t.dtype))
+    uniform_ = seeded_uniform(seed)
 
     with torch.no_grad():
         for name in FC_NAMES:

@@ -12,7 +12,7 @@ the presets.
 
 from __future__ import annotations
 
-from typing import Dict, Iterable
+from typing import Callable, Dict, Iterable
 
 import torch
 from torch import nn
@@ -91,6 +91,17 @@ def count_parameters(model: nn.Module) -> Dict[str, int]:
     }
 
 
+def seeded_uniform(seed: int) -> Callable[[torch.Tensor, float, float], None]:
+    """A filler t <- U(lo, hi), drawn in float64 from one torch.Generator seeded `seed` and rounded to
+    t's dtype; successive calls continue the same stream (randomize and fcn.randomize_fcn use it)."""
+    g = torch.Generator().manual_seed(int(seed))
+
+    def uniform_(t: torch.Tensor, lo: float, hi: float) -> None:
+        t.copy_(torch.rand(t.shape, generator=g, dtype=torch.float64).mul_(hi - lo).add_(lo).to(t.dtype))
+
+    return uniform_
+
+
 def randomize(model: UNet, seed: int) -> UNet:
     """Fills every weight and BN statistic with deterministic random values (for tests); returns model.
 
@@ -98,10 +109,7 @@ def randomize(model: UNet, seed: int) -> UNet:
     U(-0.2, 0.2), running_mean U(-0.2, 0.2), running_var U(0.5, 2.0). The values depend only on
     `seed` and the width (one torch.Generator, layers visited in forward order).
     """
-    g = torch.Generator().manual_seed(int(seed))
-
-    def uniform_(t: torch.Tensor, lo: float, hi: float) -> None:
-        t.copy_(torch.rand(t.shape, generator=g, dtype=torch.float64).mul_(hi - lo).add_(lo).to(t.dtype))
+    uniform_ = seeded_uniform(seed)
 
     with torch.no_grad():
         for name in CONV_NAMES:
