@@ -13,3 +13,5 @@
 #include "sensor/calibration.hpp"
 #include "grid/grid_map.hpp"
 #include "filter/one_euro.hpp"
+#include "hand/joint_list.hpp"
+#include "estimator.hpp"

@@ -1,0 +1,465 @@
+/// @file estimator.hpp
+/// @brief GlovePoseEstimator: the one class that composes the stages, from the glove's rows to a
+/// hand pose (ARCHITECTURE.md, "One frame, end to end").
+///
+/// Two objects:
+/// - PoseModel: what is loaded once and shared, immutable, by any number of estimators on any number
+///   of threads: the network, the glove description, the capacitance solver of the glove's wiring,
+///   the joint limits and the model's training-set calibration range.
+/// - GlovePoseEstimator: one glove's stream. It owns the per-stream state (the readout ring, the
+///   calibration, the 1-euro filter, the network's workspace) and answers every per-frame call
+///   without allocating or throwing.
+///
+/// Inputs, whichever the glove's firmware delivers: raw rows (row, value, timestamp), whole frames
+/// of compound measurements C_m, or already solved cell capacitances C_c. Each accepted input that
+/// completes a frame yields a Pose: 25 angles, timestamp, status flags, and the frame's latency
+/// budget (age of the oldest reading, compute time).
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "config.hpp"
+#include "filter/one_euro.hpp"
+#include "grid/glove_description.hpp"
+#include "grid/grid_map.hpp"
+#include "hand/dofs.hpp"
+#include "hand/joint_list.hpp"
+#include "hand/kinematics.hpp"
+#include "nn/model.hpp"
+#include "sensor/calibration.hpp"
+#include "sensor/layout.hpp"
+#include "sensor/readout.hpp"
+#include "sensor/solver.hpp"
+#include "status.hpp"
+
+namespace glovepose {
+
+/// @brief How to load a PoseModel.
+struct PoseModelOptions {
+  /// In-memory weight precision. F16 halves the bytes a frame reads (faster at batch 1); its angles
+  /// differ from F32 by less than 0.01 degree (README, "Figures").
+  nn::WeightStorage storage = nn::WeightStorage::F32;
+  /// The glove. Default: the description stored in the model file, else the built-in 44-cell glove
+  /// when the model was trained for it.
+  std::optional<grid::GloveDescription> glove;
+  /// The glove's wiring (which cells each measured row sums), needed for rows and C_m frames.
+  /// Default: the paper's 15 x 12 trace matrix for the built-in glove; none for other gloves (then
+  /// only already solved C_c frames are accepted).
+  std::optional<sensor::TraceLayout> layout;
+};
+
+/// @brief A loaded model with everything the estimators share. Immutable; share it with
+/// std::shared_ptr<const BasicPoseModel> between estimators and threads.
+template <typename Backend = nn::kernels::SimdBackend>
+class BasicPoseModel {
+ public:
+  /// @brief The solver of a glove wiring of any size.
+  using Solver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
+  /// @brief The network.
+  using Network = nn::UNet<Backend>;
+
+  /// @brief Loads a model file (weights_format.md). Throws glovepose::Error naming the file and what
+  /// is wrong: unreadable or malformed file, not a U-Net, or a glove or wiring that does not fit it.
+  static std::shared_ptr<const BasicPoseModel> load(const std::string& path, PoseModelOptions options = {}) {
+    nn::Model<Backend> model = nn::Model<Backend>::load(path, options.storage);
+    try {
+      return std::make_shared<const BasicPoseModel>(std::move(model.info), std::move(model.unet), std::move(options));
+    } catch (const Error& e) {
+      throw Error("model file '" + path + "': " + e.what());
+    }
+  }
+
+  /// @brief A model from its parts (see load()). Throws glovepose::Error when the glove's cell count
+  /// or id differs from the model's, or the wiring's cells differ from the glove's.
+  BasicPoseModel(nn::ModelInfo info, Network network, PoseModelOptions options)
+      : info_(std::move(info)), network_(std::move(network)), glove_(choose_glove(info_, options.glove)) {
+    if (glove_.cell_count() != info_.inputs)
+      throw Error("glove '" + glove_.id() + "' has " + std::to_string(glove_.cell_count()) + " cells, expected " +
+                  std::to_string(info_.inputs) + " (the model's inputs)");
+    if (glove_.id() != info_.glove)
+      throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
+    std::optional<sensor::TraceLayout> layout = std::move(options.layout);
+    if (!layout && glove_.id() == grid::GloveDescription::glauser2019().id()) layout = sensor::TraceLayout::glauser2019();
+    if (layout) {
+      if (layout->cell_count() != glove_.cell_count())
+        throw Error("wiring '" + layout->id() + "' has " + std::to_string(layout->cell_count()) + " cells, expected " +
+                    std::to_string(glove_.cell_count()) + " (the glove's)");
+      solver_ = std::make_shared<const Solver>(*layout);
+    }
+    hand::Angles lo{}, hi{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      lo[d] = info_.joint_limits_min[d];
+      hi[d] = info_.joint_limits_max[d];
+    }
+    limits_ = hand::JointLimits(lo, hi);
+    if (info_.calibration_min && info_.calibration_max) {
+      if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
+        throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
+                    " numbers, expected " + std::to_string(glove_.cell_count()) + " (one per cell)");
+      training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
+                              Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()),
+                              glove_.cell_names());
+    }
+  }
+
+  /// @brief The file's metadata.
+  const nn::ModelInfo& info() const noexcept { return info_; }
+  /// @brief The network.
+  const Network& network() const noexcept { return network_; }
+  /// @brief The glove the model reads.
+  const grid::GloveDescription& glove() const noexcept { return glove_; }
+  /// @brief Number of sensor cells.
+  int cell_count() const noexcept { return glove_.cell_count(); }
+  /// @brief The solver of the glove's wiring; null when no wiring is known (C_c input only).
+  const std::shared_ptr<const Solver>& solver() const noexcept { return solver_; }
+  /// @brief What the network's outputs -1 and +1 mean, per DoF.
+  const hand::JointLimits& joint_limits() const noexcept { return limits_; }
+  /// @brief The training data's per-cell range, when the file records one.
+  const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
+
+  /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
+  /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one
+  /// Angles per frame (radians, unsmoothed). Set-up code: allocates; throws glovepose::Error for a
+  /// range of another size or a non-finite value (naming the frame).
+  std::vector<hand::Angles> predict(const float* cells, long frames, const sensor::CalibrationRange& range, int threads = 1) const {
+    const int n = cell_count();
+    if (range.size() != n)
+      throw Error("PoseModel::predict: calibration range of " + std::to_string(range.size()) + " cells, expected " + std::to_string(n));
+    std::vector<float> maps(static_cast<std::size_t>(frames) * grid::kStretchValues);
+    std::vector<float> pose_maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
+    Eigen::VectorXd raw(n), normalized(n);
+    std::array<float, grid::kStretchValues> frame_maps{};
+    for (long f = 0; f < frames; ++f) {
+      for (int c = 0; c < n; ++c) raw(c) = cells[f * n + c];
+      if (range.normalize(raw, normalized) != Status::Ok || glove_.map().to_stretch_maps(normalized.data(), frame_maps) != Status::Ok)
+        throw Error("PoseModel::predict: frame " + std::to_string(f) + " has a non-finite cell value, expected finite C_c");
+      std::copy(frame_maps.begin(), frame_maps.end(), maps.begin() + f * grid::kStretchValues);
+    }
+    network_.forward_batch(maps.data(), pose_maps.data(), frames, threads);
+    std::vector<hand::Angles> angles(static_cast<std::size_t>(frames));
+    std::array<float, grid::kMapSlots> pose_map{};
+    hand::Angles normalized_angles{};
+    for (long f = 0; f < frames; ++f) {
+      std::copy_n(pose_maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());
+      glove_.map().from_pose_map(pose_map, normalized_angles);
+      angles[static_cast<std::size_t>(f)] = limits_.denormalize(normalized_angles);
+    }
+    return angles;
+  }
+
+ private:
+  static grid::GloveDescription choose_glove(const nn::ModelInfo& info, std::optional<grid::GloveDescription>& given) {
+    if (given) return std::move(*given);
+    if (!info.glove_description.empty()) return grid::GloveDescription::from_metadata(info.glove_description);
+    grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
+    if (info.glove != builtin.id())
+      throw Error("the model reads glove '" + info.glove + "' and carries no glove description, expected a glove description (PoseModelOptions::glove)");
+    return builtin;
+  }
+
+  nn::ModelInfo info_;
+  Network network_;
+  grid::GloveDescription glove_;
+  std::shared_ptr<const Solver> solver_;
+  hand::JointLimits limits_;
+  std::optional<sensor::CalibrationRange> training_range_;
+};
+
+/// @brief The model of the default (SIMD) backend.
+using PoseModel = BasicPoseModel<>;
+
+/// @brief Settings of one estimator (one glove stream).
+struct EstimatorConfig {
+  sensor::ReadoutConfig readout{};          ///< Mean window and solve cadence of the row stream (paper: 5, 16).
+  sensor::CalibrationConfig calibration{};  ///< Flat-sensor threshold and the clamp of normalised values.
+  int calibration_median_window = 20;       ///< Frames of the on-the-fly calibration's median (paper: 20).
+  /// Stream time between two frames the on-the-fly calibration takes (s). The median's window then
+  /// spans the same time however often the readout solves: 20 frames at 60 Hz, a third of a second,
+  /// as in the paper and in the training data's calibration.
+  double calibration_sample_period = 1.0 / 60.0;
+  std::optional<filter::OneEuroConfig> smoothing;  ///< 1-euro smoothing of the angles; none: the network's output.
+  bool joint_transforms = false;                  ///< Compute the skeleton and the joint list with every pose.
+  hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
+};
+
+/// @brief Where the estimator's calibration range comes from.
+enum class CalibrationSource : std::uint8_t {
+  None,      ///< No range yet: no pose can be computed (Status::Uncalibrated).
+  OnTheFly,  ///< This user's range, from start_calibration() ... finish_calibration().
+  User,      ///< A range set or loaded by the caller (e.g. the user's saved calibration).
+  Training,  ///< The model's training-set range (the paper's "without calibration").
+};
+
+/// @brief How far an on-the-fly calibration has come.
+struct CalibrationProgress {
+  bool collecting = false;  ///< Between start_calibration() and finish/cancel.
+  long frames = 0;          ///< Frames taken so far.
+  int frames_needed = 0;    ///< Frames before finish_calibration() can succeed (the median window).
+  bool ready = false;       ///< finish_calibration() would succeed now.
+};
+
+/// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
+enum PoseFlag : std::uint32_t {
+  kPoseReadingsRejected = 1u << 0,    ///< Readings were rejected since the previous pose (dropped, NaN, negative, out of order): their rows kept older values.
+  kPoseInputClamped = 1u << 1,        ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
+  kPoseTrainingCalibration = 1u << 2, ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
+  kPoseCalibrating = 1u << 3,         ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
+};
+
+/// @brief One estimated hand pose.
+struct Pose {
+  hand::Angles angles{};      ///< The 25 angles, radians (hand::kDofs order, theta 9..33); smoothed when smoothing is on.
+  hand::Angles raw_angles{};  ///< The network's angles before smoothing.
+  double timestamp = 0.0;     ///< Timestamp of the newest reading behind the pose (the stream's clock, s).
+  double oldest_age = 0.0;    ///< timestamp minus the timestamp of the oldest reading behind it (s): the readout's share of the latency.
+  double compute_seconds = 0.0;  ///< Wall time the estimator spent on this pose (solve to joint transforms).
+  std::uint64_t sequence = 0;    ///< Poses produced so far, this one included.
+  std::uint32_t rejected = 0;    ///< Readings rejected since the previous pose.
+  std::uint32_t flags = 0;       ///< PoseFlag bits.
+  bool valid = false;            ///< False until the first pose.
+};
+
+/// @brief One glove stream: rows, frames or solved cells in, poses out. See the file comment.
+///
+/// Per-frame calls (push_*, pose(), joints(), calibration_progress(), start/cancel_calibration(),
+/// reset()) are noexcept and never allocate. Calibration calls that build a range (finish, set,
+/// load, save, use_training_calibration) are set-up code and throw glovepose::Error.
+/// One estimator is used by one thread at a time; estimators sharing a model may run concurrently.
+template <typename Backend = nn::kernels::SimdBackend>
+class BasicGlovePoseEstimator {
+ public:
+  /// @brief The shared model type.
+  using Model = BasicPoseModel<Backend>;
+
+  /// @brief An estimator over a shared model. Throws glovepose::Error for a null model or bad settings.
+  explicit BasicGlovePoseEstimator(std::shared_ptr<const Model> model, EstimatorConfig config = {})
+      : model_(checked(std::move(model))),
+        config_(std::move(config)),
+        calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
+        workspace_(model_->network().make_workspace(1)),
+        kinematics_(config_.hand) {
+    if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
+      throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
+                  " s, expected a finite value >= 0");
+    if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
+    if (model_->solver()) {
+      readout_.emplace(model_->solver(), config_.readout);
+      measurements_ = Eigen::VectorXd::Zero(model_->solver()->layout().row_count());
+    }
+    cells_ = Eigen::VectorXd::Zero(model_->cell_count());
+    normalized_ = Eigen::VectorXd::Zero(model_->cell_count());
+    skeleton_.fill(Eigen::Affine3d::Identity());
+  }
+
+  // ---- input -------------------------------------------------------------------------------
+
+  /// @brief One reading of measurement row `row` at `timestamp` (s). Returns Status::Solved when it
+  /// completed a frame and a new pose is in pose(); Status::Ok or Status::NotReady when accepted
+  /// without a new pose; Status::Uncalibrated when a frame was solved but no calibration range is
+  /// set; a rejection status (readout.hpp) otherwise, or Status::UnknownIndex when the model has no
+  /// wiring. A rejected reading changes nothing but the count in Pose::rejected.
+  GLOVEPOSE_REALTIME Status push_row(int row, double value, double timestamp) noexcept {
+    if (!readout_) return Status::UnknownIndex;
+    const auto start = std::chrono::steady_clock::now();
+    const Status status = readout_->push_row(row, value, timestamp);
+    if (status != Status::Solved) return status;
+    return estimate_from_readout(start);
+  }
+
+  /// @brief A whole frame of `count` compound measurements C_m at `timestamp`, solved at once. Bad
+  /// rows are skipped (their previous readings stay in use) and counted; see Readout::push_frame.
+  GLOVEPOSE_REALTIME Status push_measurements(const double* values, int count, double timestamp) noexcept {
+    if (!readout_) return Status::UnknownIndex;
+    if (values == nullptr || count != measurements_.size()) return Status::SizeMismatch;
+    const auto start = std::chrono::steady_clock::now();
+    measurements_ = Eigen::Map<const Eigen::VectorXd>(values, count);
+    const Status status = readout_->push_frame(measurements_, timestamp);
+    if (status != Status::Solved) return status;
+    return estimate_from_readout(start);
+  }
+
+  /// @brief A frame of `count` already solved cell capacitances C_c at `timestamp` (firmware that
+  /// solves on board). `oldest_age` is the age of its oldest reading, if the firmware knows it.
+  GLOVEPOSE_REALTIME Status push_cells(const double* cells, int count, double timestamp, double oldest_age = 0.0) noexcept {
+    if (cells == nullptr || count != cells_.size()) return Status::SizeMismatch;
+    if (!std::isfinite(timestamp) || !std::isfinite(oldest_age)) return Status::NonFinite;
+    if (timestamp < last_cells_timestamp_) return Status::TimestampBackwards;
+    const auto start = std::chrono::steady_clock::now();
+    cells_ = Eigen::Map<const Eigen::VectorXd>(cells, count);
+    if (!cells_.allFinite()) return Status::NonFinite;
+    last_cells_timestamp_ = timestamp;
+    return estimate(cells_, timestamp, oldest_age, 0, start);
+  }
+
+  // ---- output ------------------------------------------------------------------------------
+
+  /// @brief The latest pose (Pose::valid is false before the first).
+  const Pose& pose() const noexcept { return pose_; }
+  /// @brief The latest skeleton (reference chain, mm), when EstimatorConfig::joint_transforms is on.
+  const hand::Skeleton& skeleton() const noexcept { return skeleton_; }
+  /// @brief The latest joint list (metres, quaternions; hand/joint_list.hpp), when joint_transforms is on.
+  const hand::JointList& joints() const noexcept { return joints_; }
+  /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
+  const Eigen::VectorXd& cells() const noexcept { return cells_; }
+
+  // ---- calibration -------------------------------------------------------------------------
+
+  /// @brief Starts (or restarts) an on-the-fly calibration: from now on solved frames also feed the
+  /// per-sensor min/max (median of calibration_median_window frames). The user moves through
+  /// extreme poses; poses keep coming from the previous range, if any, flagged kPoseCalibrating.
+  void start_calibration() noexcept {
+    calibrator_.reset();
+    collecting_ = true;
+    next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+  }
+  /// @brief How far the calibration has come.
+  CalibrationProgress calibration_progress() const noexcept {
+    return {collecting_, calibrator_.frames(), calibrator_.median_window(), calibrator_.ready()};
+  }
+  /// @brief Ends the calibration and uses its range. Throws glovepose::Error (and keeps collecting)
+  /// when fewer frames than the median window arrived or no calibration was started. The range's
+  /// flat sensors (too small a range) are listed by CalibrationRange::flat_sensors().
+  const sensor::CalibrationRange& finish_calibration() {
+    if (!collecting_) throw Error("GlovePoseEstimator::finish_calibration: no calibration running, expected start_calibration() first");
+    set_range(calibrator_.finish(), CalibrationSource::OnTheFly);
+    collecting_ = false;
+    return *range_;
+  }
+  /// @brief Stops collecting and keeps the previous range.
+  void cancel_calibration() noexcept { collecting_ = false; }
+  /// @brief Uses a range the caller has (e.g. a saved user calibration). Throws glovepose::Error
+  /// when its size or sensor names differ from the glove's.
+  void set_calibration(const sensor::CalibrationRange& range) {
+    if (range.size() != model_->cell_count() || range.names() != model_->glove().cell_names())
+      throw Error("GlovePoseEstimator::set_calibration: a range of " + std::to_string(range.size()) +
+                  " sensors with other names, expected the " + std::to_string(model_->cell_count()) + " cells of glove '" +
+                  model_->glove().id() + "'");
+    set_range(range, CalibrationSource::User);
+  }
+  /// @brief Loads a range saved by save_calibration() for this glove.
+  void load_calibration(const std::string& path) {
+    set_range(sensor::CalibrationRange::load(path, model_->glove().id(), model_->glove().cell_names(), config_.calibration),
+              CalibrationSource::User);
+  }
+  /// @brief Saves the range in use (to load it for the same user and glove later).
+  void save_calibration(const std::string& path) const {
+    if (!range_) throw Error("GlovePoseEstimator::save_calibration: no calibration range set, expected one to save");
+    range_->save(path, model_->glove().id());
+  }
+  /// @brief Uses the model's training-set range. Throws glovepose::Error when the file has none.
+  void use_training_calibration() {
+    if (!model_->training_range())
+      throw Error("GlovePoseEstimator::use_training_calibration: the model records no training-set range, expected a model trained with --calibration training");
+    set_range(*model_->training_range(), CalibrationSource::Training);
+  }
+  /// @brief The range in use, if any.
+  const std::optional<sensor::CalibrationRange>& calibration() const noexcept { return range_; }
+  /// @brief Where the range in use came from.
+  CalibrationSource calibration_source() const noexcept { return source_; }
+
+  // ---- state -------------------------------------------------------------------------------
+
+  /// @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged or
+  /// its clock restarted; keeps the calibration and the last pose (marked by its sequence).
+  void reset() noexcept {
+    if (readout_) readout_->reset();
+    if (smoothing_) smoothing_->reset();
+    last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
+    next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+  }
+  /// @brief The shared model.
+  const Model& model() const noexcept { return *model_; }
+  /// @brief The settings in use.
+  const EstimatorConfig& config() const noexcept { return config_; }
+
+ private:
+  static std::shared_ptr<const Model> checked(std::shared_ptr<const Model> model) {
+    if (!model) throw Error("GlovePoseEstimator: no model given, expected a loaded PoseModel");
+    return model;
+  }
+
+  void set_range(sensor::CalibrationRange range, CalibrationSource source) {
+    range_.emplace(std::move(range));
+    source_ = source;
+  }
+
+  Status estimate_from_readout(std::chrono::steady_clock::time_point start) noexcept {
+    const auto& frame = readout_->frame();
+    return estimate(frame.cells, frame.timestamp, frame.oldest_age, frame.rejected, start);
+  }
+
+  Status estimate(const Eigen::VectorXd& cells, double timestamp, double oldest_age, std::uint32_t rejected,
+                  std::chrono::steady_clock::time_point start) noexcept {
+    if (&cells != &cells_) cells_ = cells;
+    rejected_ += rejected;
+    if (collecting_ && timestamp >= next_calibration_sample_) {
+      // A small tolerance keeps frames that arrive on a period's grid from slipping by one.
+      if (calibrator_.add(cells) != Status::NonFinite)
+        next_calibration_sample_ = timestamp + config_.calibration_sample_period * (1.0 - 1e-6);
+    }
+    if (!range_) return Status::Uncalibrated;
+    if (range_->normalize(cells, normalized_) != Status::Ok) return Status::NonFinite;
+    std::uint32_t flags = rejected_ > 0 ? kPoseReadingsRejected : 0u;
+    if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
+    if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
+    if (collecting_) flags |= kPoseCalibrating;
+    if (model_->glove().map().to_stretch_maps(normalized_.data(), maps_) != Status::Ok) return Status::NonFinite;
+    const Status net = model_->network().forward(maps_, pose_map_, workspace_);
+    if (net != Status::Ok) return net;
+    hand::Angles normalized_angles{};
+    model_->glove().map().from_pose_map(pose_map_, normalized_angles);
+    pose_.raw_angles = model_->joint_limits().denormalize(normalized_angles);
+    pose_.angles = pose_.raw_angles;
+    if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
+    if (config_.joint_transforms) {
+      kinematics_.pose(pose_.angles, skeleton_);
+      hand::to_joint_list(kinematics_, skeleton_, joints_);
+    }
+    pose_.timestamp = timestamp;
+    pose_.oldest_age = oldest_age;
+    pose_.rejected = rejected_;
+    pose_.flags = flags;
+    pose_.valid = true;
+    ++pose_.sequence;
+    rejected_ = 0;
+    pose_.compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return Status::Solved;
+  }
+
+  std::shared_ptr<const Model> model_;
+  EstimatorConfig config_;
+  std::optional<sensor::Readout<Eigen::Dynamic, Eigen::Dynamic>> readout_;
+  sensor::OnTheFlyCalibrator calibrator_;
+  bool collecting_ = false;
+  double next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+  std::optional<sensor::CalibrationRange> range_;
+  CalibrationSource source_ = CalibrationSource::None;
+  std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
+  typename Model::Network::Workspace workspace_;
+  hand::Kinematics kinematics_;
+  Eigen::VectorXd measurements_;
+  Eigen::VectorXd cells_;
+  Eigen::VectorXd normalized_;
+  double last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
+  std::uint32_t rejected_ = 0;
+  std::array<float, grid::kStretchValues> maps_{};
+  std::array<float, grid::kMapSlots> pose_map_{};
+  Pose pose_;
+  hand::Skeleton skeleton_;
+  hand::JointList joints_{};
+};
+
+/// @brief The estimator of the default (SIMD) backend.
+using GlovePoseEstimator = BasicGlovePoseEstimator<>;
+
+}  // namespace glovepose

@@ -1,0 +1,80 @@
+/// @file joint_list.hpp
+/// @brief The hand's joints as an engine-friendly list: 21 joints, each a position in metres and a
+/// unit quaternion, in the order of the common 21-point hand convention (wrist/palm, then per finger
+/// from the knuckle to the tip; thumb, index, middle, ring, pinky).
+///
+/// What an engine drives a skeleton with. The frames come from hand::Kinematics (the reference chain
+/// of Tkach et al. 2017): each joint's position is the origin of the phalanx that starts there, its
+/// rotation that phalanx's orientation; a tip takes the orientation of its distal phalanx and lies
+/// at the end of it. Coordinates: the hand model's root frame (right hand), right-handed, metres.
+/// At rest the fingers point along +Y, +X points from the pinky side towards the thumb side, and
+/// flexing a finger moves its tip towards -Z: the palm faces -Z, the back of the hand +Z
+/// (tests/test_estimator.cpp checks these directions). An engine with a left-handed, Y-up frame
+/// (e.g. Unity) mirrors X (x -> -x) and negates the quaternion's y and z.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include <Eigen/Geometry>
+
+#include "../config.hpp"
+#include "kinematics.hpp"
+
+namespace glovepose::hand {
+
+/// @brief The joints of the list, in list order.
+enum class Joint : int {
+  Palm = 0,                                                          ///< Root of the fingers (the palm frame).
+  ThumbMetacarpal, ThumbProximal, ThumbDistal, ThumbTip,             ///< Thumb: CMC, MCP, IP joints and the tip.
+  IndexProximal, IndexIntermediate, IndexDistal, IndexTip,           ///< Index: MCP, PIP, DIP joints and the tip.
+  MiddleProximal, MiddleIntermediate, MiddleDistal, MiddleTip,       ///< Middle finger.
+  RingProximal, RingIntermediate, RingDistal, RingTip,               ///< Ring finger.
+  PinkyProximal, PinkyIntermediate, PinkyDistal, PinkyTip,           ///< Pinky.
+};
+
+/// @brief Number of joints in the list.
+inline constexpr std::size_t kJointCount = 21;
+
+/// @brief Stable names of the joints, in list order (for logs, files and bindings).
+inline constexpr std::array<const char*, kJointCount> kJointNames{
+    "palm",
+    "thumb_metacarpal", "thumb_proximal", "thumb_distal", "thumb_tip",
+    "index_proximal", "index_intermediate", "index_distal", "index_tip",
+    "middle_proximal", "middle_intermediate", "middle_distal", "middle_tip",
+    "ring_proximal", "ring_intermediate", "ring_distal", "ring_tip",
+    "pinky_proximal", "pinky_intermediate", "pinky_distal", "pinky_tip"};
+
+/// @brief Parent of each joint in the list (-1 for the palm): the previous joint of the same finger,
+/// or the palm for a finger's first joint.
+inline constexpr std::array<int, kJointCount> kJointParent{-1, 0, 1, 2, 3, 0, 5, 6, 7, 0, 9, 10, 11, 0, 13, 14, 15, 0, 17, 18, 19};
+
+/// @brief One joint: position and orientation in the root frame.
+struct JointTransform {
+  std::array<float, 3> position{};             ///< Metres: x, y, z.
+  std::array<float, 4> rotation{0, 0, 0, 1};   ///< Unit quaternion: x, y, z, w.
+};
+
+/// @brief All joints, indexed by Joint.
+using JointList = std::array<JointTransform, kJointCount>;
+
+/// @brief Fills the joint list from a posed skeleton (Kinematics::pose) of the same kinematics.
+GLOVEPOSE_REALTIME inline void to_joint_list(const Kinematics& kinematics, const Skeleton& skeleton, JointList& out) noexcept {
+  const auto put = [&](std::size_t joint, const Eigen::Affine3d& frame, const Eigen::Vector3d& position) {
+    const Eigen::Quaterniond q(frame.linear());
+    out[joint].position = {static_cast<float>(position.x() * 1e-3), static_cast<float>(position.y() * 1e-3),
+                           static_cast<float>(position.z() * 1e-3)};
+    out[joint].rotation = {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()),
+                           static_cast<float>(q.w())};
+  };
+  const Eigen::Affine3d& palm = skeleton[static_cast<std::size_t>(Phalanx::Hand)];
+  put(0, palm, palm.translation());
+  for (std::size_t f = 0; f < kFingerCount; ++f) {
+    const auto base = static_cast<std::size_t>(kFingerBase[f]);
+    const std::size_t first = 1 + 4 * f;
+    for (std::size_t k = 0; k < 3; ++k) put(first + k, skeleton[base + k], skeleton[base + k].translation());
+    put(first + 3, skeleton[base + 2], kinematics.fingertip(skeleton, static_cast<Finger>(f)));
+  }
+}
+
+}  // namespace glovepose::hand

@@ -1,0 +1,393 @@
+// GlovePoseEstimator: the streaming path equals the batch path, every input form agrees, the
+// calibration state machine, smoothing and joint transforms, zero allocations per frame, one model
+// shared by estimators on threads, and the statuses of bad input.
+#include <doctest/doctest.h>
+
+#include <glovepose/estimator.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
+#include <glovepose/train/samples.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.hpp"
+
+using namespace glovepose;
+
+namespace {
+
+const std::string kShippedModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
+
+// One simulated subject: a 3 s calibration sequence, then a 6 s session, with the raw rows, solved
+// once per readout cycle (so the recorded C_c frames are the ones a row stream solves at cycle ends).
+// No dropped rows: the readout counts accepted readings, so a drop would move the solves off the
+// cycle ends, in the stream and in the recorder at different places (fault handling has its own tests).
+struct Session {
+  train::Dataset data;
+  std::size_t first_session_frame = 0;
+};
+
+const Session& session() {
+  static const Session s = [] {
+    sim::CorpusConfig config;
+    config.seed = 41;
+    config.subjects = 1;
+    config.sessions = 1;
+    config.gloves = 1;
+    config.minutes = 0.1;
+    config.calibration_seconds = 3.0;
+    config.threads = 1;
+    config.recording.raw_rows = true;
+    config.recording.readout.solve_every = sim::kRows;
+    config.recording.noise.drop_probability = 0.0;
+    Session out;
+    out.data = sim::to_dataset(sim::simulate_corpus(config), config);
+    while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
+    return out;
+  }();
+  return s;
+}
+
+EstimatorConfig cycle_config() {
+  EstimatorConfig config;
+  config.readout.solve_every = sim::kRows;
+  return config;
+}
+
+// Row r of a frame was read (179 - r) row slots before the frame's end (sim/recorder.hpp).
+double row_time(const train::Dataset& d, std::size_t frame, int row) {
+  return d.timestamps[frame] - static_cast<double>(d.row_count - 1 - static_cast<std::size_t>(row)) / (d.row_count * 60.0);
+}
+
+// Streams frames [begin, end) row by row; calls on_pose(frame) whenever a frame's rows produced a pose.
+template <typename Estimator, typename OnPose>
+void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose) {
+  const train::Dataset& d = session().data;
+  for (std::size_t f = begin; f < end; ++f) {
+    bool solved = false;
+    for (int r = 0; r < static_cast<int>(d.row_count); ++r)
+      solved |= estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], row_time(d, f, r)) == Status::Solved;
+    if (solved) on_pose(f);
+  }
+}
+
+// An estimator calibrated on the session's calibration sequence (streamed row by row).
+GlovePoseEstimator calibrated(const std::shared_ptr<const PoseModel>& model, EstimatorConfig config = cycle_config()) {
+  GlovePoseEstimator estimator(model, std::move(config));
+  estimator.start_calibration();
+  stream_rows(estimator, 0, session().first_session_frame, [](std::size_t) {});
+  estimator.finish_calibration();
+  return estimator;
+}
+
+std::shared_ptr<const PoseModel> shipped() {
+  static const auto model = PoseModel::load(kShippedModel);
+  return model;
+}
+
+double max_difference(const hand::Angles& a, const hand::Angles& b) {
+  double worst = 0.0;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) worst = std::max(worst, std::abs(a[d] - b[d]));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("estimator: a session streamed row by row gives the poses of the batch path") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  const std::size_t begin = session().first_session_frame, end = d.frames();
+  // Calibrate on the calibration sequence, from its 6th cycle on: the recorder's readout had run
+  // warm-up cycles before it, the stream's ring needs its first mean_window (5) cycles to fill.
+  constexpr std::size_t kFill = 5;
+  GlovePoseEstimator estimator(model, cycle_config());
+  stream_rows(estimator, 0, kFill, [](std::size_t) {});
+  estimator.start_calibration();
+  stream_rows(estimator, kFill, begin, [](std::size_t) {});
+  estimator.finish_calibration();
+  REQUIRE(estimator.calibration_source() == CalibrationSource::OnTheFly);
+
+  // The on-the-fly range equals the training pipeline's (train::onthefly_ranges over the recorded
+  // frames): the same 20-frame median over the same 60 Hz frames, from C_c solved in double here
+  // and stored as float there.
+  train::Dataset recorded = d;
+  std::fill(recorded.kind.begin(), recorded.kind.begin() + kFill, train::kKindRecording);
+  const auto ranges = train::onthefly_ranges(recorded);
+  REQUIRE(ranges.size() == 1);
+  const sensor::CalibrationRange& offline = ranges.begin()->second;
+  const sensor::CalibrationRange& online = *estimator.calibration();
+  const double range_difference = std::max((offline.min() - online.min()).cwiseAbs().maxCoeff(),
+                                           (offline.max() - online.max()).cwiseAbs().maxCoeff());
+  MESSAGE("on-the-fly range, stream vs recorded frames: largest difference " << range_difference << " pF");
+  CHECK(range_difference < 1e-4);
+
+  std::vector<hand::Angles> streamed(end - begin);
+  std::vector<double> times(end - begin, -1.0);
+  stream_rows(estimator, begin, end, [&](std::size_t f) {
+    streamed[f - begin] = estimator.pose().raw_angles;
+    times[f - begin] = estimator.pose().timestamp;
+  });
+  const std::vector<hand::Angles> batch = model->predict(d.cells.data() + begin * d.cell_count, static_cast<long>(end - begin), online, 2);
+
+  // The recorder's readout ran 5 warm-up cycles of the session's own pose; the stream's ring still
+  // holds the calibration's rows for the first mean_window cycles (10 leaves room for dropped rows).
+  constexpr std::size_t kSettle = 10;
+  double worst = 0.0, worst_time = 0.0;
+  for (std::size_t i = kSettle; i < streamed.size(); ++i) {
+    worst = std::max(worst, max_difference(streamed[i], batch[i]));
+    worst_time = std::max(worst_time, std::abs(times[i] - d.timestamps[begin + i]));
+  }
+  MESSAGE("stream vs batch over " << streamed.size() - kSettle << " frames: largest angle difference " << worst << " rad");
+  CHECK(worst < 1e-4);
+  CHECK(worst_time < 1e-9);
+  // And the poses are poses: the shipped model tracks this unseen subject (mean error in degrees).
+  double error = 0.0;
+  for (std::size_t i = kSettle; i < streamed.size(); ++i)
+    for (std::size_t k = 0; k < hand::kDofCount; ++k)
+      error += std::abs(streamed[i][k] - d.angles[(begin + i) * hand::kDofCount + k]);
+  error *= 180.0 / 3.14159265358979 / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
+  MESSAGE("mean angle error of the streamed poses: " << error << " degrees");
+  CHECK(error < 10.0);
+}
+
+TEST_CASE("estimator: rows, whole C_m frames and solved C_c frames give the same poses") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  const std::size_t begin = session().first_session_frame + 10, end = begin + 60;
+  GlovePoseEstimator by_rows = calibrated(model), by_frames = calibrated(model), by_cells = calibrated(model);
+  by_frames.set_calibration(*by_rows.calibration());
+  by_cells.set_calibration(*by_rows.calibration());
+  double worst_frames = 0.0, worst_cells = 0.0;
+  std::vector<double> frame(d.row_count), cells(d.cell_count);
+  stream_rows(by_rows, session().first_session_frame, end, [&](std::size_t f) {
+    if (f < begin) return;
+    // The same readings as one frame: with solve_every = 180 the ring holds the same values, so the
+    // solve and the pose are the same.
+    for (std::size_t r = 0; r < d.row_count; ++r) frame[r] = d.raw_rows[f * d.row_count + r];
+    (void)by_frames.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[f]);
+    for (std::size_t c = 0; c < d.cell_count; ++c) cells[c] = by_rows.cells()(static_cast<Eigen::Index>(c));
+    REQUIRE(by_cells.push_cells(cells.data(), static_cast<int>(cells.size()), d.timestamps[f]) == Status::Solved);
+    worst_cells = std::max(worst_cells, max_difference(by_rows.pose().angles, by_cells.pose().angles));
+  });
+  // The frame path's ring was filled frame by frame from `begin` on: compare after it has cycled.
+  GlovePoseEstimator rows_again = calibrated(model), frames_again = calibrated(model);
+  frames_again.set_calibration(*rows_again.calibration());
+  for (std::size_t f = session().first_session_frame; f < end; ++f) {
+    for (std::size_t r = 0; r < d.row_count; ++r) frame[r] = d.raw_rows[f * d.row_count + r];
+    const Status s = frames_again.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[f]);
+    stream_rows(rows_again, f, f + 1, [](std::size_t) {});
+    REQUIRE(s == Status::Solved);
+    if (f >= begin) worst_frames = std::max(worst_frames, max_difference(rows_again.pose().angles, frames_again.pose().angles));
+  }
+  MESSAGE("rows vs C_m frames: " << worst_frames << " rad; rows vs C_c frames: " << worst_cells << " rad");
+  CHECK(worst_frames < 1e-12);
+  CHECK(worst_cells < 1e-12);
+}
+
+TEST_CASE("estimator: calibration state machine, saved calibrations, training range") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  GlovePoseEstimator estimator(model, cycle_config());
+  CHECK(estimator.calibration_source() == CalibrationSource::None);
+  CHECK_THROWS_WITH_AS(estimator.finish_calibration(), doctest::Contains("start_calibration"), Error);
+  // Without a range, solved frames give no pose.
+  Status last = Status::Ok;
+  stream_rows(estimator, 0, 6, [](std::size_t) {});
+  for (int r = 0; r < 180; ++r) last = estimator.push_row(r, d.raw_rows[6 * d.row_count + static_cast<std::size_t>(r)], row_time(d, 6, r));
+  CHECK(last == Status::Uncalibrated);
+  CHECK_FALSE(estimator.pose().valid);
+
+  estimator.start_calibration();
+  stream_rows(estimator, 7, 20, [](std::size_t) {});
+  CalibrationProgress p = estimator.calibration_progress();
+  CHECK(p.collecting);
+  CHECK(p.frames == 13);
+  CHECK(p.frames_needed == 20);
+  CHECK_FALSE(p.ready);
+  CHECK_THROWS_WITH_AS(estimator.finish_calibration(), doctest::Contains("expected at least 20"), Error);
+  stream_rows(estimator, 20, session().first_session_frame, [](std::size_t) {});
+  CHECK(estimator.calibration_progress().ready);
+  estimator.finish_calibration();
+  CHECK(estimator.calibration_source() == CalibrationSource::OnTheFly);
+  CHECK_FALSE(estimator.calibration_progress().collecting);
+
+  // While a new calibration collects, poses keep coming from the old range, flagged.
+  estimator.start_calibration();
+  stream_rows(estimator, session().first_session_frame, session().first_session_frame + 1, [](std::size_t) {});
+  CHECK(estimator.pose().valid);
+  CHECK((estimator.pose().flags & kPoseCalibrating) != 0);
+  estimator.cancel_calibration();
+
+  // Save and load: the same range, exactly.
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/estimator_user.calibration";
+  estimator.save_calibration(path);
+  GlovePoseEstimator other(model, cycle_config());
+  other.load_calibration(path);
+  CHECK(other.calibration_source() == CalibrationSource::User);
+  CHECK(other.calibration()->min() == estimator.calibration()->min());
+  CHECK(other.calibration()->max() == estimator.calibration()->max());
+  const sensor::CalibrationRange wrong(Eigen::VectorXd::Zero(3), Eigen::VectorXd::Ones(3), {"a", "b", "c"});
+  CHECK_THROWS_WITH_AS(other.set_calibration(wrong), doctest::Contains("expected the 44 cells"), Error);
+
+  // The model's training range: absent in the shipped (on-the-fly) model; present when recorded.
+  CHECK_THROWS_WITH_AS(other.use_training_calibration(), doctest::Contains("no training-set range"), Error);
+  nn::Model<> loaded = nn::Model<>::load(kShippedModel);
+  loaded.info.calibration_min = std::vector<double>(44, 10.0);
+  loaded.info.calibration_max = std::vector<double>(44, 30.0);
+  const auto with_range = std::make_shared<const PoseModel>(loaded.info, loaded.unet, PoseModelOptions{});
+  GlovePoseEstimator generic(with_range, cycle_config());
+  generic.use_training_calibration();
+  std::vector<double> cells(44, 20.0);
+  REQUIRE(generic.push_cells(cells.data(), 44, 0.0) == Status::Solved);
+  CHECK((generic.pose().flags & kPoseTrainingCalibration) != 0);
+}
+
+TEST_CASE("estimator: smoothing is the 1-euro filter of the raw angles; joints follow the kinematics") {
+  const auto model = shipped();
+  EstimatorConfig config = cycle_config();
+  config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
+  config.joint_transforms = true;
+  GlovePoseEstimator estimator = calibrated(model, config);
+  filter::OneEuroFilter<hand::kDofCount> reference(*config.smoothing);
+  const hand::Kinematics kinematics;
+  hand::Skeleton skeleton;
+  double worst_filter = 0.0, worst_joint = 0.0, smoothing_effect = 0.0;
+  const std::size_t begin = session().first_session_frame;
+  stream_rows(estimator, begin, begin + 120, [&](std::size_t) {
+    const Pose& p = estimator.pose();
+    hand::Angles expected{};
+    (void)reference.filter(p.raw_angles, p.timestamp, expected);
+    worst_filter = std::max(worst_filter, max_difference(expected, p.angles));
+    smoothing_effect = std::max(smoothing_effect, max_difference(p.raw_angles, p.angles));
+    kinematics.pose(p.angles, skeleton);
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      const Eigen::Vector3d tip = kinematics.fingertip(skeleton, static_cast<hand::Finger>(f)) * 1e-3;
+      const auto& joint = estimator.joints()[4 + 4 * f].position;
+      worst_joint = std::max(worst_joint, (tip - Eigen::Vector3d(joint[0], joint[1], joint[2])).norm());
+    }
+  });
+  // No pose (and no filtering) happens before the calibration ends: both filters start at `begin`.
+  MESSAGE("smoothing: largest difference to the reference filter " << worst_filter << " rad, effect " << smoothing_effect << " rad");
+  CHECK(worst_filter < 1e-12);
+  CHECK(smoothing_effect > 1e-3);  // it does smooth
+  CHECK(worst_joint < 1e-6);       // metres, float rounding
+  // The joint list's documented frame: fingers along +Y at rest, flexion moves a tip towards -Z.
+  hand::JointList rest{}, bent{};
+  hand::Angles angles{};
+  kinematics.pose(angles, skeleton);
+  hand::to_joint_list(kinematics, skeleton, rest);
+  angles[hand::dof_of(hand::Finger::Middle, hand::Motion::BaseFlexion)] = 1.0;
+  kinematics.pose(angles, skeleton);
+  hand::to_joint_list(kinematics, skeleton, bent);
+  const auto tip = static_cast<std::size_t>(hand::Joint::MiddleTip);
+  CHECK(rest[tip].position[1] > 0.1f);
+  CHECK(bent[tip].position[2] < rest[tip].position[2] - 0.03f);
+  CHECK(hand::kJointNames[tip] == std::string("middle_tip"));
+}
+
+TEST_CASE("estimator: the smoothing filter restarts with reset() and equals the reference from there") {
+  const auto model = shipped();
+  EstimatorConfig config = cycle_config();
+  config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
+  GlovePoseEstimator estimator = calibrated(model, config);
+  estimator.reset();
+  filter::OneEuroFilter<hand::kDofCount> reference(*config.smoothing);
+  double worst = 0.0;
+  int poses = 0;
+  const std::size_t begin = session().first_session_frame;
+  stream_rows(estimator, begin, begin + 60, [&](std::size_t) {
+    hand::Angles expected{};
+    (void)reference.filter(estimator.pose().raw_angles, estimator.pose().timestamp, expected);
+    worst = std::max(worst, max_difference(expected, estimator.pose().angles));
+    ++poses;
+  });
+  CHECK(poses == 60);  // after reset() the first pose comes once every row was read again
+  CHECK(worst < 1e-12);
+}
+
+TEST_CASE("estimator: no heap allocation per row, per frame, while calibrating or smoothing") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  EstimatorConfig config;  // the paper's cadence: a solve every 16 rows
+  config.smoothing = filter::OneEuroConfig{};
+  config.joint_transforms = true;
+  GlovePoseEstimator estimator = calibrated(model, config);
+  const std::size_t begin = session().first_session_frame;
+  std::vector<double> frame(d.row_count), cells(d.cell_count, 20.0);
+  int poses = 0;
+  const std::size_t allocations = test::allocations_during([&] {
+    estimator.start_calibration();
+    stream_rows(estimator, begin, begin + 30, [&](std::size_t) { ++poses; });
+    estimator.cancel_calibration();
+    stream_rows(estimator, begin + 30, begin + 60, [&](std::size_t) { ++poses; });
+    for (std::size_t r = 0; r < d.row_count; ++r) frame[r] = d.raw_rows[(begin + 60) * d.row_count + r];
+    (void)estimator.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[begin + 60]);
+    (void)estimator.push_cells(cells.data(), static_cast<int>(cells.size()), d.timestamps[begin + 60]);
+    (void)estimator.push_row(3, std::nan(""), 1e9);
+    (void)estimator.calibration_progress();
+    estimator.reset();
+  });
+  CHECK(poses == 60);
+  CHECK(estimator.pose().sequence > 600);  // 11.25 solves per 180-row cycle
+  CHECK(allocations == 0);
+}
+
+TEST_CASE("estimator: one model shared by estimators on threads gives every stream the single-thread poses") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  const std::size_t begin = session().first_session_frame, end = std::min(d.frames(), begin + 120);
+  const auto run = [&](std::vector<hand::Angles>& out) {
+    GlovePoseEstimator estimator = calibrated(model);
+    stream_rows(estimator, begin, end, [&](std::size_t) { out.push_back(estimator.pose().angles); });
+  };
+  std::vector<hand::Angles> alone;
+  run(alone);
+  std::vector<std::vector<hand::Angles>> results(4);
+  std::vector<std::thread> threads;
+  for (auto& r : results) threads.emplace_back(run, std::ref(r));
+  for (auto& t : threads) t.join();
+  for (const auto& r : results) CHECK(r == alone);
+}
+
+TEST_CASE("estimator: bad input is answered with a status and never reaches the pose") {
+  const auto model = shipped();
+  GlovePoseEstimator estimator = calibrated(model);
+  const std::size_t f = session().first_session_frame;
+  stream_rows(estimator, f, f + 1, [](std::size_t) {});
+  const Pose before = estimator.pose();
+  CHECK(estimator.push_row(-1, 30.0, 100.0) == Status::UnknownIndex);
+  CHECK(estimator.push_row(180, 30.0, 100.0) == Status::UnknownIndex);
+  CHECK(estimator.push_row(0, std::nan(""), 100.0) == Status::NonFinite);
+  CHECK(estimator.push_row(0, INFINITY, 100.0) == Status::NonFinite);
+  CHECK(estimator.push_row(0, -1.0, 100.0) == Status::Negative);
+  CHECK(estimator.push_row(0, 30.0, 0.0) == Status::TimestampBackwards);
+  std::vector<double> cells(44, 20.0);
+  CHECK(estimator.push_cells(cells.data(), 43, 100.0) == Status::SizeMismatch);
+  CHECK(estimator.push_cells(nullptr, 44, 100.0) == Status::SizeMismatch);
+  cells[5] = std::nan("");
+  CHECK(estimator.push_cells(cells.data(), 44, 100.0) == Status::NonFinite);
+  std::vector<double> frame(179, 30.0);
+  CHECK(estimator.push_measurements(frame.data(), 179, 100.0) == Status::SizeMismatch);
+  CHECK(estimator.pose().sequence == before.sequence);
+  CHECK(estimator.pose().angles == before.angles);
+  // The rejected readings are counted in the next pose, and flagged.
+  stream_rows(estimator, f + 1, f + 2, [](std::size_t) {});
+  CHECK(estimator.pose().rejected >= 4);
+  CHECK((estimator.pose().flags & kPoseReadingsRejected) != 0);
+  for (double a : estimator.pose().angles) CHECK(std::isfinite(a));
+}
+
+TEST_CASE("estimator: set-up errors name what is wrong") {
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(nullptr), doctest::Contains("no model"), Error);
+  CHECK_THROWS_WITH_AS(PoseModel::load("/nonexistent/model.safetensors"), doctest::Contains("/nonexistent/model.safetensors"), Error);
+  PoseModelOptions other;
+  grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
+  other.glove = grid::GloveDescription("another-glove", builtin.cell_names(), builtin.map());
+  CHECK_THROWS_WITH_AS(PoseModel::load(kShippedModel, other), doctest::Contains("expected the model's glove 'glauser2019-44'"), Error);
+  EstimatorConfig config;
+  config.calibration_sample_period = -1.0;
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("calibration_sample_period"), Error);
+}
