@@ -1,0 +1,143 @@
+// Google Benchmark cases for GlovePoseEstimator, the whole per-frame pipeline (run:
+// build/bench/glovepose_bench --benchmark_filter=Estimator). The shipped model (U-Net, width 64),
+// calibrated on the fly on a simulated calibration sequence, with 1-euro smoothing and joint
+// transforms on; the input is a simulated session's raw rows. Argument: weight storage, 0 = F32,
+// 1 = F16 (also the label).
+// - BM_EstimatorFrame/<storage>: one iteration = one frame: push_measurements of a whole C_m frame
+//   of 180 rows, which solves once (solve, calibrate, stretch maps, U-Net, 1-euro, kinematics and
+//   joint list). frames/s counts poses.
+// - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
+//   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
+#include <glovepose/estimator.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <vector>
+
+using namespace glovepose;
+
+namespace {
+
+// A simulated subject's 3 s calibration sequence and 10 s session, with the raw rows; the rows of
+// the session frames as doubles, ready to push.
+struct Recording {
+  train::Dataset data;
+  std::size_t first_session_frame = 0;
+  std::vector<double> session_rows;  // (frames - first_session_frame) x 180
+};
+
+const Recording& recording() {
+  static const Recording r = [] {
+    sim::CorpusConfig config;
+    config.seed = 11;
+    config.subjects = config.sessions = config.gloves = 1;
+    config.minutes = 10.0 / 60.0;
+    config.calibration_seconds = 3.0;
+    config.threads = 1;
+    config.recording.raw_rows = true;
+    Recording out;
+    out.data = sim::to_dataset(sim::simulate_corpus(config), config);
+    while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
+    out.session_rows.assign(out.data.raw_rows.begin() + static_cast<std::ptrdiff_t>(out.first_session_frame * out.data.row_count),
+                            out.data.raw_rows.end());
+    return out;
+  }();
+  return r;
+}
+
+std::shared_ptr<const PoseModel> shipped_model(nn::WeightStorage storage) {
+  static std::map<nn::WeightStorage, std::shared_ptr<const PoseModel>> models;  // benchmarks run on one thread
+  auto& model = models[storage];
+  if (!model) {
+    PoseModelOptions options;
+    options.storage = storage;
+    model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors", options);
+  }
+  return model;
+}
+
+// An estimator with smoothing and joint transforms, calibrated on the calibration sequence's frames.
+GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage) {
+  EstimatorConfig config;
+  config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
+  config.joint_transforms = true;
+  GlovePoseEstimator estimator(shipped_model(storage), config);
+  const train::Dataset& d = recording().data;
+  std::vector<double> frame(d.row_count);
+  estimator.start_calibration();
+  for (std::size_t f = 0; f < recording().first_session_frame; ++f) {
+    frame.assign(d.raw_rows.begin() + static_cast<std::ptrdiff_t>(f * d.row_count),
+                 d.raw_rows.begin() + static_cast<std::ptrdiff_t>((f + 1) * d.row_count));
+    (void)estimator.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[f]);
+  }
+  estimator.finish_calibration();
+  return estimator;
+}
+
+nn::WeightStorage storage_of(const benchmark::State& state) {
+  return state.range(0) == 0 ? nn::WeightStorage::F32 : nn::WeightStorage::F16;
+}
+
+// The session's frames over and over; time keeps running on, one session length per lap.
+struct SessionClock {
+  const Recording& r = recording();
+  std::size_t frames = r.data.frames() - r.first_session_frame;
+  double lap = r.data.timestamps.back() - r.data.timestamps[r.first_session_frame] + 1.0 / 60.0;
+  std::size_t frame = 0;
+  double offset = 0.0;
+
+  double timestamp() const { return r.data.timestamps[r.first_session_frame + frame] + offset; }
+  const double* rows() const { return r.session_rows.data() + frame * r.data.row_count; }
+  void next() {
+    if (++frame == frames) {
+      frame = 0;
+      offset += lap;
+    }
+  }
+};
+
+void BM_EstimatorFrame(benchmark::State& state) {
+  GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
+  const int rows = static_cast<int>(recording().data.row_count);
+  SessionClock clock;
+  for (auto _ : state) {
+    if (estimator.push_measurements(clock.rows(), rows, clock.timestamp()) != Status::Solved) {
+      state.SkipWithError("push_measurements did not give a pose");
+      break;
+    }
+    benchmark::DoNotOptimize(estimator.joints());
+    clock.next();
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.SetLabel(state.range(0) == 0 ? "f32" : "f16");
+}
+
+void BM_EstimatorRow(benchmark::State& state) {
+  GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
+  const std::size_t rows = recording().data.row_count;
+  const double row_period = 1.0 / (60.0 * static_cast<double>(rows));
+  SessionClock clock;
+  std::size_t row = 0;
+  const std::uint64_t poses_before = estimator.pose().sequence;
+  for (auto _ : state) {
+    // Row r of a frame was read (179 - r) row slots before the frame's end.
+    const double t = clock.timestamp() - static_cast<double>(rows - 1 - row) * row_period;
+    benchmark::DoNotOptimize(estimator.push_row(static_cast<int>(row), clock.rows()[row], t));
+    if (++row == rows) {
+      row = 0;
+      clock.next();
+    }
+  }
+  const auto poses = static_cast<double>(estimator.pose().sequence - poses_before);
+  state.SetItemsProcessed(state.iterations());
+  state.counters["frames/s"] = benchmark::Counter(poses, benchmark::Counter::kIsRate);
+  state.SetLabel(state.range(0) == 0 ? "f32" : "f16");
+}
+
+}  // namespace
+
+BENCHMARK(BM_EstimatorFrame)->Arg(0)->Arg(1)->UseRealTime();
+BENCHMARK(BM_EstimatorRow)->Arg(0)->Arg(1)->UseRealTime();

@@ -1,0 +1,192 @@
+// A game loop driven by the glove. A sensor thread owns the estimator and pushes the glove's rows as
+// they arrive; the game runs a fixed 90 Hz step that takes the newest pose without ever waiting for
+// the sensor thread (nor making it wait), turns the 21-joint list into the parent-relative bone
+// transforms an engine animates a skeleton with, and "renders" a few frames as text.
+//
+// Usage: game_loop MODEL.safetensors [SECONDS]   (SECONDS of play after a 2 s calibration; default 3)
+//
+// The glove is the simulator, streamed in real time; with a real glove, the sensor thread reads
+// rows from the glove's port instead.
+#include <glovepose/glovepose.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>  // the simulated glove only
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <thread>
+
+using namespace glovepose;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// The newest value from one writer thread for one reader thread, lock-free and wait-free on both
+// sides: a triple buffer. The writer fills its own slot and swaps it with the shared middle slot;
+// the reader swaps the middle slot for its own only when something newer is there. Each thread only
+// touches the slot it holds, so a copy can never be torn, and neither side ever waits.
+template <typename T>
+class LatestValue {
+ public:
+  // Writer: fill back(), then publish() it.
+  T& back() noexcept { return slots_[back_]; }
+  void publish() noexcept { back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kSlot; }
+
+  // Reader: the newest published value (the same as last time when nothing new was published).
+  // Valid until the next read().
+  const T& read() noexcept {
+    if (middle_.load(std::memory_order_relaxed) & kFresh) front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kSlot;
+    return slots_[front_];
+  }
+
+ private:
+  static constexpr unsigned kSlot = 3, kFresh = 4;  // middle_ holds a slot index and a "not read yet" bit
+  std::array<T, 3> slots_{};
+  std::atomic<unsigned> middle_{1};
+  unsigned back_ = 0;   // the writer's slot
+  unsigned front_ = 2;  // the reader's slot
+};
+
+// What the sensor thread hands to the game: a plain copy, no pointers into the estimator.
+struct HandState {
+  Pose pose;                         // pose.valid is false until the calibration is done
+  hand::JointList joints{};          // global (hand root frame) joint transforms of that pose
+  CalibrationProgress calibration;
+};
+
+// The sensor thread: owns the estimator, calibrates it on the first 2 s, then streams.
+void stream_glove(GlovePoseEstimator& estimator, const train::Dataset& glove, Clock::time_point start,
+                  LatestValue<HandState>& latest) {
+  const std::size_t rows = glove.row_count;
+  estimator.start_calibration();
+  for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
+    if (glove.kind[frame] == train::kKindRecording && estimator.calibration_progress().collecting)
+      estimator.finish_calibration();  // set-up call: may throw (too few frames)
+    for (std::size_t r = 0; r < rows; ++r) {
+      const double t = glove.timestamps[frame] - static_cast<double>(rows - 1 - r) / (rows * 60.0);
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(t));  // stands in for a blocking read from the glove
+      const Status status = estimator.push_row(static_cast<int>(r), glove.raw_rows[frame * rows + r], t);
+      if (status != Status::Solved && status != Status::Uncalibrated) continue;  // no frame solved by this row
+      HandState& state = latest.back();
+      state.pose = estimator.pose();
+      state.joints = estimator.joints();
+      state.calibration = estimator.calibration_progress();
+      latest.publish();
+    }
+  }
+}
+
+// An engine's hand skeleton: one bone per joint of the list, each with its transform relative to its
+// parent bone (hand::kJointParent), which is what engines animate.
+struct Bone {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();            // metres, in the parent bone's frame
+  Eigen::Quaternionf rotation = Eigen::Quaternionf::Identity();  // relative to the parent bone
+};
+using HandRig = std::array<Bone, hand::kJointCount>;
+
+// The joint list is global (all in the hand's root frame); a bone's local transform is its parent's
+// inverse times its own: rotation parent^-1 * joint, position parent^-1 * (joint - parent).
+void drive_rig(const hand::JointList& joints, HandRig& rig) {
+  // JointTransform::rotation is (x, y, z, w): Eigen's storage order, so a Map reads it in place.
+  const auto rotation = [&](int j) { return Eigen::Map<const Eigen::Quaternionf>(joints[j].rotation.data()); };
+  const auto position = [&](int j) { return Eigen::Map<const Eigen::Vector3f>(joints[j].position.data()); };
+  for (int j = 0; j < static_cast<int>(hand::kJointCount); ++j) {
+    const int parent = hand::kJointParent[j];
+    if (parent < 0) {
+      rig[j] = {position(j), rotation(j)};
+      continue;
+    }
+    const Eigen::Quaternionf to_parent = rotation(parent).conjugate();
+    rig[j].rotation = (to_parent * rotation(j)).normalized();
+    rig[j].position = to_parent * (position(j) - position(parent));
+  }
+}
+
+// What a renderer does with the rig: composes the local transforms from the root down.
+Bone global_transform(const HandRig& rig, int joint) {
+  const int parent = hand::kJointParent[joint];
+  if (parent < 0) return rig[joint];
+  const Bone up = global_transform(rig, parent);
+  return {up.position + up.rotation * rig[joint].position, up.rotation * rig[joint].rotation};
+}
+
+float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * 57.29578f; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || argc > 3) {
+    std::fprintf(stderr, "usage: %s MODEL.safetensors [SECONDS]\n", argv[0]);
+    return 2;
+  }
+  try {
+    const double play_seconds = argc == 3 ? std::atof(argv[2]) : 3.0;
+    if (!(play_seconds > 0.0 && play_seconds <= 600.0)) throw Error("SECONDS is '" + std::string(argv[2]) + "', expected 0 < SECONDS <= 600");
+
+    // Smoothing on (1-euro: steady when the hand rests, little lag when it moves) and the joint list.
+    EstimatorConfig config;
+    config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
+    config.joint_transforms = true;
+    GlovePoseEstimator estimator(PoseModel::load(argv[1]), config);
+
+    sim::CorpusConfig simulated;
+    simulated.subjects = simulated.sessions = simulated.gloves = 1;
+    simulated.calibration_seconds = 2.0;
+    simulated.minutes = play_seconds / 60.0;
+    simulated.recording.raw_rows = true;
+    const train::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
+
+    // The estimator belongs to the sensor thread from here on; the game only sees `latest`.
+    LatestValue<HandState> latest;
+    std::atomic<bool> glove_done{false};
+    std::exception_ptr sensor_failure;
+    const Clock::time_point start = Clock::now();
+    std::thread sensor([&] {
+      try {
+        stream_glove(estimator, glove, start, latest);
+      } catch (...) {
+        sensor_failure = std::current_exception();
+      }
+      glove_done = true;
+    });
+
+    // The game: a fixed 90 Hz step, rendering every step (a faster renderer would interpolate).
+    constexpr auto kStep = std::chrono::duration<double>(1.0 / 90.0);
+    HandRig rig;
+    Clock::time_point next_step = start;
+    for (long step = 0; !glove_done; ++step) {
+      const HandState& hand = latest.read();  // never waits: the newest pose, or the last one again
+      if (hand.pose.valid) drive_rig(hand.joints, rig);
+      if (step % 45 == 0) {  // "render" twice a second
+        const double now = std::chrono::duration<double>(Clock::now() - start).count();
+        if (!hand.pose.valid && !hand.calibration.collecting) {
+          std::printf("%5.2f s  waiting for the glove\n", now);
+        } else if (!hand.pose.valid) {
+          std::printf("%5.2f s  calibrating: %ld frames (%d needed)\n", now, hand.calibration.frames, hand.calibration.frames_needed);
+        } else {
+          // The middle and distal index bones turn against their parents by the finger's flexion.
+          const Bone& middle = rig[static_cast<int>(hand::Joint::IndexIntermediate)];
+          const Bone& distal = rig[static_cast<int>(hand::Joint::IndexDistal)];
+          const Eigen::Vector3f tip = 1e3f * global_transform(rig, static_cast<int>(hand::Joint::IndexTip)).position;
+          std::printf("%5.2f s  pose %6llu, %4.1f ms old  index bones bent %5.1f %5.1f deg  index tip at (%5.1f %5.1f %5.1f) mm\n",
+                      now, static_cast<unsigned long long>(hand.pose.sequence), 1e3 * (now - hand.pose.timestamp),
+                      bend_degrees(middle), bend_degrees(distal), tip.x(), tip.y(), tip.z());
+        }
+      }
+      next_step += std::chrono::duration_cast<Clock::duration>(kStep);
+      std::this_thread::sleep_until(next_step);
+    }
+    sensor.join();
+    if (sensor_failure) std::rethrow_exception(sensor_failure);
+    return latest.read().pose.valid ? 0 : 1;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "game_loop: %s\n", e.what());
+    return 2;
+  }
+}
