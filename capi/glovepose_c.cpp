@@ -1,0 +1,543 @@
+// The C ABI over glovepose::GlovePoseEstimator (glovepose_c.h). Every entry point catches every
+// exception; set-up calls report through the thread-local last-error buffer, per-frame calls only
+// copy (no allocation, no string building: errors there copy a literal into the buffer).
+#define GLOVEPOSE_C_BUILDING
+#include "glovepose_c.h"
+
+#include <glovepose/estimator.hpp>
+
+#include <cstdarg>
+#include <cstddef>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <string>
+
+// Handles carry a tag so that a model passed where an estimator is expected (both are plain
+// pointers in C# and ctypes), or a freed handle, is usually refused instead of misread.
+namespace {
+constexpr std::uint32_t kModelTag = 0x4d4f444cu;      // "MODL"
+constexpr std::uint32_t kEstimatorTag = 0x45535449u;  // "ESTI"
+}  // namespace
+
+struct glovepose_model {
+  std::uint32_t tag = kModelTag;
+  std::shared_ptr<const glovepose::PoseModel> model;
+};
+
+struct glovepose_estimator {
+  glovepose_estimator(std::shared_ptr<const glovepose::PoseModel> model, glovepose::EstimatorConfig config)
+      : estimator(std::move(model), std::move(config)) {}
+  std::uint32_t tag = kEstimatorTag;
+  glovepose::GlovePoseEstimator estimator;
+};
+
+namespace {
+
+using glovepose::Status;
+
+// The per-frame statuses cross the ABI with the numbers of glovepose::Status.
+static_assert(GLOVEPOSE_OK == static_cast<int>(Status::Ok), "status numbers");
+static_assert(GLOVEPOSE_SOLVED == static_cast<int>(Status::Solved), "status numbers");
+static_assert(GLOVEPOSE_NOT_READY == static_cast<int>(Status::NotReady), "status numbers");
+static_assert(GLOVEPOSE_NON_FINITE == static_cast<int>(Status::NonFinite), "status numbers");
+static_assert(GLOVEPOSE_NEGATIVE == static_cast<int>(Status::Negative), "status numbers");
+static_assert(GLOVEPOSE_UNKNOWN_INDEX == static_cast<int>(Status::UnknownIndex), "status numbers");
+static_assert(GLOVEPOSE_TIMESTAMP_BACKWARDS == static_cast<int>(Status::TimestampBackwards), "status numbers");
+static_assert(GLOVEPOSE_SIZE_MISMATCH == static_cast<int>(Status::SizeMismatch), "status numbers");
+static_assert(GLOVEPOSE_UNCALIBRATED == static_cast<int>(Status::Uncalibrated), "status numbers");
+static_assert(GLOVEPOSE_DOF_COUNT == glovepose::hand::kDofCount, "DoF count");
+static_assert(GLOVEPOSE_JOINT_COUNT == glovepose::hand::kJointCount, "joint count");
+static_assert(GLOVEPOSE_POSE_READINGS_REJECTED == glovepose::kPoseReadingsRejected, "pose flags");
+static_assert(GLOVEPOSE_POSE_INPUT_CLAMPED == glovepose::kPoseInputClamped, "pose flags");
+static_assert(GLOVEPOSE_POSE_TRAINING_CALIBRATION == glovepose::kPoseTrainingCalibration, "pose flags");
+static_assert(GLOVEPOSE_POSE_CALIBRATING == glovepose::kPoseCalibrating, "pose flags");
+static_assert(GLOVEPOSE_CALIBRATION_NONE == static_cast<int>(glovepose::CalibrationSource::None) &&
+                  GLOVEPOSE_CALIBRATION_ON_THE_FLY == static_cast<int>(glovepose::CalibrationSource::OnTheFly) &&
+                  GLOVEPOSE_CALIBRATION_USER == static_cast<int>(glovepose::CalibrationSource::User) &&
+                  GLOVEPOSE_CALIBRATION_TRAINING == static_cast<int>(glovepose::CalibrationSource::Training),
+              "calibration sources");
+// The documented ABI-1 sizes: no implicit padding, the same layout in C, C# and ctypes.
+static_assert(sizeof(glovepose_estimator_config) == 80, "ABI 1 layout");
+static_assert(offsetof(glovepose_estimator_config, calibration_sample_period) == 16, "ABI 1 layout");
+static_assert(offsetof(glovepose_estimator_config, smoothing_frequency) == 48, "ABI 1 layout");
+static_assert(sizeof(glovepose_pose) == 448, "ABI 1 layout");
+static_assert(offsetof(glovepose_pose, timestamp) == 408, "ABI 1 layout");
+static_assert(offsetof(glovepose_pose, sequence) == 432, "ABI 1 layout");
+static_assert(sizeof(glovepose_joint) == 28, "ABI 1 layout");
+static_assert(sizeof(glovepose_calibration_progress) == 32, "ABI 1 layout");
+static_assert(offsetof(glovepose_calibration_progress, frames) == 8, "ABI 1 layout");
+
+// Fixed-size and trivially constructed: setting it never allocates, and a thread-local of a
+// trivial type needs no per-thread constructor or destructor.
+constexpr std::size_t kLastErrorCapacity = 2048;
+thread_local char last_error_text[kLastErrorCapacity] = "";
+
+glovepose_result fail(glovepose_result code, const char* message) noexcept {
+  std::size_t n = std::strlen(message);
+  if (n >= kLastErrorCapacity) n = kLastErrorCapacity - 1;
+  std::memcpy(last_error_text, message, n);
+  last_error_text[n] = '\0';
+  return code;
+}
+
+// Set-up paths only: the message is formatted into the fixed buffer.
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 2, 3)))
+#endif
+glovepose_result failf(glovepose_result code, const char* format, ...) noexcept {
+  std::va_list args;
+  va_start(args, format);
+  std::vsnprintf(last_error_text, kLastErrorCapacity, format, args);
+  va_end(args);
+  return code;
+}
+
+bool readable(const char* path) noexcept {
+  std::FILE* file = std::fopen(path, "rb");
+  if (file == nullptr) return false;
+  std::fclose(file);
+  return true;
+}
+
+// Maps the exception in flight to a code. `reading` is the file a glovepose::Error may be about:
+// unopenable means not found, otherwise its contents were refused.
+glovepose_result fail_from_exception(const char* reading, glovepose_result error_code) noexcept {
+  try {
+    throw;
+  } catch (const std::bad_alloc&) {
+    return fail(GLOVEPOSE_ERROR_OUT_OF_MEMORY, "out of memory");
+  } catch (const glovepose::Error& e) {
+    if (reading != nullptr && !readable(reading)) return fail(GLOVEPOSE_ERROR_FILE_NOT_FOUND, e.what());
+    return fail(error_code, e.what());
+  } catch (const std::exception& e) {
+    return fail(GLOVEPOSE_ERROR_INTERNAL, e.what());
+  } catch (...) {
+    return fail(GLOVEPOSE_ERROR_INTERNAL, "unknown exception");
+  }
+}
+
+const glovepose::PoseModel* model_of(const glovepose_model* handle) noexcept {
+  return handle != nullptr && handle->tag == kModelTag ? handle->model.get() : nullptr;
+}
+
+glovepose::GlovePoseEstimator* estimator_of(const glovepose_estimator* handle) noexcept {
+  return handle != nullptr && handle->tag == kEstimatorTag ? &const_cast<glovepose_estimator*>(handle)->estimator
+                                                            : nullptr;
+}
+
+glovepose_result invalid_model() noexcept {
+  return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "invalid model handle: null, freed, or not a glovepose_model");
+}
+glovepose_result invalid_estimator() noexcept {
+  return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "invalid estimator handle: null, freed, or not a glovepose_estimator");
+}
+
+glovepose_result to_result(Status status) noexcept { return static_cast<glovepose_result>(status); }
+
+glovepose::EstimatorConfig to_config(const glovepose_estimator_config& c) {
+  glovepose::EstimatorConfig config;
+  config.readout.mean_window = c.readout_mean_window;
+  config.readout.solve_every = c.readout_solve_every;
+  config.calibration_median_window = c.calibration_median_window;
+  config.calibration_sample_period = c.calibration_sample_period;
+  config.calibration.min_relative_range = c.calibration_min_relative_range;
+  config.calibration.clamp_limit = c.calibration_clamp_limit;
+  if (c.smoothing != 0)
+    config.smoothing = glovepose::filter::OneEuroConfig{c.smoothing_frequency, c.smoothing_min_cutoff, c.smoothing_beta,
+                                                        c.smoothing_d_cutoff};
+  config.joint_transforms = c.joint_transforms != 0;
+  return config;
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* glovepose_version(void) noexcept { return glovepose::kVersion; }
+
+int32_t glovepose_abi_version(void) noexcept { return GLOVEPOSE_C_ABI_VERSION; }
+
+const char* glovepose_last_error(void) noexcept { return last_error_text; }
+
+const char* glovepose_result_name(glovepose_result result) noexcept {
+  if (result >= GLOVEPOSE_OK && result <= GLOVEPOSE_UNCALIBRATED) return glovepose::to_string(static_cast<Status>(result));
+  switch (result) {
+    case GLOVEPOSE_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case GLOVEPOSE_ERROR_INVALID_HANDLE: return "invalid handle";
+    case GLOVEPOSE_ERROR_STRUCT_SIZE: return "unknown struct size";
+    case GLOVEPOSE_ERROR_FILE_NOT_FOUND: return "file not found";
+    case GLOVEPOSE_ERROR_INVALID_FILE: return "invalid file";
+    case GLOVEPOSE_ERROR_IO: return "i/o error";
+    case GLOVEPOSE_ERROR_CALIBRATION_STATE: return "calibration state";
+    case GLOVEPOSE_ERROR_DISABLED: return "disabled";
+    case GLOVEPOSE_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case GLOVEPOSE_ERROR_INTERNAL: return "internal error";
+    default: return "unknown result";
+  }
+}
+
+const char* glovepose_dof_name(int32_t dof) noexcept {
+  if (dof < 0 || dof >= GLOVEPOSE_DOF_COUNT) return nullptr;
+  return glovepose::hand::kDofs[static_cast<std::size_t>(dof)].name;
+}
+
+const char* glovepose_joint_name(int32_t joint) noexcept {
+  if (joint < 0 || joint >= GLOVEPOSE_JOINT_COUNT) return nullptr;
+  return glovepose::hand::kJointNames[static_cast<std::size_t>(joint)];
+}
+
+int32_t glovepose_joint_parent(int32_t joint) noexcept {
+  if (joint < 0 || joint >= GLOVEPOSE_JOINT_COUNT) return -2;
+  return glovepose::hand::kJointParent[static_cast<std::size_t>(joint)];
+}
+
+// ---- model -------------------------------------------------------------------------------------
+
+glovepose_result glovepose_model_load(const char* model_path, int32_t weight_storage, const char* glove_description_path,
+                                      glovepose_model** out_model) noexcept {
+  if (out_model == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: out_model is NULL");
+  *out_model = nullptr;
+  if (model_path == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: model_path is NULL");
+  if (weight_storage != GLOVEPOSE_WEIGHTS_F32 && weight_storage != GLOVEPOSE_WEIGHTS_F16)
+    return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT,
+                 "glovepose_model_load: weight_storage %d, expected GLOVEPOSE_WEIGHTS_F32 (0) or GLOVEPOSE_WEIGHTS_F16 (1)",
+                 static_cast<int>(weight_storage));
+  glovepose::PoseModelOptions options;
+  options.storage = weight_storage == GLOVEPOSE_WEIGHTS_F16 ? glovepose::nn::WeightStorage::F16 : glovepose::nn::WeightStorage::F32;
+  if (glove_description_path != nullptr) {
+    try {
+      options.glove = glovepose::grid::GloveDescription::read(glove_description_path);
+    } catch (...) {
+      return fail_from_exception(glove_description_path, GLOVEPOSE_ERROR_INVALID_FILE);
+    }
+  }
+  try {
+    auto handle = std::make_unique<glovepose_model>();
+    handle->model = glovepose::PoseModel::load(model_path, std::move(options));
+    *out_model = handle.release();
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(model_path, GLOVEPOSE_ERROR_INVALID_FILE);
+  }
+}
+
+void glovepose_model_free(glovepose_model* model) noexcept {
+  if (model_of(model) == nullptr) return;
+  model->tag = 0;  // a second free or a later use is refused (while the memory is not reused)
+  delete model;
+}
+
+int32_t glovepose_model_cell_count(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->cell_count();
+}
+
+int32_t glovepose_model_row_count(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->solver() ? static_cast<int32_t>(m->solver()->layout().row_count()) : 0;
+}
+
+const char* glovepose_model_glove_id(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return nullptr;
+  }
+  return m->glove().id().c_str();
+}
+
+const char* glovepose_model_cell_name(const glovepose_model* model, int32_t cell) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return nullptr;
+  }
+  if (cell < 0 || cell >= m->cell_count()) {
+    failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_cell_name: cell %d, expected 0..%d", static_cast<int>(cell),
+          m->cell_count() - 1);
+    return nullptr;
+  }
+  return m->glove().cell_names()[static_cast<std::size_t>(cell)].c_str();
+}
+
+int32_t glovepose_model_has_training_range(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->training_range() ? 1 : 0;
+}
+
+// ---- estimator ---------------------------------------------------------------------------------
+
+glovepose_result glovepose_estimator_config_default(glovepose_estimator_config* config) noexcept {
+  if (config == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_config_default: config is NULL");
+  const glovepose::EstimatorConfig defaults;
+  const glovepose::filter::OneEuroConfig one_euro;
+  std::memset(config, 0, sizeof *config);
+  config->struct_size = sizeof *config;
+  config->readout_mean_window = defaults.readout.mean_window;
+  config->readout_solve_every = defaults.readout.solve_every;
+  config->calibration_median_window = defaults.calibration_median_window;
+  config->calibration_sample_period = defaults.calibration_sample_period;
+  config->calibration_min_relative_range = defaults.calibration.min_relative_range;
+  config->calibration_clamp_limit = defaults.calibration.clamp_limit;
+  config->smoothing = defaults.smoothing ? 1 : 0;
+  config->joint_transforms = defaults.joint_transforms ? 1 : 0;
+  config->smoothing_frequency = one_euro.frequency;
+  config->smoothing_min_cutoff = one_euro.min_cutoff;
+  config->smoothing_beta = one_euro.beta;
+  config->smoothing_d_cutoff = one_euro.d_cutoff;
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_create(const glovepose_model* model, const glovepose_estimator_config* config,
+                                            glovepose_estimator** out_estimator) noexcept {
+  if (out_estimator == nullptr)
+    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_create: out_estimator is NULL");
+  *out_estimator = nullptr;
+  if (model_of(model) == nullptr) return invalid_model();
+  glovepose_estimator_config settings;
+  if (config == nullptr) {
+    (void)glovepose_estimator_config_default(&settings);
+  } else {
+    if (config->struct_size != sizeof(glovepose_estimator_config))
+      return failf(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_create: config struct_size %u, expected %u (ABI %d)",
+                   static_cast<unsigned>(config->struct_size), static_cast<unsigned>(sizeof(glovepose_estimator_config)),
+                   GLOVEPOSE_C_ABI_VERSION);
+    settings = *config;
+  }
+  try {
+    *out_estimator = new glovepose_estimator(model->model, to_config(settings));
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    // Every glovepose::Error here is about the settings (the model was checked above).
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  }
+}
+
+void glovepose_estimator_free(glovepose_estimator* estimator) noexcept {
+  if (estimator_of(estimator) == nullptr) return;
+  estimator->tag = 0;
+  delete estimator;
+}
+
+glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row, double value,
+                                              double timestamp) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  return to_result(e->push_row(row, value, timestamp));
+}
+
+glovepose_result glovepose_estimator_push_measurements(glovepose_estimator* estimator, const double* values, int32_t count,
+                                                       double timestamp) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  return to_result(e->push_measurements(values, count, timestamp));
+}
+
+glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells, int32_t count,
+                                                double timestamp, double oldest_age) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  return to_result(e->push_cells(cells, count, timestamp, oldest_age));
+}
+
+glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimator, glovepose_pose* out) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_pose: out is NULL");
+  if (out->struct_size != sizeof(glovepose_pose))
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_get_pose: out->struct_size is not sizeof(glovepose_pose) "
+                                             "(call glovepose_pose_init first)");
+  const glovepose::Pose& p = e->pose();
+  std::memcpy(out->angles, p.angles.data(), sizeof out->angles);
+  std::memcpy(out->raw_angles, p.raw_angles.data(), sizeof out->raw_angles);
+  out->flags = p.flags;
+  out->timestamp = p.timestamp;
+  out->oldest_age = p.oldest_age;
+  out->compute_seconds = p.compute_seconds;
+  out->sequence = p.sequence;
+  out->rejected = p.rejected;
+  out->valid = p.valid ? 1 : 0;
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator, glovepose_joint* out,
+                                                int32_t count) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_joints: out is NULL");
+  if (count != GLOVEPOSE_JOINT_COUNT)
+    return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_joints: count is not GLOVEPOSE_JOINT_COUNT (21)");
+  if (!e->config().joint_transforms)
+    return fail(GLOVEPOSE_ERROR_DISABLED, "glovepose_estimator_get_joints: the estimator was created with joint_transforms = 0");
+  const glovepose::hand::JointList& joints = e->joints();
+  for (std::size_t j = 0; j < glovepose::hand::kJointCount; ++j) {
+    std::memcpy(out[j].position, joints[j].position.data(), sizeof out[j].position);
+    std::memcpy(out[j].rotation, joints[j].rotation.data(), sizeof out[j].rotation);
+  }
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estimator, double* out, int32_t count) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_cells: out is NULL");
+  if (count != e->cells().size())
+    return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_cells: count is not the model's cell count");
+  std::memcpy(out, e->cells().data(), sizeof(double) * static_cast<std::size_t>(count));
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  e->reset();
+  return GLOVEPOSE_OK;
+}
+
+// ---- calibration -------------------------------------------------------------------------------
+
+glovepose_result glovepose_calibration_start(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  e->start_calibration();
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator,
+                                                glovepose_calibration_progress* out) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_get_progress: out is NULL");
+  if (out->struct_size != sizeof(glovepose_calibration_progress))
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_calibration_get_progress: out->struct_size is not "
+                                             "sizeof(glovepose_calibration_progress) (call glovepose_calibration_progress_init first)");
+  const glovepose::CalibrationProgress p = e->calibration_progress();
+  out->collecting = p.collecting ? 1 : 0;
+  out->frames = p.frames;
+  out->frames_needed = p.frames_needed;
+  out->ready = p.ready ? 1 : 0;
+  out->source = static_cast<int32_t>(e->calibration_source());
+  out->flat_cells = e->calibration() ? static_cast<int32_t>(e->calibration()->flat_sensors().size()) : 0;
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_calibration_finish(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  try {
+    (void)e->finish_calibration();
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_CALIBRATION_STATE);
+  }
+}
+
+glovepose_result glovepose_calibration_cancel(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  e->cancel_calibration();
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_calibration_load(glovepose_estimator* estimator, const char* path) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (path == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_load: path is NULL");
+  try {
+    e->load_calibration(path);
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(path, GLOVEPOSE_ERROR_INVALID_FILE);
+  }
+}
+
+glovepose_result glovepose_calibration_save(const glovepose_estimator* estimator, const char* path) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (path == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_save: path is NULL");
+  if (!e->calibration())
+    return fail(GLOVEPOSE_ERROR_CALIBRATION_STATE, "glovepose_calibration_save: no calibration range set, expected one to save");
+  try {
+    e->save_calibration(path);
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_IO);
+  }
+}
+
+glovepose_result glovepose_calibration_use_training(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  try {
+    e->use_training_calibration();
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_CALIBRATION_STATE);
+  }
+}
+
+glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator, const double* min, const double* max,
+                                                 int32_t count) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (min == nullptr || max == nullptr)
+    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_set_range: min or max is NULL");
+  const int cells = e->model().cell_count();
+  if (count != cells)
+    return failf(GLOVEPOSE_SIZE_MISMATCH, "glovepose_calibration_set_range: count %d, expected %d (the model's cells)",
+                 static_cast<int>(count), cells);
+  try {
+    const glovepose::sensor::CalibrationRange range(Eigen::Map<const Eigen::VectorXd>(min, count),
+                                                    Eigen::Map<const Eigen::VectorXd>(max, count),
+                                                    e->model().glove().cell_names(), e->config().calibration);
+    e->set_calibration(range);
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  }
+}
+
+glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min, double* max,
+                                                 int32_t count) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (min == nullptr || max == nullptr)
+    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_get_range: min or max is NULL");
+  if (count != e->model().cell_count())
+    return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_calibration_get_range: count is not the model's cell count");
+  if (!e->calibration()) return GLOVEPOSE_UNCALIBRATED;
+  std::memcpy(min, e->calibration()->min().data(), sizeof(double) * static_cast<std::size_t>(count));
+  std::memcpy(max, e->calibration()->max().data(), sizeof(double) * static_cast<std::size_t>(count));
+  return GLOVEPOSE_OK;
+}
+
+// ---- struct helpers ----------------------------------------------------------------------------
+
+void glovepose_pose_init(glovepose_pose* pose) noexcept {
+  if (pose == nullptr) return;
+  std::memset(pose, 0, sizeof *pose);
+  pose->struct_size = sizeof *pose;
+}
+
+void glovepose_calibration_progress_init(glovepose_calibration_progress* progress) noexcept {
+  if (progress == nullptr) return;
+  std::memset(progress, 0, sizeof *progress);
+  progress->struct_size = sizeof *progress;
+}
+
+}  // extern "C"

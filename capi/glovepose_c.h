@@ -1,0 +1,337 @@
+/**
+ * @file glovepose_c.h
+ * @brief The C ABI of glovepose: a stretch-sensing glove's readings in, 25 hand angles (and a
+ * 21-joint list) out, for game engines, VR runtimes and any language with a C foreign-function
+ * interface (C# P/Invoke, Python ctypes).
+ *
+ * Pure C (C89 with <stdint.h>, or C99 and later); no C++ types cross it. Two opaque handles:
+ * - glovepose_model: a loaded model, immutable, shared by any number of estimators on any threads.
+ * - glovepose_estimator: one glove stream (readout ring, calibration, filter, workspace); used by one
+ *   thread at a time.
+ *
+ * Every function returns at once and never lets an exception out. Functions returning
+ * glovepose_result answer with a GLOVEPOSE_* code: 0 and positive codes are the per-frame statuses
+ * of the C++ API (glovepose::Status, same numbers), negative codes are errors, after which
+ * glovepose_last_error() on the same thread says what went wrong. The per-frame functions (push_*,
+ * get_*, calibration start / progress / cancel, reset) never allocate.
+ *
+ * Structs are plain: fixed-size fields of explicit width, doubles, floats, no bitfields, no unions,
+ * no implicit padding. Structs that may grow start with `struct_size`, which the caller sets to
+ * sizeof the struct it was compiled with (the *_init / *_default functions do that).
+ * See capi/README.md for thread safety, ownership and the ABI stability rules.
+ */
+#ifndef GLOVEPOSE_C_H
+#define GLOVEPOSE_C_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** @brief Marks a public symbol: exported from the shared library (built with hidden visibility). */
+#if defined(_WIN32)
+#  if defined(GLOVEPOSE_C_BUILDING)
+#    define GLOVEPOSE_C_API __declspec(dllexport)
+#  else
+#    define GLOVEPOSE_C_API __declspec(dllimport)
+#  endif
+#elif defined(__GNUC__) || defined(__clang__)
+#  define GLOVEPOSE_C_API __attribute__((visibility("default")))
+#else
+#  define GLOVEPOSE_C_API
+#endif
+
+/** @brief In C++ the functions are declared noexcept: none lets an exception out. */
+#if defined(__cplusplus)
+#  define GLOVEPOSE_C_NOEXCEPT noexcept
+#else
+#  define GLOVEPOSE_C_NOEXCEPT
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- constants --------------------------------------------------------------------------- */
+
+/** @brief Version of this ABI. Bumped only by incompatible changes (README, "ABI stability"). */
+#define GLOVEPOSE_C_ABI_VERSION 1
+/** @brief Number of hand angles (degrees of freedom) in a pose. */
+#define GLOVEPOSE_DOF_COUNT 25
+/** @brief Number of joints in the joint list. */
+#define GLOVEPOSE_JOINT_COUNT 21
+
+/** @brief Result of a call: one of the GLOVEPOSE_* codes below (32-bit on every platform). */
+typedef int32_t glovepose_result;
+
+/* Per-frame statuses (>= 0): the numbers of glovepose::Status. */
+/** @brief Accepted; nothing new to report. */
+#define GLOVEPOSE_OK 0
+/** @brief Accepted, and a new pose is available (glovepose_estimator_get_pose). */
+#define GLOVEPOSE_SOLVED 1
+/** @brief Accepted, but not enough data has arrived yet to produce a result. */
+#define GLOVEPOSE_NOT_READY 2
+/** @brief Rejected: a value is NaN or infinite. */
+#define GLOVEPOSE_NON_FINITE 3
+/** @brief Rejected: a capacitance reading below zero. */
+#define GLOVEPOSE_NEGATIVE 4
+/** @brief Rejected: a row index outside the glove's wiring, or the model knows no wiring. */
+#define GLOVEPOSE_UNKNOWN_INDEX 5
+/** @brief Rejected: a timestamp earlier than the last accepted one. */
+#define GLOVEPOSE_TIMESTAMP_BACKWARDS 6
+/** @brief Rejected: a frame with the wrong number of values (or a null array). */
+#define GLOVEPOSE_SIZE_MISMATCH 7
+/** @brief A frame was solved but no calibration range is set: no pose. */
+#define GLOVEPOSE_UNCALIBRATED 8
+
+/* Errors (< 0): glovepose_last_error() holds the message. */
+/** @brief An argument is invalid: a null pointer, an index out of range, a bad setting. */
+#define GLOVEPOSE_ERROR_INVALID_ARGUMENT (-1)
+/** @brief A null handle, or a handle of the other kind, or one already freed. */
+#define GLOVEPOSE_ERROR_INVALID_HANDLE (-2)
+/** @brief A struct's struct_size is not a size this library knows. */
+#define GLOVEPOSE_ERROR_STRUCT_SIZE (-3)
+/** @brief A file to read does not exist or cannot be opened. */
+#define GLOVEPOSE_ERROR_FILE_NOT_FOUND (-4)
+/** @brief A file was read but its contents are malformed or do not fit (model, glove, calibration). */
+#define GLOVEPOSE_ERROR_INVALID_FILE (-5)
+/** @brief A file could not be written. */
+#define GLOVEPOSE_ERROR_IO (-6)
+/** @brief The calibration is not in a state that allows the call (e.g. finish before enough frames). */
+#define GLOVEPOSE_ERROR_CALIBRATION_STATE (-7)
+/** @brief The estimator was created without the feature the call needs (joint transforms). */
+#define GLOVEPOSE_ERROR_DISABLED (-8)
+/** @brief Memory ran out. */
+#define GLOVEPOSE_ERROR_OUT_OF_MEMORY (-9)
+/** @brief An unexpected internal failure (a bug: please report the message). */
+#define GLOVEPOSE_ERROR_INTERNAL (-10)
+
+/** @brief In-memory weight precision: float32, the file's values exactly. */
+#define GLOVEPOSE_WEIGHTS_F32 0
+/** @brief In-memory weight precision: binary16, half the bytes (faster at batch 1); angles differ
+ * from F32 by rounding (hundredths of a degree). */
+#define GLOVEPOSE_WEIGHTS_F16 1
+
+/** @brief Where the calibration range in use comes from: none yet (no pose can be computed). */
+#define GLOVEPOSE_CALIBRATION_NONE 0
+/** @brief From this user's on-the-fly calibration (start ... finish). */
+#define GLOVEPOSE_CALIBRATION_ON_THE_FLY 1
+/** @brief Set or loaded by the caller (e.g. a saved user calibration). */
+#define GLOVEPOSE_CALIBRATION_USER 2
+/** @brief The model's training-set range (expect larger errors than with the user's own). */
+#define GLOVEPOSE_CALIBRATION_TRAINING 3
+
+/** @brief Pose flag: readings were rejected since the previous pose (their rows kept older values). */
+#define GLOVEPOSE_POSE_READINGS_REJECTED 0x1u
+/** @brief Pose flag: a calibrated cell lay beyond the clamp limit (stretched beyond the range, or a glitch). */
+#define GLOVEPOSE_POSE_INPUT_CLAMPED 0x2u
+/** @brief Pose flag: normalised with the model's training-set range, not the user's own. */
+#define GLOVEPOSE_POSE_TRAINING_CALIBRATION 0x4u
+/** @brief Pose flag: produced while an on-the-fly calibration was collecting. */
+#define GLOVEPOSE_POSE_CALIBRATING 0x8u
+
+/* ---- handles and structs ----------------------------------------------------------------- */
+
+/** @brief A loaded model (opaque). Immutable; thread-safe to share. */
+typedef struct glovepose_model glovepose_model;
+/** @brief One glove stream (opaque). One thread at a time. */
+typedef struct glovepose_estimator glovepose_estimator;
+
+/** @brief Settings of an estimator. Fill with glovepose_estimator_config_default(), then change fields. */
+typedef struct glovepose_estimator_config {
+  uint32_t struct_size;               /**< sizeof(glovepose_estimator_config) (80 in ABI 1). */
+  int32_t readout_mean_window;        /**< Readings per row averaged before a solve (default 5). */
+  int32_t readout_solve_every;        /**< Solve after this many accepted row readings (default 16; 180 = once per cycle). */
+  int32_t calibration_median_window;  /**< Frames of the on-the-fly calibration's median (default 20). */
+  double calibration_sample_period;   /**< Stream time between two frames the calibration takes, s (default 1/60). */
+  double calibration_min_relative_range; /**< A cell whose range is below this fraction of its value is flat (default 0.01). */
+  double calibration_clamp_limit;     /**< Normalised cells are clamped to +-this (default 1.5). */
+  int32_t smoothing;                  /**< 1: 1-euro smoothing of the angles; 0: the network's output (default 0). */
+  int32_t joint_transforms;           /**< 1: compute the 21-joint list with every pose (default 0). */
+  double smoothing_frequency;         /**< 1-euro: initial sampling rate, Hz (default 60). */
+  double smoothing_min_cutoff;        /**< 1-euro: cutoff at rest, Hz (default 1). */
+  double smoothing_beta;              /**< 1-euro: speed coefficient (default 0). */
+  double smoothing_d_cutoff;          /**< 1-euro: cutoff of the derivative's low-pass, Hz (default 1). */
+} glovepose_estimator_config;
+
+/** @brief One estimated hand pose. Set struct_size (glovepose_pose_init) before asking for one. */
+typedef struct glovepose_pose {
+  uint32_t struct_size;                   /**< sizeof(glovepose_pose) (448 in ABI 1); set by the caller. */
+  uint32_t flags;                         /**< GLOVEPOSE_POSE_* bits; 0: nothing to distrust. */
+  double angles[GLOVEPOSE_DOF_COUNT];     /**< Radians, glovepose_dof_name() order; smoothed when smoothing is on. */
+  double raw_angles[GLOVEPOSE_DOF_COUNT]; /**< The network's angles before smoothing. */
+  double timestamp;                       /**< Timestamp of the newest reading behind the pose (the stream's clock, s). */
+  double oldest_age;                      /**< timestamp minus the timestamp of the oldest reading behind it, s. */
+  double compute_seconds;                 /**< Wall time the estimator spent on this pose, s. */
+  uint64_t sequence;                      /**< Poses produced so far, this one included. */
+  uint32_t rejected;                      /**< Readings rejected since the previous pose. */
+  int32_t valid;                          /**< 0 until the first pose, then 1. */
+} glovepose_pose;
+
+/** @brief One joint of the joint list: position and orientation in the hand's root frame
+ * (right-handed, metres; fingers along +Y at rest, palm facing -Z; include/glovepose/hand/joint_list.hpp). */
+typedef struct glovepose_joint {
+  float position[3]; /**< Metres: x, y, z. */
+  float rotation[4]; /**< Unit quaternion: x, y, z, w. */
+} glovepose_joint;
+
+/** @brief How far an on-the-fly calibration has come, and the range in use. */
+typedef struct glovepose_calibration_progress {
+  uint32_t struct_size;      /**< sizeof(glovepose_calibration_progress) (32 in ABI 1); set by the caller. */
+  int32_t collecting;        /**< 1 between start and finish/cancel. */
+  int64_t frames;            /**< Frames taken so far. */
+  int32_t frames_needed;     /**< Frames before finish can succeed (the median window). */
+  int32_t ready;             /**< 1 when finish would succeed now. */
+  int32_t source;            /**< GLOVEPOSE_CALIBRATION_* of the range in use. */
+  int32_t flat_cells;        /**< Cells of the range in use too flat to normalise by (they read 0); 0 without a range. */
+} glovepose_calibration_progress;
+
+/* ---- library ------------------------------------------------------------------------------- */
+
+/** @brief The library version, "major.minor.patch" (static string). */
+GLOVEPOSE_C_API const char* glovepose_version(void) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The ABI version the library was built with; compare with GLOVEPOSE_C_ABI_VERSION. */
+GLOVEPOSE_C_API int32_t glovepose_abi_version(void) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The message of the last error on the calling thread ("" if none yet). Valid until the
+ * next failing call on this thread; copy it to keep it. */
+GLOVEPOSE_C_API const char* glovepose_last_error(void) GLOVEPOSE_C_NOEXCEPT;
+/** @brief A short, stable name of a result code, e.g. "solved", "file not found" (static string). */
+GLOVEPOSE_C_API const char* glovepose_result_name(glovepose_result result) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Stable snake_case name of angle `dof` (0..24), e.g. "index_base_flexion"; NULL when out of range. */
+GLOVEPOSE_C_API const char* glovepose_dof_name(int32_t dof) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Stable name of joint `joint` (0..20), e.g. "middle_tip"; NULL when out of range. */
+GLOVEPOSE_C_API const char* glovepose_joint_name(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Parent of joint `joint` in the list (-1 for the palm); -2 when out of range. */
+GLOVEPOSE_C_API int32_t glovepose_joint_parent(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
+
+/* ---- model --------------------------------------------------------------------------------- */
+
+/**
+ * @brief Loads a model file (weights_format.md) into *out_model.
+ * @param model_path path of the .safetensors model file.
+ * @param weight_storage GLOVEPOSE_WEIGHTS_F32 or GLOVEPOSE_WEIGHTS_F16.
+ * @param glove_description_path a glove description JSON file, or NULL for the model's own glove.
+ * @param out_model receives the handle (NULL on failure). Free it with glovepose_model_free().
+ * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE / _INVALID_ARGUMENT /
+ * _OUT_OF_MEMORY with a message naming the file.
+ */
+GLOVEPOSE_C_API glovepose_result glovepose_model_load(const char* model_path, int32_t weight_storage,
+                                                      const char* glove_description_path,
+                                                      glovepose_model** out_model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Releases the caller's reference. Estimators created from the model keep it alive until
+ * they are freed. NULL is ignored. */
+GLOVEPOSE_C_API void glovepose_model_free(glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Number of sensor cells of the model's glove (44 for the paper's); -1 for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_cell_count(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Number of measurement rows of the glove's wiring (180 for the paper's); 0 when the model
+ * knows no wiring (then only glovepose_estimator_push_cells works); -1 for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_row_count(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The glove's id, e.g. "glauser2019-44" (owned by the model); NULL for an invalid handle. */
+GLOVEPOSE_C_API const char* glovepose_model_glove_id(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Name of cell `cell` (owned by the model); NULL for an invalid handle or index. */
+GLOVEPOSE_C_API const char* glovepose_model_cell_name(const glovepose_model* model, int32_t cell) GLOVEPOSE_C_NOEXCEPT;
+/** @brief 1 when the model records its training-set range (glovepose_calibration_use_training
+ * works), 0 when not, -1 for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_has_training_range(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+
+/* ---- estimator ----------------------------------------------------------------------------- */
+
+/** @brief Fills *config with the defaults (the paper's settings) and its struct_size.
+ * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_INVALID_ARGUMENT for NULL. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_config_default(glovepose_estimator_config* config) GLOVEPOSE_C_NOEXCEPT;
+/**
+ * @brief Creates an estimator for one glove stream over a shared model.
+ * @param model the model (the estimator keeps it alive).
+ * @param config settings, or NULL for the defaults.
+ * @param out_estimator receives the handle (NULL on failure). Free it with glovepose_estimator_free().
+ * @return GLOVEPOSE_OK, or _INVALID_HANDLE / _STRUCT_SIZE / _INVALID_ARGUMENT (bad settings, named
+ * in the message) / _OUT_OF_MEMORY.
+ */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_create(const glovepose_model* model,
+                                                            const glovepose_estimator_config* config,
+                                                            glovepose_estimator** out_estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Frees an estimator. NULL is ignored. */
+GLOVEPOSE_C_API void glovepose_estimator_free(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+
+/**
+ * @brief One reading of measurement row `row` (0 .. row_count-1) at `timestamp` (s, increasing).
+ * @return GLOVEPOSE_SOLVED when it completed a frame and a new pose is available; GLOVEPOSE_OK or
+ * GLOVEPOSE_NOT_READY when accepted without a new pose; GLOVEPOSE_UNCALIBRATED when a frame was
+ * solved without a calibration range; a rejection status (3..7); _INVALID_HANDLE.
+ */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row,
+                                                              double value, double timestamp) GLOVEPOSE_C_NOEXCEPT;
+/** @brief A whole frame of `count` (= row_count) compound measurements at `timestamp`, solved at
+ * once; bad rows are skipped and counted. Returns as glovepose_estimator_push_row. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_measurements(glovepose_estimator* estimator,
+                                                                       const double* values, int32_t count,
+                                                                       double timestamp) GLOVEPOSE_C_NOEXCEPT;
+/** @brief A frame of `count` (= cell_count) already solved cell capacitances at `timestamp`;
+ * `oldest_age` is the age of its oldest reading (0 if unknown). Returns as glovepose_estimator_push_row. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells,
+                                                                int32_t count, double timestamp,
+                                                                double oldest_age) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Copies the latest pose into *out (out->valid is 0 before the first pose).
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimator,
+                                                              glovepose_pose* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Copies the latest joint list into out[0..count-1]; `count` must be GLOVEPOSE_JOINT_COUNT.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out), GLOVEPOSE_SIZE_MISMATCH
+ * (wrong count) or _DISABLED (joint_transforms was off in the config). */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator,
+                                                                glovepose_joint* out, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Copies the latest solved cell capacitances (pF, the network's input before calibration)
+ * into out[0..count-1]; `count` must be the model's cell count.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or GLOVEPOSE_SIZE_MISMATCH. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estimator, double* out,
+                                                               int32_t count) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged;
+ * keeps the calibration and the last pose. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+
+/* ---- calibration --------------------------------------------------------------------------- */
+
+/** @brief Starts (or restarts) an on-the-fly calibration: solved frames now also feed the per-cell
+ * range. Poses keep coming from the previous range, if any, flagged GLOVEPOSE_POSE_CALIBRATING.
+ * @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_start(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief How far the calibration has come, and the range in use.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator,
+                                                                glovepose_calibration_progress* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Ends the calibration and uses its range (set-up: allocates).
+ * @return GLOVEPOSE_OK, or _CALIBRATION_STATE (none running, or fewer frames than the median window
+ * so far: it keeps collecting), _INVALID_HANDLE, _OUT_OF_MEMORY. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_finish(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Stops collecting and keeps the previous range. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_cancel(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Uses a range file written by glovepose_calibration_save() for the same glove.
+ * @return GLOVEPOSE_OK, _FILE_NOT_FOUND, _INVALID_FILE (names the line), _INVALID_ARGUMENT, _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_load(glovepose_estimator* estimator, const char* path) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Saves the range in use as a text file (exact round trip).
+ * @return GLOVEPOSE_OK, _CALIBRATION_STATE (no range yet), _IO, _INVALID_ARGUMENT, _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_save(const glovepose_estimator* estimator, const char* path) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Uses the model's training-set range (the paper's "without calibration").
+ * @return GLOVEPOSE_OK, _CALIBRATION_STATE (the model records none), _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_use_training(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Uses the range min[i] .. max[i] of each of the `count` (= cell_count) cells.
+ * @return GLOVEPOSE_OK, GLOVEPOSE_SIZE_MISMATCH, _INVALID_ARGUMENT (NULL array, non-finite or
+ * min > max, named in the message), _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator, const double* min,
+                                                                 const double* max, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Copies the range in use into min/max[0..count-1] (count = cell_count).
+ * @return GLOVEPOSE_OK, GLOVEPOSE_UNCALIBRATED (no range yet), GLOVEPOSE_SIZE_MISMATCH,
+ * _INVALID_ARGUMENT (NULL array), _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min,
+                                                                 double* max, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+
+/* ---- struct helpers ------------------------------------------------------------------------ */
+
+/** @brief Zeroes *pose and sets its struct_size (call once before glovepose_estimator_get_pose). */
+GLOVEPOSE_C_API void glovepose_pose_init(glovepose_pose* pose) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Zeroes *progress and sets its struct_size. */
+GLOVEPOSE_C_API void glovepose_calibration_progress_init(glovepose_calibration_progress* progress) GLOVEPOSE_C_NOEXCEPT;
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* GLOVEPOSE_C_H */

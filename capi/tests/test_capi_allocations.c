@@ -1,0 +1,135 @@
+/* The per-frame calls of the C ABI allocate nothing, counted at the malloc level (glibc only).
+ *
+ * This program defines malloc, calloc, realloc and the aligned allocators, counting each call and
+ * forwarding to glibc's __libc_* functions. The dynamic linker binds the shared library's (and
+ * libstdc++'s operator new's) calls to these, so every heap allocation made inside libglovepose_c
+ * is seen, whether by operator new, Eigen's aligned_malloc or the C library.
+ *
+ * Usage: capi_test_allocations MODEL   Last line "N passed, N failed"; exit code 0 when none failed. */
+#include "glovepose_c.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+extern void* __libc_malloc(size_t size);
+extern void* __libc_calloc(size_t count, size_t size);
+extern void* __libc_realloc(void* p, size_t size);
+extern void* __libc_memalign(size_t alignment, size_t size);
+
+static volatile unsigned long allocations = 0;
+
+void* malloc(size_t size) {
+  ++allocations;
+  return __libc_malloc(size);
+}
+void* calloc(size_t count, size_t size) {
+  ++allocations;
+  return __libc_calloc(count, size);
+}
+void* realloc(void* p, size_t size) {
+  ++allocations;
+  return __libc_realloc(p, size);
+}
+void* aligned_alloc(size_t alignment, size_t size) {
+  ++allocations;
+  return __libc_memalign(alignment, size);
+}
+void* memalign(size_t alignment, size_t size) {
+  ++allocations;
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, size_t alignment, size_t size) {
+  void* p;
+  ++allocations;
+  p = __libc_memalign(alignment, size);
+  if (p == NULL) return ENOMEM;
+  *out = p;
+  return 0;
+}
+
+static int passed = 0, failed = 0;
+static void check(int condition, const char* what) {
+  if (condition) {
+    ++passed;
+  } else {
+    ++failed;
+    printf("FAILED: %s\n", what);
+  }
+}
+
+static void synthetic_cells(double t, double* cells) {
+  int c;
+  for (c = 0; c < 44; ++c) cells[c] = 20.0 + 5.0 * sin(2.0 * 3.14159265358979 * (0.7 + 0.05 * c) * t + c);
+}
+
+int main(int argc, char** argv) {
+  glovepose_model* model = NULL;
+  glovepose_estimator* estimator = NULL;
+  glovepose_estimator_config config;
+  glovepose_pose pose;
+  glovepose_joint joints[GLOVEPOSE_JOINT_COUNT];
+  glovepose_calibration_progress progress;
+  double cells[44], frame[180];
+  unsigned long before, during;
+  int f, r, solved = 0;
+  if (argc != 2) {
+    printf("usage: %s MODEL\n", argv[0]);
+    return 2;
+  }
+  /* Set-up allocates; the counter must see it (else the interposition does not work here). */
+  before = allocations;
+  if (glovepose_model_load(argv[1], GLOVEPOSE_WEIGHTS_F32, NULL, &model) != GLOVEPOSE_OK) {
+    printf("cannot load %s: %s\n", argv[1], glovepose_last_error());
+    return 1;
+  }
+  check(allocations - before > 10, "loading the model is seen allocating (the counter works)");
+  glovepose_estimator_config_default(&config);
+  config.smoothing = 1;
+  config.joint_transforms = 1;
+  check(glovepose_estimator_create(model, &config, &estimator) == GLOVEPOSE_OK, "create");
+  glovepose_pose_init(&pose);
+  glovepose_calibration_progress_init(&progress);
+  /* Calibrate from rows of a synthetic glove (set-up: finish allocates the range). */
+  glovepose_calibration_start(estimator);
+  for (f = 0; f < 40; ++f) {
+    synthetic_cells(f / 60.0, cells);
+    for (r = 0; r < 180; ++r) glovepose_estimator_push_row(estimator, r, cells[r % 44] + cells[(r / 15) % 44], f / 60.0 + r / 10800.0);
+  }
+  check(glovepose_calibration_finish(estimator) == GLOVEPOSE_OK, "finish the calibration");
+
+  before = allocations;
+  glovepose_calibration_start(estimator); /* while a calibration collects, and after */
+  for (f = 40; f < 80; ++f) {
+    if (f == 60) glovepose_calibration_cancel(estimator);
+    synthetic_cells(f / 60.0, cells);
+    for (r = 0; r < 180; ++r)
+      if (glovepose_estimator_push_row(estimator, r, cells[r % 44] + cells[(r / 15) % 44], f / 60.0 + r / 10800.0) == GLOVEPOSE_SOLVED)
+        ++solved;
+    glovepose_estimator_get_pose(estimator, &pose);
+    glovepose_estimator_get_joints(estimator, joints, GLOVEPOSE_JOINT_COUNT);
+    glovepose_estimator_get_cells(estimator, cells, 44);
+    glovepose_calibration_get_progress(estimator, &progress);
+  }
+  for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;
+  glovepose_estimator_push_measurements(estimator, frame, 180, 2.0);
+  synthetic_cells(2.1, cells);
+  glovepose_estimator_push_cells(estimator, cells, 44, 2.1, 0.0);
+  /* Rejections and per-frame errors (they write the last-error buffer) allocate nothing either. */
+  glovepose_estimator_push_row(estimator, 3, NAN, 3.0);
+  glovepose_estimator_push_row(NULL, 3, 1.0, 3.0);
+  glovepose_estimator_get_joints(estimator, joints, 3);
+  pose.struct_size = 1;
+  glovepose_estimator_get_pose(estimator, &pose);
+  glovepose_estimator_reset(estimator);
+  during = allocations - before;
+  printf("per-frame calls: %d poses, %lu heap allocations\n", solved, during);
+  check(solved > 400, "poses were computed (11.25 per 180-row cycle)");
+  check(during == 0, "no heap allocation in the per-frame calls");
+
+  glovepose_estimator_free(estimator);
+  glovepose_model_free(model);
+  printf("%d passed, %d failed\n", passed, failed);
+  return failed == 0 ? 0 : 1;
+}
