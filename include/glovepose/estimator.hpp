@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -47,7 +48,7 @@ namespace glovepose {
 /// @brief How to load a PoseModel.
 struct PoseModelOptions {
   /// In-memory weight precision. F16 halves the bytes a frame reads (faster at batch 1); its angles
-  /// differ from F32 by less than 0.01 degree (README, "Figures").
+  /// differ from F32 by a few hundredths of a degree (README, "Figures"; the issue bounds it at 0.1).
   nn::WeightStorage storage = nn::WeightStorage::F32;
   /// The glove. Default: the description stored in the model file, else the built-in 44-cell glove
   /// when the model was trained for it.
@@ -187,6 +188,10 @@ struct EstimatorConfig {
   /// spans the same time however often the readout solves: 20 frames at 60 Hz, a third of a second,
   /// as in the paper and in the training data's calibration.
   double calibration_sample_period = 1.0 / 60.0;
+  /// For C_c frames (push_cells): this many consecutive frames timestamped before the last accepted
+  /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
+  /// ReadoutConfig::clock_restart_readings.
+  int clock_restart_frames = 10;
   std::optional<filter::OneEuroConfig> smoothing;  ///< 1-euro smoothing of the angles; none: the network's output.
   bool joint_transforms = false;                  ///< Compute the skeleton and the joint list with every pose.
   hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
@@ -214,7 +219,16 @@ enum PoseFlag : std::uint32_t {
   kPoseInputClamped = 1u << 1,        ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
   kPoseTrainingCalibration = 1u << 2, ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
   kPoseCalibrating = 1u << 3,         ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
+  kPoseStaleReadings = 1u << 4,       ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
+  kPoseRecovering = 1u << 5,          ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
+  kPoseStuckRows = 1u << 6,           ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
+  kPoseDisconnectedRows = 1u << 7,    ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
+  kPoseOutlierRows = 1u << 8,         ///< A row disagrees with the least-squares solve (ReadoutConfig::max_residual): a spike or a failing cell.
 };
+
+/// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
+inline constexpr std::uint32_t kPoseFaultFlags =
+    kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows;
 
 /// @brief One estimated hand pose.
 struct Pose {
@@ -227,6 +241,9 @@ struct Pose {
   std::uint32_t rejected = 0;    ///< Readings rejected since the previous pose.
   std::uint32_t flags = 0;       ///< PoseFlag bits.
   bool valid = false;            ///< False until the first pose.
+  sensor::ReadoutHealth health;  ///< The readout's view of the frame (rows and C_m frames; zero for C_c frames).
+  /// @brief Whether no fault flag (kPoseFaultFlags) is set.
+  bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
 };
 
 /// @brief One glove stream: rows, frames or solved cells in, poses out. See the file comment.
@@ -251,6 +268,8 @@ class BasicGlovePoseEstimator {
     if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
       throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
                   " s, expected a finite value >= 0");
+    if (config_.clock_restart_frames < 1)
+      throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
     if (model_->solver()) {
       readout_.emplace(model_->solver(), config_.readout);
@@ -290,15 +309,24 @@ class BasicGlovePoseEstimator {
 
   /// @brief A frame of `count` already solved cell capacitances C_c at `timestamp` (firmware that
   /// solves on board). `oldest_age` is the age of its oldest reading, if the firmware knows it.
+  /// After a gap (ReadoutConfig::gap_seconds) or a clock restart (clock_restart_frames frames
+  /// timestamped backwards in a row; fewer are rejected) the smoothing starts over.
   GLOVEPOSE_REALTIME Status push_cells(const double* cells, int count, double timestamp, double oldest_age = 0.0) noexcept {
     if (cells == nullptr || count != cells_.size()) return Status::SizeMismatch;
     if (!std::isfinite(timestamp) || !std::isfinite(oldest_age)) return Status::NonFinite;
-    if (timestamp < last_cells_timestamp_) return Status::TimestampBackwards;
+    for (int c = 0; c < count; ++c)
+      if (!std::isfinite(cells[c])) return Status::NonFinite;
+    if (timestamp < last_cells_timestamp_) {
+      if (++cells_backwards_run_ < config_.clock_restart_frames) return Status::TimestampBackwards;
+      last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
+    }
     const auto start = std::chrono::steady_clock::now();
+    const bool restarted = !std::isfinite(last_cells_timestamp_) || timestamp - last_cells_timestamp_ > config_.readout.gap_seconds;
+    if (restarted && smoothing_) smoothing_->reset();
+    cells_backwards_run_ = 0;
     cells_ = Eigen::Map<const Eigen::VectorXd>(cells, count);
-    if (!cells_.allFinite()) return Status::NonFinite;
     last_cells_timestamp_ = timestamp;
-    return estimate(cells_, timestamp, oldest_age, 0, start);
+    return estimate(cells_, timestamp, oldest_age, 0, sensor::ReadoutHealth{}, start);
   }
 
   // ---- output ------------------------------------------------------------------------------
@@ -375,6 +403,7 @@ class BasicGlovePoseEstimator {
     if (readout_) readout_->reset();
     if (smoothing_) smoothing_->reset();
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
+    cells_backwards_run_ = 0;
     next_calibration_sample_ = -std::numeric_limits<double>::infinity();
   }
   /// @brief The shared model.
@@ -395,11 +424,25 @@ class BasicGlovePoseEstimator {
 
   Status estimate_from_readout(std::chrono::steady_clock::time_point start) noexcept {
     const auto& frame = readout_->frame();
-    return estimate(frame.cells, frame.timestamp, frame.oldest_age, frame.rejected, start);
+    // A gap or a clock restart started the readout over: the smoothing follows (its clock and its
+    // history belong to the stream before).
+    if (frame.health.restarts != readout_restarts_ && smoothing_) smoothing_->reset();
+    readout_restarts_ = frame.health.restarts;
+    return estimate(frame.cells, frame.timestamp, frame.oldest_age, frame.rejected, frame.health, start);
+  }
+
+  static std::uint32_t fault_flags(const sensor::ReadoutHealth& health) noexcept {
+    std::uint32_t flags = 0;
+    if (health.filling_rows > 0) flags |= kPoseRecovering;
+    if (health.stale_rows > 0) flags |= kPoseStaleReadings;
+    if (health.stuck_rows > 0) flags |= kPoseStuckRows;
+    if (health.disconnected_rows > 0) flags |= kPoseDisconnectedRows;
+    if (health.outlier_rows > 0) flags |= kPoseOutlierRows;
+    return flags;
   }
 
   Status estimate(const Eigen::VectorXd& cells, double timestamp, double oldest_age, std::uint32_t rejected,
-                  std::chrono::steady_clock::time_point start) noexcept {
+                  const sensor::ReadoutHealth& health, std::chrono::steady_clock::time_point start) noexcept {
     if (&cells != &cells_) cells_ = cells;
     rejected_ += rejected;
     if (collecting_ && timestamp >= next_calibration_sample_) {
@@ -409,7 +452,7 @@ class BasicGlovePoseEstimator {
     }
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells, normalized_) != Status::Ok) return Status::NonFinite;
-    std::uint32_t flags = rejected_ > 0 ? kPoseReadingsRejected : 0u;
+    std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u);
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
     if (collecting_) flags |= kPoseCalibrating;
@@ -429,6 +472,7 @@ class BasicGlovePoseEstimator {
     pose_.oldest_age = oldest_age;
     pose_.rejected = rejected_;
     pose_.flags = flags;
+    pose_.health = health;
     pose_.valid = true;
     ++pose_.sequence;
     rejected_ = 0;
@@ -451,6 +495,8 @@ class BasicGlovePoseEstimator {
   Eigen::VectorXd cells_;
   Eigen::VectorXd normalized_;
   double last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
+  int cells_backwards_run_ = 0;
+  std::uint64_t readout_restarts_ = 0;
   std::uint32_t rejected_ = 0;
   std::array<float, grid::kStretchValues> maps_{};
   std::array<float, grid::kMapSlots> pose_map_{};

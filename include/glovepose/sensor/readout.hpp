@@ -22,10 +22,42 @@
 
 namespace glovepose::sensor {
 
-/// @brief Settings of the streaming readout.
+/// @brief Settings of the streaming readout, including how it meets faults of the stream.
 struct ReadoutConfig {
   int mean_window = 5;   ///< Readings per row averaged before solving (paper: last 5 frames).
   int solve_every = 16;  ///< Solve after this many accepted row updates (paper: 16).
+  /// A pause longer than this (s) between two accepted readings (glove unplugged, link stalled)
+  /// makes every held reading stale: the readout forgets them and starts over, as reset() does.
+  double gap_seconds = 0.1;
+  /// This many consecutive readings with timestamps before the last accepted one mean the glove's
+  /// clock restarted (firmware reboot): the readout starts over on the new clock. Fewer are rejected
+  /// as out of order. 0: the number of rows (a whole cycle on the new clock).
+  int clock_restart_readings = 0;
+  /// A row that repeats exactly the same value this many readings in a row is stuck: real readings
+  /// carry noise (the paper's timer-based measurement jitters by far more than a float's last bit).
+  int stuck_readings = 30;
+  /// A row whose newest reading is older than this many readout cycles is stale (its readings are
+  /// being lost). The cycle is estimated per frame as twice the median age of the rows' newest
+  /// readings (rows are read one after another), so no rate needs configuring.
+  double stale_cycles = 2.5;
+  /// A row whose mean reading is below this (pF) reads through a disconnected trace: the paper's
+  /// compound capacitances are tens of pF, an open trace leaves only stray capacitance.
+  double disconnected_below = 1.0;
+  /// A row whose least-squares residual |M C_c - C_m| exceeds this (pF) disagrees with the others:
+  /// a spike or a failing cell. 1 pF is about 8 times the residual of the readout noise assumed in
+  /// docs/simulator.md (0.3 pF per reading, averaged over 5).
+  double max_residual = 1.0;
+};
+
+/// @brief Health of a solved frame: what the readout saw that makes it less trustworthy.
+struct ReadoutHealth {
+  std::uint16_t filling_rows = 0;       ///< Rows holding fewer readings than the mean window (after a start or restart).
+  std::uint16_t stale_rows = 0;         ///< Rows whose newest reading is older than ReadoutConfig::stale_cycles cycles.
+  std::uint16_t stuck_rows = 0;         ///< Rows repeating one value (ReadoutConfig::stuck_readings).
+  std::uint16_t disconnected_rows = 0;  ///< Rows reading below ReadoutConfig::disconnected_below.
+  std::uint16_t outlier_rows = 0;       ///< Rows whose residual exceeds ReadoutConfig::max_residual.
+  double max_residual = 0.0;            ///< Largest |M C_c - C_m| over the rows, pF.
+  std::uint64_t restarts = 0;           ///< Times the readout started over (gaps, clock restarts) since construction.
 };
 
 /// @brief One solved frame of cell capacitances.
@@ -36,6 +68,7 @@ struct CapacitanceFrame {
   double oldest_age = 0.0;                ///< timestamp minus the timestamp of the oldest reading used.
   std::uint32_t rejected = 0;             ///< Readings rejected since the previous solve.
   std::uint64_t sequence = 0;             ///< Number of frames solved so far, this one included.
+  ReadoutHealth health;                   ///< What makes this frame less trustworthy.
 };
 
 /// @brief Per-stream readout state: a ring of recent readings per measurement row.
@@ -61,13 +94,25 @@ class Readout {
       throw Error("Readout: mean_window " + std::to_string(config_.mean_window) + ", expected at least 1");
     if (config_.solve_every < 1)
       throw Error("Readout: solve_every " + std::to_string(config_.solve_every) + ", expected at least 1");
+    if (!(config_.gap_seconds > 0.0) || config_.clock_restart_readings < 0 || config_.stuck_readings < 2 ||
+        !(config_.max_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below))
+      throw Error("Readout: gap_seconds " + std::to_string(config_.gap_seconds) + ", clock_restart_readings " +
+                  std::to_string(config_.clock_restart_readings) + ", stuck_readings " + std::to_string(config_.stuck_readings) +
+                  ", max_residual " + std::to_string(config_.max_residual) +
+                  ", stale_cycles " + std::to_string(config_.stale_cycles) +
+                  ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_residual > 0, stale_cycles > 1");
     rows_ = solver_->layout().row_count();
+    if (config_.clock_restart_readings == 0) config_.clock_restart_readings = rows_;
     const auto slots = static_cast<std::size_t>(rows_) * static_cast<std::size_t>(config_.mean_window);
     values_.assign(slots, 0.0);
     times_.assign(slots, 0.0);
     count_.assign(static_cast<std::size_t>(rows_), 0);
     head_.assign(static_cast<std::size_t>(rows_), 0);
+    repeats_.assign(static_cast<std::size_t>(rows_), 0);
+    newest_age_.assign(static_cast<std::size_t>(rows_), 0.0);
+    age_scratch_.assign(static_cast<std::size_t>(rows_), 0.0);
     mean_ = Measurements::Zero(rows_);
+    residual_ = Measurements::Zero(rows_);
     frame_.cells = Solver::Capacitances::Zero(solver_->layout().cell_count());
     reset();
   }
@@ -76,6 +121,8 @@ class Readout {
   void reset() noexcept {
     std::fill(count_.begin(), count_.end(), 0);
     std::fill(head_.begin(), head_.end(), 0);
+    std::fill(repeats_.begin(), repeats_.end(), 0);
+    backwards_run_ = 0;
     rows_seen_ = 0;
     updates_since_solve_ = 0;
     rejected_since_solve_ = 0;
@@ -86,22 +133,36 @@ class Readout {
   ///
   /// Rejected without changing any state: an unknown row (Status::UnknownIndex), a NaN or infinite
   /// value or timestamp (Status::NonFinite), a negative capacitance (Status::Negative), a timestamp
-  /// before the last accepted one (Status::TimestampBackwards). Accepted readings return
-  /// Status::Solved when they completed a solve (see frame()), Status::NotReady while some row has
-  /// never been read, and Status::Ok otherwise.
+  /// before the last accepted one (Status::TimestampBackwards; after clock_restart_readings of
+  /// them in a row the readout starts over on the new clock and accepts it). Accepted readings
+  /// return Status::Solved when they completed a solve (see frame()), Status::NotReady while some
+  /// row has not been read since the start (or since a restart after a gap), Status::Ok otherwise.
   GLOVEPOSE_REALTIME Status push_row(int row, double value, double timestamp) noexcept {
-    const Status check = validate(row, value, timestamp);
+    Status check = validate(row, value, timestamp);
+    if (check == Status::TimestampBackwards && ++backwards_run_ >= config_.clock_restart_readings) {
+      restart();
+      check = validate(row, value, timestamp);
+    }
     if (check != Status::Ok) {
       ++rejected_since_solve_;
       return check;
     }
+    if (std::isfinite(last_timestamp_) && timestamp - last_timestamp_ > config_.gap_seconds) restart();
+    const bool was_incomplete = rows_seen_ < rows_;
     store(row, value, timestamp);
     // Solves fall on every solve_every-th accepted reading counted from the start of the stream, so
     // with solve_every equal to the row count they coincide with the ends of full cycles.
     const bool due = ++updates_since_solve_ >= config_.solve_every;
     if (due) updates_since_solve_ = 0;
     if (rows_seen_ < rows_) return Status::NotReady;
-    return due ? solve() : Status::Ok;
+    if (due) return solve();
+    if (!was_incomplete) return Status::Ok;
+    // The first complete picture (at the start or after a restart) is solved at once, off the
+    // cadence, which it leaves as it was.
+    const int cadence = updates_since_solve_;
+    const Status status = solve();
+    updates_since_solve_ = cadence;
+    return status;
   }
 
   /// @brief Offers a whole frame of measurements taken at `timestamp` and solves once.
@@ -114,6 +175,7 @@ class Readout {
     if (measurements.size() != rows_) return Status::SizeMismatch;
     if (!std::isfinite(timestamp)) return Status::NonFinite;
     if (timestamp < last_timestamp_) return Status::TimestampBackwards;
+    if (std::isfinite(last_timestamp_) && timestamp - last_timestamp_ > config_.gap_seconds) restart();
     for (int row = 0; row < rows_; ++row) {
       const double value = measurements(row);
       if (validate(row, value, timestamp) == Status::Ok)
@@ -129,7 +191,7 @@ class Readout {
   const Frame& frame() const noexcept { return frame_; }
   /// @brief The mean-filtered measurements that went into the latest solve.
   const Measurements& filtered_measurements() const noexcept { return mean_; }
-  /// @brief The settings in use.
+  /// @brief The settings in use (clock_restart_readings resolved).
   const ReadoutConfig& config() const noexcept { return config_; }
   /// @brief The shared solver.
   const Solver& solver() const noexcept { return *solver_; }
@@ -143,9 +205,18 @@ class Readout {
     return Status::Ok;
   }
 
+  // Starts over after a gap or a clock restart; the frame's counters survive.
+  void restart() noexcept {
+    reset();
+    ++restarts_;
+  }
+
   void store(int row, double value, double timestamp) noexcept {
     const auto r = static_cast<std::size_t>(row);
     const auto window = static_cast<std::size_t>(config_.mean_window);
+    const std::size_t previous = r * window + static_cast<std::size_t>((head_[r] + config_.mean_window - 1) % config_.mean_window);
+    repeats_[r] = count_[r] > 0 && values_[previous] == value ? repeats_[r] + 1 : 1;
+    backwards_run_ = 0;
     const std::size_t slot = r * window + static_cast<std::size_t>(head_[r]);
     values_[slot] = value;
     times_[slot] = timestamp;
@@ -161,15 +232,36 @@ class Readout {
     for (int row = 0; row < rows_; ++row) {
       const auto r = static_cast<std::size_t>(row);
       const auto n = static_cast<std::size_t>(count_[r]);
-      double sum = 0.0;
+      double sum = 0.0, newest = -std::numeric_limits<double>::infinity();
       for (std::size_t k = 0; k < n; ++k) {
         sum += values_[r * window + k];
         oldest = std::min(oldest, times_[r * window + k]);
+        newest = std::max(newest, times_[r * window + k]);
       }
       mean_(row) = sum / static_cast<double>(n);
+      newest_age_[r] = last_timestamp_ - newest;
     }
     const Status status = solver_->solve(mean_, frame_.cells);
     if (status != Status::Ok) return status;
+    residual_.noalias() = solver_->measurement_matrix() * frame_.cells;
+    residual_ -= mean_;
+    ReadoutHealth& health = frame_.health;
+    health = ReadoutHealth{};
+    health.restarts = restarts_;
+    health.max_residual = residual_.cwiseAbs().maxCoeff();
+    // Rows are read one after another, so their newest readings' ages spread evenly over one cycle.
+    std::copy(newest_age_.begin(), newest_age_.end(), age_scratch_.begin());
+    const auto middle = age_scratch_.begin() + rows_ / 2;
+    std::nth_element(age_scratch_.begin(), middle, age_scratch_.end());
+    const double stale_age = config_.stale_cycles * 2.0 * *middle;
+    for (int row = 0; row < rows_; ++row) {
+      const auto r = static_cast<std::size_t>(row);
+      health.filling_rows += count_[r] < config_.mean_window ? 1 : 0;
+      health.stale_rows += newest_age_[r] > stale_age ? 1 : 0;
+      health.stuck_rows += repeats_[r] >= config_.stuck_readings ? 1 : 0;
+      health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
+      health.outlier_rows += std::abs(residual_(row)) > config_.max_residual ? 1 : 0;
+    }
     frame_.timestamp = last_timestamp_;
     frame_.oldest_age = last_timestamp_ - oldest;
     frame_.rejected = rejected_since_solve_;
@@ -186,11 +278,17 @@ class Readout {
   std::vector<double> times_;   // timestamps of values_
   std::vector<int> count_;      // readings held per row (<= mean_window)
   std::vector<int> head_;       // next slot to write per row
+  std::vector<int> repeats_;    // consecutive identical readings per row (the latest included)
+  std::vector<double> newest_age_;   // per row, age of its newest reading at the latest solve
+  std::vector<double> age_scratch_;  // for the median of newest_age_
+  int backwards_run_ = 0;       // consecutive readings timestamped before the last accepted one
+  std::uint64_t restarts_ = 0;
   int rows_seen_ = 0;           // rows with at least one reading
   int updates_since_solve_ = 0;
   std::uint32_t rejected_since_solve_ = 0;
   double last_timestamp_ = 0.0;
   Measurements mean_;
+  Measurements residual_;
   Frame frame_;
 };
 
