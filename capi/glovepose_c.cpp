@@ -49,6 +49,12 @@ static_assert(GLOVEPOSE_TIMESTAMP_BACKWARDS == static_cast<int>(Status::Timestam
 static_assert(GLOVEPOSE_SIZE_MISMATCH == static_cast<int>(Status::SizeMismatch), "status numbers");
 static_assert(GLOVEPOSE_UNCALIBRATED == static_cast<int>(Status::Uncalibrated), "status numbers");
 static_assert(GLOVEPOSE_DOF_COUNT == glovepose::hand::kDofCount, "DoF count");
+static_assert(GLOVEPOSE_POSE_STALE_READINGS == glovepose::kPoseStaleReadings, "pose flags");
+static_assert(GLOVEPOSE_POSE_RECOVERING == glovepose::kPoseRecovering, "pose flags");
+static_assert(GLOVEPOSE_POSE_STUCK_ROWS == glovepose::kPoseStuckRows, "pose flags");
+static_assert(GLOVEPOSE_POSE_DISCONNECTED_ROWS == glovepose::kPoseDisconnectedRows, "pose flags");
+static_assert(GLOVEPOSE_POSE_OUTLIER_ROWS == glovepose::kPoseOutlierRows, "pose flags");
+static_assert(GLOVEPOSE_POSE_FAULT_FLAGS == glovepose::kPoseFaultFlags, "pose flags");
 static_assert(GLOVEPOSE_JOINT_COUNT == glovepose::hand::kJointCount, "joint count");
 static_assert(GLOVEPOSE_POSE_READINGS_REJECTED == glovepose::kPoseReadingsRejected, "pose flags");
 static_assert(GLOVEPOSE_POSE_INPUT_CLAMPED == glovepose::kPoseInputClamped, "pose flags");

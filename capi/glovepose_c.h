@@ -127,6 +127,18 @@ typedef int32_t glovepose_result;
 #define GLOVEPOSE_POSE_TRAINING_CALIBRATION 0x4u
 /** @brief Pose flag: produced while an on-the-fly calibration was collecting. */
 #define GLOVEPOSE_POSE_CALIBRATING 0x8u
+/** @brief Pose flag (fault): some rows stopped arriving; their newest reading is several cycles old. */
+#define GLOVEPOSE_POSE_STALE_READINGS 0x10u
+/** @brief Pose flag (fault): some rows hold fewer readings than the mean window (start, gap, clock restart). */
+#define GLOVEPOSE_POSE_RECOVERING 0x20u
+/** @brief Pose flag (fault): a row repeats one value: a stuck sensor. */
+#define GLOVEPOSE_POSE_STUCK_ROWS 0x40u
+/** @brief Pose flag (fault): a row reads (near) zero: a disconnected trace. */
+#define GLOVEPOSE_POSE_DISCONNECTED_ROWS 0x80u
+/** @brief Pose flag (fault): a row disagrees with the least-squares solve: a spike or a failing cell. */
+#define GLOVEPOSE_POSE_OUTLIER_ROWS 0x100u
+/** @brief The fault flags: a pose with any of them set cannot be trusted. */
+#define GLOVEPOSE_POSE_FAULT_FLAGS 0x1F0u
 
 /* ---- handles and structs ----------------------------------------------------------------- */
 

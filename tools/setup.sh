@@ -3,7 +3,8 @@
 # Usage: tools/setup.sh [EXTRA_PACKAGE ...]   (extra Debian packages to ensure as well)
 set -euo pipefail
 # python3-torch: the PyTorch reference the numerics tests compare with (Debian's, for /usr/bin/python3).
-packages=(cmake make g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy "$@")
+# mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
+packages=(cmake make g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
