@@ -8,12 +8,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <random>
 #include <set>
 #include <tuple>
+#include <utility>
 #include <sstream>
+#include <string>
+#include <vector>
 
 using namespace glovepose;
 
@@ -286,4 +290,90 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   r = run("predict --model " + model_file + " --in " + temp("main14.csv") + " --no-header");
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
+}
+
+namespace {
+// A number printed after `label` on the first line of `text` that holds it; NaN when absent.
+double number_after(const std::string& text, const std::string& label) {
+  const std::size_t at = text.find(label);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(text.c_str() + at + label.size(), nullptr);
+}
+
+// Whether `xml` is one <svg> element whose tags all close in order (text and attributes unchecked).
+bool well_formed_svg(const std::string& xml) {
+  std::vector<std::string> open;
+  int roots = 0;
+  for (std::size_t at = xml.find('<'); at != std::string::npos; at = xml.find('<', at + 1)) {
+    const std::size_t end = xml.find('>', at);
+    if (end == std::string::npos) return false;
+    const std::string tag = xml.substr(at + 1, end - at - 1);
+    if (tag.empty() || tag[0] == '?') continue;  // the XML declaration
+    if (tag[0] == '/') {
+      if (open.empty() || open.back() != tag.substr(1)) return false;
+      open.pop_back();
+      continue;
+    }
+    const std::string name = tag.substr(0, tag.find_first_of(" /"));
+    if (open.empty() && (name != "svg" || ++roots > 1)) return false;
+    if (tag.back() != '/') open.push_back(name);
+  }
+  return roots == 1 && open.empty();
+}
+
+std::size_t occurrences(const std::string& text, const std::string& part) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose demo streams a new user through the shipped model and writes the table and pictures") {
+  const std::string out = temp("demo");
+  const Run r = run("demo --seed 7 --minutes 0.05 --out " + out);  // a 3 s session after the 30 s calibration
+  INFO(r.out);
+  REQUIRE(r.status == 0);
+  // The shipped model on a person it never saw: the held-out figures of models/README.md are about
+  // 4 degrees mean and 98% under 15 degrees; a broken stream (rows out of place, no calibration) is
+  // far worse.
+  const double mean = number_after(r.out, "all 25 angles");
+  CHECK(mean > 0.5);
+  CHECK(mean < 8.0);
+  CHECK(number_after(r.out, "angles under 15 degrees:") > 85.0);
+  for (const char* finger : {"thumb", "index", "middle", "ring", "pinky"}) {
+    INFO(finger);
+    CHECK(number_after(r.out, std::string("\n  ") + finger) < 15.0);
+  }
+  // The paper's cadence: 180 rows at 60 cycles/s, a solve every 16 rows: 675 poses per second.
+  CHECK(number_after(r.out, "the stream's pose rate") == doctest::Approx(675.0).epsilon(0.01));
+  CHECK(number_after(r.out, "poses per second of compute") > 100.0);
+  // The oldest of the 5 averaged readings of a row is 4 to 5 cycles old: 67 to 83 ms, plus up to 16 rows.
+  const double age_p50 = number_after(r.out, "age of the oldest row         p50");
+  CHECK(age_p50 > 60.0);
+  CHECK(age_p50 < 100.0);
+  CHECK(number_after(r.out, "sequence streamed row by row:") >= 20.0);  // at least the median window
+  CHECK(r.out.find("3.0 s: 32400 rows streamed") != std::string::npos);
+
+  const std::string summary = slurp(out + "/summary.txt");
+  CHECK(!summary.empty());
+  CHECK(r.out.rfind(summary, 0) == 0);  // the file holds the printed table
+  const std::string angles = slurp(out + "/angles_over_time.svg"), curve = slurp(out + "/cumulative_error.svg"),
+                    hands = slurp(out + "/skeletons.svg");
+  for (const std::string* svg : {&angles, &curve, &hands}) CHECK(well_formed_svg(*svg));
+  CHECK(occurrences(angles, "<polyline") == 8);  // 4 DoFs, predicted and true
+  CHECK(occurrences(curve, "<polyline") >= 1);
+  CHECK(occurrences(hands, "<line") >= 4 * 2 * 20);  // 4 frames, 2 hands, 20 bones each
+  CHECK_FALSE(well_formed_svg("<svg><line></svg>"));  // the checker can fail
+
+  // Set-up errors name what is wrong.
+  const std::pair<std::string, std::string> refused[] = {
+      {"--model " + temp("missing.safetensors"), "missing.safetensors"},
+      {"--minutes abc", "--minutes 'abc' is not a number"},
+      {"--minutes 0", "expected a session length"}};
+  for (const auto& [options, message] : refused) {
+    const Run bad = run("demo " + options + " --out " + out);
+    INFO(bad.out);
+    CHECK(bad.status == 2);
+    CHECK(bad.out.find(message) != std::string::npos);
+  }
 }

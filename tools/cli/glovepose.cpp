@@ -8,6 +8,8 @@
 //       the simulated glove corpus (simulate.cpp).
 //   glovepose train | finetune | eval ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
+//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]
+//       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -39,7 +41,8 @@ struct Options {
             << "usage: glovepose predict --model FILE [--in CSV] [--f16] [--no-header]\n"
             << "       glovepose info --model FILE\n"
             << "       glovepose simulate --help\n"
-            << "       glovepose train | finetune | eval --help\n";
+            << "       glovepose train | finetune | eval --help\n"
+            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n";
   std::exit(2);
 }
 
@@ -148,6 +151,7 @@ int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "simulate") return cli::simulate(argc, argv);
   if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval"))
     return cli::train_tools(argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);

@@ -1,0 +1,448 @@
+// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]
+//   The product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
+//   default 2026; the shipped model was trained on seed 1) puts the glove on, performs the
+//   simulator's calibration sequence, then a session of poses. Every reading is streamed row by
+//   row through GlovePoseEstimator (default settings: a solve every 16 rows, joint transforms on),
+//   and the latest pose at each readout-cycle end is compared with the true angles. Prints a table
+//   (angle errors, speed, latency, calibration) and writes it and three SVG pictures to DIR:
+//   angles over time (paper Fig. 15), the cumulative error curve (Fig. 14) and predicted beside
+//   true skeletons (Fig. 11).
+#include <glovepose/estimator.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
+#include <glovepose/train/metrics.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "svg.hpp"
+
+namespace glovepose::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kShippedModelName = "glovepose_unet64.safetensors";
+// The DoFs of the angles-over-time picture: the index finger's three flexions (paper Fig. 15) and
+// the thumb's base flexion.
+constexpr const char* kPlottedDofs[] = {"index_base_flexion", "index_middle_flexion", "index_tip_flexion", "thumb_base_flexion"};
+constexpr double kPlottedSeconds = 20.0;  // of the session, in the angles-over-time picture
+constexpr int kSkeletonFrames = 4;        // frames of the skeleton picture, evenly spaced in the session
+
+struct DemoOptions {
+  std::string model;  // empty: the shipped model
+  std::string out = "demo-out";
+  std::uint64_t seed = 2026;
+  double minutes = 1.5;
+  bool f16 = false;
+};
+
+[[noreturn]] void usage(const std::string& problem) {
+  std::cerr << "glovepose demo: " << problem << "\n"
+            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n"
+            << "  --model FILE  weights (default: models/" << kShippedModelName << " of the source tree)\n"
+            << "  --out DIR     where the table and pictures go (default: demo-out)\n"
+            << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seed 1)\n"
+            << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
+            << "  --f16         keep the weights as F16 in memory\n";
+  std::exit(2);
+}
+
+DemoOptions parse_options(int argc, char** argv) {
+  DemoOptions o;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--model") o.model = value();
+    else if (a == "--out") o.out = value();
+    else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
+    else if (a == "--minutes") o.minutes = parse_number<double>(a, value());
+    else if (a == "--f16") o.f16 = true;
+    else if (a == "--help" || a == "-h") usage("help");
+    else usage("unknown option " + a);
+  }
+  if (!(o.minutes > 0.0 && o.minutes <= 600.0)) {
+    char minutes[32];
+    std::snprintf(minutes, sizeof minutes, "%g", o.minutes);
+    throw Error(std::string("--minutes ") + minutes + ", expected a session length in (0, 600] minutes");
+  }
+  return o;
+}
+
+// The shipped model: beside the executable's build folder (build/tools/glovepose in a clone), else
+// in the source tree this tool was built from.
+std::string shipped_model_path() {
+  std::vector<fs::path> candidates;
+  std::error_code error;
+  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
+  if (!error) candidates.push_back(executable.parent_path() / ".." / ".." / "models" / kShippedModelName);
+  candidates.push_back(fs::path(GLOVEPOSE_SOURCE_DIR) / "models" / kShippedModelName);
+  std::string tried;
+  for (const fs::path& candidate : candidates) {
+    if (fs::is_regular_file(candidate, error)) return candidate.lexically_normal().string();
+    tried += (tried.empty() ? "'" : ", '") + candidate.lexically_normal().string() + "'";
+  }
+  throw Error("the shipped model is in none of " + tried + ", expected --model FILE");
+}
+
+// A new user in memory: the calibration sequence, then the session, with every raw reading.
+struct NewUser {
+  train::Dataset data;
+  std::size_t first_session_frame = 0;
+  double cycle_rate = 0.0;  // readout cycles per second
+};
+
+NewUser simulate_new_user(const DemoOptions& o) {
+  sim::CorpusConfig config;
+  config.seed = o.seed;
+  config.subjects = 1;
+  config.sessions = 1;
+  config.gloves = 1;
+  config.minutes = o.minutes;
+  config.recording.raw_rows = true;
+  NewUser user;
+  user.data = sim::to_dataset(sim::simulate_corpus(config), config);
+  user.cycle_rate = config.recording.cycle_rate;
+  while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)
+    ++user.first_session_frame;
+  if (user.first_session_frame == 0 || user.first_session_frame == user.data.frames())
+    throw Error("the simulated user has " + std::to_string(user.first_session_frame) + " calibration frames of " +
+                std::to_string(user.data.frames()) + ", expected a calibration sequence followed by a session");
+  return user;
+}
+
+// What streaming the session produced.
+struct SessionRun {
+  std::vector<std::size_t> compared_frames;  // dataset frames compared with the truth (collision outliers left out)
+  std::vector<hand::Angles> predicted;       // latest pose at each compared frame's cycle end
+  std::vector<double> compute_seconds;       // Pose::compute_seconds of every pose
+  std::vector<double> oldest_age;            // Pose::oldest_age of every pose
+  std::vector<std::size_t> skeleton_frames;  // dataset frames of the skeleton picture
+  std::vector<hand::JointList> skeleton_joints;  // the estimator's joint list at those frames
+  std::vector<hand::Angles> skeleton_angles;     // and its angles
+  std::size_t rows = 0, rejected_rows = 0;
+  double wall_seconds = 0.0;  // streaming the session, all rows
+};
+
+// Streams frame f's readings row by row, each at the end of its row slot (sim/recorder.hpp);
+// calls on_pose() after every reading that produced a pose. Returns the readings rejected.
+template <typename OnPose>
+std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std::size_t f, OnPose on_pose) {
+  const train::Dataset& d = user.data;
+  const auto rows = static_cast<int>(d.row_count);
+  std::size_t rejected = 0;
+  for (int r = 0; r < rows; ++r) {
+    const double time = d.timestamps[f] - static_cast<double>(rows - 1 - r) / (rows * user.cycle_rate);
+    const Status status = estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], time);
+    if (status == Status::Solved) on_pose();
+    else if (status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated) ++rejected;
+  }
+  return rejected;
+}
+
+struct CalibrationResult {
+  long frames = 0;
+  double seconds = 0.0;
+  std::vector<std::string> flat_sensors;
+};
+
+CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) {
+  estimator.start_calibration();
+  for (std::size_t f = 0; f < user.first_session_frame; ++f) stream_frame(estimator, user, f, [] {});
+  CalibrationResult result;
+  result.frames = estimator.calibration_progress().frames;
+  result.seconds = static_cast<double>(user.first_session_frame) / user.cycle_rate;
+  result.flat_sensors = estimator.finish_calibration().flat_sensors();
+  return result;
+}
+
+// Evenly spaced session frames whose true pose is no collision outlier.
+std::vector<std::size_t> pick_skeleton_frames(const NewUser& user) {
+  const train::Dataset& d = user.data;
+  const std::size_t begin = user.first_session_frame, count = d.frames() - begin;
+  std::vector<std::size_t> picked;
+  for (int k = 0; k < kSkeletonFrames; ++k) {
+    std::size_t f = begin + static_cast<std::size_t>((k + 0.5) / kSkeletonFrames * static_cast<double>(count));
+    while (f < d.frames() && d.outlier[f]) ++f;
+    if (f < d.frames() && (picked.empty() || picked.back() != f)) picked.push_back(f);
+  }
+  return picked;
+}
+
+SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
+  const train::Dataset& d = user.data;
+  SessionRun run;
+  run.skeleton_frames = pick_skeleton_frames(user);
+  const std::size_t frames = d.frames() - user.first_session_frame;
+  run.compute_seconds.reserve(frames * 12);
+  run.oldest_age.reserve(frames * 12);
+  run.predicted.reserve(frames);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t f = user.first_session_frame; f < d.frames(); ++f) {
+    run.rejected_rows += stream_frame(estimator, user, f, [&] {
+      run.compute_seconds.push_back(estimator.pose().compute_seconds);
+      run.oldest_age.push_back(estimator.pose().oldest_age);
+    });
+    run.rows += d.row_count;
+    if (!estimator.pose().valid) continue;
+    if (std::find(run.skeleton_frames.begin(), run.skeleton_frames.end(), f) != run.skeleton_frames.end())
+    {
+      run.skeleton_joints.push_back(estimator.joints());
+      run.skeleton_angles.push_back(estimator.pose().angles);
+    }
+    if (d.outlier[f]) continue;  // the true pose collides with itself: no reference (as in the paper)
+    run.compared_frames.push_back(f);
+    run.predicted.push_back(estimator.pose().angles);
+  }
+  run.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (run.predicted.empty() || run.skeleton_joints.size() != run.skeleton_frames.size())
+    throw Error("the session gave " + std::to_string(run.predicted.size()) + " poses to compare, expected one per readout cycle");
+  return run;
+}
+
+const double* true_angles(const train::Dataset& d, std::size_t f, hand::Angles& out) {
+  for (std::size_t k = 0; k < hand::kDofCount; ++k) out[k] = d.angles[f * hand::kDofCount + k];
+  return out.data();
+}
+
+train::AngleErrorReport measure_errors(const NewUser& user, const SessionRun& run) {
+  train::AngleErrorAccumulator errors;
+  hand::Angles truth{};
+  for (std::size_t i = 0; i < run.predicted.size(); ++i) errors.add(run.predicted[i].data(), true_angles(user.data, run.compared_frames[i], truth));
+  return errors.report();
+}
+
+// Nearest-rank percentile (the ceil(q n)-th smallest), the definition train/metrics.hpp uses.
+double percentile(std::vector<double> values, double q) {
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  return values[std::clamp<std::size_t>(rank, 1, values.size()) - 1];
+}
+
+std::string format_table(const DemoOptions& o, const std::string& model_path, const NewUser& user, const CalibrationResult& calibration,
+                         const SessionRun& run, const train::AngleErrorReport& report) {
+  std::string out;
+  char line[512];
+  const auto add = [&](const char* format, auto... args) {
+    std::snprintf(line, sizeof line, format, args...);
+    out += line;
+  };
+  const double session_seconds = static_cast<double>(user.data.frames() - user.first_session_frame) / user.cycle_rate;
+  const std::size_t poses = run.compute_seconds.size();
+  double compute = 0.0;
+  for (double s : run.compute_seconds) compute += s;
+  std::string flat;
+  for (const std::string& name : calibration.flat_sensors) flat += (flat.empty() ? "" : ", ") + name;
+
+  add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n",
+      static_cast<unsigned long long>(o.seed), model_path.c_str(), o.f16 ? "F16" : "F32");
+  add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s\n", calibration.seconds, calibration.frames,
+      flat.empty() ? "none" : flat.c_str());
+  add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
+      run.rejected_rows, poses);
+  add("             %zu cycle ends compared with the truth (%zu with a self-colliding true pose left out, as the paper does)\n\n",
+      report.frames, user.data.frames() - user.first_session_frame - report.frames);
+  add("%-22s %8s %8s %8s\n", "angle error (degrees)", "mean", "rms", "max");
+  for (const train::FingerError& f : report.fingers) add("  %-20s %8.2f %8.2f %8.2f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
+  add("  %-20s %8.2f %8.2f %8.2f\n", "all 25 angles", report.overall.mean_deg, report.overall.rms_deg, report.overall.max_deg);
+  add("  median %.2f, p95 %.2f; angles under 15 degrees: %.1f%%\n\n", report.median_deg, report.p95_deg, 100.0 * report.share_under_15deg);
+  add("speed and latency\n");
+  add("  poses per second of compute   %10.0f  (poses / sum of Pose::compute_seconds)\n", static_cast<double>(poses) / compute);
+  add("  the stream's pose rate        %10.0f  per second of glove time\n", static_cast<double>(poses) / session_seconds);
+  add("  compute per pose              p50 %7.1f us   p99 %7.1f us\n", 1e6 * percentile(run.compute_seconds, 0.5),
+      1e6 * percentile(run.compute_seconds, 0.99));
+  add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * percentile(run.oldest_age, 0.5), 1e3 * percentile(run.oldest_age, 0.99));
+  add("  whole stream                  %.1f s of glove time in %.2f s wall (%.1fx real time)\n", session_seconds, run.wall_seconds,
+      session_seconds / run.wall_seconds);
+  return out;
+}
+
+// ---- pictures ------------------------------------------------------------------------------
+
+// A range around [lo, hi] on multiples of `step`, at least two steps wide.
+std::pair<double, double> padded_range(double lo, double hi, double step) {
+  lo = std::floor(lo / step) * step;
+  hi = std::ceil(hi / step) * step;
+  if (hi - lo < 2 * step) hi = lo + 2 * step;
+  return {lo, hi};
+}
+
+void draw_angles_over_time(const NewUser& user, const SessionRun& run, const std::string& path) {
+  const double session_start = user.data.timestamps[user.first_session_frame];
+  const std::size_t dofs = std::size(kPlottedDofs);
+  const double panel_width = 820, panel_height = 130, left = 70, top = 50, gap = 40;
+  svg::Document doc(left + panel_width + 30, top + dofs * (panel_height + gap) + 10);
+  doc.text(left, 24, "Predicted vs true angles over the first seconds of the session (new user, streamed row by row)", 15);
+  for (std::size_t p = 0; p < dofs; ++p) {
+    const std::size_t dof = hand::dof_from_name(kPlottedDofs[p]);
+    std::vector<double> times, predicted, truth;
+    for (std::size_t i = 0; i < run.predicted.size(); ++i) {
+      const std::size_t f = run.compared_frames[i];
+      const double t = user.data.timestamps[f] - session_start;
+      if (t > kPlottedSeconds) break;
+      times.push_back(t);
+      predicted.push_back(run.predicted[i][dof] * train::kDegreesPerRadian);
+      truth.push_back(user.data.angles[f * hand::kDofCount + dof] * train::kDegreesPerRadian);
+    }
+    const auto [lo, hi] = std::minmax({*std::min_element(predicted.begin(), predicted.end()), *std::min_element(truth.begin(), truth.end()),
+                                       *std::max_element(predicted.begin(), predicted.end()), *std::max_element(truth.begin(), truth.end())});
+    const double step = hi - lo > 90 ? 30 : (hi - lo > 40 ? 20 : 10);
+    const auto [y_min, y_max] = padded_range(lo, hi, step);
+    svg::Axes axes(doc, left, top + p * (panel_height + gap), panel_width, panel_height, 0.0, std::max(times.back(), 1.0), y_min, y_max);
+    axes.draw(times.back() > 10 ? 2.0 : 1.0, step, p + 1 == dofs ? "time in the session (s)" : "", "degrees", kPlottedDofs[p]);
+    axes.plot(times, truth, "#1f5fbf", 1.6);
+    axes.plot(times, predicted, "#d62728", 1.2);
+    if (p == 0) {
+      axes.legend(0, "#1f5fbf", "true");
+      axes.legend(1, "#d62728", "predicted");
+    }
+  }
+  doc.save(path);
+}
+
+void draw_cumulative_error(const train::AngleErrorReport& report, const std::string& path) {
+  svg::Document doc(640, 430);
+  svg::Axes axes(doc, 70, 50, 540, 320, 0, train::kCurveMaxDeg, 0, 100);
+  axes.draw(5, 10, "error threshold (degrees)", "% of angles below", "Cumulative angle error (paper Fig. 14), all 25 angles");
+  std::vector<double> thresholds, shares;
+  for (const train::CurvePoint& point : report.curve) {
+    thresholds.push_back(point.threshold_deg);
+    shares.push_back(100.0 * point.share);
+  }
+  axes.plot(thresholds, shares, "#d62728", 2.0);
+  axes.plot({15.0, 15.0}, {0.0, 100.0}, "#808080", 1.0, "4 3");
+  // This run's share at 15 degrees, and the paper's for its real glove over its key poses, for scale.
+  const double share = 100.0 * report.share_under_15deg;
+  char label[80];
+  std::snprintf(label, sizeof label, "this demo: %.1f%% of angles under 15 deg", share);
+  doc.circle(axes.px(15), axes.py(share), 4, "#d62728");
+  doc.circle(axes.px(15), axes.py(92), 4, "#404040");
+  doc.circle(axes.px(20), axes.py(40), 4, "#d62728");
+  doc.text(axes.px(20) + 10, axes.py(40) + 4, label, 12, "start", "#d62728");
+  doc.circle(axes.px(20), axes.py(32), 4, "#404040");
+  doc.text(axes.px(20) + 10, axes.py(32) + 4, "paper, real glove, key poses: 92% under 15 deg", 12, "start", "#404040");
+  doc.save(path);
+}
+
+// The fixed view of the skeleton picture: fingers up, seen from the back of the hand turned by
+// 50 degrees towards the thumb, so flexion (towards the palm, -Z) and abduction (X) both show.
+svg::Point project(const hand::JointTransform& joint) {
+  constexpr double kYaw = 50.0 * 3.14159265358979 / 180.0;
+  const double x = joint.position[0], y = joint.position[1], z = joint.position[2];
+  return {x * std::cos(kYaw) - z * std::sin(kYaw), y};
+}
+
+void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::HandModel& hand_model, const std::string& path) {
+  // True joint lists from the same kinematics the estimator uses.
+  const hand::Kinematics kinematics(hand_model);
+  const std::vector<hand::JointList> truths = [&] {
+    std::vector<hand::JointList> lists;
+    for (std::size_t f : run.skeleton_frames) {
+      hand::Angles truth{};
+      true_angles(user.data, f, truth);
+      hand::Skeleton skeleton;
+      kinematics.pose(truth, skeleton);
+      hand::to_joint_list(kinematics, skeleton, lists.emplace_back());
+    }
+    return lists;
+  }();
+  // One scale for every hand: the bounding box of all projected joints.
+  double x_lo = 1e9, x_hi = -1e9, y_lo = 1e9, y_hi = -1e9;
+  for (const auto* lists : {&truths, &run.skeleton_joints})
+    for (const hand::JointList& joints : *lists)
+      for (const hand::JointTransform& joint : joints) {
+        const svg::Point p = project(joint);
+        x_lo = std::min(x_lo, p.first), x_hi = std::max(x_hi, p.first), y_lo = std::min(y_lo, p.second), y_hi = std::max(y_hi, p.second);
+      }
+  const double cell = 170, margin = 12, top = 70;
+  const double scale = (cell - 2 * margin) / std::max(x_hi - x_lo, y_hi - y_lo);
+  svg::Document doc(2 * cell * run.skeleton_frames.size() + 20, top + cell + 40);
+  doc.text(10, 22, "True (blue) and predicted (red) hands, evenly spaced frames of the session (paper Fig. 11)", 15);
+  const double session_start = user.data.timestamps[user.first_session_frame];
+  for (std::size_t k = 0; k < run.skeleton_frames.size(); ++k) {
+    const std::size_t f = run.skeleton_frames[k];
+    double error = 0.0;
+    hand::Angles truth{};
+    true_angles(user.data, f, truth);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) error += std::abs(run.skeleton_angles[k][d] - truth[d]) * train::kDegreesPerRadian / hand::kDofCount;
+    char caption[96];
+    std::snprintf(caption, sizeof caption, "t = %.1f s, mean error %.1f deg", user.data.timestamps[f] - session_start, error);
+    const double x0 = 10 + 2 * cell * static_cast<double>(k);
+    doc.text(x0 + cell, top - 22, caption, 12, "middle");
+    doc.rect(x0, top - 12, 2 * cell, cell + 30, "none", "#d0d0d0");
+    const auto draw_hand = [&](const hand::JointList& joints, double left, const std::string& colour, const std::string& label) {
+      const auto pixel = [&](std::size_t j) {
+        const svg::Point p = project(joints[j]);
+        return svg::Point{left + margin + (p.first - x_lo) * scale, top + cell - margin - (p.second - y_lo) * scale};
+      };
+      for (std::size_t j = 1; j < hand::kJointCount; ++j) {
+        const svg::Point a = pixel(j), b = pixel(static_cast<std::size_t>(hand::kJointParent[j]));
+        doc.line(a.first, a.second, b.first, b.second, colour, 3.0);
+      }
+      std::vector<svg::Point> knuckles;  // the palm's far edge, index to pinky
+      for (hand::Joint j : {hand::Joint::IndexProximal, hand::Joint::MiddleProximal, hand::Joint::RingProximal, hand::Joint::PinkyProximal})
+        knuckles.push_back(pixel(static_cast<std::size_t>(j)));
+      doc.polyline(knuckles, colour, 2.0);
+      for (std::size_t j = 0; j < hand::kJointCount; ++j) doc.circle(pixel(j).first, pixel(j).second, 2.5, "#202020");
+      doc.text(left + cell / 2, top + cell + 12, label, 12, "middle", colour);
+    };
+    draw_hand(truths[k], x0, "#1f5fbf", "true");
+    draw_hand(run.skeleton_joints[k], x0 + cell, "#d62728", "predicted");
+  }
+  doc.save(path);
+}
+
+}  // namespace
+
+int demo(int argc, char** argv) {
+  try {
+    const DemoOptions o = parse_options(argc, argv);
+    const std::string model_path = o.model.empty() ? shipped_model_path() : o.model;
+    PoseModelOptions model_options;
+    model_options.storage = o.f16 ? nn::WeightStorage::F16 : nn::WeightStorage::F32;
+    const auto model = PoseModel::load(model_path, model_options);
+    std::error_code error;
+    fs::create_directories(o.out, error);
+    if (error || !fs::is_directory(o.out))
+      throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
+
+    const NewUser user = simulate_new_user(o);
+    EstimatorConfig config;  // the paper's readout cadence: a solve every 16 rows
+    config.joint_transforms = true;
+    GlovePoseEstimator estimator(model, config);
+    const CalibrationResult calibration = calibrate(estimator, user);
+    const SessionRun run = stream_session(estimator, user);
+    const train::AngleErrorReport report = measure_errors(user, run);
+
+    const std::string table = format_table(o, model_path, user, calibration, run, report);
+    const fs::path out(o.out);
+    const std::string files[] = {(out / "summary.txt").string(), (out / "angles_over_time.svg").string(),
+                                 (out / "cumulative_error.svg").string(), (out / "skeletons.svg").string()};
+    std::ofstream summary(files[0]);
+    summary << table;
+    if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
+    draw_angles_over_time(user, run, files[1]);
+    draw_cumulative_error(report, files[2]);
+    draw_skeletons(user, run, estimator.config().hand, files[3]);
+    std::cout << table << "\nwrote";
+    for (const std::string& file : files) std::cout << " " << file;
+    std::cout << "\n";
+    return 0;
+  } catch (const Error& e) {
+    std::cerr << "glovepose demo: " << e.what() << "\n";
+    return 2;
+  }
+}
+
+}  // namespace glovepose::cli
