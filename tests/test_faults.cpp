@@ -1,5 +1,5 @@
 // Fault injection in the row stream (issue: reliability). A simulated session is streamed row by
-// row through a calibrated estimator twice: clean, and with one fault injected during frames
+// row through a calibrated estimator twice: clean, and with one fault (sim/faults.hpp) injected during frames
 // [kFaultBegin, kFaultEnd). For every fault the estimator keeps running, never emits a non-finite
 // angle, flags the frames it cannot trust, keeps its trusted frames close to the clean stream's,
 // and is back to the clean stream's accuracy (and to unflagged frames) kRecoveryFrames after the
@@ -8,11 +8,12 @@
 
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
+#include <glovepose/sim/faults.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
+#include <optional>
 #include <vector>
 
 using namespace glovepose;
@@ -64,14 +65,10 @@ const sensor::CalibrationRange& faults_range() {
   return range;
 }
 
-// One reading as the glove would deliver it; a fault turns it into zero, one or more readings.
-struct Reading {
-  int row;
-  double value;
-  double timestamp;
-};
-// frame (from the session start), the reading, the readings to push.
-using Fault = std::function<void(std::size_t, const Reading&, std::vector<Reading>&)>;
+// The fault of a run: one kind, its injector seeded per kind so every run is reproducible.
+sim::FaultInjector inject(sim::FaultKind kind, sim::FaultSettings settings = {}) {
+  return sim::FaultInjector(kind, sensor::TraceLayout::glauser2019(), sim::derive_seed(43, {static_cast<std::uint64_t>(kind)}), settings);
+}
 
 struct FrameRecord {
   bool fresh = false;  // a new pose was produced during the frame
@@ -86,23 +83,24 @@ struct Run {
   long rejected_statuses = 0;
 };
 
-Run stream(const Fault& fault) {
+// The session streamed row by row; `fault`, when given, turns the readings of frames
+// [kFaultBegin, kFaultEnd) into what the faulty glove delivers.
+Run stream(std::optional<sim::FaultInjector> fault) {
   const train::Dataset& d = faults_session();
   GlovePoseEstimator estimator(faults_model());
   estimator.set_calibration(faults_range());
   Run run;
-  std::vector<Reading> out;
   std::uint64_t last_sequence = 0;
   const std::size_t first = first_session_frame();
   for (std::size_t f = first; f < d.frames(); ++f) {
     for (int r = 0; r < 180; ++r) {
-      const Reading in{r, d.raw_rows[f * 180 + static_cast<std::size_t>(r)], d.timestamps[f] - (179 - r) * kRowSlot};
-      out.clear();
+      const sim::Reading in{r, d.raw_rows[f * 180 + static_cast<std::size_t>(r)], d.timestamps[f] - (179 - r) * kRowSlot};
+      sim::InjectedReadings out;
       if (fault && f - first >= kFaultBegin && f - first < kFaultEnd)
-        fault(f - first, in, out);
+        out = fault->apply(in);
       else
         out.push_back(in);
-      for (const Reading& x : out) run.rejected_statuses += accepted(estimator.push_row(x.row, x.value, x.timestamp)) ? 0 : 1;
+      for (const sim::Reading& x : out) run.rejected_statuses += accepted(estimator.push_row(x.row, x.value, x.timestamp)) ? 0 : 1;
     }
     FrameRecord rec;
     const Pose& p = estimator.pose();
@@ -118,7 +116,7 @@ Run stream(const Fault& fault) {
 }
 
 const Run& clean_run() {
-  static const Run run = stream(nullptr);
+  static const Run run = stream(std::nullopt);
   return run;
 }
 
@@ -130,12 +128,6 @@ double mean_error_degrees(const Run& run, std::size_t begin, std::size_t end) {
     for (std::size_t k = 0; k < hand::kDofCount; ++k)
       sum += std::abs(run.frames[i].angles[k] - d.angles[(first + i) * hand::kDofCount + k]);
   return sum * 180.0 / 3.14159265358979 / static_cast<double>((end - begin) * hand::kDofCount);
-}
-
-double angle_difference_degrees(const FrameRecord& a, const FrameRecord& b) {
-  double worst = 0.0;
-  for (std::size_t k = 0; k < hand::kDofCount; ++k) worst = std::max(worst, std::abs(a.angles[k] - b.angles[k]));
-  return worst * 180.0 / 3.14159265358979;
 }
 
 struct Expectation {
@@ -159,7 +151,7 @@ double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
 // solve every 16 accepted readings) shifts with every lost or extra reading, and a pose depends on
 // the solve's place in the cycle by a few degrees, so trusted poses are compared with the truth
 // (the simulator's angles) as the clean stream is, not pose by pose with the clean stream.
-Run check_fault(const char* name, const Fault& fault, const Expectation& expect) {
+Run check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect) {
   const Run& clean = clean_run();
   Run run = stream(fault);
   REQUIRE(run.frames.size() == clean.frames.size());
@@ -219,91 +211,115 @@ TEST_CASE("faults: the clean stream is trusted and accurate") {
 
 TEST_CASE("faults: dropped rows") {
   // One reading in five lost on the link: the rows keep their previous readings; nothing to flag.
-  check_fault("random drops (20%)", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    if ((in.row * 7 + static_cast<int>(in.timestamp * 1e4)) % 5 != 0) out.push_back(in);
-  }, {});
+  check_fault("random drops (20%)", inject(sim::FaultKind::DroppedRows), {});
   // Every row of bottom trace 2 lost: their readings age until the pose is flagged stale.
-  check_fault("a burst of lost rows (trace 2)", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    if (in.row / 12 != 2) out.push_back(in);
-  }, {kPoseStaleReadings, 1.0, 3, 6});
+  sim::FaultSettings trace_2;
+  trace_2.lost_bottom_trace = 2;
+  check_fault("a burst of lost rows (trace 2)", inject(sim::FaultKind::LostTraceBurst, trace_2), {kPoseStaleReadings, 1.0, 3, 6});
 }
 
 TEST_CASE("faults: duplicated and out-of-order rows") {
-  check_fault("every row twice", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    out.push_back(in);
-    out.push_back(in);
-  }, {});
+  check_fault("every row twice", inject(sim::FaultKind::DuplicatedRows), {});
   // Rows delivered in swapped pairs: the late one is older than the last accepted, and rejected.
-  Reading held{-1, 0.0, 0.0};
-  const Run run = check_fault("rows swapped in pairs", [held](std::size_t, const Reading& in, std::vector<Reading>& out) mutable {
-    if (in.row % 2 == 0) {
-      held = in;
-      return;
-    }
-    out.push_back(in);
-    out.push_back(held);
-  }, {kPoseReadingsRejected, 1.0, 0, 6});
+  const Run run = check_fault("rows swapped in pairs", inject(sim::FaultKind::OutOfOrderRows), {kPoseReadingsRejected, 1.0, 0, 6});
   CHECK(run.rejected_statuses >= 90 * static_cast<long>(kFaultEnd - kFaultBegin));
 }
 
 TEST_CASE("faults: a stuck sensor") {
-  double stuck = -1.0;
-  check_fault("row 50 stuck", [stuck](std::size_t, const Reading& in, std::vector<Reading>& out) mutable {
-    Reading r = in;
-    if (in.row == 50) {
-      if (stuck < 0.0) stuck = in.value;
-      r.value = stuck;
-    }
-    out.push_back(r);
-  }, {kPoseStuckRows, 1.0, 30, 6});
+  sim::FaultSettings row_50;
+  row_50.stuck_row = 50;
+  check_fault("row 50 stuck", inject(sim::FaultKind::StuckSensor, row_50), {kPoseStuckRows, 1.0, 30, 6});
 }
 
 TEST_CASE("faults: a disconnected trace") {
-  check_fault("top trace 4 disconnected", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    Reading r = in;
-    if (in.row % 12 == 4) r.value = 0.05;  // stray capacitance only
-    out.push_back(r);
-  }, {kPoseDisconnectedRows | kPoseOutlierRows, 1.0, 0, 6});
+  sim::FaultSettings trace_4;
+  trace_4.disconnected_top_trace = 4;
+  trace_4.disconnected_pf = 0.05;  // stray capacitance only
+  check_fault("top trace 4 disconnected", inject(sim::FaultKind::DisconnectedTrace, trace_4),
+              {kPoseDisconnectedRows | kPoseOutlierRows, 1.0, 0, 6});
 }
 
 TEST_CASE("faults: spikes") {
-  const Run run = check_fault("spikes of +30 pF in 1 reading of 500", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    Reading r = in;
-    if ((in.row * 131 + static_cast<long>(in.timestamp * 1e4)) % 500 == 0) r.value += 30.0;
-    out.push_back(r);
-  }, {kPoseOutlierRows, 0.5, 0, 6});
-  (void)run;
+  sim::FaultSettings spikes;
+  spikes.spike_one_in = 500;
+  spikes.spike_pf = 30.0;
+  check_fault("spikes of +30 pF in 1 reading of 500", inject(sim::FaultKind::Spikes, spikes), {kPoseOutlierRows, 0.5, 0, 6});
 }
 
 TEST_CASE("faults: NaN and infinite readings") {
-  const Run run = check_fault("NaN and Inf in 1 reading of 10", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    Reading r = in;
-    const long k = in.row * 13 + static_cast<long>(in.timestamp * 1e4);
-    if (k % 20 == 0) r.value = std::numeric_limits<double>::quiet_NaN();
-    if (k % 20 == 10) r.value = std::numeric_limits<double>::infinity();
-    out.push_back(r);
-  }, {kPoseReadingsRejected, 0.9, 0, 6});
+  sim::FaultSettings one_in_ten;
+  one_in_ten.non_finite_one_in = 10;
+  const Run run = check_fault("NaN and Inf in 1 reading of 10", inject(sim::FaultKind::NonFiniteValues, one_in_ten),
+                              {kPoseReadingsRejected, 0.9, 0, 6});
   CHECK(run.rejected_statuses > 1000);
 }
 
 TEST_CASE("faults: glove unplugged and plugged back (a gap in the stream)") {
   // 2 s without any reading; then the readout starts over: no stale pre-gap readings are mixed in,
   // the first poses after it are flagged as recovering, and the smoothing restarts.
-  const Run run = check_fault("unplugged for 2 s", [](std::size_t, const Reading&, std::vector<Reading>&) {}, {0, 0.0, 0, 6});
+  const Run run = check_fault("unplugged for 2 s", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6});
   // During the gap the last pose stays (nothing arrives); the first frame after it is recovering.
   CHECK((run.frames[kFaultEnd].flags & kPoseRecovering) != 0);
 }
 
 TEST_CASE("faults: clock jumps") {
-  check_fault("clock jumps forward by 100 s", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    out.push_back(in);
-    out.back().timestamp += 100.0;
-  }, {kPoseRecovering, 0.0, 0, 7});
+  sim::FaultSettings jump;
+  jump.clock_jump_seconds = 100.0;
+  check_fault("clock jumps forward by 100 s", inject(sim::FaultKind::ClockJumpForward, jump), {kPoseRecovering, 0.0, 0, 7});
   // Backwards: the readings are rejected as out of order until a whole cycle of them shows the
   // clock restarted; then the readout follows the new clock, and again when it jumps back.
-  const Run run = check_fault("clock jumps back by 100 s", [](std::size_t, const Reading& in, std::vector<Reading>& out) {
-    out.push_back(in);
-    out.back().timestamp -= 100.0;
-  }, {kPoseRecovering, 0.0, 0, 7});
+  const Run run = check_fault("clock jumps back by 100 s", inject(sim::FaultKind::ClockJumpBack, jump), {kPoseRecovering, 0.0, 0, 7});
   CHECK(run.rejected_statuses >= 180);
+}
+
+TEST_CASE("faults: the injector turns each clean reading into what the faulty glove delivers") {
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  const sim::Reading clean{5, 30.0, 1.0};
+  const auto readings = [&](sim::FaultKind kind, const sim::Reading& in) {
+    sim::FaultInjector injector(kind, layout, 1);
+    const sim::InjectedReadings out = injector.apply(in);
+    return std::vector<sim::Reading>(out.begin(), out.end());
+  };
+  CHECK(readings(sim::FaultKind::DuplicatedRows, clean).size() == 2);
+  CHECK(readings(sim::FaultKind::Unplugged, clean).empty());
+  CHECK(readings(sim::FaultKind::ClockJumpForward, clean).at(0).timestamp == 101.0);
+  CHECK(readings(sim::FaultKind::ClockJumpBack, clean).at(0).timestamp == -99.0);
+  CHECK(readings(sim::FaultKind::DisconnectedTrace, {4, 30.0, 1.0}).at(0).value == 0.05);  // top trace 4
+  CHECK(readings(sim::FaultKind::DisconnectedTrace, {5, 30.0, 1.0}).at(0).value == 30.0);
+  CHECK(readings(sim::FaultKind::LostTraceBurst, {24, 30.0, 1.0}).empty());                 // bottom trace 2
+  CHECK(readings(sim::FaultKind::LostTraceBurst, {36, 30.0, 1.0}).size() == 1);
+
+  // Swapped pairs: the first reading waits and arrives after the second.
+  sim::FaultInjector swap(sim::FaultKind::OutOfOrderRows, layout, 1);
+  CHECK(swap.apply({0, 10.0, 1.0}).empty());
+  const sim::InjectedReadings pair = swap.apply({1, 11.0, 2.0});
+  REQUIRE(pair.size() == 2);
+  CHECK((pair.begin()[0].row == 1 && pair.begin()[1].row == 0));
+
+  // A stuck row repeats its first finite reading of the fault.
+  sim::FaultInjector stuck(sim::FaultKind::StuckSensor, layout, 1);
+  (void)stuck.apply({50, std::numeric_limits<double>::quiet_NaN(), 1.0});
+  (void)stuck.apply({50, 40.0, 2.0});
+  CHECK(stuck.apply({50, 41.0, 3.0}).begin()->value == 40.0);
+
+  // Rates are exact, hits never come three in a row, and a seed gives the same stream.
+  const auto drops = [&](std::uint64_t seed) {
+    sim::FaultInjector injector(sim::FaultKind::DroppedRows, layout, seed);
+    std::vector<bool> lost;
+    for (int i = 0; i < 5000; ++i) lost.push_back(injector.apply({i % 180, 30.0, i * 1e-4}).empty());
+    CHECK(injector.altered_readings() == 1000);
+    int run = 0, longest = 0;
+    for (const bool l : lost) longest = std::max(longest, run = l ? run + 1 : 0);
+    CHECK(longest <= 2);
+    return lost;
+  };
+  CHECK(drops(3) == drops(3));
+  CHECK(drops(3) != drops(4));
+
+  sim::FaultSettings bad;
+  bad.stuck_row = 180;
+  CHECK_THROWS_WITH_AS(sim::FaultInjector(sim::FaultKind::StuckSensor, layout, 1, bad), doctest::Contains("stuck_row 180"), Error);
+  bad = {};
+  bad.spike_one_in = 0;
+  CHECK_THROWS_WITH_AS(sim::FaultInjector(sim::FaultKind::Spikes, layout, 1, bad), doctest::Contains("spike_one_in 0"), Error);
 }
