@@ -17,6 +17,9 @@ int train_tools(int argc, char** argv);
 /// `glovepose demo ...` (demo.cpp); argv[1] is "demo". Returns the exit code.
 int demo(int argc, char** argv);
 
+/// `glovepose soak ...` (soak.cpp); argv[1] is "soak". Returns the exit code.
+int soak(int argc, char** argv);
+
 /// The value `text` of command-line option `option` as a number of type T (locale-independent).
 /// Throws glovepose::Error naming the option and the text when it is not one.
 template <typename T>

@@ -10,6 +10,8 @@
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
 //   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
+//   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
+//       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -42,7 +44,8 @@ struct Options {
             << "       glovepose info --model FILE\n"
             << "       glovepose simulate --help\n"
             << "       glovepose train | finetune | eval --help\n"
-            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n";
+            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n"
+            << "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n";
   std::exit(2);
 }
 
@@ -152,6 +155,7 @@ int main(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval"))
     return cli::train_tools(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);

@@ -1,0 +1,109 @@
+// The soak run, bounded for CI (issue: reliability): three estimators on threads sharing one
+// loaded model, each fed minutes of simulated 60 Hz row stream with random faults of every kind
+// (sim/soak.hpp; `glovepose soak` runs the same for hours). Every cycle must end in a pose or a
+// status that explains why not, every pose must be finite and in sequence, every fault must be
+// recovered from within the bound, memory must not grow and nothing may allocate after warm-up.
+#include <doctest/doctest.h>
+
+#include <glovepose/sim/soak.hpp>
+
+#include <sstream>
+#include <string>
+
+#include "alloc_counter.hpp"
+
+using namespace glovepose;
+
+namespace {
+
+std::shared_ptr<const PoseModel> soak_model() {
+  static const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");
+  return model;
+}
+
+// 30 s of simulated motion after a 3 s calibration sequence (about 4 s of CPU to simulate).
+const train::Dataset& soak_source() {
+  static const train::Dataset source = sim::simulate_soak_source(2026, 0.5, 3.0);
+  return source;
+}
+
+std::string printed(const sim::SoakReport& report) {
+  std::ostringstream text;
+  report.print(text);
+  return text.str();
+}
+
+}  // namespace
+
+TEST_CASE("soak: three estimators sharing one model through minutes of faulty stream") {
+  sim::SoakConfig config;
+  config.stream_minutes = 1.5;  // x 3 estimators: 4.5 minutes of stream, about 70 faults
+  config.estimators = 3;
+  config.seed = 7;
+  // Shorter stretches than the default, so that each estimator's 80 s after the warm-up hold at
+  // least 16 faults: more than one shuffled round of all 11 kinds.
+  config.clean_seconds_min = 1.0;  // 60 cycles: still far beyond the recovery bound
+  config.clean_seconds_max = 3.0;
+  config.fault_seconds_max = 2.0;
+  config.allocation_count = test::allocation_count;
+  const sim::SoakReport report = sim::run_soak(soak_model(), soak_source(), config);
+  MESSAGE(printed(report));
+  for (const std::string& failure : report.failures()) FAIL_CHECK(failure);
+  CHECK(report.passed());
+
+  // Every cycle was played and accounted for: the calibration sequence, then the stream.
+  const auto calibration_cycles = static_cast<std::uint64_t>(std::llround(report.calibration_seconds * 60.0));
+  CHECK(report.cycles == 3 * (calibration_cycles + 90 * 60));
+  CHECK(report.trusted_cycles + report.flagged_cycles + report.no_pose_total() == report.cycles);
+  // Every kind of fault came (in shuffled rounds of all kinds) and was recovered from.
+  for (int k = 0; k < sim::kFaultKindCount; ++k) {
+    CAPTURE(sim::to_string(static_cast<sim::FaultKind>(k)));
+    CHECK(report.faults[static_cast<std::size_t>(k)] >= 3);
+    CHECK(report.recoveries[static_cast<std::size_t>(k)].count == report.faults[static_cast<std::size_t>(k)]);
+  }
+  // The faults were seen: readings rejected, restarts (NotReady), flagged poses of each detector.
+  CHECK(report.statuses[static_cast<std::size_t>(Status::NonFinite)] > 0);
+  CHECK(report.statuses[static_cast<std::size_t>(Status::TimestampBackwards)] > 0);
+  CHECK(report.statuses[static_cast<std::size_t>(Status::NotReady)] > 0);
+  CHECK(report.statuses[static_cast<std::size_t>(Status::Uncalibrated)] > 0);
+  for (PoseFlag flag : {kPoseStaleReadings, kPoseRecovering, kPoseStuckRows, kPoseDisconnectedRows, kPoseOutlierRows}) {
+    int bit = 0;
+    while ((1u << bit) != flag) ++bit;
+    CAPTURE(sim::pose_flag_name(bit));
+    CHECK(report.poses_by_flag[static_cast<std::size_t>(bit)] > 0);
+  }
+  // Most of the stream is clean, so most cycles end in a trusted pose.
+  CHECK(report.trusted_cycles > report.cycles / 2);
+  // Memory was measured (Linux) and allocations counted.
+  CHECK(report.rss_after_warmup_kib > 0);
+  CHECK(report.allocations_counted);
+}
+
+TEST_CASE("soak: the run fails when a check does not hold") {
+  // A recovery bound no restart can meet (the rows' mean needs 5 cycles to fill): the run must say so.
+  sim::SoakConfig config;
+  config.stream_minutes = 0.5;
+  config.estimators = 1;
+  config.seed = 3;
+  config.warmup_seconds = 2.0;
+  config.recovery_bound_cycles = 1;
+  const sim::SoakReport report = sim::run_soak(soak_model(), soak_source(), config);
+  CHECK_FALSE(report.passed());
+  bool named = false;
+  for (const std::string& failure : report.failures()) named = named || failure.find("a recovery took") != std::string::npos;
+  CHECK(named);
+  CHECK(printed(report).find("soak: FAILED") != std::string::npos);
+}
+
+TEST_CASE("soak: set-up errors name what is wrong") {
+  sim::SoakConfig config;
+  config.estimators = 0;
+  CHECK_THROWS_WITH_AS(sim::run_soak(soak_model(), soak_source(), config), doctest::Contains("--estimators 0"), Error);
+  config = sim::SoakConfig{};
+  config.stream_minutes = 0.1;  // 6 s: shorter than the warm-up
+  CHECK_THROWS_WITH_AS(sim::run_soak(soak_model(), soak_source(), config), doctest::Contains("warm-up"), Error);
+  train::Dataset no_rows = soak_source();
+  no_rows.row_count = 0;
+  no_rows.raw_rows.clear();
+  CHECK_THROWS_WITH_AS(sim::run_soak(soak_model(), no_rows, sim::SoakConfig{}), doctest::Contains("raw rows"), Error);
+}
