@@ -123,14 +123,14 @@ class JointLimits {
     }
   }
 
-  /// @brief Custom limits; throws glovepose::Error naming the DoF when a limit is not finite or
-  /// min >= max.
+  /// @brief Custom limits; throws glovepose::Error naming the DoF when a limit is not finite,
+  /// min >= max, or max - min overflows (denormalize() would then give infinite or NaN angles).
   JointLimits(const Angles& min, const Angles& max) : min_(min), max_(max) {
     for (std::size_t i = 0; i < kDofCount; ++i) {
-      if (!std::isfinite(min_[i]) || !std::isfinite(max_[i]) || !(min_[i] < max_[i]))
+      if (!std::isfinite(min_[i]) || !std::isfinite(max_[i]) || !(min_[i] < max_[i]) || !std::isfinite(max_[i] - min_[i]))
         throw Error(std::string("JointLimits: DoF ") + kDofs[i].name + " has limits [" +
                     std::to_string(min_[i]) + ", " + std::to_string(max_[i]) +
-                    "], expected finite values with min < max");
+                    "], expected finite values with min < max and a finite range max - min");
     }
   }
 

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <istream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -64,6 +65,10 @@ class CalibrationRange {
       if (min_(i) > max_(i))
         throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " above max " +
                     std::to_string(max_(i)) + ", expected min <= max");
+      // normalize() divides by the span: one that overflows would turn finite readings into NaN.
+      if (!std::isfinite(max_(i) - min_(i)))
+        throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " and max " + std::to_string(max_(i)) +
+                    ", whose difference overflows, expected a range max - min that is a finite number");
       const double scale = std::max(std::abs(min_(i)), std::abs(max_(i)));
       if (max_(i) - min_(i) <= config_.min_relative_range * scale || max_(i) - min_(i) <= 0.0) {
         flat_[static_cast<std::size_t>(i)] = true;
@@ -133,10 +138,17 @@ class CalibrationRange {
                                const std::vector<std::string>& names, CalibrationConfig config = {}) {
     std::ifstream file(path);
     if (!file) throw Error("CalibrationRange::load: cannot open '" + path + "'");
+    return load(file, path, glove_id, names, config);
+  }
+
+  /// @brief Reads save()'s format from a stream (the parser of load(path, ...)); `source` names the
+  /// stream in messages, as the path does.
+  static CalibrationRange load(std::istream& file, const std::string& source, const std::string& glove_id,
+                               const std::vector<std::string>& names, CalibrationConfig config = {}) {
     std::string line;
     int line_no = 0;
     const auto fail = [&](const std::string& what) -> Error {
-      return Error("CalibrationRange::load: '" + path + "' line " + std::to_string(line_no) + ": " + what);
+      return Error("CalibrationRange::load: '" + source + "' line " + std::to_string(line_no) + ": " + what);
     };
     const auto next = [&]() {
       ++line_no;

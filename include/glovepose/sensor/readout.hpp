@@ -245,6 +245,10 @@ class Readout {
     if (status != Status::Ok) return status;
     residual_.noalias() = solver_->measurement_matrix() * frame_.cells;
     residual_ -= mean_;
+    // Finite readings can still be large enough (~1e308 pF) for the solve or its residual to
+    // overflow: no frame then, rather than one whose residual is infinite or NaN (a NaN row escapes
+    // the outlier count below).
+    if (!residual_.allFinite()) return Status::NonFinite;
     ReadoutHealth& health = frame_.health;
     health = ReadoutHealth{};
     health.restarts = restarts_;

@@ -1,0 +1,38 @@
+/// @file glove_description_fuzz.cpp
+/// @brief Fuzz target: the bytes as a glove description (grid/glove_description.hpp JSON, also the
+/// "glove_description" metadata of model files), through GloveDescription::from_json, the parser
+/// GloveDescription::read uses after reading the file.
+///
+/// Invariants: bad input is refused with glovepose::Error only; an accepted description writes
+/// (to_json) text that parses to an equal description, and maps plausible cells to finite stretch
+/// maps.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glovepose/grid/glove_description.hpp>
+
+#include "fuzz_check.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  std::optional<glovepose::grid::GloveDescription> glove;
+  try {
+    glove.emplace(glovepose::grid::GloveDescription::from_json(text));
+  } catch (const glovepose::Error&) {
+    return 0;
+  }
+  const glovepose::grid::GloveDescription again = glovepose::grid::GloveDescription::from_json(glove->to_json());
+  GLOVEPOSE_FUZZ_REQUIRE(again == *glove);
+  GLOVEPOSE_FUZZ_REQUIRE(glove->cell_count() >= 1 && glove->cell_count() <= glovepose::grid::kStretchValues);
+  GLOVEPOSE_FUZZ_REQUIRE(static_cast<int>(glove->cell_names().size()) == glove->cell_count());
+
+  std::vector<double> cells(static_cast<std::size_t>(glove->cell_count()));
+  for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = -1.0 + 2.0 * static_cast<double>(c) / static_cast<double>(cells.size());
+  std::array<float, glovepose::grid::kStretchValues> maps{};
+  GLOVEPOSE_FUZZ_REQUIRE(glove->map().to_stretch_maps(cells.data(), maps) == glovepose::Status::Ok);
+  GLOVEPOSE_FUZZ_REQUIRE(glovepose::fuzz::all_finite(maps));
+  return 0;
+}
