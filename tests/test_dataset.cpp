@@ -188,7 +188,9 @@ TEST_CASE("dataset: write and read back exactly, NaN kept in raw_rows, the file 
                                                     {"glove", DType::I32},      {"donning", DType::I32}, {"kind", DType::U8},
                                                     {"outlier", DType::U8}};
   CHECK(file.tensors.size() == 10);
-  for (const auto& [name, dtype] : expected) {
+  for (const auto& entry : expected) {  // no structured binding: clang 14 (C++17) cannot capture one in INFO's lambda
+    const char* const name = entry.first;
+    const DType dtype = entry.second;
     INFO(name);
     REQUIRE(file.tensors.count(name) == 1);
     CHECK(file.tensors.at(name).dtype == dtype);

@@ -40,7 +40,9 @@ TEST_CASE("pose gallery: in pinches and OK the thumb tip meets the fingertip (so
                                                           {"pinch_ring", hand::Finger::Ring}, {"pinch_pinky", hand::Finger::Pinky},
                                                           {"ok", hand::Finger::Index}};
   const auto gallery = pose_gallery();
-  for (const auto& [name, finger] : pinches) {
+  for (const auto& entry : pinches) {  // no structured binding: C++17 lambdas cannot capture one (clang 14 rejects it)
+    const char* const name = entry.first;
+    const hand::Finger finger = entry.second;
     const auto it = std::find_if(gallery.begin(), gallery.end(), [&](const KeyPose& p) { return p.name == name; });
     REQUIRE(it != gallery.end());
     fk.pose(it->angles, s);

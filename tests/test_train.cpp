@@ -60,7 +60,9 @@ void check_against_fixture(Net& net, const Fixture& fx, Forward&& forward_and_ba
   CHECK(worst_output <= 1e-5);
   const nn::TensorMap grads = net.parameters().gradients();
   double worst_grad = 0.0;
-  for (const auto& [name, g] : grads) {
+  for (const auto& entry : grads) {  // no structured binding: C++17 lambdas (INFO) cannot capture one (clang 14 rejects it)
+    const std::string& name = entry.first;
+    const auto& g = entry.second;
     INFO("gradient of " << name);
     const std::vector<double> expected = fx.get("grad." + name);
     REQUIRE(expected.size() == g.values.size());
@@ -74,15 +76,19 @@ void check_against_fixture(Net& net, const Fixture& fx, Forward&& forward_and_ba
   }
   MESSAGE("gradients: worst max|C++ - autograd| / max|autograd| per tensor = " << worst_grad);
   const nn::TensorMap after = net.parameters().to_tensors();
-  for (const auto& [name, t] : fx.file.tensors)
+  for (const auto& entry : fx.file.tensors) {  // no structured binding, as above
+    const std::string& name = entry.first;
+    const auto& t = entry.second;
     if (name.rfind("after.", 0) == 0) {
       INFO("running statistic " << name);
       CHECK(relative(after.at(name.substr(6)).values, t.template to<double>()) <= 1e-5);
     }
+  }
   train::Optimizer adam(net.parameters(), {});
   adam.step(net.parameters(), pool);
   const nn::TensorMap stepped = net.parameters().to_tensors();
-  for (const auto& [name, g] : grads) {
+  for (const auto& entry : grads) {  // no structured binding, as above
+    const std::string& name = entry.first;
     INFO("Adam step of " << name);
     const std::vector<double> expected = fx.get("adam." + name);
     const std::vector<float> start = starting_tensors(fx).at(name).values;
@@ -227,7 +233,9 @@ TEST_CASE("train: a step is reproducible for a thread count and close across thr
     return std::make_pair(net.parameters().to_tensors(), std::vector<float>(net.output(), net.output() + t.size()));
   };
   const auto one = step(1), two = step(2), two_again = step(2), three = step(3);
-  for (const auto& [name, t2] : two.first) {
+  for (const auto& entry : two.first) {  // no structured binding, as above
+    const std::string& name = entry.first;
+    const auto& t2 = entry.second;
     INFO(name);
     CHECK(t2.values == two_again.first.at(name).values);
   }

@@ -235,8 +235,12 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   std::string out;
   char line[512];
   const auto add = [&](const char* format, auto... args) {
-    std::snprintf(line, sizeof line, format, args...);
-    out += line;
+    if constexpr (sizeof...(args) == 0) {
+      out += format;  // plain text: no printf with a non-literal format and no arguments (clang's -Wformat-security)
+    } else {
+      std::snprintf(line, sizeof line, format, args...);
+      out += line;
+    }
   };
   const double session_seconds = static_cast<double>(user.data.frames() - user.first_session_frame) / user.cycle_rate;
   const std::size_t poses = run.compute_seconds.size();
