@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -15,47 +16,95 @@ namespace kernels = glovepose::nn::kernels;
 
 namespace {
 template <typename W>
+W to_weight(float v) {
+  if constexpr (std::is_same_v<W, float>) return v;
+  else if constexpr (std::is_same_v<W, std::uint16_t>) return float_to_f16(v);
+  else return static_cast<W>(float_to_bf16(v));
+}
+
+// A k x n matrix (row-major, values exact in W) in the layout a backend reads: its column panels,
+// BF16 in pair layout (kernels/weight_load.hpp).
+template <typename W>
+std::vector<W> pack(const std::vector<float>& logical, int k, int n, int panel, int lanes) {
+  std::vector<W> packed(logical.size());
+  for (int kk = 0; kk < k; ++kk)
+    for (int j = 0; j < n; ++j) {
+      const int column = std::is_same_v<W, kernels::BFloat16> ? kernels::paired_slot(j, lanes) : j;
+      packed[static_cast<std::size_t>(kernels::panel_index(kk, column, k, n, panel))] = to_weight<W>(logical[static_cast<std::size_t>(kk * n + j)]);
+    }
+  return packed;
+}
+
+template <typename W>
 void check_gemm(int rows, int k, int n, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  // Activations as a ReLU leaves them: about 40% exact zeros (one -0 among them).
   std::vector<float> x(static_cast<std::size_t>(rows * k));
-  for (float& v : x) v = u(rng);
-  std::vector<W> w(static_cast<std::size_t>(k * n));  // any values: both read the same panel layout
-  for (W& v : w) {
-    if constexpr (std::is_same_v<W, float>) v = u(rng);
-    else v = float_to_f16(u(rng));
-  }
-  std::vector<float> y_scalar(static_cast<std::size_t>(rows * n)), y_simd;
-  for (float& v : y_scalar) v = u(rng);
-  y_simd = y_scalar;
+  for (float& v : x) v = rng() % 5 < 2 ? 0.0f : u(rng);
+  if (!x.empty()) x[x.size() / 2] = -0.0f;
+  std::vector<float> logical(static_cast<std::size_t>(k * n));  // exact in W: rounded through it
+  for (float& v : logical) v = kernels::weight_value(to_weight<W>(u(rng)));
+  const std::vector<W> w = pack<W>(logical, k, n, SimdBackend::panel, SimdBackend::lanes);
+  std::vector<float> y_reference(static_cast<std::size_t>(rows * n));
+  for (float& v : y_reference) v = u(rng);
+  std::vector<float> y_simd = y_reference, y_sparse = y_reference, y_scalar_sparse = y_reference;
   std::vector<const float*> xr;
-  std::vector<float*> ys, yv;
+  std::vector<float*> yv, ysp, yss;
   // Rows in a scrambled order, as a tap's (output, input) pairs are.
   for (int r = 0; r < rows; ++r) {
     const int src = rows - 1 - r;  // reversed: rows need not be in memory order
     xr.push_back(x.data() + src * k);
-    ys.push_back(y_scalar.data() + r * n);
     yv.push_back(y_simd.data() + r * n);
+    ysp.push_back(y_sparse.data() + r * n);
+    yss.push_back(y_scalar_sparse.data() + r * n);
   }
-  // The scalar kernel is told the SIMD panel width so that both read the same packing.
   for (int r = 0; r < rows; ++r)
     for (int kk = 0; kk < k; ++kk)
       for (int j = 0; j < n; ++j)
-        ys[static_cast<std::size_t>(r)][j] += xr[static_cast<std::size_t>(r)][kk] *
-            kernels::weight_value(w[static_cast<std::size_t>(kernels::panel_index(kk, j, k, n, SimdBackend::panel))]);
+        y_reference[static_cast<std::size_t>(r * n + j)] += xr[static_cast<std::size_t>(r)][kk] * logical[static_cast<std::size_t>(kk * n + j)];
   SimdBackend::gemm_rows(xr.data(), yv.data(), rows, w.data(), k, n);
-  for (std::size_t i = 0; i < y_scalar.size(); ++i) REQUIRE(y_simd[i] == doctest::Approx(y_scalar[i]).epsilon(1e-5).scale(1.0));
+  for (std::size_t i = 0; i < y_reference.size(); ++i) REQUIRE(y_simd[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
+  // The same product from the rows' nonzero entries: SIMD and scalar compaction agree, and both
+  // sparse products equal the dense one (the scalar kernel reads its own packing).
+  std::vector<int> index(static_cast<std::size_t>(rows * k) + 1), scalar_index = index;
+  std::vector<float> value(static_cast<std::size_t>(rows * k) + 1), scalar_value = value;
+  std::vector<kernels::SparseRow> sparse, scalar_sparse;
+  for (int r = 0; r < rows; ++r) {
+    const std::size_t at = static_cast<std::size_t>(r * k);
+    const int count = SimdBackend::compact(xr[static_cast<std::size_t>(r)], k, index.data() + at, value.data() + at);
+    REQUIRE(ScalarBackend::compact(xr[static_cast<std::size_t>(r)], k, scalar_index.data() + at, scalar_value.data() + at) == count);
+    int expected = 0;
+    for (int kk = 0; kk < k; ++kk) expected += xr[static_cast<std::size_t>(r)][kk] != 0.0f;
+    REQUIRE(count == expected);
+    for (int i = 0; i < count; ++i) {
+      REQUIRE(index[at + static_cast<std::size_t>(i)] == scalar_index[at + static_cast<std::size_t>(i)]);
+      REQUIRE(value[at + static_cast<std::size_t>(i)] == xr[static_cast<std::size_t>(r)][index[at + static_cast<std::size_t>(i)]]);
+      REQUIRE(value[at + static_cast<std::size_t>(i)] != 0.0f);
+    }
+    sparse.push_back({index.data() + at, value.data() + at, count});
+    scalar_sparse.push_back({scalar_index.data() + at, scalar_value.data() + at, count});
+  }
+  SimdBackend::gemm_sparse_rows(sparse.data(), ysp.data(), rows, w.data(), k, n);
+  const std::vector<W> w_scalar = pack<W>(logical, k, n, ScalarBackend::panel, ScalarBackend::lanes);
+  ScalarBackend::gemm_sparse_rows(scalar_sparse.data(), yss.data(), rows, w_scalar.data(), k, n);
+  for (std::size_t i = 0; i < y_reference.size(); ++i) {
+    REQUIRE(y_sparse[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
+    REQUIRE(y_scalar_sparse[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
+  }
   // Sums of dot products over several terms (one output channel gathered over taps and sources),
-  // for several frames whose rows lie `stride` floats apart.
+  // for several frames whose rows lie `stride` floats apart. Weights in natural (not pair) layout.
   const int frames = 1 + rows % 11, stride = k + 3;
   std::vector<float> xf(static_cast<std::size_t>(rows * frames * stride));
   for (float& v : xf) v = u(rng);
+  std::vector<W> wd(logical.size());
+  for (std::size_t i = 0; i < wd.size(); ++i) wd[i] = to_weight<W>(logical[i]);
   std::vector<const float*> xt;
   std::vector<const W*> wt;
   std::vector<int> kt;
   for (int r = 0; r < rows; ++r) {
     xt.push_back(xf.data() + static_cast<std::size_t>(r * frames * stride));
-    wt.push_back(w.data() + (r * 3) % n);
+    wt.push_back(wd.data() + (r * 3) % n);
     kt.push_back(k - (r % 3 == 0 ? 0 : std::min(k - 1, r % 5)));  // lengths that differ between terms
   }
   std::vector<float> scalar_sums(static_cast<std::size_t>(frames)), simd_sums(static_cast<std::size_t>(frames));
@@ -78,19 +127,58 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
 }
 }  // namespace
 
-TEST_CASE("kernels: the SIMD row-gathered product equals the scalar reference (all blockings, F32 and F16 weights)") {
+TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16 and BF16 weights)") {
   const int lanes = SimdBackend::lanes;
   MESSAGE("SIMD backend: " << lanes << " floats per vector");
   unsigned seed = 1;
   for (int rows : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 25, 64, 100})
-    for (int n : {lanes, 2 * lanes, 3 * lanes, 5 * lanes, 8 * lanes, 13 * lanes})
-      for (int k : {1, 2, 7, 64, 130}) {
+    for (int n : {lanes, 2 * lanes, 3 * lanes, 4 * lanes, 5 * lanes, 8 * lanes, 10 * lanes, 13 * lanes})
+      for (int k : {1, 2, 7, 17, 64, 130}) {
         CAPTURE(rows);
         CAPTURE(n);
         CAPTURE(k);
         check_gemm<float>(rows, k, n, seed++);
         check_gemm<std::uint16_t>(rows, k, n, seed++);
+        if (n % (2 * lanes) == 0) check_gemm<kernels::BFloat16>(rows, k, n, seed++);  // pair layout: whole pairs of vectors
       }
+}
+
+TEST_CASE("kernels: compaction keeps NaN and infinities, drops both zeros") {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  std::vector<float> x(37, 0.0f);
+  x[0] = nan;
+  x[5] = -0.0f;
+  x[16] = -inf;
+  x[17] = 2.5f;
+  x[36] = 1e-30f;
+  for (const bool simd : {false, true}) {
+    std::vector<int> index(x.size());
+    std::vector<float> value(x.size());
+    const int count = simd ? SimdBackend::compact(x.data(), 37, index.data(), value.data())
+                           : ScalarBackend::compact(x.data(), 37, index.data(), value.data());
+    REQUIRE(count == 4);
+    CHECK(index[0] == 0);
+    CHECK(std::isnan(value[0]));
+    CHECK(index[1] == 16);
+    CHECK(value[1] == -inf);
+    CHECK(index[2] == 17);
+    CHECK(index[3] == 36);
+    CHECK(value[3] == 1e-30f);
+  }
+}
+
+TEST_CASE("kernels: BF16 pair layout") {
+  // Groups of 2 x lanes columns: column j and lanes + j share 32-bit word j (low, high half).
+  CHECK(kernels::paired_slot(0, 16) == 0);
+  CHECK(kernels::paired_slot(1, 16) == 2);
+  CHECK(kernels::paired_slot(16, 16) == 1);
+  CHECK(kernels::paired_slot(31, 16) == 31);
+  CHECK(kernels::paired_slot(32 + 17, 16) == 32 + 3);
+  for (int c = 0; c < 8; ++c) CHECK(kernels::paired_slot(c, 1) == c);  // the scalar backend: identity
+  // The widening itself: bfloat16 is the top half of the float.
+  const std::uint16_t one = float_to_bf16(1.0f);
+  CHECK(one == 0x3F80);
+  CHECK(kernels::weight_value(static_cast<kernels::BFloat16>(one)) == 1.0f);
 }
 
 TEST_CASE("kernels: the scalar reference product follows the panel layout's definition") {

@@ -26,6 +26,20 @@ std::vector<float> random_inputs(int frames, unsigned seed, float range = 1.0f) 
 template <typename Backend>
 double max_difference_to_reference(const TensorMap& tensors, int width, int frames, unsigned seed) {
   const auto net = UNet<Backend>::from_tensors(tensors, width);
+  if (frames == 1) {  // one frame: the sparse products (kSparseMaxFrames); several: the dense ones
+    auto ws = net.make_workspace(1);
+    const std::vector<float> x = random_inputs(4, seed);
+    double worst = 0.0;
+    for (int f = 0; f < 4; ++f) {
+      std::array<float, kUNetOutputs> y{};
+      std::array<float, kUNetInputs> in{};
+      std::copy_n(x.begin() + f * kUNetInputs, kUNetInputs, in.begin());
+      REQUIRE(net.forward(in, y, ws) == Status::Ok);
+      const std::vector<double> expected = test::unet_reference(tensors, in.data());
+      for (int i = 0; i < kUNetOutputs; ++i) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(i)]));
+    }
+    return worst;
+  }
   auto ws = net.make_workspace(frames);
   const std::vector<float> x = random_inputs(frames, seed);
   std::vector<float> y(static_cast<std::size_t>(frames * kUNetOutputs));
@@ -83,11 +97,14 @@ TEST_CASE("unet: the SIMD and scalar backends equal an independent reference for
   for (int width : {1, 2, 3, 4, 13, 64}) {
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 100 + static_cast<unsigned>(width));
-    const double simd = max_difference_to_reference<kernels::SimdBackend>(tensors, width, 6, 7);
-    const double scalar = max_difference_to_reference<kernels::ScalarBackend>(tensors, width, 6, 7);
-    MESSAGE("w = " << width << ": max |simd - reference| = " << simd << ", max |scalar - reference| = " << scalar);
-    CHECK(simd <= 1e-5);
-    CHECK(scalar <= 1e-5);
+    for (const int frames : {6, 1}) {  // dense products; sparse ones (single frames)
+      CAPTURE(frames);
+      const double simd = max_difference_to_reference<kernels::SimdBackend>(tensors, width, frames, 7);
+      const double scalar = max_difference_to_reference<kernels::ScalarBackend>(tensors, width, frames, 7);
+      MESSAGE("w = " << width << ", " << frames << " frame(s): max |simd - reference| = " << simd << ", max |scalar - reference| = " << scalar);
+      CHECK(simd <= 1e-5);
+      CHECK(scalar <= 1e-5);
+    }
   }
 }
 
@@ -125,29 +142,55 @@ TEST_CASE("unet: bad input gets a status and the single-frame forward allocates 
   for (float v : out) CHECK(std::abs(v) < 1.0f);
 }
 
-TEST_CASE("unet: 16-bit weights stay within 0.1 degree of the exact F32 path on calibrated inputs") {
+TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree; single frames (sparse) equal batches (dense)") {
+  for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
+    CAPTURE(width);
+    const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 300 + static_cast<unsigned>(width));
+    const auto simd = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::BF16);
+    const auto scalar = UNet<kernels::ScalarBackend>::from_tensors(tensors, width, 1e-5, WeightStorage::BF16);
+    const int frames = 9;
+    const std::vector<float> x = random_inputs(frames, 5);
+    std::vector<float> batched(static_cast<std::size_t>(frames * kUNetOutputs)), single = batched, reference = batched;
+    auto ws = simd.make_workspace(frames), one = simd.make_workspace(1);
+    auto scalar_ws = scalar.make_workspace(frames);
+    REQUIRE(simd.forward(x.data(), batched.data(), frames, ws) == Status::Ok);
+    REQUIRE(scalar.forward(x.data(), reference.data(), frames, scalar_ws) == Status::Ok);
+    for (int f = 0; f < frames; ++f)
+      REQUIRE(simd.forward(x.data() + f * kUNetInputs, single.data() + f * kUNetOutputs, 1, one) == Status::Ok);
+    for (std::size_t i = 0; i < batched.size(); ++i) {
+      CHECK(batched[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
+      CHECK(single[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
+    }
+  }
+}
+
+TEST_CASE("unet: 16-bit weights (F16, BF16) stay within 0.1 degree of the exact F32 path on calibrated inputs") {
   const int width = 64, frames = 256;
   const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 21);
   const auto exact = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F32);
-  const auto half = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F16);
-  CHECK(half.weight_bytes() * 2 == exact.weight_bytes());
-  auto ws = exact.make_workspace(frames), ws16 = half.make_workspace(frames);
+  auto ws = exact.make_workspace(frames);
   const std::vector<float> x = random_inputs(frames, 4);
-  std::vector<float> a(static_cast<std::size_t>(frames * kUNetOutputs)), b = a;
+  std::vector<float> a(static_cast<std::size_t>(frames * kUNetOutputs));
   REQUIRE(exact.forward(x.data(), a.data(), frames, ws) == Status::Ok);
-  REQUIRE(half.forward(x.data(), b.data(), frames, ws16) == Status::Ok);
-  // Pose-map slot -> DoF, and the angle a unit of output is worth: (max - min) / 2 (dofs.hpp).
-  const auto slots = grid::GridMap::paper_pose_slots();
-  double worst_degrees = 0.0;
-  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-    const double radians_per_unit = 0.5 * (hand::kDofs[d].max - hand::kDofs[d].min);
-    for (int f = 0; f < frames; ++f) {
-      const std::size_t i = static_cast<std::size_t>(f * kUNetOutputs + slots[d].flat());
-      worst_degrees = std::max(worst_degrees, std::abs(a[i] - b[i]) * radians_per_unit * 180.0 / 3.14159265358979);
+  for (const WeightStorage storage : {WeightStorage::F16, WeightStorage::BF16}) {
+    const auto half = UNet<>::from_tensors(tensors, width, 1e-5, storage);
+    CHECK(half.weight_bytes() * 2 == exact.weight_bytes());
+    auto ws16 = half.make_workspace(frames);
+    std::vector<float> b = a;
+    REQUIRE(half.forward(x.data(), b.data(), frames, ws16) == Status::Ok);
+    // Pose-map slot -> DoF, and the angle a unit of output is worth: (max - min) / 2 (dofs.hpp).
+    const auto slots = grid::GridMap::paper_pose_slots();
+    double worst_degrees = 0.0;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const double radians_per_unit = 0.5 * (hand::kDofs[d].max - hand::kDofs[d].min);
+      for (int f = 0; f < frames; ++f) {
+        const std::size_t i = static_cast<std::size_t>(f * kUNetOutputs + slots[d].flat());
+        worst_degrees = std::max(worst_degrees, std::abs(a[i] - b[i]) * radians_per_unit * 180.0 / 3.14159265358979);
+      }
     }
+    MESSAGE(std::string(storage_name(storage)) << " weights vs F32: largest angle difference " << worst_degrees << " degrees over " << frames << " frames");
+    CHECK(worst_degrees < 0.1);
   }
-  MESSAGE("F16 weights vs F32: largest angle difference " << worst_degrees << " degrees over " << frames << " frames");
-  CHECK(worst_degrees < 0.1);
 }
 
 TEST_CASE("unet: folded weights the storage cannot hold are refused, naming the layer") {
@@ -157,6 +200,11 @@ TEST_CASE("unet: folded weights the storage cannot hold are refused, naming the 
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::F16),
                        doctest::Contains("layer enc3 with bn3 folded in has a weight of"), Error);
   CHECK_NOTHROW(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::F32));
+  CHECK_NOTHROW(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::BF16));  // bfloat16 has float's range
+  tensors["bn3.weight"].values.assign(64, 1.0f);
+  tensors["bn3.running_var"].values.assign(64, 1.0f);
+  tensors["enc3.weight"].values[5] = 3.4e38f;  // folded 3.39998e38: bfloat16 rounds it up past its largest (3.3895e38)
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::BF16), doctest::Contains("too large for BF16 storage"), Error);
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 0), doctest::Contains("width 0, expected 1..4096"), Error);
 }
 

@@ -5,8 +5,9 @@ Usage: /usr/bin/python3 bench/peers/report.py --width 64 --glovepose GB.json --o
 
 GB.json is Google Benchmark output of build/bench/glovepose_bench run with
 --benchmark_repetitions=N --benchmark_report_aggregates_only=true --benchmark_format=json; the
-`median` aggregate's real_time of BM_UNetForward/<width>/<batch>[/real_time][/threads:N] (and
-BM_UNetForwardF16/...) is taken as the time of one forward of the whole batch (per thread-iteration
+`median` aggregate's real_time of BM_UNetForward[F32|BF16]/<width>/<batch>[/real_time][/threads:N]
+(BM_UNetForward: F16 weights, the real-time path; F32 exact; BF16) is taken as the time of one
+forward of the whole batch (per thread-iteration
 with threads:N, i.e. batch / real_time is the N threads' throughput). ORT.json and TORCH.json come from
 ort_bench.js and torch_bench.py. Every ratio is (engine's time per frame) / (glovepose F32 time per
 frame at the same batch and thread count): above 1 means glovepose is faster.
@@ -42,11 +43,12 @@ def parse_gbench(src: Union[str, Path, dict], aggregate: str = "median") -> Dict
     return out
 
 
-_UNET = re.compile(r"^BM_UNetForward(?P<f16>F16)?/(?P<width>\d+)/(?P<batch>\d+)(?P<rest>(/[^/]+)*)$")
+_UNET = re.compile(r"^BM_UNetForward(?P<prec>F32|BF16)?/(?P<width>\d+)/(?P<batch>\d+)(?P<rest>(/[^/]+)*)$")
+_ENGINE = {"F32": "glovepose F32", "F16": "glovepose F16 weights", "BF16": "glovepose BF16 weights"}
 
 
 def unet_cases(gb: Dict[str, float], width: int) -> List[Tuple[str, int, int, float]]:
-    """(precision 'F32'|'F16', batch, threads, seconds per run) of the BM_UNetForward cases of `width`.
+    """(precision 'F32'|'F16'|'BF16', batch, threads, seconds per run) of the BM_UNetForward cases of `width`.
 
     Accepts Google Benchmark suffixes such as /real_time and /threads:N. With threads:N, Google
     Benchmark's real_time is wall time / total iterations over all threads, so batch / real_time is
@@ -58,7 +60,7 @@ def unet_cases(gb: Dict[str, float], width: int) -> List[Tuple[str, int, int, fl
         if not m or int(m["width"]) != width:
             continue
         t = re.search(r"/threads:(\d+)", m["rest"] or "")
-        out.append(("F16" if m["f16"] else "F32", int(m["batch"]), int(t[1]) if t else 1, sec))
+        out.append((m["prec"] or "F16", int(m["batch"]), int(t[1]) if t else 1, sec))
     return sorted(out, key=lambda c: (c[1], c[2], c[0] != "F32"))
 
 
@@ -77,7 +79,7 @@ def build_rows(width: int, gb: Dict[str, float], ort: dict, torch: dict) -> List
     for b in batches:
         for prec, cb, th, sec in cases:
             if cb == b:
-                rows.append(_row("glovepose F32" if prec == "F32" else "glovepose F16 weights", b, th, sec, base.get((b, th))))
+                rows.append(_row(_ENGINE[prec], b, th, sec, base.get((b, th))))
         for r in ort["results"]:
             if r["batch"] == b:
                 rows.append(_row(f"ONNX Runtime {ort['version']}", b, r["threads"], r["median_s_per_run"],
@@ -122,7 +124,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = ap.parse_args(argv)
     gb = parse_gbench(args.glovepose)
     have = {(c[1], c[2]) for c in unet_cases(gb, args.width) if c[0] == "F32"}
-    missing = [f"BM_UNetForward/{args.width}/{b}" for b in (1, 1024) if (b, 1) not in have]
+    missing = [f"BM_UNetForwardF32/{args.width}/{b}" for b in (1, 1024) if (b, 1) not in have]
     if missing:
         print(f"report: {args.glovepose} has no single-thread median for {', '.join(missing)} "
               f"(found: {sorted(gb) or 'nothing'})", file=sys.stderr)

@@ -122,8 +122,37 @@ static void test_model_errors(const char* model_path, const char* dir) {
   glovepose_model_free(NULL); /* ignored */
 }
 
+/* The pose with 16-bit weights is the pose of F32 weights up to rounding: the largest angle
+ * difference (degrees) on the synthetic input, which must be nonzero (the storage is really in use). */
+static double angle_difference_degrees(glovepose_model* exact, glovepose_model* rounded) {
+  glovepose_estimator* a = NULL;
+  glovepose_estimator* b = NULL;
+  glovepose_pose pa, pb;
+  double worst = 0.0, lo[44], hi[44];
+  int c, d;
+  CHECK_RESULT(glovepose_estimator_create(exact, NULL, &a), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_create(rounded, NULL, &b), GLOVEPOSE_OK);
+  for (c = 0; c < 44; ++c) {
+    lo[c] = 15.0 + 0.1 * c;
+    hi[c] = 25.0 + 0.1 * c;
+  }
+  CHECK_RESULT(glovepose_calibration_set_range(a, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_set_range(b, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK(push_synthetic(a, 0.0, 10) == 10);
+  CHECK(push_synthetic(b, 0.0, 10) == 10);
+  glovepose_pose_init(&pa);
+  glovepose_pose_init(&pb);
+  CHECK_RESULT(glovepose_estimator_get_pose(a, &pa), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_get_pose(b, &pb), GLOVEPOSE_OK);
+  for (d = 0; d < GLOVEPOSE_DOF_COUNT; ++d) worst = fmax(worst, fabs(pa.angles[d] - pb.angles[d]));
+  glovepose_estimator_free(a);
+  glovepose_estimator_free(b);
+  return worst * 180.0 / 3.14159265358979;
+}
+
 static void test_model(glovepose_model* model, const char* model_path, const char* dir) {
   glovepose_model* f16 = NULL;
+  glovepose_model* bf16 = NULL;
   glovepose_model* with_glove = NULL;
   glovepose_model* with_training = NULL;
   CHECK(glovepose_model_cell_count(model) == 44);
@@ -138,6 +167,7 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
 
   CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_F16, NULL, &f16), GLOVEPOSE_OK);
   CHECK(glovepose_model_cell_count(f16) == 44);
+  CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_BF16, NULL, &bf16), GLOVEPOSE_OK);
   CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_F32, path_in(3, dir, "glauser2019-44.json"), &with_glove),
                GLOVEPOSE_OK);
   CHECK(strcmp(glovepose_model_glove_id(with_glove), "glauser2019-44") == 0);
@@ -145,40 +175,23 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
                GLOVEPOSE_OK);
   CHECK(glovepose_model_has_training_range(with_training) == 1);
 
-  /* F16 weights: the pose of F32 up to rounding. The README's bound (0.01 degree) is measured on
-   * recorded sessions; this synthetic input sits at 0.016 degree, hence 0.05 here. */
+  /* 16-bit weights: the pose of F32 up to rounding. F16 stays within the 0.1 degree bound (this
+   * synthetic input: 0.016 degree, hence 0.05 here); BF16 does not on the shipped model (0.24
+   * degree here; docs/performance.md), so only its order of magnitude is checked. */
   {
     glovepose_estimator* a = NULL;
-    glovepose_estimator* b = NULL;
-    glovepose_pose pa, pb;
-    double worst = 0.0;
-    int d;
+    double f16_degrees, bf16_degrees;
     CHECK_RESULT(glovepose_estimator_create(model, NULL, &a), GLOVEPOSE_OK);
-    CHECK_RESULT(glovepose_estimator_create(f16, NULL, &b), GLOVEPOSE_OK);
     CHECK_RESULT(glovepose_calibration_use_training(a), GLOVEPOSE_ERROR_CALIBRATION_STATE);
     CHECK(contains(glovepose_last_error(), "no training-set range"));
-    {
-      double lo[44], hi[44];
-      int c;
-      for (c = 0; c < 44; ++c) {
-        lo[c] = 15.0 + 0.1 * c;
-        hi[c] = 25.0 + 0.1 * c;
-      }
-      CHECK_RESULT(glovepose_calibration_set_range(a, lo, hi, 44), GLOVEPOSE_OK);
-      CHECK_RESULT(glovepose_calibration_set_range(b, lo, hi, 44), GLOVEPOSE_OK);
-    }
-    CHECK(push_synthetic(a, 0.0, 10) == 10);
-    CHECK(push_synthetic(b, 0.0, 10) == 10);
-    glovepose_pose_init(&pa);
-    glovepose_pose_init(&pb);
-    CHECK_RESULT(glovepose_estimator_get_pose(a, &pa), GLOVEPOSE_OK);
-    CHECK_RESULT(glovepose_estimator_get_pose(b, &pb), GLOVEPOSE_OK);
-    for (d = 0; d < GLOVEPOSE_DOF_COUNT; ++d) worst = fmax(worst, fabs(pa.angles[d] - pb.angles[d]));
-    printf("F16 vs F32 weights: largest angle difference %.3g degrees\n", worst * 180.0 / 3.14159265358979);
-    CHECK(worst > 0.0); /* F16 is really in use */
-    CHECK(worst * 180.0 / 3.14159265358979 < 0.05);
     glovepose_estimator_free(a);
-    glovepose_estimator_free(b);
+    f16_degrees = angle_difference_degrees(model, f16);
+    bf16_degrees = angle_difference_degrees(model, bf16);
+    printf("16-bit vs F32 weights: largest angle difference %.3g degrees (F16), %.3g degrees (BF16)\n", f16_degrees, bf16_degrees);
+    CHECK(f16_degrees > 0.0);
+    CHECK(f16_degrees < 0.05);
+    CHECK(bf16_degrees > f16_degrees);
+    CHECK(bf16_degrees < 1.0);
   }
 
   /* The training range: the pose is flagged as such. */
@@ -198,6 +211,7 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
     glovepose_estimator_free(e);
   }
   glovepose_model_free(f16);
+  glovepose_model_free(bf16);
   glovepose_model_free(with_glove);
   glovepose_model_free(with_training);
 }

@@ -1,4 +1,4 @@
-// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]
+// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]
 //   The product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
 //   default 2026; the shipped model was trained on seed 1) puts the glove on, performs the
 //   simulator's calibration sequence, then a session of poses. Every reading is streamed row by
@@ -42,17 +42,18 @@ struct DemoOptions {
   std::string out = "demo-out";
   std::uint64_t seed = 2026;
   double minutes = 1.5;
-  bool f16 = false;
+  nn::WeightStorage storage = nn::WeightStorage::F32;
 };
 
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose demo: " << problem << "\n"
-            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n"
+            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]\n"
             << "  --model FILE  weights (default: models/" << kShippedModelName << " of the source tree)\n"
             << "  --out DIR     where the table and pictures go (default: demo-out)\n"
             << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seed 1)\n"
             << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
-            << "  --f16         keep the weights as F16 in memory\n";
+            << "  --f16         keep the weights as F16 in memory\n"
+            << "  --bf16        keep the weights as BF16 in memory (the fastest)\n";
   std::exit(2);
 }
 
@@ -68,7 +69,8 @@ DemoOptions parse_options(int argc, char** argv) {
     else if (a == "--out") o.out = value();
     else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
     else if (a == "--minutes") o.minutes = parse_number<double>(a, value());
-    else if (a == "--f16") o.f16 = true;
+    else if (a == "--f16") o.storage = nn::WeightStorage::F16;
+    else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
     else if (a == "--help" || a == "-h") usage("help");
     else usage("unknown option " + a);
   }
@@ -250,7 +252,7 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   for (const std::string& name : calibration.flat_sensors) flat += (flat.empty() ? "" : ", ") + name;
 
   add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n",
-      static_cast<unsigned long long>(o.seed), model_path.c_str(), o.f16 ? "F16" : "F32");
+      static_cast<unsigned long long>(o.seed), model_path.c_str(), nn::storage_name(o.storage));
   add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s\n", calibration.seconds, calibration.frames,
       flat.empty() ? "none" : flat.c_str());
   add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
@@ -414,7 +416,7 @@ int demo(int argc, char** argv) {
     const DemoOptions o = parse_options(argc, argv);
     const std::string model_path = o.model.empty() ? shipped_model_path() : o.model;
     PoseModelOptions model_options;
-    model_options.storage = o.f16 ? nn::WeightStorage::F16 : nn::WeightStorage::F32;
+    model_options.storage = o.storage;
     const auto model = PoseModel::load(model_path, model_options);
     std::error_code error;
     fs::create_directories(o.out, error);

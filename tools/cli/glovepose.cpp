@@ -1,5 +1,5 @@
 // The glovepose command-line tool.
-//   glovepose predict --model FILE [--in CSV] [--f16] [--no-header]
+//   glovepose predict --model FILE [--in CSV] [--f16 | --bf16] [--no-header]
 //       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
 //       radians out (theta 9..33 of the hand model), one row per input row.
 //   glovepose info --model FILE
@@ -8,7 +8,7 @@
 //       the simulated glove corpus (simulate.cpp).
 //   glovepose train | finetune | eval ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
-//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]
+//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 //   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
@@ -35,16 +35,17 @@ namespace {
 
 struct Options {
   std::string command, model, input;
-  bool f16 = false, header = true;
+  nn::WeightStorage storage = nn::WeightStorage::F32;
+  bool header = true;
 };
 
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose: " << problem << "\n"
-            << "usage: glovepose predict --model FILE [--in CSV] [--f16] [--no-header]\n"
+            << "usage: glovepose predict --model FILE [--in CSV] [--f16 | --bf16] [--no-header]\n"
             << "       glovepose info --model FILE\n"
             << "       glovepose simulate --help\n"
             << "       glovepose train | finetune | eval --help\n"
-            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16]\n"
+            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]\n"
             << "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n";
   std::exit(2);
 }
@@ -61,7 +62,8 @@ Options parse(int argc, char** argv) {
     };
     if (a == "--model") o.model = value();
     else if (a == "--in") o.input = value();
-    else if (a == "--f16") o.f16 = true;
+    else if (a == "--f16") o.storage = nn::WeightStorage::F16;
+    else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
     else if (a == "--no-header") o.header = false;
     else usage("unknown option " + a);
   }
@@ -92,7 +94,7 @@ std::vector<double> parse_row(const std::string& line, std::size_t line_no, std:
 }
 
 int predict(const Options& o) {
-  const auto model = nn::Model<>::load(o.model, o.f16 ? nn::WeightStorage::F16 : nn::WeightStorage::F32);
+  const auto model = nn::Model<>::load(o.model, o.storage);
   hand::Angles lo{}, hi{};
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {
     lo[d] = model.info.joint_limits_min[d];

@@ -30,6 +30,7 @@
 #include "half.hpp"
 #include "kernels/scalar.hpp"
 #include "kernels/simd.hpp"
+#include "kernels/sparse_row.hpp"
 #include "tensor.hpp"
 #include "unet_topology.hpp"
 
@@ -38,8 +39,15 @@ namespace glovepose::nn {
 /// @brief How the weights are kept in memory.
 enum class WeightStorage : unsigned char {
   F32,  ///< Exact: the file's values (with BN folded) in float.
-  F16,  ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
+  F16,   ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
+  BF16,  ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
+         ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
 };
+
+/// @brief Name of a weight storage for messages and reports: "F32", "F16" or "BF16".
+constexpr const char* storage_name(WeightStorage storage) noexcept {
+  return storage == WeightStorage::F32 ? "F32" : (storage == WeightStorage::F16 ? "F16" : "BF16");
+}
 
 /// @brief Named widths: the paper's three sizes (Tables 4/5: about 3M, 13M, 50M parameters) and w = 64.
 struct UNetPreset {
@@ -53,6 +61,12 @@ inline constexpr std::array<UNetPreset, 4> kUNetPresets{{{"paper3m", 48}, {"w64"
 inline constexpr int kMaxWidth = 4096;
 /// @brief Largest batch a workspace may hold.
 inline constexpr int kMaxBatch = 1 << 16;
+
+/// @brief Up to this many frames per forward, products take their inputs as nonzero entries
+/// (kernels/sparse_row.hpp): each weight row meets few activations there, and skipping the zeros
+/// that ReLU leaves skips their multiply-adds and weight reads. Larger batches reuse each weight
+/// row over many activations: the dense, register-blocked product is faster there.
+inline constexpr int kSparseMaxFrames = 1;
 
 /// @brief Values in one network input (2 x 5 x 5, channel-major).
 inline constexpr int kUNetInputs = 50;
@@ -121,7 +135,8 @@ class UNet {
   /// @brief Bytes of packed weights streamed per forward at batch 1 (channel padding included).
   std::size_t weight_bytes() const noexcept {
     std::size_t n = 0;
-    for (const PackedLayer& l : layers_) n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t);
+    for (const PackedLayer& l : layers_)
+      n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t) + l.wbf16.size() * sizeof(kernels::BFloat16);
     return n;
   }
 
@@ -140,8 +155,13 @@ class UNet {
     std::vector<float*> y_rows;
     std::vector<const float*> w32_terms;          // Gather: weight block per term (F32 storage)
     std::vector<const std::uint16_t*> w16_terms;  // ... (F16 storage)
+    std::vector<const kernels::BFloat16*> wbf16_terms;  // ... (BF16 storage)
     std::vector<int> k_terms;          // Gather: length per term
     AlignedVector<float> columns;      // Im2col: receptive fields, one row per (position, frame)
+    std::vector<int> sparse_index;     // Taps, small batches: nonzero entries of the sources' rows
+    std::vector<float> sparse_value;
+    std::vector<kernels::SparseRow> sparse_rows;  // per (source, position, frame)
+    std::vector<kernels::SparseRow> tap_rows;     // the rows one product joins
     std::vector<float> sums;           // Gather: one output per frame
   };
 
@@ -169,10 +189,28 @@ class UNet {
       for (const auto& list : l.terms) terms = std::max(terms, list.size() * l.sources.size());
     }
     rows = std::max(rows, terms);
+    std::size_t sparse_values = 0, sparse_rows = 0;
+    const std::size_t sparse_frames = static_cast<std::size_t>(std::min(capacity, kSparseMaxFrames));
+    for (const PackedLayer& l : layers_) {
+      if (l.mode != Mode::Taps) continue;
+      std::size_t values = 0, source_rows = 0;
+      for (int s : l.sources) {
+        const BufferSpec& in = buffers_[static_cast<std::size_t>(s)];
+        source_rows += static_cast<std::size_t>(in.positions) * sparse_frames;
+        values += static_cast<std::size_t>(in.positions) * sparse_frames * static_cast<std::size_t>(in.channels);
+      }
+      sparse_values = std::max(sparse_values, values);
+      sparse_rows = std::max(sparse_rows, source_rows);
+    }
+    ws.sparse_index.resize(sparse_values);
+    ws.sparse_value.resize(sparse_values);
+    ws.sparse_rows.resize(sparse_rows);
+    ws.tap_rows.resize(rows);
     ws.x_rows.resize(rows);
     ws.y_rows.resize(rows);
     ws.w32_terms.resize(terms);
     ws.w16_terms.resize(terms);
+    ws.wbf16_terms.resize(terms);
     ws.k_terms.resize(terms);
     ws.columns.resize(columns);
     ws.sums.resize(static_cast<std::size_t>(capacity));
@@ -280,6 +318,7 @@ class UNet {
     AlignedVector<float> bias;   // padded output channels
     AlignedVector<float> w32;    // per (tap, source): in channels x padded out channels, in column panels
     AlignedVector<std::uint16_t> w16;
+    AlignedVector<kernels::BFloat16> wbf16;  // pair layout (kernels/weight_load.hpp), except Gather's plain rows
     std::vector<std::size_t> block;  // offset of (tap, source) block
     std::size_t stored_weights = 0;
   };
@@ -287,7 +326,9 @@ class UNet {
   void define_buffers() {
     for (int id = 0; id < kUNetBufferCount; ++id) {
       const int c = unet_buffer_channels(id, width_);
-      const int stride = (id == 0 || id == 8) ? c : round_up(c, Backend::lanes);
+      // BF16 weights come in pairs of vectors (kernels/weight_load.hpp): whole pairs of output channels.
+      const int multiple = storage_ == WeightStorage::BF16 ? 2 * Backend::lanes : Backend::lanes;
+      const int stride = (id == 0 || id == 8) ? c : round_up(c, multiple);
       buffers_.push_back({c, stride, unet_buffer_size(id), unet_buffer_size(id) * unet_buffer_size(id)});
     }
   }
@@ -354,13 +395,18 @@ class UNet {
     };
     std::vector<float> packed;
     const std::vector<TapPairs> plan = plan_taps(spec.geometry);
+    // Where W(row, co) of a (rows x padded cout) product block goes.
+    const auto slot = [&](int row, int co, int rows) {
+      const int column = storage_ == WeightStorage::BF16 ? kernels::paired_slot(co, Backend::lanes) : co;
+      return static_cast<std::size_t>(kernels::panel_index(row, column, rows, out.stride, Backend::panel));
+    };
     if (layer.mode == Mode::Im2col) {  // one dense (taps x channels) x stride block over the whole kernel
       const int cs = first_channels, rows = layer.kernel_taps * cs;
       packed.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(out.stride), 0.0f);
       for (int tap = 0; tap < layer.kernel_taps; ++tap)
         for (int ci = 0; ci < cs; ++ci)
           for (int co = 0; co < cout; ++co)
-            packed[static_cast<std::size_t>(kernels::panel_index(tap * cs + ci, co, rows, out.stride, Backend::panel))] =
+            packed[slot(tap * cs + ci, co, rows)] =
                 static_cast<float>(w_at(ci, co, tap) * scale[static_cast<std::size_t>(co)]);
       layer.receptive.assign(static_cast<std::size_t>(out.positions * layer.kernel_taps), -1);
       for (const TapPairs& t : plan)
@@ -392,7 +438,7 @@ class UNet {
           packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(out.stride), 0.0f);
           for (int ci = 0; ci < cs; ++ci)
             for (int co = 0; co < cout; ++co)
-              packed[base + static_cast<std::size_t>(kernels::panel_index(ci, co, cs, out.stride, Backend::panel))] =
+              packed[base + slot(ci, co, cs)] =
                   static_cast<float>(w_at(channel_base + ci, co, t.tap) * scale[static_cast<std::size_t>(co)]);
         }
         layer.stored_weights += static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);
@@ -401,19 +447,27 @@ class UNet {
     }
     // Folding can scale weights far beyond what the file held (a tiny running variance); refuse what
     // the chosen storage cannot represent rather than compute with infinities.
-    const float limit = storage_ == WeightStorage::F32 ? std::numeric_limits<float>::max() : 65504.0f;
+    const float limit = storage_ == WeightStorage::F16 ? 65504.0f : std::numeric_limits<float>::max();
     for (float v : packed)
       if (!(std::abs(v) <= limit))
         throw Error("UNet: layer " + spec.conv + (spec.bn.empty() ? "" : " with " + spec.bn + " folded in") + " has a weight of " +
                     std::to_string(v) + ", expected magnitudes up to " + std::to_string(limit) + " for " +
-                    (storage_ == WeightStorage::F32 ? "F32" : "F16 storage (load as F32 instead)"));
+                    (storage_ == WeightStorage::F32 ? "F32" : std::string(storage_name(storage_)) + " storage (load as F32 instead)"));
     for (float v : layer.bias)
       if (!std::isfinite(v)) throw Error("UNet: layer " + spec.conv + " has a non-finite folded bias");
     if (storage_ == WeightStorage::F32) {
       layer.w32.assign(packed.begin(), packed.end());
-    } else {
+    } else if (storage_ == WeightStorage::F16) {
       layer.w16.resize(packed.size());
       for (std::size_t i = 0; i < packed.size(); ++i) layer.w16[i] = float_to_f16(packed[i]);
+    } else {
+      layer.wbf16.resize(packed.size());
+      for (std::size_t i = 0; i < packed.size(); ++i) {
+        layer.wbf16[i] = static_cast<kernels::BFloat16>(float_to_bf16(packed[i]));
+        if (!std::isfinite(kernels::weight_value(layer.wbf16[i])))  // within float range, but rounds up past bfloat16's largest
+          throw Error("UNet: layer " + spec.conv + " has a weight of " + std::to_string(packed[i]) +
+                      ", too large for BF16 storage (load as F32 instead)");
+      }
     }
     return layer;
   }
@@ -423,6 +477,9 @@ class UNet {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const std::size_t sources = layer.sources.size();
+    const bool sparse = frames <= kSparseMaxFrames;
+    std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
+    if (sparse) compact_sources(layer, frames, ws, first_row);
     for (std::size_t t = 0; t < layer.taps.size(); ++t) {
       const PackedTap& tap = layer.taps[t];
       for (std::size_t s = 0; s < sources; ++s) {
@@ -432,11 +489,34 @@ class UNet {
         int rows = 0;
         for (std::size_t j = 0; j < tap.out_positions.size(); ++j)
           for (int f = 0; f < frames; ++f, ++rows) {
-            ws.x_rows[static_cast<std::size_t>(rows)] = in + (static_cast<long>(tap.in_positions[j]) * frames + f) * in_spec.stride;
+            const long in_row = static_cast<long>(tap.in_positions[j]) * frames + f;
+            if (sparse) ws.tap_rows[static_cast<std::size_t>(rows)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
+            else ws.x_rows[static_cast<std::size_t>(rows)] = in + in_row * in_spec.stride;
             ws.y_rows[static_cast<std::size_t>(rows)] = out + (static_cast<long>(tap.out_positions[j]) * frames + f) * out_spec.stride;
           }
         const W* block = weights + layer.block[t * sources + s];
-        Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
+        if (!sparse) {
+          Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
+          continue;
+        }
+        Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
+      }
+    }
+  }
+
+  // The nonzero entries of every row of the layer's sources, once per layer (many taps share a row).
+  void compact_sources(const PackedLayer& layer, int frames, Workspace& ws, std::size_t (&first_row)[2]) const noexcept {
+    std::size_t row = 0, value = 0;
+    for (std::size_t s = 0; s < layer.sources.size() && s < 2; ++s) {
+      const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[s])];
+      const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
+      first_row[s] = row;
+      for (long r = 0; r < static_cast<long>(in_spec.positions) * frames; ++r, ++row) {
+        int* index = ws.sparse_index.data() + value;
+        float* values = ws.sparse_value.data() + value;
+        const int count = Backend::compact(in + r * in_spec.stride, in_spec.channels, index, values);
+        ws.sparse_rows[row] = {index, values, count};
+        value += static_cast<std::size_t>(in_spec.channels);
       }
     }
   }
@@ -470,7 +550,8 @@ class UNet {
     const std::size_t sources = layer.sources.size();
     const W** terms = nullptr;  // the workspace's pointer array of this weight type
     if constexpr (std::is_same_v<W, float>) terms = ws.w32_terms.data();
-    else terms = ws.w16_terms.data();
+    else if constexpr (std::is_same_v<W, std::uint16_t>) terms = ws.w16_terms.data();
+    else terms = ws.wbf16_terms.data();
     const float* base[2] = {nullptr, nullptr};  // unet_layers(): at most two (concatenated) sources
     long stride[2] = {0, 0};
     int channels[2] = {0, 0};
@@ -510,8 +591,10 @@ class UNet {
       std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
     if (storage_ == WeightStorage::F32)
       run_products(layer, layer.w32.data(), frames, ws);
-    else
+    else if (storage_ == WeightStorage::F16)
       run_products(layer, layer.w16.data(), frames, ws);
+    else
+      run_products(layer, layer.wbf16.data(), frames, ws);
     if (layer.activation == Activation::Relu)
       Backend::relu(out, rows * out_spec.stride);
     else

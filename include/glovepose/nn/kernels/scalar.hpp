@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "../../config.hpp"
+#include "sparse_row.hpp"
 #include "weight_load.hpp"
 
 namespace glovepose::nn::kernels {
@@ -37,6 +38,31 @@ struct ScalarBackend {
     for (int r = 0; r < rows; ++r)
       for (int kk = 0; kk < k; ++kk) {
         const float xv = x[r][kk];
+        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_value(w[panel_index(kk, j, k, n, panel)]);
+      }
+  }
+
+  /// @brief The nonzero entries of x[0..k) into index[] and value[] (room for k each); returns
+  /// their count. A NaN is nonzero; -0 is zero.
+  GLOVEPOSE_REALTIME static int compact(const float* x, int k, int* index, float* value) noexcept {
+    int count = 0;
+    for (int i = 0; i < k; ++i)
+      if (x[i] != 0.0f) {  // true for NaN
+        index[count] = i;
+        value[count++] = x[i];
+      }
+    return count;
+  }
+
+  /// @brief gemm_rows() for rows given by their nonzero entries: for every row r,
+  /// y[r][0..n) += sum over i of x[r].value[i] * W(x[r].index[i], 0..n), W packed as for gemm_rows().
+  template <typename W>
+  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k,
+                                                  int n) noexcept {
+    for (int r = 0; r < rows; ++r)
+      for (int i = 0; i < x[r].count; ++i) {
+        const float xv = x[r].value[i];
+        const int kk = x[r].index[i];
         for (int j = 0; j < n; ++j) y[r][j] += xv * weight_value(w[panel_index(kk, j, k, n, panel)]);
       }
   }

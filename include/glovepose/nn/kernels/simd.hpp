@@ -10,11 +10,18 @@
 #pragma once
 
 #include <algorithm>
+#include <bitset>
+#include <type_traits>
 
 #include <xsimd/xsimd.hpp>
 
 #include "../../config.hpp"
+#include "sparse_row.hpp"
 #include "weight_load.hpp"
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 namespace glovepose::nn::kernels {
 
@@ -62,6 +69,57 @@ struct SimdBackend {
     for (; f < frames; ++f) sums[f] = dot_single(x, x_stride, f, w, k, terms);
   }
 
+  /// @brief See ScalarBackend::compact. Writes up to k entries of index[] and value[] (beyond the
+  /// returned count too); AVX-512 compresses 16 at a time.
+  GLOVEPOSE_REALTIME static int compact(const float* x, int k, int* index, float* value) noexcept {
+    int count = 0, i = 0;
+#if defined(__AVX512F__)
+    if constexpr (lanes == 16) {
+      __m512i positions = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+      const __m512i step = _mm512_set1_epi32(16);
+      for (; i + 16 <= k; i += 16) {  // count <= i: the 16 stores stay below i + 16 <= k
+        const __m512 v = _mm512_loadu_ps(x + i);
+        const __mmask16 nonzero = _mm512_cmp_ps_mask(v, _mm512_setzero_ps(), _CMP_NEQ_UQ);  // NaN: nonzero
+        _mm512_storeu_ps(value + count, _mm512_maskz_compress_ps(nonzero, v));
+        _mm512_storeu_si512(index + count, _mm512_maskz_compress_epi32(nonzero, positions));
+        count += static_cast<int>(std::bitset<16>(nonzero).count());
+        positions = _mm512_add_epi32(positions, step);
+      }
+    }
+#endif
+    for (; i < k; ++i) {  // branch-free: the slot is overwritten unless x[i] is nonzero
+      index[count] = i;
+      value[count] = x[i];
+      count += x[i] != 0.0f;  // true for NaN
+    }
+    return count;
+  }
+
+  /// @brief See ScalarBackend::gemm_sparse_rows. Per column block, each row runs over its nonzero
+  /// entries only, V accumulator vectors (U sets of them for narrow blocks) in registers.
+  template <typename W>
+  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k,
+                                                  int n) noexcept {
+    for (int p0 = 0; p0 < n; p0 += panel) {
+      const int width = std::min(panel, n - p0);
+      const W* wp = w + static_cast<long>(k) * p0;
+      for (int j = 0; j < width;) {
+        const int v = vectors_for(1, (width - j) / lanes);
+        for (int r = 0; r < rows; ++r) {
+          if (x[r].count == 0) continue;
+          float* out = y[r] + p0 + j;
+          switch (v) {
+            case 8: sparse_block<8>(x[r], out, wp + j, width, p0 + j); break;
+            case 4: sparse_block<4>(x[r], out, wp + j, width, p0 + j); break;
+            case 2: sparse_block<2>(x[r], out, wp + j, width, p0 + j); break;
+            default: sparse_block<1>(x[r], out, wp + j, width, p0 + j); break;
+          }
+        }
+        j += v * lanes;
+      }
+    }
+  }
+
   /// @brief In-place max(0, v); count must be a multiple of `lanes`.
   GLOVEPOSE_REALTIME static void relu(float* data, int count) noexcept {
     const Batch zero(0.0f);
@@ -98,6 +156,49 @@ struct SimdBackend {
       for (; kk < k[i]; ++kk) tail += xi[kk] * weight_value(w[i][kk]);
     }
     return xsimd::hadd((acc[0] + acc[1]) + (acc[2] + acc[3])) + tail;
+  }
+
+  template <int V, typename W>
+  static void sparse_block(const SparseRow& x, float* y, const W* w, int ldw, int col) noexcept {
+    constexpr int U = V >= 8 ? 1 : 8 / V;  // >= 8 independent FMA chains, as in block()
+    Batch acc[U][V];
+#pragma GCC unroll 8
+    for (int u = 0; u < U; ++u)
+#pragma GCC unroll 8
+      for (int v = 0; v < V; ++v) acc[u][v] = Batch(0.0f);
+    int i = 0;
+    for (; i + U <= x.count; i += U) {
+      // The rows a skip leaves out break the hardware prefetcher's stride: fetch a few rows ahead.
+      if (i + kPrefetchRows < x.count) prefetch_row<V>(w + static_cast<long>(x.index[i + kPrefetchRows]) * ldw);
+#pragma GCC unroll 8
+      for (int u = 0; u < U; ++u) sparse_step<V>(acc[u], x.value[i + u], w + static_cast<long>(x.index[i + u]) * ldw, col);
+    }
+    for (; i < x.count; ++i) sparse_step<V>(acc[0], x.value[i], w + static_cast<long>(x.index[i]) * ldw, col);
+#pragma GCC unroll 8
+    for (int v = 0; v < V; ++v) {
+      Batch sum = acc[0][v];
+      for (int u = 1; u < U; ++u) sum += acc[u][v];
+      (Batch::load_unaligned(y + v * lanes) + sum).store_unaligned(y + v * lanes);
+    }
+  }
+
+  static constexpr int kPrefetchRows = 4;
+
+  template <int V, typename W>
+  static void prefetch_row(const W* row) noexcept {
+    constexpr int bytes = V * lanes * static_cast<int>(sizeof(W));
+    const char* p = reinterpret_cast<const char*>(row);
+#pragma GCC unroll 8
+    for (int b = 0; b < bytes; b += 64) __builtin_prefetch(p + b);
+  }
+
+  template <int V, typename W>
+  static void sparse_step(Batch (&acc)[V], float value, const W* wk, int col) noexcept {
+    const Batch xb(value);
+    Batch wv[V];
+    load_vectors<V>(wk, col, wv);
+#pragma GCC unroll 8
+    for (int v = 0; v < V; ++v) acc[v] = xsimd::fma(xb, wv[v], acc[v]);
   }
 
   template <int F, typename W>
@@ -141,8 +242,8 @@ struct SimdBackend {
     int kk = 0;
     for (; kk + U <= k; kk += U)
 #pragma GCC unroll 8
-      for (int u = 0; u < U; ++u) step<R, V>(acc[u], xr, w, kk + u, ldw);
-    for (; kk < k; ++kk) step<R, V>(acc[0], xr, w, kk, ldw);
+      for (int u = 0; u < U; ++u) step<R, V>(acc[u], xr, w, kk + u, ldw, col);
+    for (; kk < k; ++kk) step<R, V>(acc[0], xr, w, kk, ldw, col);
     for (int r = 0; r < R; ++r)
       for (int v = 0; v < V; ++v) {
         Batch sum = acc[0][r][v];
@@ -152,13 +253,34 @@ struct SimdBackend {
       }
   }
 
+  // The V weight vectors at wk, whose first column is `col`: BF16 comes in pairs of vectors
+  // (pair layout, weight_load.hpp), whose groups start at even multiples of `lanes`.
+  template <int V, typename W>
+  static void load_vectors(const W* wk, int col, Batch (&wv)[V]) noexcept {
+    if constexpr (std::is_same_v<W, BFloat16>) {
+      static_assert(V == 1 || V % 2 == 0, "BF16 blocks are whole pairs of vectors or a single vector");
+      if constexpr (V == 1) {  // half a pair: only when a layer has an odd number of vectors (not with BF16 strides)
+        Batch low, high;
+        const bool second = (col / lanes) % 2 != 0;
+        load_weight_pair<Arch>(second ? wk - lanes : wk, low, high);
+        wv[0] = second ? high : low;
+      } else {
+#pragma GCC unroll 4
+        for (int v = 0; v < V; v += 2) load_weight_pair<Arch>(wk + v * lanes, wv[v], wv[v + 1]);
+      }
+    } else {
+      (void)col;
+#pragma GCC unroll 8
+      for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
+    }
+  }
+
   // One k of a block: V weight vectors, each used by R rows.
   template <int R, int V, typename W>
-  static void step(Batch (&acc)[R][V], const float* const (&xr)[R], const W* w, int kk, int ldw) noexcept {
+  static void step(Batch (&acc)[R][V], const float* const (&xr)[R], const W* w, int kk, int ldw, int col) noexcept {
     const W* wk = w + static_cast<long>(kk) * ldw;
     Batch wv[V];
-#pragma GCC unroll 8
-    for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
+    load_vectors<V>(wk, col, wv);
 #pragma GCC unroll 16
     for (int r = 0; r < R; ++r) {
       const Batch xb(xr[r][kk]);

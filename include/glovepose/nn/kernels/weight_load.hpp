@@ -1,6 +1,13 @@
 /// @file weight_load.hpp
-/// @brief Reading stored weights as float: F32 as is, F16 (binary16 bits) widened. The SIMD loads
-/// use the hardware conversion (F16C / AVX-512F) when the compiler targets it.
+/// @brief Reading stored weights as float: F32 as is, F16 (binary16 bits) widened by the hardware
+/// conversion (F16C / AVX-512F) when the compiler targets it, BF16 widened by integer operations.
+///
+/// BF16 is the top half of a float, so widening is a 16-bit shift. Matrix weights in BF16 are
+/// stored in *pair layout*: each group of 2 x lanes output columns is stored as `lanes` 32-bit
+/// words, word j holding column j in its low half and column lanes + j in its high half. One load
+/// then gives two vectors of weights by a shift and a mask (two plain integer operations that run
+/// beside the FMAs), where `vcvtph2ps` and `vpmovzxwd` cost this core twice an FMA's issue slot
+/// (docs/performance.md).
 #pragma once
 
 #include <cstdint>
@@ -9,16 +16,29 @@
 
 #include "../half.hpp"
 
-#if defined(__F16C__) || defined(__AVX512F__)
+#if defined(__F16C__) || defined(__AVX512F__) || defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
 namespace glovepose::nn::kernels {
 
+/// @brief A stored bfloat16 weight: its own type, so that overloads pick the bfloat16 widening.
+enum class BFloat16 : std::uint16_t {};
+
 /// @brief One stored weight as float.
 inline float weight_value(float w) noexcept { return w; }
 /// @brief One stored F16 weight as float.
 inline float weight_value(std::uint16_t w) noexcept { return f16_to_float(w); }
+/// @brief One stored BF16 weight as float.
+inline float weight_value(BFloat16 w) noexcept { return bf16_to_float(static_cast<std::uint16_t>(w)); }
+
+/// @brief The slot, within its row of a pair-layout matrix, that holds column `col`: groups of
+/// 2 x `lanes` columns, column lanes * h + j of a group in half h of 32-bit word j. With lanes = 1
+/// this is the identity.
+constexpr int paired_slot(int col, int lanes) noexcept {
+  const int group = col / (2 * lanes) * (2 * lanes), j = col - group;
+  return group + (j < lanes ? 2 * j : 2 * (j - lanes) + 1);
+}
 
 /// @brief A SIMD batch of stored weights as floats (unaligned load).
 template <typename Arch>
@@ -43,6 +63,41 @@ inline xsimd::batch<float, Arch> load_weights(const std::uint16_t* p) noexcept {
   alignas(64) float wide[n];
   for (std::size_t i = 0; i < n; ++i) wide[i] = f16_to_float(p[i]);
   return xsimd::batch<float, Arch>::load_aligned(wide);
+}
+
+/// @brief A SIMD batch of consecutive stored BF16 weights (natural layout, not pair layout) as floats.
+template <typename Arch>
+inline xsimd::batch<float, Arch> load_weights(const BFloat16* p) noexcept {
+  using Batch = xsimd::batch<float, Arch>;
+  using Words = xsimd::batch<std::uint32_t, Arch>;
+  constexpr std::size_t n = Batch::size;
+#if defined(__AVX512F__)
+  if constexpr (n == 16)
+    return Batch(_mm512_castsi512_ps(_mm512_slli_epi32(_mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))), 16)));
+#endif
+#if defined(__AVX2__)
+  if constexpr (n == 8)
+    return Batch(_mm256_castsi256_ps(_mm256_slli_epi32(_mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))), 16)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (n == 4)  // interleave zeros below each bfloat16: the float with those top bits
+    return Batch(_mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))));
+#endif
+  alignas(64) std::uint32_t words[n];
+  for (std::size_t i = 0; i < n; ++i) words[i] = static_cast<std::uint32_t>(p[i]);
+  return xsimd::bitwise_cast<Batch>(Words::load_aligned(words) << 16);
+}
+
+/// @brief Two SIMD batches of floats from 2 x lanes BF16 weights in pair layout: `low` the
+/// group's first `lanes` columns, `high` the next `lanes`.
+template <typename Arch>
+inline void load_weight_pair(const BFloat16* p, xsimd::batch<float, Arch>& low, xsimd::batch<float, Arch>& high) noexcept {
+  using Batch = xsimd::batch<float, Arch>;
+  using Words = xsimd::batch<std::uint32_t, Arch>;
+  static_assert(sizeof(BFloat16) == 2, "two bfloat16 per 32-bit word");
+  const Words words = Words::load_unaligned(reinterpret_cast<const std::uint32_t*>(p));
+  low = xsimd::bitwise_cast<Batch>(words << 16);
+  high = xsimd::bitwise_cast<Batch>(words & Words(0xFFFF0000u));
 }
 
 }  // namespace glovepose::nn::kernels
