@@ -1,8 +1,8 @@
 /// @file sparse_row.hpp
 /// @brief A row of activations as its nonzero entries.
 ///
-/// After a ReLU about half of the activations are exactly zero (measured on the trained w = 64
-/// model and on random weights: 47-58% per layer, docs/performance.md). At batch 1 each weight row
+/// After a ReLU about half of the activations are exactly zero (the trained w = 64 model and random
+/// weights alike; docs/performance.md). At batch 1 each weight row
 /// of a product meets only a few activations, so skipping the zero ones skips their multiply-adds
 /// and, where a weight row meets a single activation, the reading of that weight row. Skipping is
 /// exact: a zero activation contributes an exact zero.
