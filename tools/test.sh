@@ -1,12 +1,26 @@
 #!/usr/bin/env bash
-# The one command: installs what is missing, configures, builds, and runs every test.
-# Usage: tools/test.sh   (from anywhere; builds into ./build of the repository)
+# The one command: installs what is missing, configures, builds, and runs every test, twice:
+#   build/        GCC, Release, this machine's instruction set (-march=native)
+#   build-clang/  clang, Release, baseline x86-64 (the "must also pass without -march" run)
+# Usage: tools/test.sh   (from anywhere; builds into ./build and ./build-clang of the repository)
+# With CI=true, warnings in our own code are errors in both (GLOVEPOSE_WERROR=ON).
+# The sanitizer runs (ASan+UBSan, TSan) are a separate command: tools/sanitize.sh address|thread.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
+werror=OFF
 # CI always has ../shared beside the repository: there a missing reference file is a failure.
 # CI also always has PyTorch (installed above): there the PyTorch comparisons must run.
-if [ "${CI:-}" = "true" ]; then export GLOVEPOSE_REQUIRE_REFERENCE=1 GLOVEPOSE_REQUIRE_TORCH=1; fi
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+if [ "${CI:-}" = "true" ]; then
+  export GLOVEPOSE_REQUIRE_REFERENCE=1 GLOVEPOSE_REQUIRE_TORCH=1
+  werror=ON
+fi
+echo "== GCC, native (build/)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_BASELINE=OFF
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+echo "== clang, baseline x86-64 (build-clang/)"
+cmake -S . -B build-clang -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
+  -DGLOVEPOSE_NATIVE=OFF -DGLOVEPOSE_WERROR=$werror
+cmake --build build-clang -j"$(nproc)"
+ctest --test-dir build-clang --output-on-failure -j"$(nproc)"
