@@ -207,15 +207,14 @@ glovepose_result glovepose_model_load(const char* model_path, int32_t weight_sto
   if (out_model == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: out_model is NULL");
   *out_model = nullptr;
   if (model_path == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: model_path is NULL");
-  if (weight_storage != GLOVEPOSE_WEIGHTS_F32 && weight_storage != GLOVEPOSE_WEIGHTS_F16 && weight_storage != GLOVEPOSE_WEIGHTS_BF16)
+  if (weight_storage < GLOVEPOSE_WEIGHTS_F32 || weight_storage > GLOVEPOSE_WEIGHTS_FIXED16)
     return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT,
-                 "glovepose_model_load: weight_storage %d, expected GLOVEPOSE_WEIGHTS_F32 (0), GLOVEPOSE_WEIGHTS_F16 (1) or "
-                 "GLOVEPOSE_WEIGHTS_BF16 (2)",
+                 "glovepose_model_load: weight_storage %d, expected GLOVEPOSE_WEIGHTS_F32 (0), GLOVEPOSE_WEIGHTS_F16 (1), "
+                 "GLOVEPOSE_WEIGHTS_BF16 (2) or GLOVEPOSE_WEIGHTS_FIXED16 (3)",
                  static_cast<int>(weight_storage));
   glovepose::PoseModelOptions options;
-  options.storage = weight_storage == GLOVEPOSE_WEIGHTS_F16    ? glovepose::nn::WeightStorage::F16
-                    : weight_storage == GLOVEPOSE_WEIGHTS_BF16 ? glovepose::nn::WeightStorage::BF16
-                                                               : glovepose::nn::WeightStorage::F32;
+  // The C values are the enumerators' order (checked where WeightStorage is defined).
+  options.storage = static_cast<glovepose::nn::WeightStorage>(weight_storage);
   if (glove_description_path != nullptr) {
     try {
       options.glove = glovepose::grid::GloveDescription::read(glove_description_path);

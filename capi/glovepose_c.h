@@ -112,6 +112,10 @@ typedef int32_t glovepose_result;
 /** @brief In-memory weight precision: bfloat16, half the bytes and the fastest at batch 1; its
  * rounding moves angles by up to about 0.4 degree on the shipped model (F16: 0.03 degree). */
 #define GLOVEPOSE_WEIGHTS_BF16 2
+/** @brief In-memory weight precision: 16-bit codes with one scale per output channel (Fixed16):
+ * half the bytes, the real-time choice; angles within a thousandth of a degree of F32 on the shipped
+ * model (README, "Figures"). */
+#define GLOVEPOSE_WEIGHTS_FIXED16 3
 
 /** @brief Where the calibration range in use comes from: none yet (no pose can be computed). */
 #define GLOVEPOSE_CALIBRATION_NONE 0
@@ -222,7 +226,7 @@ GLOVEPOSE_C_API int32_t glovepose_joint_parent(int32_t joint) GLOVEPOSE_C_NOEXCE
 /**
  * @brief Loads a model file (weights_format.md) into *out_model.
  * @param model_path path of the .safetensors model file.
- * @param weight_storage GLOVEPOSE_WEIGHTS_F32, GLOVEPOSE_WEIGHTS_F16 or GLOVEPOSE_WEIGHTS_BF16.
+ * @param weight_storage GLOVEPOSE_WEIGHTS_F32, _F16, _BF16 or _FIXED16.
  * @param glove_description_path a glove description JSON file, or NULL for the model's own glove.
  * @param out_model receives the handle (NULL on failure). Free it with glovepose_model_free().
  * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE / _INVALID_ARGUMENT /

@@ -19,7 +19,16 @@ template <typename W>
 W to_weight(float v) {
   if constexpr (std::is_same_v<W, float>) return v;
   else if constexpr (std::is_same_v<W, std::uint16_t>) return float_to_f16(v);
+  else if constexpr (std::is_same_v<W, kernels::Fixed16>) return static_cast<W>(std::lround((v - 1.0f) * 65536.0f));  // levels below
   else return static_cast<W>(float_to_bf16(v));
+}
+
+// A value exact in W. Fixed16: a level 1 + u / 2^16 with u < 512, so that the low code's top 7 bits,
+// which a high level carries, are zero and the level is the same whichever column it is paired with.
+template <typename W>
+float exact_weight(std::mt19937& rng, std::uniform_real_distribution<float>& u) {
+  if constexpr (std::is_same_v<W, kernels::Fixed16>) return 1.0f + static_cast<float>(rng() % 512) / 65536.0f;
+  else return kernels::weight_value(to_weight<W>(u(rng)));
 }
 
 // A k x n matrix (row-major, values exact in W) in the layout a backend reads: its column panels,
@@ -29,11 +38,14 @@ std::vector<W> pack(const std::vector<float>& logical, int k, int n, int panel, 
   std::vector<W> packed(logical.size());
   for (int kk = 0; kk < k; ++kk)
     for (int j = 0; j < n; ++j) {
-      const int column = std::is_same_v<W, kernels::BFloat16> ? kernels::paired_slot(j, lanes) : j;
+      const int column = kernels::kPairLayout<W> ? kernels::paired_slot(j, lanes) : j;
       packed[static_cast<std::size_t>(kernels::panel_index(kk, column, k, n, panel))] = to_weight<W>(logical[static_cast<std::size_t>(kk * n + j)]);
     }
   return packed;
 }
+
+template <typename W>
+void check_dot_terms(int rows, int k, int n, const std::vector<float>& logical, std::mt19937& rng);
 
 template <typename W>
 void check_gemm(int rows, int k, int n, unsigned seed) {
@@ -44,7 +56,7 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
   for (float& v : x) v = rng() % 5 < 2 ? 0.0f : u(rng);
   if (!x.empty()) x[x.size() / 2] = -0.0f;
   std::vector<float> logical(static_cast<std::size_t>(k * n));  // exact in W: rounded through it
-  for (float& v : logical) v = kernels::weight_value(to_weight<W>(u(rng)));
+  for (float& v : logical) v = exact_weight<W>(rng, u);
   const std::vector<W> w = pack<W>(logical, k, n, SimdBackend::panel, SimdBackend::lanes);
   std::vector<float> y_reference(static_cast<std::size_t>(rows * n));
   for (float& v : y_reference) v = u(rng);
@@ -93,7 +105,14 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
     REQUIRE(y_scalar_sparse[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
   }
   // Sums of dot products over several terms (one output channel gathered over taps and sources),
-  // for several frames whose rows lie `stride` floats apart. Weights in natural (not pair) layout.
+  // for several frames whose rows lie `stride` floats apart. Weights in natural (not pair) layout:
+  // not for Fixed16, which codes the row products only.
+  if constexpr (!std::is_same_v<W, kernels::Fixed16>) check_dot_terms<W>(rows, k, n, logical, rng);
+}
+
+template <typename W>
+void check_dot_terms(int rows, int k, int n, const std::vector<float>& logical, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   const int frames = 1 + rows % 11, stride = k + 3;
   std::vector<float> xf(static_cast<std::size_t>(rows * frames * stride));
   for (float& v : xf) v = u(rng);
@@ -127,7 +146,7 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
 }
 }  // namespace
 
-TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16 and BF16 weights)") {
+TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16, BF16, Fixed16 weights)") {
   const int lanes = SimdBackend::lanes;
   MESSAGE("SIMD backend: " << lanes << " floats per vector");
   unsigned seed = 1;
@@ -139,7 +158,10 @@ TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar r
         CAPTURE(k);
         check_gemm<float>(rows, k, n, seed++);
         check_gemm<std::uint16_t>(rows, k, n, seed++);
-        if (n % (2 * lanes) == 0) check_gemm<kernels::BFloat16>(rows, k, n, seed++);  // pair layout: whole pairs of vectors
+        if (n % (2 * lanes) == 0) {  // pair layout: whole pairs of vectors
+          check_gemm<kernels::BFloat16>(rows, k, n, seed++);
+          check_gemm<kernels::Fixed16>(rows, k, n, seed++);
+        }
       }
 }
 
@@ -179,6 +201,58 @@ TEST_CASE("kernels: BF16 pair layout") {
   const std::uint16_t one = float_to_bf16(1.0f);
   CHECK(one == 0x3F80);
   CHECK(kernels::weight_value(static_cast<kernels::BFloat16>(one)) == 1.0f);
+}
+
+TEST_CASE("kernels: Fixed16 levels: the SIMD widening equals the definition, and the encoder is within half a step") {
+  const int lanes = SimdBackend::lanes;
+  std::mt19937 rng(17);
+  // Random words (every bit pattern): both halves of each SIMD pair against fixed16.hpp's definition.
+  std::vector<kernels::Fixed16> codes(static_cast<std::size_t>(2 * lanes));
+  for (int trial = 0; trial < 200; ++trial) {
+    for (auto& c : codes) c = static_cast<kernels::Fixed16>(rng() & 0xFFFFu);
+    SimdBackend::Batch low, high;
+    kernels::load_weight_pair<SimdBackend::Arch>(codes.data(), low, high);
+    alignas(64) float lv[64], hv[64];
+    low.store_aligned(lv);
+    high.store_aligned(hv);
+    for (int j = 0; j < lanes; ++j) {
+      const std::uint32_t word = static_cast<std::uint32_t>(codes[static_cast<std::size_t>(2 * j)]) |
+                                 static_cast<std::uint32_t>(codes[static_cast<std::size_t>(2 * j + 1)]) << 16;
+      REQUIRE(lv[j] == fixed16_low_level(word));
+      REQUIRE(hv[j] == fixed16_high_level(word));
+      REQUIRE(lv[j] == kernels::weight_at(codes.data(), 2 * j));  // the scalar kernels' read
+      REQUIRE(hv[j] == kernels::weight_at(codes.data(), 2 * j + 1));
+    }
+  }
+  CHECK(fixed16_low_level(0x0000u) == 1.0f);
+  CHECK(fixed16_low_level(0xFFFF8000u) == 1.5f);             // the high half does not leak into the low level
+  CHECK(fixed16_high_level(0x80000000u) == 1.5f);
+  CHECK(fixed16_high_level(0x8000FE00u) == 1.5f + 127.0f / 8388608.0f);  // the low code's top 7 bits, below
+  // Encoding: every level within 2^-17 of 1.5 + weight / scale, over the whole range and its ends.
+  std::uniform_real_distribution<double> u(-kFixed16Range, kFixed16Range);
+  double worst = 0.0;
+  for (int trial = 0; trial < 100000; ++trial) {
+    const double low = trial < 4 ? (trial % 2 ? kFixed16Range : -kFixed16Range) : u(rng);
+    const double high = trial < 4 ? (trial / 2 ? kFixed16Range : -kFixed16Range) : u(rng);
+    const std::uint32_t word = fixed16_encode_pair(low, high);
+    worst = std::max(worst, std::abs(fixed16_low_level(word) - (1.5 + low)));
+    worst = std::max(worst, std::abs(fixed16_high_level(word) - (1.5 + high)));
+  }
+  MESSAGE("Fixed16 encoding: largest level error " << worst * 131072.0 << " x 2^-17");
+  CHECK(worst <= std::ldexp(1.0, -17) * (1.0 + 1e-9));
+}
+
+TEST_CASE("kernels: sum (SIMD, scalar) of rows of any length") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 2.0f);
+  for (int k : {0, 1, 5, 16, 17, 64, 130, 513}) {
+    std::vector<float> x(static_cast<std::size_t>(k));
+    double exact = 0.0;
+    for (float& v : x) exact += v = u(rng);
+    CAPTURE(k);
+    CHECK(SimdBackend::sum(x.data(), k) == doctest::Approx(exact).epsilon(1e-6));
+    CHECK(ScalarBackend::sum(x.data(), k) == doctest::Approx(exact).epsilon(1e-6));
+  }
 }
 
 TEST_CASE("kernels: the scalar reference product follows the panel layout's definition") {

@@ -10,7 +10,7 @@
 #                     ORT and PyTorch (default 0.5, Google Benchmark's default min time)
 #
 # Cases: batch 1 and 1024, one thread everywhere (glovepose BM_UNetForward/W/B and, if present,
-# BM_UNetForwardF32/W/B and BM_UNetForwardBF16/W/B, with whatever /real_time or /threads:N suffixes the binary registers; ORT
+# BM_UNetForwardF32/W/B, BM_UNetForwardF16/W/B and BM_UNetForwardBF16/W/B, with whatever /real_time or /threads:N suffixes the binary registers; ORT
 # intraOpNumThreads = 1; torch.set_num_threads(1), OpenBLAS/OpenMP pinned to one thread), plus ORT
 # with 2 intra-op threads at batch 1024, compared with glovepose's threads:2 case if there is one. Each engine reports
 # the median over repetitions of the mean time per run. Nothing is downloaded.
@@ -64,7 +64,7 @@ $py "$root/tools/python/export.py" --width "$width" --seed "$seed" --out "$model
 read -r -a stat0 < <(head -1 /proc/stat)
 read -r -a self0 < /proc/$$/stat
 echo "timing glovepose ..." >&2
-"$bench" --benchmark_filter="^BM_UNetForward(F32|BF16)?/$width/(1|1024)(/|\$)" --benchmark_repetitions="$reps" \
+"$bench" --benchmark_filter="^BM_UNetForward(F32|F16|BF16)?/$width/(1|1024)(/|\$)" --benchmark_repetitions="$reps" \
   --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/glovepose.json"
 echo "timing ONNX Runtime ..." >&2
 $py "$here/torch_bench.py" --model "$model" --batches 1 --reps 1 --min-time 0.001 --warmup 0 --no-jit \

@@ -1,4 +1,4 @@
-// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]
+// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
 //   The product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
 //   default 2026; the shipped model was trained on seed 1) puts the glove on, performs the
 //   simulator's calibration sequence, then a session of poses. Every reading is streamed row by
@@ -47,11 +47,12 @@ struct DemoOptions {
 
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose demo: " << problem << "\n"
-            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]\n"
+            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
             << "  --model FILE  weights (default: models/" << kShippedModelName << " of the source tree)\n"
             << "  --out DIR     where the table and pictures go (default: demo-out)\n"
             << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seed 1)\n"
             << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
+            << "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.001 degree of F32)\n"
             << "  --f16         keep the weights as F16 in memory\n"
             << "  --bf16        keep the weights as BF16 in memory (the fastest)\n";
   std::exit(2);
@@ -69,6 +70,7 @@ DemoOptions parse_options(int argc, char** argv) {
     else if (a == "--out") o.out = value();
     else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
     else if (a == "--minutes") o.minutes = parse_number<double>(a, value());
+    else if (a == "--fixed16") o.storage = nn::WeightStorage::Fixed16;
     else if (a == "--f16") o.storage = nn::WeightStorage::F16;
     else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
     else if (a == "--help" || a == "-h") usage("help");

@@ -1,5 +1,5 @@
 // The glovepose command-line tool.
-//   glovepose predict --model FILE [--in CSV] [--f16 | --bf16] [--no-header]
+//   glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]
 //       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
 //       radians out (theta 9..33 of the hand model), one row per input row.
 //   glovepose info --model FILE
@@ -8,7 +8,7 @@
 //       the simulated glove corpus (simulate.cpp).
 //   glovepose train | finetune | eval ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
-//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]
+//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 //   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
@@ -41,11 +41,11 @@ struct Options {
 
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose: " << problem << "\n"
-            << "usage: glovepose predict --model FILE [--in CSV] [--f16 | --bf16] [--no-header]\n"
+            << "usage: glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]\n"
             << "       glovepose info --model FILE\n"
             << "       glovepose simulate --help\n"
             << "       glovepose train | finetune | eval --help\n"
-            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--f16 | --bf16]\n"
+            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
             << "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n";
   std::exit(2);
 }
@@ -62,6 +62,7 @@ Options parse(int argc, char** argv) {
     };
     if (a == "--model") o.model = value();
     else if (a == "--in") o.input = value();
+    else if (a == "--fixed16") o.storage = nn::WeightStorage::Fixed16;
     else if (a == "--f16") o.storage = nn::WeightStorage::F16;
     else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
     else if (a == "--no-header") o.header = false;

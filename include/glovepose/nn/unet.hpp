@@ -4,9 +4,9 @@
 ///
 /// Load time: every batch norm is folded into the convolution before it, each layer's weights are
 /// packed per useful tap (conv_plan.hpp; taps that only meet zero padding are dropped), output
-/// channels are padded to the SIMD width, and the weights are stored as F32 (exact) or F16 (half
-/// the bytes to stream at batch 1; converted to F32 in registers). The loaded model is immutable
-/// and may be shared by any number of threads; each stream owns a Workspace.
+/// channels are padded to the SIMD width, and the weights are stored as F32 (exact) or in 16 bits
+/// (F16, BF16, Fixed16: half the bytes to stream at batch 1; widened to F32 in registers). The
+/// loaded model is immutable and may be shared by any number of threads; each stream owns a Workspace.
 ///
 /// Activations live as [position][frame][channel]: a layer is, per useful tap and per skip
 /// source, one matrix product of the (frame x channel) rows it joins with the tap's weight block,
@@ -27,6 +27,7 @@
 #include "../config.hpp"
 #include "../status.hpp"
 #include "conv_plan.hpp"
+#include "fixed16.hpp"
 #include "half.hpp"
 #include "kernels/scalar.hpp"
 #include "kernels/simd.hpp"
@@ -42,11 +43,22 @@ enum class WeightStorage : unsigned char {
   F16,   ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
   BF16,  ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
          ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
+  Fixed16,  ///< 16-bit codes with one scale per output channel (fixed16.hpp): half the bytes, widened
+            ///< by 1.5 integer operations per vector; rounding at most 2^-16 of the channel's largest
+            ///< weight. The first and the last layer (few weights, not row products) stay F32.
 };
 
-/// @brief Name of a weight storage for messages and reports: "F32", "F16" or "BF16".
+static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEPOSE_WEIGHTS_* values are this order");
+
+/// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
 constexpr const char* storage_name(WeightStorage storage) noexcept {
-  return storage == WeightStorage::F32 ? "F32" : (storage == WeightStorage::F16 ? "F16" : "BF16");
+  switch (storage) {
+    case WeightStorage::F32: return "F32";
+    case WeightStorage::F16: return "F16";
+    case WeightStorage::BF16: return "BF16";
+    case WeightStorage::Fixed16: return "Fixed16";
+  }
+  return "unknown";
 }
 
 /// @brief Named widths: the paper's three sizes (Tables 4/5: about 3M, 13M, 50M parameters) and w = 64.
@@ -136,7 +148,8 @@ class UNet {
   std::size_t weight_bytes() const noexcept {
     std::size_t n = 0;
     for (const PackedLayer& l : layers_)
-      n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t) + l.wbf16.size() * sizeof(kernels::BFloat16);
+      n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t) + l.wbf16.size() * sizeof(kernels::BFloat16) +
+           (l.wfx16.size() * sizeof(kernels::Fixed16) + l.fixed_scale.size() * sizeof(float));
     return n;
   }
 
@@ -163,6 +176,8 @@ class UNet {
     std::vector<kernels::SparseRow> sparse_rows;  // per (source, position, frame)
     std::vector<kernels::SparseRow> tap_rows;     // the rows one product joins
     std::vector<float> sums;           // Gather: one output per frame
+    std::vector<float> input_sums;     // Fixed16: sum of each source row (per source, position, frame)
+    std::vector<float> output_sums;    // Fixed16: sum of the inputs each output row met
   };
 
   /// @brief A workspace for batches of up to `capacity` frames (set-up: allocates).
@@ -202,6 +217,17 @@ class UNet {
       sparse_values = std::max(sparse_values, values);
       sparse_rows = std::max(sparse_rows, source_rows);
     }
+    std::size_t input_rows = 0, output_rows = 0;
+    for (const PackedLayer& l : layers_) {
+      if (l.wfx16.empty()) continue;
+      std::size_t rows_in = 0;
+      for (int s : l.sources) rows_in += static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].positions);
+      input_rows = std::max(input_rows, rows_in * static_cast<std::size_t>(capacity));
+      output_rows = std::max(output_rows, static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].positions) *
+                                              static_cast<std::size_t>(capacity));
+    }
+    ws.input_sums.resize(input_rows);
+    ws.output_sums.resize(output_rows);
     ws.sparse_index.resize(sparse_values);
     ws.sparse_value.resize(sparse_values);
     ws.sparse_rows.resize(sparse_rows);
@@ -319,6 +345,8 @@ class UNet {
     AlignedVector<float> w32;    // per (tap, source): in channels x padded out channels, in column panels
     AlignedVector<std::uint16_t> w16;
     AlignedVector<kernels::BFloat16> wbf16;  // pair layout (kernels/weight_load.hpp), except Gather's plain rows
+    AlignedVector<kernels::Fixed16> wfx16;   // Taps layers only, pair layout (fixed16.hpp)
+    AlignedVector<float> fixed_scale;        // Fixed16: per padded output channel
     std::vector<std::size_t> block;  // offset of (tap, source) block
     std::size_t stored_weights = 0;
   };
@@ -326,8 +354,9 @@ class UNet {
   void define_buffers() {
     for (int id = 0; id < kUNetBufferCount; ++id) {
       const int c = unet_buffer_channels(id, width_);
-      // BF16 weights come in pairs of vectors (kernels/weight_load.hpp): whole pairs of output channels.
-      const int multiple = storage_ == WeightStorage::BF16 ? 2 * Backend::lanes : Backend::lanes;
+      // BF16 and Fixed16 weights come in pairs of vectors (kernels/weight_load.hpp): whole pairs of output channels.
+      const bool paired = storage_ == WeightStorage::BF16 || storage_ == WeightStorage::Fixed16;
+      const int multiple = paired ? 2 * Backend::lanes : Backend::lanes;
       const int stride = (id == 0 || id == 8) ? c : round_up(c, multiple);
       buffers_.push_back({c, stride, unet_buffer_size(id), unet_buffer_size(id) * unet_buffer_size(id)});
     }
@@ -395,11 +424,15 @@ class UNet {
     };
     std::vector<float> packed;
     const std::vector<TapPairs> plan = plan_taps(spec.geometry);
+    // Fixed16 codes the row products only; the first and last layers (few weights) stay F32.
+    const bool fixed = storage_ == WeightStorage::Fixed16 && layer.mode == Mode::Taps;
+    const bool paired = storage_ == WeightStorage::BF16 || fixed;
     // Where W(row, co) of a (rows x padded cout) product block goes.
     const auto slot = [&](int row, int co, int rows) {
-      const int column = storage_ == WeightStorage::BF16 ? kernels::paired_slot(co, Backend::lanes) : co;
+      const int column = paired ? kernels::paired_slot(co, Backend::lanes) : co;
       return static_cast<std::size_t>(kernels::panel_index(row, column, rows, out.stride, Backend::panel));
     };
+    std::vector<int> column_of;  // Fixed16: the output channel of each packed slot (padding included)
     if (layer.mode == Mode::Im2col) {  // one dense (taps x channels) x stride block over the whole kernel
       const int cs = first_channels, rows = layer.kernel_taps * cs;
       packed.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(out.stride), 0.0f);
@@ -440,6 +473,11 @@ class UNet {
             for (int co = 0; co < cout; ++co)
               packed[base + slot(ci, co, cs)] =
                   static_cast<float>(w_at(channel_base + ci, co, t.tap) * scale[static_cast<std::size_t>(co)]);
+          if (fixed) {
+            column_of.resize(packed.size());
+            for (int ci = 0; ci < cs; ++ci)
+              for (int co = 0; co < out.stride; ++co) column_of[base + slot(ci, co, cs)] = co;
+          }
         }
         layer.stored_weights += static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);
         channel_base += cs;
@@ -447,7 +485,10 @@ class UNet {
     }
     // Folding can scale weights far beyond what the file held (a tiny running variance); refuse what
     // the chosen storage cannot represent rather than compute with infinities.
-    const float limit = storage_ == WeightStorage::F16 ? 65504.0f : std::numeric_limits<float>::max();
+    // Fixed16: the channel's scale, largest |weight| / kFixed16Range, must be a float too.
+    const float limit = storage_ == WeightStorage::F16 ? 65504.0f
+                        : fixed                        ? static_cast<float>(std::numeric_limits<float>::max() * kFixed16Range)
+                                                       : std::numeric_limits<float>::max();
     for (float v : packed)
       if (!(std::abs(v) <= limit))
         throw Error("UNet: layer " + spec.conv + (spec.bn.empty() ? "" : " with " + spec.bn + " folded in") + " has a weight of " +
@@ -455,7 +496,9 @@ class UNet {
                     (storage_ == WeightStorage::F32 ? "F32" : std::string(storage_name(storage_)) + " storage (load as F32 instead)"));
     for (float v : layer.bias)
       if (!std::isfinite(v)) throw Error("UNet: layer " + spec.conv + " has a non-finite folded bias");
-    if (storage_ == WeightStorage::F32) {
+    if (fixed) {
+      encode_fixed16(packed, column_of, out.stride, layer);
+    } else if (storage_ == WeightStorage::F32 || storage_ == WeightStorage::Fixed16) {
       layer.w32.assign(packed.begin(), packed.end());
     } else if (storage_ == WeightStorage::F16) {
       layer.w16.resize(packed.size());
@@ -470,6 +513,32 @@ class UNet {
       }
     }
     return layer;
+  }
+
+  // Fixed16 codes of a packed layer: per output channel the scale that maps its largest |weight|
+  // to the largest code, then each 32-bit word's two codes (fixed16.hpp).
+  static void encode_fixed16(const std::vector<float>& packed, const std::vector<int>& column_of, int stride, PackedLayer& layer) {
+    std::vector<double> largest(static_cast<std::size_t>(stride), 0.0);
+    for (std::size_t i = 0; i < packed.size(); ++i) {
+      double& m = largest[static_cast<std::size_t>(column_of[i])];
+      m = std::max(m, static_cast<double>(std::abs(packed[i])));
+    }
+    std::vector<double> scale(largest.size());
+    layer.fixed_scale.assign(largest.size(), 0.0f);
+    for (std::size_t c = 0; c < largest.size(); ++c) {
+      layer.fixed_scale[c] = static_cast<float>(fixed16_scale(largest[c]));
+      scale[c] = layer.fixed_scale[c];  // the float the layer multiplies by
+    }
+    const auto units = [&](std::size_t i) {
+      const double s = scale[static_cast<std::size_t>(column_of[i])];
+      return s > 0.0 ? packed[i] / s : 0.0;
+    };
+    layer.wfx16.resize(packed.size());  // whole words: blocks are whole rows of even width
+    for (std::size_t i = 0; i + 1 < packed.size(); i += 2) {
+      const std::uint32_t word = fixed16_encode_pair(units(i), units(i + 1));
+      layer.wfx16[i] = static_cast<kernels::Fixed16>(word & 0xFFFFu);
+      layer.wfx16[i + 1] = static_cast<kernels::Fixed16>(word >> 16);
+    }
   }
 
   template <typename W>
@@ -501,6 +570,37 @@ class UNet {
         }
         Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
       }
+    }
+  }
+
+  // Fixed16: out = scale * (sum of level * x - kFixed16Offset * sum of x) + bias, per output row,
+  // where sum of x runs over every input row the output met (fixed16.hpp).
+  void finish_fixed16(const PackedLayer& layer, int frames, Workspace& ws) const noexcept {
+    const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
+    float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
+    const int out_rows = out_spec.positions * frames;
+    float* met = ws.output_sums.data();
+    std::fill(met, met + out_rows, 0.0f);
+    float* input_sum = ws.input_sums.data();
+    std::size_t first = 0;
+    for (std::size_t s = 0; s < layer.sources.size(); ++s) {
+      const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[s])];
+      const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
+      const int in_rows = in_spec.positions * frames;
+      for (int r = 0; r < in_rows; ++r)
+        input_sum[first + static_cast<std::size_t>(r)] = Backend::sum(in + static_cast<long>(r) * in_spec.stride, in_spec.channels);
+      for (const PackedTap& tap : layer.taps)
+        for (std::size_t j = 0; j < tap.out_positions.size(); ++j)
+          for (int f = 0; f < frames; ++f)
+            met[tap.out_positions[j] * frames + f] += input_sum[first + static_cast<std::size_t>(tap.in_positions[j] * frames + f)];
+      first += static_cast<std::size_t>(in_rows);
+    }
+    const float* scale = layer.fixed_scale.data();
+    const float* bias = layer.bias.data();
+    for (int r = 0; r < out_rows; ++r) {
+      float* row = out + static_cast<long>(r) * out_spec.stride;
+      const float offset = kFixed16Offset * met[r];
+      for (int c = 0; c < out_spec.stride; ++c) row[c] = scale[c] * (row[c] - offset) + bias[c];
     }
   }
 
@@ -587,14 +687,17 @@ class UNet {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
-    for (int r = 0; r < rows; ++r)
-      std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
-    if (storage_ == WeightStorage::F32)
-      run_products(layer, layer.w32.data(), frames, ws);
-    else if (storage_ == WeightStorage::F16)
-      run_products(layer, layer.w16.data(), frames, ws);
-    else
-      run_products(layer, layer.wbf16.data(), frames, ws);
+    if (!layer.wfx16.empty()) {  // Fixed16: products of levels first, then scale, offset and bias
+      std::fill(out, out + static_cast<long>(rows) * out_spec.stride, 0.0f);
+      run_taps(layer, layer.wfx16.data(), frames, ws);
+      finish_fixed16(layer, frames, ws);
+    } else {
+      for (int r = 0; r < rows; ++r)
+        std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
+      if (!layer.w32.empty()) run_products(layer, layer.w32.data(), frames, ws);
+      else if (!layer.w16.empty()) run_products(layer, layer.w16.data(), frames, ws);
+      else run_products(layer, layer.wbf16.data(), frames, ws);
+    }
     if (layer.activation == Activation::Relu)
       Backend::relu(out, rows * out_spec.stride);
     else

@@ -38,7 +38,7 @@ struct ScalarBackend {
     for (int r = 0; r < rows; ++r)
       for (int kk = 0; kk < k; ++kk) {
         const float xv = x[r][kk];
-        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_value(w[panel_index(kk, j, k, n, panel)]);
+        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_at(w, panel_index(kk, j, k, n, panel));
       }
   }
 
@@ -63,7 +63,7 @@ struct ScalarBackend {
       for (int i = 0; i < x[r].count; ++i) {
         const float xv = x[r].value[i];
         const int kk = x[r].index[i];
-        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_value(w[panel_index(kk, j, k, n, panel)]);
+        for (int j = 0; j < n; ++j) y[r][j] += xv * weight_at(w, panel_index(kk, j, k, n, panel));
       }
   }
 
@@ -76,9 +76,16 @@ struct ScalarBackend {
     for (int f = 0; f < frames; ++f) {
       float sum = 0.0f;
       for (int i = 0; i < terms; ++i)
-        for (int kk = 0; kk < k[i]; ++kk) sum += x[i][f * x_stride + kk] * weight_value(w[i][kk]);
+        for (int kk = 0; kk < k[i]; ++kk) sum += x[i][f * x_stride + kk] * weight_at(w[i], kk);
       sums[f] = sum;
     }
+  }
+
+  /// @brief Sum of x[0..k), in order.
+  GLOVEPOSE_REALTIME static float sum(const float* x, int k) noexcept {
+    float total = 0.0f;
+    for (int i = 0; i < k; ++i) total += x[i];
+    return total;
   }
 
   /// @brief In-place max(0, v).

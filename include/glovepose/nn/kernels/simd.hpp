@@ -120,6 +120,16 @@ struct SimdBackend {
     }
   }
 
+  /// @brief See ScalarBackend::sum (here in `lanes` partial sums, then across them).
+  GLOVEPOSE_REALTIME static float sum(const float* x, int k) noexcept {
+    Batch partial(0.0f);
+    int i = 0;
+    for (; i + lanes <= k; i += lanes) partial += Batch::load_unaligned(x + i);
+    float total = xsimd::hadd(partial);
+    for (; i < k; ++i) total += x[i];
+    return total;
+  }
+
   /// @brief In-place max(0, v); count must be a multiple of `lanes`.
   GLOVEPOSE_REALTIME static void relu(float* data, int count) noexcept {
     const Batch zero(0.0f);
@@ -253,13 +263,13 @@ struct SimdBackend {
       }
   }
 
-  // The V weight vectors at wk, whose first column is `col`: BF16 comes in pairs of vectors
-  // (pair layout, weight_load.hpp), whose groups start at even multiples of `lanes`.
+  // The V weight vectors at wk, whose first column is `col`: BF16 and Fixed16 come in pairs of
+  // vectors (pair layout, weight_load.hpp), whose groups start at even multiples of `lanes`.
   template <int V, typename W>
   static void load_vectors(const W* wk, int col, Batch (&wv)[V]) noexcept {
-    if constexpr (std::is_same_v<W, BFloat16>) {
-      static_assert(V == 1 || V % 2 == 0, "BF16 blocks are whole pairs of vectors or a single vector");
-      if constexpr (V == 1) {  // half a pair: only when a layer has an odd number of vectors (not with BF16 strides)
+    if constexpr (kPairLayout<W>) {
+      static_assert(V == 1 || V % 2 == 0, "pair-layout blocks are whole pairs of vectors or a single vector");
+      if constexpr (V == 1) {  // half a pair: only when a layer has an odd number of vectors (not with pair strides)
         Batch low, high;
         const bool second = (col / lanes) % 2 != 0;
         load_weight_pair<Arch>(second ? wk - lanes : wk, low, high);

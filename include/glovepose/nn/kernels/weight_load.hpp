@@ -7,13 +7,15 @@
 /// words, word j holding column j in its low half and column lanes + j in its high half. One load
 /// then gives two vectors of weights by a shift and a mask (two plain integer operations that run
 /// beside the FMAs), where `vcvtph2ps` and `vpmovzxwd` cost this core twice an FMA's issue slot
-/// (docs/performance.md).
+/// (docs/performance.md). Fixed16 codes (../fixed16.hpp) use the same pair layout.
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include <xsimd/xsimd.hpp>
 
+#include "../fixed16.hpp"
 #include "../half.hpp"
 
 #if defined(__F16C__) || defined(__AVX512F__) || defined(__SSE2__)
@@ -25,12 +27,32 @@ namespace glovepose::nn::kernels {
 /// @brief A stored bfloat16 weight: its own type, so that overloads pick the bfloat16 widening.
 enum class BFloat16 : std::uint16_t {};
 
+/// @brief A stored Fixed16 code (../fixed16.hpp): its own type, so that overloads pick its widening.
+enum class Fixed16 : std::uint16_t {};
+
+/// @brief Whether matrices of this weight type are stored in pair layout.
+template <typename W>
+inline constexpr bool kPairLayout = std::is_same_v<W, BFloat16> || std::is_same_v<W, Fixed16>;
+
 /// @brief One stored weight as float.
 inline float weight_value(float w) noexcept { return w; }
 /// @brief One stored F16 weight as float.
 inline float weight_value(std::uint16_t w) noexcept { return f16_to_float(w); }
 /// @brief One stored BF16 weight as float.
 inline float weight_value(BFloat16 w) noexcept { return bf16_to_float(static_cast<std::uint16_t>(w)); }
+
+/// @brief Stored weight `i` of an array as float (the scalar kernels' read). For Fixed16 this is
+/// the code's level, which depends on the other half of its 32-bit word: `w` must start a word.
+template <typename W>
+inline float weight_at(const W* w, long i) noexcept {
+  return weight_value(w[i]);
+}
+/// @brief Fixed16: the level of code `i` (../fixed16.hpp); codes 2j and 2j + 1 share a word.
+inline float weight_at(const Fixed16* w, long i) noexcept {
+  const long first = i & ~1L;
+  const std::uint32_t word = static_cast<std::uint32_t>(w[first]) | static_cast<std::uint32_t>(w[first + 1]) << 16;
+  return i == first ? fixed16_low_level(word) : fixed16_high_level(word);
+}
 
 /// @brief The slot, within its row of a pair-layout matrix, that holds column `col`: groups of
 /// 2 x `lanes` columns, column lanes * h + j of a group in half h of 32-bit word j. With lanes = 1
@@ -98,6 +120,31 @@ inline void load_weight_pair(const BFloat16* p, xsimd::batch<float, Arch>& low, 
   const Words words = Words::load_unaligned(reinterpret_cast<const std::uint32_t*>(p));
   low = xsimd::bitwise_cast<Batch>(words << 16);
   high = xsimd::bitwise_cast<Batch>(words & Words(0xFFFF0000u));
+}
+
+/// @brief Two SIMD batches of Fixed16 levels from 2 x lanes codes in pair layout: `low` the
+/// group's first `lanes` columns, `high` the next `lanes`. With AVX-512 VBMI2, the high levels
+/// are one double shift (the constant supplies the exponent) and the low ones a shift and a
+/// ternary logic operation.
+template <typename Arch>
+inline void load_weight_pair(const Fixed16* p, xsimd::batch<float, Arch>& low, xsimd::batch<float, Arch>& high) noexcept {
+  using Batch = xsimd::batch<float, Arch>;
+  using Words = xsimd::batch<std::uint32_t, Arch>;
+  static_assert(sizeof(Fixed16) == 2, "two codes per 32-bit word");
+  const Words words = Words::load_unaligned(reinterpret_cast<const std::uint32_t*>(p));
+#if defined(__AVX512VBMI2__)
+  if constexpr (Batch::size == 16) {
+    const __m512i w = words;
+    high = Batch(_mm512_castsi512_ps(_mm512_shrdi_epi32(w, _mm512_set1_epi32(0x7F), 9)));
+    // (w << 7) & 0x7FFFFF | 0x3F800000: ternary logic 0xEA is (a & b) | c.
+    low = Batch(_mm512_castsi512_ps(
+        _mm512_ternarylogic_epi32(_mm512_slli_epi32(w, 7), _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
+    return;
+  }
+#endif
+  const Words one(0x3F800000u);
+  high = xsimd::bitwise_cast<Batch>((words >> 9) | one);
+  low = xsimd::bitwise_cast<Batch>(((words << 7) & Words(0x007FFFFFu)) | one);
 }
 
 }  // namespace glovepose::nn::kernels
