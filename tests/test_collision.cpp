@@ -36,7 +36,7 @@ TEST_CASE("collision: closest distance between segments matches brute-force samp
   CHECK(segment_distance_squared({0, 0, 0}, {0, 0, 0}, {3, 4, 0}, {3, 4, 0}) == doctest::Approx(25.0));
 }
 
-TEST_CASE("collision: the rest pose and a spread hand are collision-free; fingers pushed into each other are outliers") {
+TEST_CASE("collision: the rest pose and a spread hand are collision-free, fingers pushed into each other are outliers") {
   // At rest two capsules graze by about 0.1 mm (the template's 6-digit rest pose): far below 80.
   CHECK(energy_of(Angles{}) < 0.1);
   // Positive abduction turns every finger towards the thumb (+x: the base frames' x axis is

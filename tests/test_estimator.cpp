@@ -153,7 +153,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   CHECK(error < 10.0);
 }
 
-TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 and F16 within 0.1 degree of F32 over a session; BF16 measured") {
+TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 and F16 within 0.1 degree of F32 over a session, BF16 measured") {
   const train::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame, end = d.frames();
   const GlovePoseEstimator estimator = calibrated(shipped());
@@ -275,7 +275,7 @@ TEST_CASE("estimator: calibration state machine, saved calibrations, training ra
   CHECK((generic.pose().flags & kPoseTrainingCalibration) != 0);
 }
 
-TEST_CASE("estimator: smoothing is the 1-euro filter of the raw angles; joints follow the kinematics") {
+TEST_CASE("estimator: smoothing is the 1-euro filter of the raw angles, joints follow the kinematics") {
   const auto model = shipped();
   EstimatorConfig config = cycle_config();
   config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};

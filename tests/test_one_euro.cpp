@@ -40,7 +40,7 @@ TEST_CASE("one euro: reproduces the authors' conformance vectors within 1e-4") {
   CHECK(worst <= 1e-4);
 }
 
-TEST_CASE("one euro: the first sample passes unchanged; noise is smoothed, a fast move is followed") {
+TEST_CASE("one euro: the first sample passes unchanged, noise is smoothed, a fast move is followed") {
   OneEuroFilter<2> filter({60.0, 1.0, 0.5, 1.0});
   std::array<double, 2> out{};
   REQUIRE(filter.filter({0.3, -0.2}, 0.0, out) == Status::Ok);
@@ -80,7 +80,7 @@ TEST_CASE("one euro: NaN values and backwards timestamps are refused and not mix
   CHECK(std::isfinite(b[4]));
 }
 
-TEST_CASE("one euro: settings are validated; filtering allocates nothing") {
+TEST_CASE("one euro: settings are validated, filtering allocates nothing") {
   CHECK_THROWS_WITH_AS(OneEuroFilter<1>({0.0, 1.0, 0.0, 1.0}), doctest::Contains("expected all finite and > 0"), Error);
   CHECK_THROWS_WITH_AS(OneEuroFilter<1>({60.0, 1.0, -1.0, 1.0}), doctest::Contains("beta -1.000000"), Error);
   OneEuroFilter<hand::kDofCount> filter;

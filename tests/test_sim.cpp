@@ -257,7 +257,7 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   CHECK_THROWS_WITH_AS(simulate_corpus(config), doctest::Contains("--minutes"), Error);
 }
 
-TEST_CASE("sim report: realistic readout age, outliers and signal; re-donning below pose change; not linearly solvable across people") {
+TEST_CASE("sim report: realistic readout age, outliers and signal, re-donning below pose change, not linearly solvable across people") {
   CorpusConfig config;
   config.seed = 11;
   config.subjects = 5;

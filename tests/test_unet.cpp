@@ -60,7 +60,7 @@ std::size_t paper_parameter_count(std::size_t w) {
 }
 }  // namespace
 
-TEST_CASE("unet: presets have the paper's sizes; the fixed 5x5 grid lets most 4x4 taps go unread") {
+TEST_CASE("unet: presets have the paper's sizes, the fixed 5x5 grid lets most 4x4 taps go unread") {
   for (const UNetPreset& p : kUNetPresets) {
     const auto tensors = UNet<>::expected_tensors(p.width);
     std::size_t count = 0;
@@ -108,7 +108,7 @@ TEST_CASE("unet: the SIMD and scalar backends equal an independent reference for
   }
 }
 
-TEST_CASE("unet: a batch gives the same outputs as frames one at a time; forward_batch on threads too") {
+TEST_CASE("unet: a batch gives the same outputs as frames one at a time, forward_batch on threads too") {
   const int width = 16, frames = 37;
   const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(width), 3), width);
   const std::vector<float> x = random_inputs(frames, 11);
@@ -142,7 +142,7 @@ TEST_CASE("unet: bad input gets a status and the single-frame forward allocates 
   for (float v : out) CHECK(std::abs(v) < 1.0f);
 }
 
-TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree; single frames (sparse) equal batches (dense)") {
+TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, single frames (sparse) equal batches (dense)") {
   for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 300 + static_cast<unsigned>(width));

@@ -32,7 +32,7 @@ WeightFile small_file() {
 }
 }  // namespace
 
-TEST_CASE("weights: write and read back exactly; the header is padded so data starts 8-byte aligned") {
+TEST_CASE("weights: write and read back exactly, the header is padded so data starts 8-byte aligned") {
   const WeightFile f = small_file();
   const std::string bytes = f.serialize();
   std::uint64_t n = 0;
