@@ -113,7 +113,7 @@ typedef int32_t glovepose_result;
  * rounding moves angles by up to about 0.4 degree on the shipped model (F16: 0.03 degree). */
 #define GLOVEPOSE_WEIGHTS_BF16 2
 /** @brief In-memory weight precision: 16-bit codes with one scale per output channel (Fixed16):
- * half the bytes, the real-time choice; angles within a thousandth of a degree of F32 on the shipped
+ * half the bytes, the real-time choice; angles within 0.005 degree of F32 on the shipped
  * model (README, "Figures"). */
 #define GLOVEPOSE_WEIGHTS_FIXED16 3
 

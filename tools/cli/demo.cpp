@@ -52,7 +52,7 @@ struct DemoOptions {
             << "  --out DIR     where the table and pictures go (default: demo-out)\n"
             << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seed 1)\n"
             << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
-            << "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.001 degree of F32)\n"
+            << "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)\n"
             << "  --f16         keep the weights as F16 in memory\n"
             << "  --bf16        keep the weights as BF16 in memory (the fastest)\n";
   std::exit(2);
