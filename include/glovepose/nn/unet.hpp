@@ -523,14 +523,10 @@ class UNet {
       double& m = largest[static_cast<std::size_t>(column_of[i])];
       m = std::max(m, static_cast<double>(std::abs(packed[i])));
     }
-    std::vector<double> scale(largest.size());
     layer.fixed_scale.assign(largest.size(), 0.0f);
-    for (std::size_t c = 0; c < largest.size(); ++c) {
-      layer.fixed_scale[c] = static_cast<float>(fixed16_scale(largest[c]));
-      scale[c] = layer.fixed_scale[c];  // the float the layer multiplies by
-    }
-    const auto units = [&](std::size_t i) {
-      const double s = scale[static_cast<std::size_t>(column_of[i])];
+    for (std::size_t c = 0; c < largest.size(); ++c) layer.fixed_scale[c] = static_cast<float>(fixed16_scale(largest[c]));
+    const auto units = [&](std::size_t i) {  // against the float scale the layer multiplies by
+      const double s = layer.fixed_scale[static_cast<std::size_t>(column_of[i])];
       return s > 0.0 ? packed[i] / s : 0.0;
     };
     layer.wfx16.resize(packed.size());  // whole words: blocks are whole rows of even width
