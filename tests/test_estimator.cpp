@@ -183,6 +183,31 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 and F16 withi
   CHECK(worst[2] > worst[1]);  // 8 significant bits: BF16 is not a bounded path
 }
 
+TEST_CASE("estimator: the shipped model leaves about half of each hidden layer exactly zero over a session") {
+  // docs/performance.md: the single-frame products skip zero activations, so this share sets how
+  // much of the weights a frame reads. Measured, not assumed: the band is the claim the docs make.
+  const train::Dataset& d = session().data;
+  const GlovePoseEstimator estimator = calibrated(shipped());
+  const PoseModel& model = *shipped();
+  auto ws = model.network().make_workspace(1);
+  Eigen::VectorXd raw(model.cell_count()), normalized(model.cell_count());
+  std::array<float, nn::kUNetInputs> maps{};
+  std::array<float, nn::kUNetOutputs> pose_map{};
+  std::array<double, nn::kUNetBufferCount - 2> mean{};
+  const std::size_t begin = session().first_session_frame, frames = d.frames() - begin;
+  for (std::size_t f = begin; f < d.frames(); ++f) {
+    for (int c = 0; c < model.cell_count(); ++c) raw(c) = d.cells[f * d.cell_count + static_cast<std::size_t>(c)];
+    REQUIRE(estimator.calibration()->normalize(raw, normalized) == Status::Ok);
+    REQUIRE(model.glove().map().to_stretch_maps(normalized.data(), maps) == Status::Ok);
+    REQUIRE(model.network().forward(maps, pose_map, ws) == Status::Ok);
+    const auto fractions = model.network().zero_fractions(ws, 1);
+    for (std::size_t l = 0; l < mean.size(); ++l) mean[l] += fractions[l] / static_cast<double>(frames);
+  }
+  MESSAGE("shipped model, " << frames << " frames, mean share of exact zeros e1..d3: " << mean[0] << " " << mean[1] << " " << mean[2]
+                            << " " << mean[3] << " " << mean[4] << " " << mean[5] << " " << mean[6]);
+  for (double share : mean) CHECK((share > 0.2 && share < 0.8));
+}
+
 TEST_CASE("estimator: rows, whole C_m frames and solved C_c frames give the same poses") {
   const auto model = shipped();
   const train::Dataset& d = session().data;

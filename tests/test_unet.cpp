@@ -123,6 +123,45 @@ TEST_CASE("unet: a batch gives the same outputs as frames one at a time, forward
   }
 }
 
+TEST_CASE("unet: zero_fractions counts the zeros each ReLU leaves as the independent reference forward does") {
+  const int width = 16, frames = 3;
+  TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 21);
+  const std::vector<float> x = random_inputs(frames, 5);
+  const auto fractions_of = [&](const TensorMap& t) {
+    const auto net = UNet<>::from_tensors(t, width);
+    auto ws = net.make_workspace(frames);
+    std::vector<float> y(static_cast<std::size_t>(frames * kUNetOutputs));
+    REQUIRE(net.forward(x.data(), y.data(), frames, ws) == Status::Ok);
+    std::array<double, 7> reference{};
+    std::array<double, 7> size{};
+    for (int f = 0; f < frames; ++f) {
+      const std::vector<test::Grid> acts = test::unet_reference_activations(t, x.data() + f * kUNetInputs);
+      for (std::size_t l = 0; l < reference.size(); ++l) {
+        reference[l] += static_cast<double>(std::count(acts[l].v.begin(), acts[l].v.end(), 0.0));
+        size[l] += static_cast<double>(acts[l].v.size());
+      }
+    }
+    const auto fractions = net.zero_fractions(ws, frames);
+    for (std::size_t l = 0; l < reference.size(); ++l) {
+      CAPTURE(l);
+      // float against double: a pre-activation within rounding of zero may fall either side.
+      CHECK(std::abs(fractions[l] - reference[l] / size[l]) <= 2.0 / size[l]);
+    }
+    CHECK_THROWS_WITH_AS((void)net.zero_fractions(ws, frames + 1), doctest::Contains("4 frames, expected 1..3"), Error);
+    const auto other = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(4), 9), 4);
+    CHECK_THROWS_WITH_AS((void)other.zero_fractions(ws, 1), doctest::Contains("expected width 4"), Error);
+    return fractions;
+  };
+  const auto random = fractions_of(tensors);
+  MESSAGE("random w = 16 network, zero fractions e1..d3: " << random[0] << " " << random[1] << " " << random[2] << " " << random[3]
+                                                             << " " << random[4] << " " << random[5] << " " << random[6]);
+  for (double f : random) CHECK((f > 0.2 && f < 0.8));  // about half, as docs/performance.md says
+  // A first layer that only ever outputs -1 before its ReLU: all of e1 is zero.
+  std::fill(tensors.at("enc1.weight").values.begin(), tensors.at("enc1.weight").values.end(), 0.0f);
+  std::fill(tensors.at("enc1.bias").values.begin(), tensors.at("enc1.bias").values.end(), -1.0f);
+  CHECK(fractions_of(tensors)[0] == 1.0);
+}
+
 TEST_CASE("unet: bad input gets a status and the single-frame forward allocates nothing") {
   const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(64), 9), 64);
   auto ws = net.make_workspace();

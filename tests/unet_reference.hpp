@@ -74,8 +74,9 @@ inline Grid cat(const Grid& a, const Grid& b) {
   return out;
 }
 
-// One frame: 50 inputs (2x5x5) -> 25 outputs (1x5x5).
-inline std::vector<double> unet_reference(const nn::TensorMap& t, const float* input) {
+// One frame: 50 inputs (2x5x5) -> the hidden activations e1..e4, d1..d3 (after their ReLU) and the
+// 25 outputs (1x5x5, last).
+inline std::vector<Grid> unet_reference_activations(const nn::TensorMap& t, const float* input) {
   Grid x{2, 5, std::vector<double>(input, input + 50)};
   const Grid e1 = relu(conv(x, t, "enc1", 5, 5, 1, 2, false));
   const Grid e2 = relu(batch_norm_relu(conv(e1, t, "enc2", 3, 3, 2, 1, false), t, "bn2"));
@@ -86,7 +87,12 @@ inline std::vector<double> unet_reference(const nn::TensorMap& t, const float* i
   const Grid d3 = relu(batch_norm_relu(conv(cat(d2, e2), t, "dec3", 5, 3, 2, 1, true), t, "dbn3"));
   Grid y = conv(cat(d3, e1), t, "out", 5, 5, 1, 2, false);
   for (double& v : y.v) v = std::tanh(v);
-  return y.v;
+  return {e1, e2, e3, e4, d1, d2, d3, y};
+}
+
+// One frame: 50 inputs (2x5x5) -> 25 outputs (1x5x5).
+inline std::vector<double> unet_reference(const nn::TensorMap& t, const float* input) {
+  return unet_reference_activations(t, input).back().v;
 }
 
 // Random tensors of the given shapes: weights ~ U(+-sqrt(6 / (fan_in + fan_out))) (Xavier),

@@ -13,6 +13,7 @@
 /// which is also how concatenation costs nothing (each source is its own block of input channels).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -309,6 +310,29 @@ class UNet {
     work(0, std::min(frames, per));  // the calling thread takes the first share
     for (std::thread& th : pool) th.join();
     if (failure) std::rethrow_exception(failure);
+  }
+
+  /// @brief For the last `frames`-frame forward on `ws`: the fraction of each hidden activation
+  /// buffer (e1, e2, e3, e4, d1, d2, d3, after their ReLU; real channels only) that is exactly
+  /// zero. At batch 1 the products skip those entries (kernels/sparse_row.hpp), so these fractions
+  /// set how much of the weights a frame reads. Diagnostic, set-up code: throws glovepose::Error for
+  /// a workspace of another network or `frames` outside 1..capacity.
+  std::array<double, kUNetBufferCount - 2> zero_fractions(const Workspace& ws, int frames) const {
+    if (ws.width_ != width_ || ws.buffers.size() != buffers_.size())
+      throw Error("UNet::zero_fractions: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " + std::to_string(width_));
+    if (frames < 1 || frames > ws.capacity_)
+      throw Error("UNet::zero_fractions: " + std::to_string(frames) + " frames, expected 1.." + std::to_string(ws.capacity_));
+    std::array<double, kUNetBufferCount - 2> fractions{};
+    for (int id = 1; id + 1 < kUNetBufferCount; ++id) {
+      const BufferSpec& spec = buffers_[static_cast<std::size_t>(id)];
+      const float* values = ws.buffers[static_cast<std::size_t>(id)].data();
+      const long rows = static_cast<long>(spec.positions) * frames;
+      long zeros = 0;
+      for (long r = 0; r < rows; ++r)
+        zeros += std::count(values + r * spec.stride, values + r * spec.stride + spec.channels, 0.0f);
+      fractions[static_cast<std::size_t>(id - 1)] = static_cast<double>(zeros) / static_cast<double>(rows * spec.channels);
+    }
+    return fractions;
   }
 
  private:
