@@ -1,10 +1,17 @@
 // The two limits the U-Net forward races (run: build/bench/glovepose_bench --benchmark_filter=Peak|Stream):
 //   BM_PeakFma          this core's F32 multiply-add rate (independent FMA chains, xsimd default arch)
 //   BM_StreamBytes/N    the rate at which one core re-reads an N-byte buffer (the weights at batch 1)
+//   BM_SparseRowKernel* the batch-1 product kernel itself, weights in the L1/L2: its multiply-adds per
+//                       second per weight storage (what the widening of 16-bit weights costs)
+#include <glovepose/nn/kernels/simd.hpp>
 #include <glovepose/nn/tensor.hpp>
 
 #include <benchmark/benchmark.h>
 #include <xsimd/xsimd.hpp>
+
+#include <cstdint>
+#include <random>
+#include <vector>
 
 using Batch = xsimd::batch<float>;
 
@@ -42,3 +49,47 @@ static void BM_StreamBytes(benchmark::State& state) {
 }
 // The packed weights of w = 64 (4.3 MB F16, 8.6 MB F32) and w = 100 (10.8 MB F16, 21.5 MB F32).
 BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584)->Arg(10757200)->Arg(21514400);
+
+// One row with every other of its 128 entries nonzero (the share of zeros ReLU leaves) times a
+// 128 x 128 weight block: gemm_sparse_rows as the batch-1 forward calls it, but with the weights
+// in the L1/L2 after the first iteration, so that only the kernel's own instructions count.
+template <typename W>
+static void sparse_row_kernel(benchmark::State& state, W (*code)(std::mt19937&)) {
+  using glovepose::nn::kernels::SimdBackend;
+  constexpr int k = 128, n = 128, nonzero = 64;
+  std::mt19937 rng(1);
+  std::vector<W> weights(static_cast<std::size_t>(k) * n);
+  for (W& w : weights) w = code(rng);
+  std::vector<int> index(nonzero);
+  std::vector<float> value(nonzero, 0.5f);
+  for (int i = 0; i < nonzero; ++i) index[static_cast<std::size_t>(i)] = 2 * i;
+  const glovepose::nn::kernels::SparseRow row{index.data(), value.data(), nonzero};
+  std::vector<float> y(n, 0.0f);
+  float* out = y.data();
+  for (auto _ : state) {
+    SimdBackend::gemm_sparse_rows(&row, &out, 1, weights.data(), k, n);
+    benchmark::ClobberMemory();
+  }
+  benchmark::DoNotOptimize(y.data());
+  const double macs = static_cast<double>(state.iterations()) * nonzero * n;
+  state.counters["MAC_per_s"] = benchmark::Counter(macs, benchmark::Counter::kIsRate);
+}
+static void BM_SparseRowKernelF32(benchmark::State& state) {
+  sparse_row_kernel<float>(state, [](std::mt19937& rng) { return std::uniform_real_distribution<float>(-0.05f, 0.05f)(rng); });
+}
+static void BM_SparseRowKernelFixed16(benchmark::State& state) {
+  sparse_row_kernel<glovepose::nn::kernels::Fixed16>(
+      state, [](std::mt19937& rng) { return static_cast<glovepose::nn::kernels::Fixed16>(static_cast<std::uint16_t>(rng())); });
+}
+static void BM_SparseRowKernelF16(benchmark::State& state) {
+  // Finite binary16 codes of magnitude below 2 (exponent field below 16).
+  sparse_row_kernel<std::uint16_t>(state, [](std::mt19937& rng) { return static_cast<std::uint16_t>(rng() & 0xBFFFu); });
+}
+static void BM_SparseRowKernelBF16(benchmark::State& state) {
+  sparse_row_kernel<glovepose::nn::kernels::BFloat16>(
+      state, [](std::mt19937& rng) { return static_cast<glovepose::nn::kernels::BFloat16>(static_cast<std::uint16_t>(rng() & 0xBFFFu)); });
+}
+BENCHMARK(BM_SparseRowKernelF32);
+BENCHMARK(BM_SparseRowKernelFixed16);
+BENCHMARK(BM_SparseRowKernelF16);
+BENCHMARK(BM_SparseRowKernelBF16);

@@ -123,9 +123,10 @@ inline void load_weight_pair(const BFloat16* p, xsimd::batch<float, Arch>& low, 
 }
 
 /// @brief Two SIMD batches of Fixed16 levels from 2 x lanes codes in pair layout: `low` the
-/// group's first `lanes` columns, `high` the next `lanes`. With AVX-512 VBMI2, the high levels
-/// are one double shift (the constant supplies the exponent) and the low ones a shift and a
-/// ternary logic operation.
+/// group's first `lanes` columns, `high` the next `lanes`. With AVX-512 VBMI2 the high levels are
+/// one double shift (the constant supplies the exponent), the low ones a plain shift and a ternary
+/// logic operation: three operations per 32 weights, the fewest we found (a double shift for the
+/// low half too, also three, is slower on Zen 4: docs/performance.md).
 template <typename Arch>
 inline void load_weight_pair(const Fixed16* p, xsimd::batch<float, Arch>& low, xsimd::batch<float, Arch>& high) noexcept {
   using Batch = xsimd::batch<float, Arch>;
@@ -136,11 +137,9 @@ inline void load_weight_pair(const Fixed16* p, xsimd::batch<float, Arch>& low, x
   if constexpr (Batch::size == 16) {
     const __m512i w = words;
     high = Batch(_mm512_castsi512_ps(_mm512_shrdi_epi32(w, _mm512_set1_epi32(0x7F), 9)));
-    // (w << 7) & 0x7FFFFF | 0x3F800000: ternary logic 0xEA is (a & b) | c. The shift is a double
-    // shift with zero: GCC 12's _mm512_slli_epi32 trips -Wuninitialized inside its own header.
-    const __m512i shifted = _mm512_shldi_epi32(w, _mm512_setzero_si512(), 7);
+    // (w << 7) & 0x7FFFFF | 0x3F800000: ternary logic 0xEA is (a & b) | c.
     low = Batch(_mm512_castsi512_ps(
-        _mm512_ternarylogic_epi32(shifted, _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
+        _mm512_ternarylogic_epi32(_mm512_slli_epi32(w, 7), _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
     return;
   }
 #endif
