@@ -137,9 +137,12 @@ inline void load_weight_pair(const Fixed16* p, xsimd::batch<float, Arch>& low, x
   if constexpr (Batch::size == 16) {
     const __m512i w = words;
     high = Batch(_mm512_castsi512_ps(_mm512_shrdi_epi32(w, _mm512_set1_epi32(0x7F), 9)));
-    // (w << 7) & 0x7FFFFF | 0x3F800000: ternary logic 0xEA is (a & b) | c.
+    // (w << 7) & 0x7FFFFF | 0x3F800000: ternary logic 0xEA is (a & b) | c. The shift is spelled
+    // with an all-ones zeroing mask: GCC 12's _mm512_slli_epi32 trips -Wuninitialized inside its
+    // own header (an undefined pass-through operand); this form compiles to the same plain vpslld.
+    const __m512i shifted = _mm512_maskz_slli_epi32(static_cast<__mmask16>(0xFFFF), w, 7);
     low = Batch(_mm512_castsi512_ps(
-        _mm512_ternarylogic_epi32(_mm512_slli_epi32(w, 7), _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
+        _mm512_ternarylogic_epi32(shifted, _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
     return;
   }
 #endif
