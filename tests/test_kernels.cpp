@@ -45,9 +45,6 @@ std::vector<W> pack(const std::vector<float>& logical, int k, int n, int panel, 
 }
 
 template <typename W>
-void check_dot_terms(int rows, int k, int n, const std::vector<float>& logical, std::mt19937& rng);
-
-template <typename W>
 void check_gemm(int rows, int k, int n, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -104,46 +101,8 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
     REQUIRE(y_sparse[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
     REQUIRE(y_scalar_sparse[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
   }
-  // Sums of dot products over several terms (one output channel gathered over taps and sources),
-  // for several frames whose rows lie `stride` floats apart. Weights in natural (not pair) layout:
-  // not for Fixed16, which codes the row products only.
-  if constexpr (!std::is_same_v<W, kernels::Fixed16>) check_dot_terms<W>(rows, k, n, logical, rng);
 }
 
-template <typename W>
-void check_dot_terms(int rows, int k, int n, const std::vector<float>& logical, std::mt19937& rng) {
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  const int frames = 1 + rows % 11, stride = k + 3;
-  std::vector<float> xf(static_cast<std::size_t>(rows * frames * stride));
-  for (float& v : xf) v = u(rng);
-  std::vector<W> wd(logical.size());
-  for (std::size_t i = 0; i < wd.size(); ++i) wd[i] = to_weight<W>(logical[i]);
-  std::vector<const float*> xt;
-  std::vector<const W*> wt;
-  std::vector<int> kt;
-  for (int r = 0; r < rows; ++r) {
-    xt.push_back(xf.data() + static_cast<std::size_t>(r * frames * stride));
-    wt.push_back(wd.data() + (r * 3) % n);
-    kt.push_back(k - (r % 3 == 0 ? 0 : std::min(k - 1, r % 5)));  // lengths that differ between terms
-  }
-  std::vector<float> scalar_sums(static_cast<std::size_t>(frames)), simd_sums(static_cast<std::size_t>(frames));
-  ScalarBackend::dot_terms(xt.data(), stride, wt.data(), kt.data(), rows, frames, scalar_sums.data());
-  SimdBackend::dot_terms(xt.data(), stride, wt.data(), kt.data(), rows, frames, simd_sums.data());
-  // Both against the exact (double) sum, within float rounding of the sum of magnitudes.
-  for (int f = 0; f < frames; ++f) {
-    double exact = 0.0, magnitude = 0.0;
-    for (int i = 0; i < rows; ++i)
-      for (int kk = 0; kk < kt[static_cast<std::size_t>(i)]; ++kk) {
-        const double term = static_cast<double>(xt[static_cast<std::size_t>(i)][f * stride + kk]) *
-                            kernels::weight_value(wt[static_cast<std::size_t>(i)][kk]);
-        exact += term;
-        magnitude += std::abs(term);
-      }
-    const double bound = 1e-6 * magnitude + 1e-7;
-    REQUIRE(std::abs(scalar_sums[static_cast<std::size_t>(f)] - exact) <= bound);
-    REQUIRE(std::abs(simd_sums[static_cast<std::size_t>(f)] - exact) <= bound);
-  }
-}
 }  // namespace
 
 TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16, BF16, Fixed16 weights)") {

@@ -137,6 +137,8 @@ class UNet {
       std::size_t pairs = 0;
       if (l.mode == Mode::Im2col) {
         for (int source : l.receptive) pairs += source >= 0;
+      } else if (l.mode == Mode::TapColumns) {
+        for (const auto& list : l.terms) pairs += list.size();
       } else {
         for (const PackedTap& t : l.taps) pairs += t.out_positions.size();
       }
@@ -167,16 +169,12 @@ class UNet {
     std::vector<AlignedVector<float>> buffers;
     std::vector<const float*> x_rows;
     std::vector<float*> y_rows;
-    std::vector<const float*> w32_terms;          // Gather: weight block per term (F32 storage)
-    std::vector<const std::uint16_t*> w16_terms;  // ... (F16 storage)
-    std::vector<const kernels::BFloat16*> wbf16_terms;  // ... (BF16 storage)
-    std::vector<int> k_terms;          // Gather: length per term
     AlignedVector<float> columns;      // Im2col: receptive fields, one row per (position, frame)
     std::vector<int> sparse_index;     // Taps, small batches: nonzero entries of the sources' rows
     std::vector<float> sparse_value;
     std::vector<kernels::SparseRow> sparse_rows;  // per (source, position, frame)
     std::vector<kernels::SparseRow> tap_rows;     // the rows one product joins
-    std::vector<float> sums;           // Gather: one output per frame
+    AlignedVector<float> tap_sums;     // TapColumns: per (source, position, frame) one partial sum per tap
     std::vector<float> input_sums;     // Fixed16: sum of each source row (per source, position, frame)
     std::vector<float> output_sums;    // Fixed16: sum of the inputs each output row met
   };
@@ -192,7 +190,7 @@ class UNet {
       ws.buffers.emplace_back(static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(capacity) *
                                   static_cast<std::size_t>(b.stride),
                               0.0f);
-    std::size_t rows = 0, columns = 0, terms = 0;
+    std::size_t rows = 0, columns = 0, tap_sums = 0;
     for (const PackedLayer& l : layers_) {
       const BufferSpec& out = buffers_[static_cast<std::size_t>(l.out_buffer)];
       const std::size_t outputs = static_cast<std::size_t>(out.positions) * static_cast<std::size_t>(capacity);
@@ -202,13 +200,20 @@ class UNet {
         columns = std::max(columns, outputs * static_cast<std::size_t>(l.kernel_taps) *
                                         static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.sources[0])].channels));
       }
-      for (const auto& list : l.terms) terms = std::max(terms, list.size() * l.sources.size());
+      if (l.mode == Mode::TapColumns) {
+        std::size_t source_rows = 0;
+        for (int s : l.sources) {
+          const std::size_t positions = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].positions) * static_cast<std::size_t>(capacity);
+          rows = std::max(rows, positions);
+          source_rows += positions;
+        }
+        tap_sums = std::max(tap_sums, source_rows * static_cast<std::size_t>(l.tap_stride));
+      }
     }
-    rows = std::max(rows, terms);
     std::size_t sparse_values = 0, sparse_rows = 0;
     const std::size_t sparse_frames = static_cast<std::size_t>(std::min(capacity, kSparseMaxFrames));
     for (const PackedLayer& l : layers_) {
-      if (l.mode != Mode::Taps) continue;
+      if (l.mode == Mode::Im2col) continue;
       std::size_t values = 0, source_rows = 0;
       for (int s : l.sources) {
         const BufferSpec& in = buffers_[static_cast<std::size_t>(s)];
@@ -235,12 +240,8 @@ class UNet {
     ws.tap_rows.resize(rows);
     ws.x_rows.resize(rows);
     ws.y_rows.resize(rows);
-    ws.w32_terms.resize(terms);
-    ws.w16_terms.resize(terms);
-    ws.wbf16_terms.resize(terms);
-    ws.k_terms.resize(terms);
     ws.columns.resize(columns);
-    ws.sums.resize(static_cast<std::size_t>(capacity));
+    ws.tap_sums.resize(tap_sums);
     return ws;
   }
 
@@ -353,7 +354,10 @@ class UNet {
   enum class Mode : unsigned char {
     Taps,    // per useful tap and source: one product of the rows it joins with the tap's block
     Im2col,  // few input channels: gather each output's whole receptive field, one product with K = taps x channels
-    Gather,  // one output channel: per output, one sum of dot products over its taps and sources
+    // One output channel: per input row, one product with the kernel's taps as columns (a sum per
+    // tap); each output then adds the (input row, tap) sums it meets. Replaces a short dot product
+    // per (output, tap, source), whose horizontal sums and pointer set-up cost more than the FMAs.
+    TapColumns,
   };
 
   struct PackedLayer {
@@ -363,12 +367,13 @@ class UNet {
     Mode mode = Mode::Taps;
     int kernel_taps = 0;                            // kernel * kernel (Im2col row length = kernel_taps * channels)
     std::vector<int> receptive;                     // Im2col: [out position][tap] -> input position or -1
-    std::vector<std::vector<std::pair<int, int>>> terms;  // Gather: [out position] -> (tap index, input position)
+    std::vector<std::vector<std::pair<int, int>>> terms;  // TapColumns: [out position] -> (tap, input position)
+    int tap_stride = 0;                             // TapColumns: taps padded to the SIMD width
     Activation activation = Activation::Relu;
     AlignedVector<float> bias;   // padded output channels
     AlignedVector<float> w32;    // per (tap, source): in channels x padded out channels, in column panels
     AlignedVector<std::uint16_t> w16;
-    AlignedVector<kernels::BFloat16> wbf16;  // pair layout (kernels/weight_load.hpp), except Gather's plain rows
+    AlignedVector<kernels::BFloat16> wbf16;  // pair layout (kernels/weight_load.hpp)
     AlignedVector<kernels::Fixed16> wfx16;   // Taps layers only, pair layout (fixed16.hpp)
     AlignedVector<float> fixed_scale;        // Fixed16: per padded output channel
     std::vector<std::size_t> block;  // offset of (tap, source) block
@@ -415,7 +420,7 @@ class UNet {
     layer.out_buffer = spec.out_buffer;
     layer.activation = spec.activation;
     const int first_channels = buffers_[static_cast<std::size_t>(spec.sources[0])].channels;
-    layer.mode = cout == 1 ? Mode::Gather : (spec.sources.size() == 1 && first_channels * k * k <= 64 ? Mode::Im2col : Mode::Taps);
+    layer.mode = cout == 1 ? Mode::TapColumns : (spec.sources.size() == 1 && first_channels * k * k <= 64 ? Mode::Im2col : Mode::Taps);
     layer.kernel_taps = k * k;
 
     // Fold BN (inference) into per-output-channel scale and shift, in double.
@@ -451,10 +456,14 @@ class UNet {
     // Fixed16 codes the row products only; the first and last layers (few weights) stay F32.
     const bool fixed = storage_ == WeightStorage::Fixed16 && layer.mode == Mode::Taps;
     const bool paired = storage_ == WeightStorage::BF16 || fixed;
-    // Where W(row, co) of a (rows x padded cout) product block goes.
+    // TapColumns: the taps are the product's columns, padded to whole pairs of vectors for every
+    // storage (the pair layout needs them; the same stride keeps 16-bit layers half an F32 one).
+    if (layer.mode == Mode::TapColumns) layer.tap_stride = round_up(layer.kernel_taps, 2 * Backend::lanes);
+    const int columns = layer.mode == Mode::TapColumns ? layer.tap_stride : out.stride;
+    // Where W(row, column) of a (rows x columns) product block goes.
     const auto slot = [&](int row, int co, int rows) {
       const int column = paired ? kernels::paired_slot(co, Backend::lanes) : co;
-      return static_cast<std::size_t>(kernels::panel_index(row, column, rows, out.stride, Backend::panel));
+      return static_cast<std::size_t>(kernels::panel_index(row, column, rows, columns, Backend::panel));
     };
     std::vector<int> column_of;  // Fixed16: the output channel of each packed slot (padding included)
     if (layer.mode == Mode::Im2col) {  // one dense (taps x channels) x stride block over the whole kernel
@@ -472,36 +481,40 @@ class UNet {
       layer.stored_weights = plan.size() * static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);  // useful taps only
       layer.block.push_back(0);
     }
-    if (layer.mode == Mode::Gather) {
-      for (int source : spec.sources)
-        if (buffers_[static_cast<std::size_t>(source)].stride != buffers_[static_cast<std::size_t>(spec.sources[0])].stride)
-          throw Error("UNet: layer " + spec.conv + " concatenates sources of different padded widths");  // unet_layers() never does
+    if (layer.mode == Mode::TapColumns) {  // per source one channels x taps block; taps no output meets stay zero
+      int channel_base = 0;
+      for (int source : spec.sources) {
+        const int cs = buffers_[static_cast<std::size_t>(source)].channels;
+        const std::size_t base = packed.size();
+        layer.block.push_back(base);
+        packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(columns), 0.0f);
+        for (const TapPairs& t : plan)
+          for (int ci = 0; ci < cs; ++ci) packed[base + slot(ci, t.tap, cs)] = static_cast<float>(w_at(channel_base + ci, 0, t.tap) * scale[0]);
+        layer.stored_weights += plan.size() * static_cast<std::size_t>(cs);
+        channel_base += cs;
+      }
       layer.terms.resize(static_cast<std::size_t>(out.positions));
-      for (std::size_t t = 0; t < plan.size(); ++t)
-        for (std::size_t j = 0; j < plan[t].out_positions.size(); ++j)
-          layer.terms[static_cast<std::size_t>(plan[t].out_positions[j])].push_back({static_cast<int>(t), plan[t].in_positions[j]});
+      for (const TapPairs& t : plan)
+        for (std::size_t j = 0; j < t.out_positions.size(); ++j)
+          layer.terms[static_cast<std::size_t>(t.out_positions[j])].push_back({t.tap, t.in_positions[j]});
     }
     for (const TapPairs& t : plan) {
-      if (layer.mode == Mode::Im2col) break;
+      if (layer.mode != Mode::Taps) break;
       layer.taps.push_back({t.out_positions, t.in_positions});
       int channel_base = 0;
       for (int source : spec.sources) {
         const int cs = buffers_[static_cast<std::size_t>(source)].channels;
-        layer.block.push_back(packed.size());
-        if (layer.mode == Mode::Gather) {
-          for (int ci = 0; ci < cs; ++ci) packed.push_back(static_cast<float>(w_at(channel_base + ci, 0, t.tap) * scale[0]));
-        } else {  // cs x stride, in the backend's column panels (kernels::panel_index)
-          const std::size_t base = packed.size();
-          packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(out.stride), 0.0f);
+        // cs x stride, in the backend's column panels (kernels::panel_index)
+        const std::size_t base = packed.size();
+        layer.block.push_back(base);
+        packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(out.stride), 0.0f);
+        for (int ci = 0; ci < cs; ++ci)
+          for (int co = 0; co < cout; ++co)
+            packed[base + slot(ci, co, cs)] = static_cast<float>(w_at(channel_base + ci, co, t.tap) * scale[static_cast<std::size_t>(co)]);
+        if (fixed) {
+          column_of.resize(packed.size());
           for (int ci = 0; ci < cs; ++ci)
-            for (int co = 0; co < cout; ++co)
-              packed[base + slot(ci, co, cs)] =
-                  static_cast<float>(w_at(channel_base + ci, co, t.tap) * scale[static_cast<std::size_t>(co)]);
-          if (fixed) {
-            column_of.resize(packed.size());
-            for (int ci = 0; ci < cs; ++ci)
-              for (int co = 0; co < out.stride; ++co) column_of[base + slot(ci, co, cs)] = co;
-          }
+            for (int co = 0; co < out.stride; ++co) column_of[base + slot(ci, co, cs)] = co;
         }
         layer.stored_weights += static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);
         channel_base += cs;
@@ -663,43 +676,47 @@ class UNet {
     Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, weights, row, out_spec.stride);
   }
 
+  // TapColumns: each source row's sums over its channels, one per tap (a product with the taps as
+  // columns, sparse for small batches as in run_taps); then each output adds the (row, tap) sums it meets.
   template <typename W>
-  void run_gather(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+  void run_tap_columns(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
-    const std::size_t sources = layer.sources.size();
-    const W** terms = nullptr;  // the workspace's pointer array of this weight type
-    if constexpr (std::is_same_v<W, float>) terms = ws.w32_terms.data();
-    else if constexpr (std::is_same_v<W, std::uint16_t>) terms = ws.w16_terms.data();
-    else terms = ws.wbf16_terms.data();
-    const float* base[2] = {nullptr, nullptr};  // unet_layers(): at most two (concatenated) sources
-    long stride[2] = {0, 0};
-    int channels[2] = {0, 0};
-    for (std::size_t s = 0; s < sources && s < 2; ++s) {
-      base[s] = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
-      stride[s] = buffers_[static_cast<std::size_t>(layer.sources[s])].stride;
-      channels[s] = buffers_[static_cast<std::size_t>(layer.sources[s])].channels;
+    const bool sparse = frames <= kSparseMaxFrames;
+    std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
+    if (sparse) compact_sources(layer, frames, ws, first_row);
+    const long columns = layer.tap_stride;
+    float* sums[2] = {nullptr, nullptr};
+    float* next = ws.tap_sums.data();
+    for (std::size_t s = 0; s < layer.sources.size() && s < 2; ++s) {
+      const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[s])];
+      const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
+      const int rows = in_spec.positions * frames;
+      sums[s] = next;
+      next += rows * columns;
+      std::fill(sums[s], next, 0.0f);
+      for (int r = 0; r < rows; ++r) {
+        if (sparse) ws.tap_rows[static_cast<std::size_t>(r)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(r)];
+        else ws.x_rows[static_cast<std::size_t>(r)] = in + static_cast<long>(r) * in_spec.stride;
+        ws.y_rows[static_cast<std::size_t>(r)] = sums[s] + r * columns;
+      }
+      const W* block = weights + layer.block[s];
+      if (sparse) Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
+      else Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
     }
-    // Per output position, all frames at once: the terms' rows for frame f lie f * stride further.
-    for (int p = 0; p < out_spec.positions; ++p) {
-      int n = 0;
-      for (const auto& [t, in_pos] : layer.terms[static_cast<std::size_t>(p)])
-        for (std::size_t s = 0; s < sources && s < 2; ++s, ++n) {
-          ws.x_rows[static_cast<std::size_t>(n)] = base[s] + static_cast<long>(in_pos) * frames * stride[s];
-          terms[n] = weights + layer.block[static_cast<std::size_t>(t) * sources + s];
-          ws.k_terms[static_cast<std::size_t>(n)] = channels[s];
-        }
-      // All sources of a layer share one padded stride (unet_layers(): same-width skips).
-      float* sums = ws.sums.data();
-      Backend::dot_terms(ws.x_rows.data(), stride[0], terms, ws.k_terms.data(), n, frames, sums);
-      for (int f = 0; f < frames; ++f) out[(static_cast<long>(p) * frames + f) * out_spec.stride] += sums[f];
-    }
+    for (int p = 0; p < out_spec.positions; ++p)
+      for (int f = 0; f < frames; ++f) {
+        float total[2] = {0.0f, 0.0f};  // one chain per source: independent additions
+        for (const auto& [tap, in_pos] : layer.terms[static_cast<std::size_t>(p)])
+          for (std::size_t s = 0; s < layer.sources.size() && s < 2; ++s) total[s] += sums[s][(static_cast<long>(in_pos) * frames + f) * columns + tap];
+        out[(static_cast<long>(p) * frames + f) * out_spec.stride] += total[0] + total[1];
+      }
   }
 
   template <typename W>
   void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
     if (layer.mode == Mode::Im2col) run_im2col(layer, weights, frames, ws);
-    else if (layer.mode == Mode::Gather) run_gather(layer, weights, frames, ws);
+    else if (layer.mode == Mode::TapColumns) run_tap_columns(layer, weights, frames, ws);
     else run_taps(layer, weights, frames, ws);
   }
 

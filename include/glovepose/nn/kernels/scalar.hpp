@@ -67,20 +67,6 @@ struct ScalarBackend {
       }
   }
 
-  /// @brief For `frames` frames f: sums[f] = sum over terms i of x[i][f * x_stride + 0..k[i]) .
-  /// w[i][0..k[i]): one output channel gathered over all its taps and skip sources, for frames
-  /// whose rows lie x_stride floats apart.
-  template <typename W>
-  GLOVEPOSE_REALTIME static void dot_terms(const float* const* x, long x_stride, const W* const* w, const int* k, int terms,
-                                           int frames, float* sums) noexcept {
-    for (int f = 0; f < frames; ++f) {
-      float sum = 0.0f;
-      for (int i = 0; i < terms; ++i)
-        for (int kk = 0; kk < k[i]; ++kk) sum += x[i][f * x_stride + kk] * weight_at(w[i], kk);
-      sums[f] = sum;
-    }
-  }
-
   /// @brief Sum of x[0..k), in order.
   GLOVEPOSE_REALTIME static float sum(const float* x, int k) noexcept {
     float total = 0.0f;

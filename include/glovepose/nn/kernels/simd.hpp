@@ -57,18 +57,6 @@ struct SimdBackend {
     }
   }
 
-  /// @brief See ScalarBackend::dot_terms. Frames go in blocks of up to 8: each weight vector is
-  /// loaded once per block, the block's accumulators are independent chains, and each frame needs a
-  /// single horizontal sum at the end.
-  template <typename W>
-  GLOVEPOSE_REALTIME static void dot_terms(const float* const* x, long x_stride, const W* const* w, const int* k, int terms,
-                                           int frames, float* sums) noexcept {
-    int f = 0;
-    for (; f + 8 <= frames; f += 8) dot_block<8>(x, x_stride, f, w, k, terms, sums + f);
-    for (; f + 4 <= frames; f += 4) dot_block<4>(x, x_stride, f, w, k, terms, sums + f);
-    for (; f < frames; ++f) sums[f] = dot_single(x, x_stride, f, w, k, terms);
-  }
-
   /// @brief See ScalarBackend::compact. Writes up to k entries of index[] and value[] (beyond the
   /// returned count too); AVX-512 compresses 16 at a time.
   GLOVEPOSE_REALTIME static int compact(const float* x, int k, int* index, float* value) noexcept {
@@ -150,24 +138,6 @@ struct SimdBackend {
   }
 
   // One frame: four rotating accumulators hide the FMA latency.
-  template <typename W>
-  static float dot_single(const float* const* x, long x_stride, int frame, const W* const* w, const int* k, int terms) noexcept {
-    Batch acc[4] = {Batch(0.0f), Batch(0.0f), Batch(0.0f), Batch(0.0f)};
-    float tail = 0.0f;
-    for (int i = 0; i < terms; ++i) {
-      const float* xi = x[i] + frame * x_stride;
-      const int full = k[i] / lanes * lanes;
-      int kk = 0;
-      for (; kk + 4 * lanes <= full; kk += 4 * lanes)
-#pragma GCC unroll 4
-        for (int c = 0; c < 4; ++c)
-          acc[c] = xsimd::fma(Batch::load_unaligned(xi + kk + c * lanes), load_weights<Arch>(w[i] + kk + c * lanes), acc[c]);
-      for (int c = 0; kk < full; kk += lanes, ++c) acc[c] = xsimd::fma(Batch::load_unaligned(xi + kk), load_weights<Arch>(w[i] + kk), acc[c]);
-      for (; kk < k[i]; ++kk) tail += xi[kk] * weight_value(w[i][kk]);
-    }
-    return xsimd::hadd((acc[0] + acc[1]) + (acc[2] + acc[3])) + tail;
-  }
-
   template <int V, typename W>
   static void sparse_block(const SparseRow& x, float* y, const W* w, int ldw, int col) noexcept {
     constexpr int U = V >= 8 ? 1 : 8 / V;  // >= 8 independent FMA chains, as in block()
@@ -209,28 +179,6 @@ struct SimdBackend {
     load_vectors<V>(wk, col, wv);
 #pragma GCC unroll 8
     for (int v = 0; v < V; ++v) acc[v] = xsimd::fma(xb, wv[v], acc[v]);
-  }
-
-  template <int F, typename W>
-  static void dot_block(const float* const* x, long x_stride, int first, const W* const* w, const int* k, int terms,
-                        float* sums) noexcept {
-    Batch acc[F];
-#pragma GCC unroll 8
-    for (int f = 0; f < F; ++f) acc[f] = Batch(0.0f);
-    float tail[F] = {};
-    for (int i = 0; i < terms; ++i) {
-      const float* xi = x[i] + first * x_stride;
-      const int full = k[i] / lanes * lanes;
-      int kk = 0;
-      for (; kk < full; kk += lanes) {
-        const Batch wv = load_weights<Arch>(w[i] + kk);
-#pragma GCC unroll 8
-        for (int f = 0; f < F; ++f) acc[f] = xsimd::fma(Batch::load_unaligned(xi + f * x_stride + kk), wv, acc[f]);
-      }
-      for (; kk < k[i]; ++kk)
-        for (int f = 0; f < F; ++f) tail[f] += xi[f * x_stride + kk] * weight_value(w[i][kk]);
-    }
-    for (int f = 0; f < F; ++f) sums[f] = xsimd::hadd(acc[f]) + tail[f];
   }
 
   template <int R, int V, typename W>
