@@ -367,6 +367,10 @@ class UNet {
     Mode mode = Mode::Taps;
     int kernel_taps = 0;                            // kernel * kernel (Im2col row length = kernel_taps * channels)
     std::vector<int> receptive;                     // Im2col: [out position][tap] -> input position or -1
+    // Im2col, small batches: per out position (from receptive_first[p]) the rows tap * channels + c
+    // of the taps that meet input, ascending, and the (input position, channel) each reads.
+    std::vector<int> receptive_first, receptive_rows;
+    std::vector<std::pair<int, int>> receptive_inputs;
     std::vector<std::vector<std::pair<int, int>>> terms;  // TapColumns: [out position] -> (tap, input position)
     int tap_stride = 0;                             // TapColumns: taps padded to the SIMD width
     Activation activation = Activation::Relu;
@@ -478,6 +482,17 @@ class UNet {
       for (const TapPairs& t : plan)
         for (std::size_t j = 0; j < t.out_positions.size(); ++j)
           layer.receptive[static_cast<std::size_t>(t.out_positions[j] * layer.kernel_taps + t.tap)] = t.in_positions[j];
+      for (int p = 0; p < out.positions; ++p) {
+        layer.receptive_first.push_back(static_cast<int>(layer.receptive_rows.size()));
+        for (int tap = 0; tap < layer.kernel_taps; ++tap) {
+          const int source = layer.receptive[static_cast<std::size_t>(p * layer.kernel_taps + tap)];
+          for (int ci = 0; source >= 0 && ci < cs; ++ci) {
+            layer.receptive_rows.push_back(tap * cs + ci);
+            layer.receptive_inputs.push_back({source, ci});
+          }
+        }
+      }
+      layer.receptive_first.push_back(static_cast<int>(layer.receptive_rows.size()));
       layer.stored_weights = plan.size() * static_cast<std::size_t>(cs) * static_cast<std::size_t>(cout);  // useful taps only
       layer.block.push_back(0);
     }
@@ -662,6 +677,23 @@ class UNet {
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int cs = in_spec.channels, row = layer.kernel_taps * cs, rows = out_spec.positions * frames;
     float* col = ws.columns.data();
+    if (frames <= kSparseMaxFrames) {  // the taps that meet input only: sparse rows over the same block
+      for (int p = 0; p < out_spec.positions; ++p)
+        for (int f = 0; f < frames; ++f) {
+          const long r = static_cast<long>(p) * frames + f;
+          const int first = layer.receptive_first[static_cast<std::size_t>(p)];
+          const int count = layer.receptive_first[static_cast<std::size_t>(p) + 1] - first;
+          float* values = col + r * row;
+          for (int i = 0; i < count; ++i) {
+            const auto& [source, c] = layer.receptive_inputs[static_cast<std::size_t>(first + i)];
+            values[i] = in[(static_cast<long>(source) * frames + f) * in_spec.stride + c];
+          }
+          ws.tap_rows[static_cast<std::size_t>(r)] = {layer.receptive_rows.data() + first, values, count};
+          ws.y_rows[static_cast<std::size_t>(r)] = out + r * out_spec.stride;
+        }
+      Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, weights, row, out_spec.stride);
+      return;
+    }
     for (int p = 0; p < out_spec.positions; ++p)
       for (int f = 0; f < frames; ++f) {
         const long r = static_cast<long>(p) * frames + f;
