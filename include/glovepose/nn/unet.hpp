@@ -81,6 +81,10 @@ inline constexpr int kMaxBatch = 1 << 16;
 /// row over many activations: the dense, register-blocked product is faster there.
 inline constexpr int kSparseMaxFrames = 1;
 
+/// @brief Frames per chunk of the one-output-channel layer: its (row, tap) sums, 25 x 2 x 32 floats a
+/// frame (6.4 KB), stay in the L2 between the product that writes them and the sums that read them.
+inline constexpr int kTapColumnFrames = 16;
+
 /// @brief Values in one network input (2 x 5 x 5, channel-major).
 inline constexpr int kUNetInputs = 50;
 /// @brief Values in one network output (1 x 5 x 5).
@@ -200,10 +204,11 @@ class UNet {
         columns = std::max(columns, outputs * static_cast<std::size_t>(l.kernel_taps) *
                                         static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.sources[0])].channels));
       }
-      if (l.mode == Mode::TapColumns) {
+      if (l.mode == Mode::TapColumns) {  // one chunk of frames at a time (run_tap_columns())
         std::size_t source_rows = 0;
         for (int s : l.sources) {
-          const std::size_t positions = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].positions) * static_cast<std::size_t>(capacity);
+          const std::size_t positions = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].positions) *
+                                        static_cast<std::size_t>(std::min(capacity, kTapColumnFrames));
           rows = std::max(rows, positions);
           source_rows += positions;
         }
@@ -709,7 +714,8 @@ class UNet {
   }
 
   // TapColumns: each source row's sums over its channels, one per tap (a product with the taps as
-  // columns, sparse for small batches as in run_taps); then each output adds the (row, tap) sums it meets.
+  // columns, sparse for small batches as in run_taps); then each output adds the (row, tap) sums it
+  // meets. Frames go in chunks of kTapColumnFrames so that the sums stay in the L2 between the two.
   template <typename W>
   void run_tap_columns(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
@@ -718,31 +724,36 @@ class UNet {
     std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
     if (sparse) compact_sources(layer, frames, ws, first_row);
     const long columns = layer.tap_stride;
-    float* sums[2] = {nullptr, nullptr};
-    float* next = ws.tap_sums.data();
-    for (std::size_t s = 0; s < layer.sources.size() && s < 2; ++s) {
-      const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[s])];
-      const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
-      const int rows = in_spec.positions * frames;
-      sums[s] = next;
-      next += rows * columns;
-      std::fill(sums[s], next, 0.0f);
-      for (int r = 0; r < rows; ++r) {
-        if (sparse) ws.tap_rows[static_cast<std::size_t>(r)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(r)];
-        else ws.x_rows[static_cast<std::size_t>(r)] = in + static_cast<long>(r) * in_spec.stride;
-        ws.y_rows[static_cast<std::size_t>(r)] = sums[s] + r * columns;
+    const std::size_t sources = std::min<std::size_t>(layer.sources.size(), 2);
+    for (int first = 0; first < frames; first += kTapColumnFrames) {
+      const int chunk = std::min(kTapColumnFrames, frames - first);
+      float* sums[2] = {nullptr, nullptr};
+      float* next = ws.tap_sums.data();
+      for (std::size_t s = 0; s < sources; ++s) {
+        const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(layer.sources[s])];
+        const float* in = ws.buffers[static_cast<std::size_t>(layer.sources[s])].data();
+        const int rows = in_spec.positions * chunk;
+        sums[s] = next;
+        next += rows * columns;
+        std::fill(sums[s], next, 0.0f);
+        for (int r = 0; r < rows; ++r) {
+          const long in_row = static_cast<long>(r / chunk) * frames + first + r % chunk;
+          if (sparse) ws.tap_rows[static_cast<std::size_t>(r)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
+          else ws.x_rows[static_cast<std::size_t>(r)] = in + in_row * in_spec.stride;
+          ws.y_rows[static_cast<std::size_t>(r)] = sums[s] + r * columns;
+        }
+        const W* block = weights + layer.block[s];
+        if (sparse) Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
+        else Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
       }
-      const W* block = weights + layer.block[s];
-      if (sparse) Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
-      else Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
+      for (int p = 0; p < out_spec.positions; ++p)
+        for (int f = 0; f < chunk; ++f) {
+          float total[2] = {0.0f, 0.0f};  // one chain per source: independent additions
+          for (const auto& [tap, in_pos] : layer.terms[static_cast<std::size_t>(p)])
+            for (std::size_t s = 0; s < sources; ++s) total[s] += sums[s][(static_cast<long>(in_pos) * chunk + f) * columns + tap];
+          out[(static_cast<long>(p) * frames + first + f) * out_spec.stride] += total[0] + total[1];
+        }
     }
-    for (int p = 0; p < out_spec.positions; ++p)
-      for (int f = 0; f < frames; ++f) {
-        float total[2] = {0.0f, 0.0f};  // one chain per source: independent additions
-        for (const auto& [tap, in_pos] : layer.terms[static_cast<std::size_t>(p)])
-          for (std::size_t s = 0; s < layer.sources.size() && s < 2; ++s) total[s] += sums[s][(static_cast<long>(in_pos) * frames + f) * columns + tap];
-        out[(static_cast<long>(p) * frames + f) * out_spec.stride] += total[0] + total[1];
-      }
   }
 
   template <typename W>
