@@ -178,7 +178,7 @@ class UNet {
     std::vector<float> sparse_value;
     std::vector<kernels::SparseRow> sparse_rows;  // per (source, position, frame)
     std::vector<kernels::SparseRow> tap_rows;     // the rows one product joins
-    AlignedVector<float> tap_sums;     // TapColumns: per (source, position, frame) one partial sum per tap
+    AlignedVector<float> tap_sums;     // TapColumns: per (source, position, frame of a chunk) one sum per tap
     std::vector<float> input_sums;     // Fixed16: sum of each source row (per source, position, frame)
     std::vector<float> output_sums;    // Fixed16: sum of the inputs each output row met
   };
