@@ -57,8 +57,11 @@ ctest --test-dir "$tree" --output-on-failure -j"$(nproc)" -E "$exclude|$hosted" 
 if [ $# -eq 0 ]; then
   compiler="$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$tree/CMakeCache.txt")"
   preload="$("$compiler" -print-file-name="$runtime")"
+  # libstdc++ too: the runtime looks up the real __cxa_throw when it starts, and a C host has not
+  # loaded libstdc++ then (ASan: "CHECK failed: ... real___cxa_throw != 0" at our first exception).
+  cxxlib="$("$compiler" -print-file-name=libstdc++.so)"
   if [ -f "$preload" ]; then
-    LD_PRELOAD="$preload" ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0" \
+    LD_PRELOAD="$preload $cxxlib" ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0" \
       ctest --test-dir "$tree" --output-on-failure -R "$hosted" || status=1
   else
     # clang names its runtimes differently (libclang_rt.asan-x86_64.so): not silently skipped.
