@@ -15,7 +15,7 @@ case "$mode" in
   address)
     tree=build-asan
     # Use-after-scope checking is off: it poisons and unpoisons the SIMD kernels' per-step vector
-    # temporaries on every FMA step (perf: 86% of a fault test in that shadow traffic), which made the
+    # temporaries on every FMA step (perf: 86% of a fault test in the kernel, shadow stores on top), which made the
     # suite ~5x slower (faults: a disconnected trace, standalone: 118 s with it, 25 s without) and
     # doubled the build. Out-of-bounds, use-after-free, use-after-return, leaks and UB stay checked.
     sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-sanitize-address-use-after-scope"
