@@ -1,5 +1,7 @@
 // The two limits the U-Net forward races (run: build/bench/glovepose_bench --benchmark_filter=Peak|Stream):
 //   BM_PeakFma          this core's F32 multiply-add rate (independent FMA chains, xsimd default arch)
+//   BM_PeakDpwssd       the same for AVX-512 VNNI's 16-bit dot product (two multiply-adds per 32-bit
+//                       lane and instruction): whether integer weights could raise the compute ceiling
 //   BM_StreamBytes/N    the rate at which one core re-reads an N-byte buffer (the weights at batch 1)
 //   BM_SparseRowKernel* the batch-1 product kernel itself, weights in the L1/L2: its multiply-adds per
 //                       second per weight storage (what the widening of 16-bit weights costs)
@@ -8,6 +10,10 @@
 
 #include <benchmark/benchmark.h>
 #include <xsimd/xsimd.hpp>
+
+#if defined(__AVX512VNNI__)
+#include <immintrin.h>
+#endif
 
 #include <cstdint>
 #include <random>
@@ -31,6 +37,27 @@ static void BM_PeakFma(benchmark::State& state) {
   state.counters["MAC_per_s"] = benchmark::Counter(macs, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_PeakFma);
+
+#if defined(__AVX512VNNI__)
+// vpdpwssd: per 32-bit lane, two int16 x int16 products added to an int32 sum; 32 multiply-adds
+// per 512-bit instruction against the FMA's 16. Same chain count as BM_PeakFma.
+static void BM_PeakDpwssd(benchmark::State& state) {
+  constexpr int kChains = 16;
+  __m512i acc[kChains];
+  for (int i = 0; i < kChains; ++i) acc[i] = _mm512_set1_epi32(i);
+  const __m512i a = _mm512_set1_epi32(0x00030001), b = _mm512_set1_epi32(0x00010002);
+  constexpr long kRounds = 1 << 16;
+  for (auto _ : state) {
+    for (long n = 0; n < kRounds; ++n)
+#pragma GCC unroll 16
+      for (int i = 0; i < kChains; ++i) acc[i] = _mm512_dpwssd_epi32(acc[i], a, b);
+    benchmark::DoNotOptimize(acc);
+  }
+  const double macs = static_cast<double>(state.iterations()) * kRounds * kChains * 32;
+  state.counters["MAC_per_s"] = benchmark::Counter(macs, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_PeakDpwssd);
+#endif
 
 static void BM_StreamBytes(benchmark::State& state) {
   const auto bytes = static_cast<std::size_t>(state.range(0));
