@@ -11,7 +11,8 @@ Also the integer dot-product scheme AVX-512 VNNI (`vpdpwssd`) would need: the ro
 as int16 with one scale per output channel ('i16'; the first and last layers stay exact), and each
 of their input rows (one grid position of one concatenated source) as 12-bit integers scaled by the
 row's largest |value| ('q12'): 12 bits let 8 pairs of products accumulate in int32 before a flush
-to float; 'q11' (11 bits) would let 16. Reported for the random model and for the shipped model (models/glovepose_unet64.safetensors).
+to float; 'q11' (11 bits) would let 16. Reported for the random model and for the shipped model
+(models/glovepose_unet64.safetensors).
 """
 import math
 import sys
