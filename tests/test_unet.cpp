@@ -26,7 +26,7 @@ std::vector<float> random_inputs(int frames, unsigned seed, float range = 1.0f) 
 template <typename Backend>
 double max_difference_to_reference(const TensorMap& tensors, int width, int frames, unsigned seed) {
   const auto net = UNet<Backend>::from_tensors(tensors, width);
-  if (frames == 1) {  // one frame: the sparse products (kSparseMaxFrames); several: the dense ones
+  if (frames == 1) {  // up to kSparseMaxFrames frames: the sparse products; more: the dense ones
     auto ws = net.make_workspace(1);
     const std::vector<float> x = random_inputs(4, seed);
     double worst = 0.0;
@@ -97,7 +97,7 @@ TEST_CASE("unet: the SIMD and scalar backends equal an independent reference for
   for (int width : {1, 2, 3, 4, 13, 64}) {
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 100 + static_cast<unsigned>(width));
-    for (const int frames : {6, 1}) {  // dense products; sparse ones (single frames)
+    for (const int frames : {kSparseMaxFrames + 1, 6, 1}) {  // dense products; sparse ones over several frames, over one
       CAPTURE(frames);
       const double simd = max_difference_to_reference<kernels::SimdBackend>(tensors, width, frames, 7);
       const double scalar = max_difference_to_reference<kernels::ScalarBackend>(tensors, width, frames, 7);
@@ -181,29 +181,32 @@ TEST_CASE("unet: bad input gets a status and the single-frame forward allocates 
   for (float v : out) CHECK(std::abs(v) < 1.0f);
 }
 
-TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, single frames (sparse) equal batches (dense)") {
+TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, sparse (single frames, small batches) and dense (large batches)") {
   for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 300 + static_cast<unsigned>(width));
     const auto simd = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::BF16);
     const auto scalar = UNet<kernels::ScalarBackend>::from_tensors(tensors, width, 1e-5, WeightStorage::BF16);
-    const int frames = 9;
+    const int frames = kSparseMaxFrames + 3, small = 9;  // dense products; sparse ones over `small` frames
     const std::vector<float> x = random_inputs(frames, 5);
-    std::vector<float> batched(static_cast<std::size_t>(frames * kUNetOutputs)), single = batched, reference = batched;
-    auto ws = simd.make_workspace(frames), one = simd.make_workspace(1);
+    std::vector<float> batched(static_cast<std::size_t>(frames * kUNetOutputs)), single = batched, reference = batched,
+        small_batch = batched;
+    auto ws = simd.make_workspace(frames), one = simd.make_workspace(1), small_ws = simd.make_workspace(small);
     auto scalar_ws = scalar.make_workspace(frames);
     REQUIRE(simd.forward(x.data(), batched.data(), frames, ws) == Status::Ok);
+    REQUIRE(simd.forward(x.data(), small_batch.data(), small, small_ws) == Status::Ok);
     REQUIRE(scalar.forward(x.data(), reference.data(), frames, scalar_ws) == Status::Ok);
     for (int f = 0; f < frames; ++f)
       REQUIRE(simd.forward(x.data() + f * kUNetInputs, single.data() + f * kUNetOutputs, 1, one) == Status::Ok);
     for (std::size_t i = 0; i < batched.size(); ++i) {
       CHECK(batched[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
       CHECK(single[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
+      if (i < static_cast<std::size_t>(small * kUNetOutputs)) CHECK(small_batch[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
     }
   }
 }
 
-TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, single frames (sparse) and batches (dense), near F32") {
+TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, sparse (single frames, small batches) and dense (large batches), near F32") {
   for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 400 + static_cast<unsigned>(width));
@@ -211,11 +214,13 @@ TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, single
     const auto simd = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::Fixed16);
     const auto scalar = UNet<kernels::ScalarBackend>::from_tensors(tensors, width, 1e-5, WeightStorage::Fixed16);
     const auto f16 = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F16);
-    const int frames = 9;
+    const int frames = kSparseMaxFrames + 3, small = 9;  // dense products; sparse ones over `small` frames
     const std::vector<float> x = random_inputs(frames, 6);
     std::vector<float> reference(static_cast<std::size_t>(frames * kUNetOutputs)), batched = reference, single = reference,
-        scalar_out = reference, f16_out = reference;
+        scalar_out = reference, f16_out = reference, small_batch(static_cast<std::size_t>(small * kUNetOutputs));
     auto ws = simd.make_workspace(frames), one = simd.make_workspace(1), exact_ws = exact.make_workspace(frames);
+    auto small_ws = simd.make_workspace(small);
+    REQUIRE(simd.forward(x.data(), small_batch.data(), small, small_ws) == Status::Ok);
     auto scalar_ws = scalar.make_workspace(frames);
     auto f16_ws = f16.make_workspace(frames);
     REQUIRE(exact.forward(x.data(), reference.data(), frames, exact_ws) == Status::Ok);
@@ -227,15 +232,16 @@ TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, single
     // The two backends pair columns differently (their own lane counts), so their codes round
     // differently: each is compared with F32, within the codes' rounding (2^-16 of a channel's
     // largest weight) carried through the network; and F16 (11 significant bits) errs more.
-    double worst[3] = {0.0, 0.0, 0.0}, worst_f16 = 0.0;
+    double worst[4] = {0.0, 0.0, 0.0, 0.0}, worst_f16 = 0.0;
     for (std::size_t i = 0; i < reference.size(); ++i) {
       worst[0] = std::max(worst[0], static_cast<double>(std::abs(batched[i] - reference[i])));
       worst[1] = std::max(worst[1], static_cast<double>(std::abs(single[i] - reference[i])));
       worst[2] = std::max(worst[2], static_cast<double>(std::abs(scalar_out[i] - reference[i])));
+      if (i < small_batch.size()) worst[3] = std::max(worst[3], static_cast<double>(std::abs(small_batch[i] - reference[i])));
       worst_f16 = std::max(worst_f16, static_cast<double>(std::abs(f16_out[i] - reference[i])));
     }
     MESSAGE("width " << width << ": Fixed16 vs F32 " << worst[0] << " (batch), " << worst[1] << " (single), " << worst[2]
-                     << " (scalar); F16 vs F32 " << worst_f16);
+                     << " (scalar), " << worst[3] << " (small batch); F16 vs F32 " << worst_f16);
     for (double w : worst) {
       CHECK(w < 2e-4);
       CHECK(w < worst_f16);
