@@ -2,9 +2,9 @@
 // Names: BM_UNetForward[F32|F16|BF16]/<width>/<batch>[/threads:N]: BM_UNetForward is the real-time
 // path, Fixed16 weights (the most accurate 16-bit storage and the fastest within 0.1 degree of F32;
 // docs/performance.md); F32 the exact one; F16 binary16; BF16, whose rounding exceeds that bound on
-// the shipped model. Random weights with BN statistics and random inputs in [-1, 1]: at batch 1 the
-// time depends on how many activations are zero (about half after each ReLU, as with the trained
-// model; docs/performance.md).
+// the shipped model. Random weights with BN statistics and random inputs in [-1, 1]: with up to 32
+// frames per forward (batch 1, and the batches' chunks of 32) the time depends on how many
+// activations are zero (about half after each ReLU, as with the trained model; docs/performance.md).
 #include <glovepose/nn/unet.hpp>
 
 #include <benchmark/benchmark.h>
@@ -63,7 +63,7 @@ void run(benchmark::State& state, WeightStorage storage) {
   state.SetItemsProcessed(state.iterations() * batch);
   state.counters["weight_MB"] = static_cast<double>(net.weight_bytes()) / 1e6;
   // Share of the hidden activations that are exactly zero (mean over the 7 layers, last chunk):
-  // at batch 1 the products skip them, so the time depends on it.
+  // up to 32 frames per forward the products skip them, so the time depends on it.
   const int last_chunk = batch - (batch - 1) / chunk * chunk;
   const auto zeros = net.zero_fractions(ws, last_chunk);
   state.counters["zero_share"] = std::accumulate(zeros.begin(), zeros.end(), 0.0) / static_cast<double>(zeros.size());

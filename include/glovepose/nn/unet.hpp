@@ -323,8 +323,8 @@ class UNet {
 
   /// @brief For the last `frames`-frame forward on `ws`: the fraction of each hidden activation
   /// buffer (e1, e2, e3, e4, d1, d2, d3, after their ReLU; real channels only) that is exactly
-  /// zero. At batch 1 the products skip those entries (kernels/sparse_row.hpp), so these fractions
-  /// set how much of the weights a frame reads. Diagnostic, set-up code: throws glovepose::Error for
+  /// zero. Forwards of up to kSparseMaxFrames frames skip those entries (kernels/sparse_row.hpp),
+  /// so these fractions set how much of the weights a frame reads. Diagnostic, set-up code: throws glovepose::Error for
   /// a workspace of another network or `frames` outside 1..capacity.
   std::array<double, kUNetBufferCount - 2> zero_fractions(const Workspace& ws, int frames) const {
     if (ws.width_ != width_ || ws.buffers.size() != buffers_.size())
