@@ -48,7 +48,7 @@ void run(benchmark::State& state, WeightStorage storage) {
   const int batch = static_cast<int>(state.range(1));
   const UNet<>& net = network(width, storage);
   // Frames of a batch go through in chunks that keep the activations in cache.
-  const int chunk = std::min(batch, 32);
+  const int chunk = std::min(batch, kSparseMaxFrames);
   auto ws = net.make_workspace(chunk);
   std::mt19937 rng(static_cast<unsigned>(state.thread_index()) + 5);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);

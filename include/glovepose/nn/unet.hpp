@@ -283,7 +283,7 @@ class UNet {
   /// @brief Many frames for evaluation: splits them over `threads` threads, each with its own
   /// workspace, in chunks of `chunk` frames. Set-up code: allocates; throws glovepose::Error naming
   /// the first frame with a non-finite input.
-  void forward_batch(const float* input, float* output, long frames, int threads = 1, int chunk = 32) const {
+  void forward_batch(const float* input, float* output, long frames, int threads = 1, int chunk = kSparseMaxFrames) const {
     if (frames <= 0) return;
     if (threads < 1 || chunk < 1) throw Error("UNet::forward_batch: threads and chunk must be >= 1");
     for (long i = 0; i < frames * kUNetInputs; ++i)
@@ -324,8 +324,8 @@ class UNet {
   /// @brief For the last `frames`-frame forward on `ws`: the fraction of each hidden activation
   /// buffer (e1, e2, e3, e4, d1, d2, d3, after their ReLU; real channels only) that is exactly
   /// zero. Forwards of up to kSparseMaxFrames frames skip those entries (kernels/sparse_row.hpp),
-  /// so these fractions set how much of the weights a frame reads. Diagnostic, set-up code: throws glovepose::Error for
-  /// a workspace of another network or `frames` outside 1..capacity.
+  /// so these fractions set how much of the weights a frame reads. Diagnostic, set-up code: throws
+  /// glovepose::Error for a workspace of another network or `frames` outside 1..capacity.
   std::array<double, kUNetBufferCount - 2> zero_fractions(const Workspace& ws, int frames) const {
     if (ws.width_ != width_ || ws.buffers.size() != buffers_.size())
       throw Error("UNet::zero_fractions: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " + std::to_string(width_));
