@@ -7,10 +7,15 @@
 /// R * V accumulators held in registers while k runs: each weight vector is loaded once per block
 /// and used R times. R * V is kept >= 8 so that enough independent FMA chains hide the FMA latency
 /// (4 cycles, 2 per cycle) even when a tap joins a single row, as in the 4x4 layers at batch 1.
+/// The blocks fit the register file: AVX-512 has 32 vector registers, AVX2 and SSE 16, where 8
+/// accumulators leave room for the weights being widened and their constants only if each group
+/// of weight vectors is widened just before its FMAs (with_weight_vectors()).
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <bitset>
+#include <cstdint>
 #include <type_traits>
 
 #include <xsimd/xsimd.hpp>
@@ -19,11 +24,28 @@
 #include "sparse_row.hpp"
 #include "weight_load.hpp"
 
-#if defined(__AVX512F__)
+#if defined(__AVX512F__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
 
 namespace glovepose::nn::kernels {
+
+/// @brief For each 8-bit mask, the positions of its set bits in ascending order, one per 4-bit
+/// nibble (nibble 0 the lowest set bit; unused nibbles 0): AVX2 has no compress instruction, so
+/// compact() permutes by this table instead.
+constexpr std::array<std::uint32_t, 256> compress_order_table() noexcept {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t mask = 0; mask < 256; ++mask) {
+    std::uint32_t order = 0, slot = 0;
+    for (std::uint32_t bit = 0; bit < 8; ++bit)
+      if (mask >> bit & 1u) order |= bit << (4 * slot++);
+    table[mask] = order;
+  }
+  return table;
+}
+
+/// @brief compress_order_table(), computed at compile time.
+inline constexpr std::array<std::uint32_t, 256> kCompressOrder = compress_order_table();
 
 /// @brief xsimd kernels for xsimd's default architecture.
 struct SimdBackend {
@@ -38,13 +60,18 @@ struct SimdBackend {
 
   /// @brief Width of the column panels weights are packed in: 8 vectors.
   static constexpr int panel = 8 * lanes;
+  /// @brief Vector registers of the architecture: 32 with AVX-512, 16 with AVX2 and SSE.
+  static constexpr int registers = lanes >= 16 ? 32 : 16;
+  /// @brief Rows a dense block holds at most: 12 (of 2 vectors) with 32 registers, 4 with 16.
+  static constexpr int max_block_rows = registers == 32 ? 12 : 4;
 
   /// @brief See ScalarBackend::gemm_rows. Requires n to be a multiple of `lanes`.
   template <typename W>
   GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
                                            int n) noexcept {
-    // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches): 6 x 4.
-    const int max_rows = rows <= 12 ? rows : 6;
+    // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches): 6 x 4
+    // with 32 registers, 4 x 2 with 16.
+    const int max_rows = rows <= max_block_rows ? rows : (registers == 32 ? 6 : 4);
     for (int p0 = 0; p0 < n; p0 += panel) {
       const int width = std::min(panel, n - p0);  // this panel's row length
       const W* wp = w + static_cast<long>(k) * p0;
@@ -58,7 +85,7 @@ struct SimdBackend {
   }
 
   /// @brief See ScalarBackend::compact. Writes up to k entries of index[] and value[] (beyond the
-  /// returned count too); AVX-512 compresses 16 at a time.
+  /// returned count too); AVX-512 compresses 16 at a time, AVX2 permutes 8 at a time.
   GLOVEPOSE_REALTIME static int compact(const float* x, int k, int* index, float* value) noexcept {
     int count = 0, i = 0;
 #if defined(__AVX512F__)
@@ -72,6 +99,23 @@ struct SimdBackend {
         _mm512_storeu_si512(index + count, _mm512_maskz_compress_epi32(nonzero, positions));
         count += static_cast<int>(std::bitset<16>(nonzero).count());
         positions = _mm512_add_epi32(positions, step);
+      }
+    }
+#endif
+#if defined(__AVX2__)
+    if constexpr (lanes == 8) {
+      __m256i positions = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+      const __m256i step = _mm256_set1_epi32(8), nibble_shifts = _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28);
+      for (; i + 8 <= k; i += 8) {  // count <= i: the 8 stores stay below i + 8 <= k
+        const __m256 v = _mm256_loadu_ps(x + i);
+        const int nonzero = _mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_setzero_ps(), _CMP_NEQ_UQ));  // NaN: nonzero
+        const __m256i order = _mm256_and_si256(
+            _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressOrder[static_cast<std::size_t>(nonzero)])), nibble_shifts),
+            _mm256_set1_epi32(7));
+        _mm256_storeu_ps(value + count, _mm256_permutevar8x32_ps(v, order));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(index + count), _mm256_permutevar8x32_epi32(positions, order));
+        count += static_cast<int>(std::bitset<8>(static_cast<unsigned>(nonzero)).count());
+        positions = _mm256_add_epi32(positions, step);
       }
     }
 #endif
@@ -127,11 +171,12 @@ struct SimdBackend {
   }
 
  private:
-  // Column vectors per block: enough accumulators (R * V >= 8), at most 32 registers in use
-  // (V = 8 for R = 1, V <= 4 for R <= 6, V <= 2 for R <= 12). dispatch() computes any (R, V)
-  // correctly, splitting a column block it has no register budget for.
+  // Column vectors per block: enough accumulators (R * V >= 8) within the register file. With 32
+  // registers V = 8 for R = 1, V <= 4 for R <= 6, V <= 2 for R <= 12; with 16 registers 8
+  // accumulators at most: V = 8 for R = 1, 4 for R = 2, 2 for R <= 4. dispatch() computes any
+  // (R, V) correctly, splitting a column block it has no register budget for.
   static int vectors_for(int rows, int vectors_left) noexcept {
-    const int wanted = rows == 1 ? 8 : (rows <= 6 ? 4 : 2);
+    const int wanted = registers == 32 ? (rows == 1 ? 8 : (rows <= 6 ? 4 : 2)) : (rows == 1 ? 8 : (rows == 2 ? 4 : 2));
     int v = wanted;
     while (v > vectors_left) v /= 2;
     return std::max(v, 1);
@@ -175,10 +220,7 @@ struct SimdBackend {
   template <int V, typename W>
   static void sparse_step(Batch (&acc)[V], float value, const W* wk, int col) noexcept {
     const Batch xb(value);
-    Batch wv[V];
-    load_vectors<V>(wk, col, wv);
-#pragma GCC unroll 8
-    for (int v = 0; v < V; ++v) acc[v] = xsimd::fma(xb, wv[v], acc[v]);
+    with_weight_vectors<V>(wk, col, [&](int v, const Batch& wv) { acc[v] = xsimd::fma(xb, wv, acc[v]); });
   }
 
   template <int R, int V, typename W>
@@ -211,25 +253,32 @@ struct SimdBackend {
       }
   }
 
-  // The V weight vectors at wk, whose first column is `col`: BF16 and Fixed16 come in pairs of
-  // vectors (pair layout, weight_load.hpp), whose groups start at even multiples of `lanes`.
-  template <int V, typename W>
-  static void load_vectors(const W* wk, int col, Batch (&wv)[V]) noexcept {
+  // Calls use(v, weights) for the V weight vectors at wk, whose first column is `col`, each group
+  // widened just before its use: BF16 and Fixed16 come in pairs of vectors (pair layout,
+  // weight_load.hpp), whose groups start at even multiples of `lanes`. Loading all V first would
+  // hold V more registers, which with 16 of them spills the accumulators to the stack.
+  template <int V, typename W, typename Use>
+  static void with_weight_vectors(const W* wk, int col, Use&& use) noexcept {
     if constexpr (kPairLayout<W>) {
       static_assert(V == 1 || V % 2 == 0, "pair-layout blocks are whole pairs of vectors or a single vector");
       if constexpr (V == 1) {  // half a pair: only when a layer has an odd number of vectors (not with pair strides)
         Batch low, high;
         const bool second = (col / lanes) % 2 != 0;
         load_weight_pair<Arch>(second ? wk - lanes : wk, low, high);
-        wv[0] = second ? high : low;
+        use(0, second ? high : low);
       } else {
 #pragma GCC unroll 4
-        for (int v = 0; v < V; v += 2) load_weight_pair<Arch>(wk + v * lanes, wv[v], wv[v + 1]);
+        for (int v = 0; v < V; v += 2) {
+          Batch low, high;
+          load_weight_pair<Arch>(wk + v * lanes, low, high);
+          use(v, low);
+          use(v + 1, high);
+        }
       }
     } else {
       (void)col;
 #pragma GCC unroll 8
-      for (int v = 0; v < V; ++v) wv[v] = load_weights<Arch>(wk + v * lanes);
+      for (int v = 0; v < V; ++v) use(v, load_weights<Arch>(wk + v * lanes));
     }
   }
 
@@ -237,13 +286,20 @@ struct SimdBackend {
   template <int R, int V, typename W>
   static void step(Batch (&acc)[R][V], const float* const (&xr)[R], const W* w, int kk, int ldw, int col) noexcept {
     const W* wk = w + static_cast<long>(kk) * ldw;
-    Batch wv[V];
-    load_vectors<V>(wk, col, wv);
+    if constexpr (registers == 32) {  // all V vectors, then the rows: the order measured on Zen 4
+      Batch wv[V];
+      with_weight_vectors<V>(wk, col, [&](int v, const Batch& widened) { wv[v] = widened; });
 #pragma GCC unroll 16
-    for (int r = 0; r < R; ++r) {
-      const Batch xb(xr[r][kk]);
+      for (int r = 0; r < R; ++r) {
+        const Batch xb(xr[r][kk]);
 #pragma GCC unroll 8
-      for (int v = 0; v < V; ++v) acc[r][v] = xsimd::fma(xb, wv[v], acc[r][v]);
+        for (int v = 0; v < V; ++v) acc[r][v] = xsimd::fma(xb, wv[v], acc[r][v]);
+      }
+    } else {  // each group's FMAs right after its widening: only one group live
+      with_weight_vectors<V>(wk, col, [&](int v, const Batch& wv) {
+#pragma GCC unroll 16
+        for (int r = 0; r < R; ++r) acc[r][v] = xsimd::fma(Batch(xr[r][kk]), wv, acc[r][v]);
+      });
     }
   }
 
