@@ -5,8 +5,9 @@ Usage: /usr/bin/python3 bench/peers/report.py --width 64 --glovepose GB.json --o
 
 GB.json is Google Benchmark output of build/bench/glovepose_bench run with
 --benchmark_repetitions=N --benchmark_report_aggregates_only=true --benchmark_format=json; the
-`median` aggregate's real_time of BM_UNetForward[F32|F16|BF16]/<width>/<batch>[/real_time][/threads:N]
-(BM_UNetForward: Fixed16 weights, the real-time path; F32 exact; F16; BF16) is taken as the time of one
+`median` aggregate's real_time of BM_UNetForward{F32|Fixed16|F16|BF16}/<width>/<batch>[/real_time][/threads:N]
+(F32 exact; Fixed16 and F16, the two 16-bit storages within 0.1 degree, one of which is the real-time
+path, BM_UNetForward, on a given instruction set; BF16) is taken as the time of one
 forward of the whole batch (per thread-iteration
 with threads:N, i.e. batch / real_time is the N threads' throughput). ORT.json and TORCH.json come from
 ort_bench.js and torch_bench.py. Every ratio is (engine's time per frame) / (glovepose F32 time per
@@ -43,7 +44,7 @@ def parse_gbench(src: Union[str, Path, dict], aggregate: str = "median") -> Dict
     return out
 
 
-_UNET = re.compile(r"^BM_UNetForward(?P<prec>F32|F16|BF16)?/(?P<width>\d+)/(?P<batch>\d+)(?P<rest>(/[^/]+)*)$")
+_UNET = re.compile(r"^BM_UNetForward(?P<prec>F32|Fixed16|F16|BF16)/(?P<width>\d+)/(?P<batch>\d+)(?P<rest>(/[^/]+)*)$")
 _ENGINE = {"F32": "glovepose F32", "Fixed16": "glovepose Fixed16 weights", "F16": "glovepose F16 weights",
            "BF16": "glovepose BF16 weights"}
 
@@ -61,7 +62,7 @@ def unet_cases(gb: Dict[str, float], width: int) -> List[Tuple[str, int, int, fl
         if not m or int(m["width"]) != width:
             continue
         t = re.search(r"/threads:(\d+)", m["rest"] or "")
-        out.append((m["prec"] or "Fixed16", int(m["batch"]), int(t[1]) if t else 1, sec))
+        out.append((m["prec"], int(m["batch"]), int(t[1]) if t else 1, sec))
     return sorted(out, key=lambda c: (c[1], c[2], c[0] != "F32"))
 
 

@@ -9,8 +9,8 @@
 #   PEERS_REPS        repetitions per case (default 10), PEERS_MIN_TIME seconds per repetition for
 #                     ORT and PyTorch (default 0.5, Google Benchmark's default min time)
 #
-# Cases: batch 1 and 1024, one thread everywhere (glovepose BM_UNetForward/W/B and, if present,
-# BM_UNetForwardF32/W/B, BM_UNetForwardF16/W/B and BM_UNetForwardBF16/W/B, with whatever /real_time or /threads:N suffixes the binary registers; ORT
+# Cases: batch 1 and 1024, one thread everywhere (glovepose BM_UNetForwardF32/W/B and, if present,
+# BM_UNetForwardFixed16/W/B, BM_UNetForwardF16/W/B and BM_UNetForwardBF16/W/B, with whatever /real_time or /threads:N suffixes the binary registers; ORT
 # intraOpNumThreads = 1; torch.set_num_threads(1), OpenBLAS/OpenMP pinned to one thread), plus ORT
 # with 2 intra-op threads at batch 1024, compared with glovepose's threads:2 case if there is one. Each engine reports
 # the median over repetitions of the mean time per run. Nothing is downloaded.
@@ -31,8 +31,8 @@ fail() { echo "run.sh: $*" >&2; exit 1; }
 [ -x "$bench" ] || fail "glovepose benchmark binary '$bench' not found; build it with: cmake --build build -j2 (or set GLOVEPOSE_BENCH)"
 cases="$("$bench" --benchmark_list_tests)" || fail "'$bench' --benchmark_list_tests failed"
 for b in 1 1024; do
-  grep -Eq "^BM_UNetForward/$width/$b(/|\$)" <<<"$cases" \
-    || fail "'$bench' has no case BM_UNetForward/$width/$b (UNet cases: $(grep UNet <<<"$cases" | tr '\n' ' ')); does it register width $width?"
+  grep -Eq "^BM_UNetForwardF32/$width/$b(/|\$)" <<<"$cases" \
+    || fail "'$bench' has no case BM_UNetForwardF32/$width/$b (UNet cases: $(grep UNet <<<"$cases" | tr '\n' ' ')); does it register width $width?"
 done
 $py -c "import torch, numpy" 2>/dev/null || fail "/usr/bin/python3 cannot import torch and numpy; run bench/peers/setup.sh"
 [ -d "$here/node_modules/onnxruntime-node" ] || fail "onnxruntime-node is not installed; run bench/peers/setup.sh"
@@ -64,7 +64,7 @@ $py "$root/tools/python/export.py" --width "$width" --seed "$seed" --out "$model
 read -r -a stat0 < <(head -1 /proc/stat)
 read -r -a self0 < /proc/$$/stat
 echo "timing glovepose ..." >&2
-"$bench" --benchmark_filter="^BM_UNetForward(F32|F16|BF16)?/$width/(1|1024)(/|\$)" --benchmark_repetitions="$reps" \
+"$bench" --benchmark_filter="^BM_UNetForward(F32|Fixed16|F16|BF16)/$width/(1|1024)(/|\$)" --benchmark_repetitions="$reps" \
   --benchmark_report_aggregates_only=true --benchmark_format=json > "$out/glovepose.json"
 echo "timing ONNX Runtime ..." >&2
 $py "$here/torch_bench.py" --model "$model" --batches 1 --reps 1 --min-time 0.001 --warmup 0 --no-jit \
