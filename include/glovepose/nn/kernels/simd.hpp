@@ -1,7 +1,7 @@
 /// @file simd.hpp
 /// @brief The xsimd kernels, for the instruction set the including code is compiled for
-/// (xsimd::default_arch: AVX-512 on the development machine with GLOVEPOSE_NATIVE, SSE2 on baseline
-/// x86-64). Same contracts as ScalarBackend, which is their reference.
+/// (xsimd::default_arch: AVX-512 or AVX2 with GLOVEPOSE_NATIVE, depending on the machine; SSE2 on
+/// baseline x86-64). Same contracts as ScalarBackend, which is their reference.
 ///
 /// The product y[r] += x[r] W is blocked as R rows x V SIMD vectors of output channels, the
 /// R * V accumulators held in registers while k runs: each weight vector is loaded once per block
