@@ -3,8 +3,9 @@
 //   BM_PeakDpwssd       the same for AVX-512 VNNI's 16-bit dot product (two multiply-adds per 32-bit
 //                       lane and instruction): whether integer weights could raise the compute ceiling
 //   BM_StreamBytes/N    the rate at which one core re-reads an N-byte buffer (the weights at batch 1)
-//   BM_SparseRowKernel* the batch-1 product kernel itself, weights in the L1/L2: its multiply-adds per
-//                       second per weight storage (what the widening of 16-bit weights costs)
+//   BM_SparseRowKernel* the batch-1 product kernel itself, per weight storage: its multiply-adds per
+//                       second with the weights in the L1/L2 (KiB:32, what the widening of 16-bit
+//                       weights costs) and streamed from the L3 (KiB:4224, what the forward sees)
 #include <glovepose/nn/kernels/simd.hpp>
 #include <glovepose/nn/tensor.hpp>
 
@@ -15,6 +16,7 @@
 #include <immintrin.h>
 #endif
 
+#include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -80,28 +82,32 @@ static void BM_StreamBytes(benchmark::State& state) {
 // The packed weights of w = 64 (4.3 MB F16, 8.6 MB F32) and w = 100 (10.8 MB F16, 21.5 MB F32).
 BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584)->Arg(10757200)->Arg(21514400);
 
-// One row with every other of its 128 entries nonzero (the share of zeros ReLU leaves) times a
-// 128 x 128 weight block: gemm_sparse_rows as the batch-1 forward calls it, but with the weights
-// in the L1/L2 after the first iteration, so that only the kernel's own instructions count.
+// One row with every other of its 128 entries nonzero (the share of zeros ReLU leaves) times
+// 128 x 128 weight blocks, gemm_sparse_rows as the batch-1 forward calls it. The argument is the
+// weights' footprint in KiB: 32 is a single block re-read from the L1/L2, so that only the
+// kernel's own instructions count; 4224 is as many blocks as the packed F16 weights of w = 64
+// (4.3 MB), run one after another, so that the weights come from the L3 as in the forward.
 template <typename W>
 static void sparse_row_kernel(benchmark::State& state, W (*code)(std::mt19937&)) {
   using glovepose::nn::kernels::SimdBackend;
   constexpr int k = 128, n = 128, nonzero = 64;
+  constexpr long block_bytes = static_cast<long>(k) * n * static_cast<long>(sizeof(W));
+  const long blocks = std::max(1L, state.range(0) * 1024 / block_bytes);
   std::mt19937 rng(1);
-  std::vector<W> weights(static_cast<std::size_t>(k) * n);
+  std::vector<W> weights(static_cast<std::size_t>(blocks * k * n));
   for (W& w : weights) w = code(rng);
   std::vector<int> index(nonzero);
   std::vector<float> value(nonzero, 0.5f);
-  for (int i = 0; i < nonzero; ++i) index[static_cast<std::size_t>(i)] = 2 * i;
+  for (int i = 0; i < nonzero; ++i) index[static_cast<std::size_t>(i)] = 2 * i + static_cast<int>(rng() & 1u);
   const glovepose::nn::kernels::SparseRow row{index.data(), value.data(), nonzero};
   std::vector<float> y(n, 0.0f);
   float* out = y.data();
   for (auto _ : state) {
-    SimdBackend::gemm_sparse_rows(&row, &out, 1, weights.data(), k, n);
+    for (long b = 0; b < blocks; ++b) SimdBackend::gemm_sparse_rows(&row, &out, 1, weights.data() + b * k * n, k, n);
     benchmark::ClobberMemory();
   }
   benchmark::DoNotOptimize(y.data());
-  const double macs = static_cast<double>(state.iterations()) * nonzero * n;
+  const double macs = static_cast<double>(state.iterations()) * static_cast<double>(blocks) * nonzero * n;
   state.counters["MAC_per_s"] = benchmark::Counter(macs, benchmark::Counter::kIsRate);
 }
 static void BM_SparseRowKernelF32(benchmark::State& state) {
@@ -119,7 +125,7 @@ static void BM_SparseRowKernelBF16(benchmark::State& state) {
   sparse_row_kernel<glovepose::nn::kernels::BFloat16>(
       state, [](std::mt19937& rng) { return static_cast<glovepose::nn::kernels::BFloat16>(static_cast<std::uint16_t>(rng() & 0xBFFFu)); });
 }
-BENCHMARK(BM_SparseRowKernelF32);
-BENCHMARK(BM_SparseRowKernelFixed16);
-BENCHMARK(BM_SparseRowKernelF16);
-BENCHMARK(BM_SparseRowKernelBF16);
+BENCHMARK(BM_SparseRowKernelF32)->ArgName("KiB")->Arg(32)->Arg(4224);
+BENCHMARK(BM_SparseRowKernelFixed16)->ArgName("KiB")->Arg(32)->Arg(4224);
+BENCHMARK(BM_SparseRowKernelF16)->ArgName("KiB")->Arg(32)->Arg(4224);
+BENCHMARK(BM_SparseRowKernelBF16)->ArgName("KiB")->Arg(32)->Arg(4224);
