@@ -82,7 +82,7 @@ static void BM_StreamBytes(benchmark::State& state) {
 // The packed weights of w = 64 (4.3 MB F16, 8.6 MB F32) and w = 100 (10.8 MB F16, 21.5 MB F32).
 BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584)->Arg(10757200)->Arg(21514400);
 
-// One row with every other of its 128 entries nonzero (the share of zeros ReLU leaves) times
+// One row with one entry of each pair of its 128 nonzero (the share of zeros ReLU leaves) times
 // 128 x 128 weight blocks, gemm_sparse_rows as the batch-1 forward calls it. The argument is the
 // weights' footprint in KiB: 32 is a single block re-read from the L1/L2, so that only the
 // kernel's own instructions count; 4224 is as many blocks as the packed F16 weights of w = 64
