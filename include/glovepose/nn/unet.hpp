@@ -65,9 +65,9 @@ constexpr const char* storage_name(WeightStorage storage) noexcept {
 /// @brief The 16-bit storage for the real-time path with the instruction set the including code is
 /// compiled for: the fastest of those within 0.1 degree of F32 (Fixed16 and F16; test_estimator.cpp).
 /// With AVX-512 VBMI2 Fixed16 (three integer operations widen 32 weights); with F16C and no
-/// AVX-512, F16 (one hardware conversion per 8 weights, cheaper there than Fixed16's five integer
-/// operations per 16: `BM_SparseRowKernel*` on Zen 3, docs/performance.md); otherwise Fixed16
-/// (binary16 would be converted in software).
+/// VBMI2, F16 (one hardware conversion per 8 weights, cheaper on AVX2 than Fixed16's five integer
+/// operations per 16: `BM_SparseRowKernel*` on Zen 3, docs/performance.md; AVX-512 without VBMI2
+/// also gets F16, unmeasured); otherwise Fixed16 (binary16 would be converted in software).
 constexpr WeightStorage realtime_storage() noexcept {
 #if defined(__F16C__) && !defined(__AVX512VBMI2__)
   return WeightStorage::F16;

@@ -64,14 +64,17 @@ struct SimdBackend {
   static constexpr int registers = lanes >= 16 ? 32 : 16;
   /// @brief Rows a dense block holds at most: 12 (of 2 vectors) with 32 registers, 4 with 16.
   static constexpr int max_block_rows = registers == 32 ? 12 : 4;
+  /// @brief Rows per block when a product has more than max_block_rows (batches): 6 (of 4
+  /// vectors) with 32 registers, 4 (of 2) with 16.
+  static constexpr int batch_block_rows = registers == 32 ? 6 : 4;
 
   /// @brief See ScalarBackend::gemm_rows. Requires n to be a multiple of `lanes`.
   template <typename W>
   GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
                                            int n) noexcept {
-    // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches): 6 x 4
-    // with 32 registers, 4 x 2 with 16.
-    const int max_rows = rows <= max_block_rows ? rows : (registers == 32 ? 6 : 4);
+    // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches):
+    // batch_block_rows, whose column blocks vectors_for() sizes.
+    const int max_rows = rows <= max_block_rows ? rows : batch_block_rows;
     for (int p0 = 0; p0 < n; p0 += panel) {
       const int width = std::min(panel, n - p0);  // this panel's row length
       const W* wp = w + static_cast<long>(k) * p0;
