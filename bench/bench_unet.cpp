@@ -68,6 +68,9 @@ void run(benchmark::State& state, WeightStorage storage) {
   const int last_chunk = batch - (batch - 1) / chunk * chunk;
   const auto zeros = net.zero_fractions(ws, last_chunk);
   state.counters["zero_share"] = std::accumulate(zeros.begin(), zeros.end(), 0.0) / static_cast<double>(zeros.size());
+  // At batch 1: the bytes of weights the frame reads (the rows that meet a nonzero activation),
+  // which come from the L3 every frame; with BM_StreamRows' rate, the forward's floor.
+  if (batch == 1) state.counters["read_MB"] = static_cast<double>(net.weight_bytes_read(ws)) / 1e6;
   state.SetLabel(storage_name(storage));
 }
 }  // namespace

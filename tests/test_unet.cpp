@@ -123,6 +123,84 @@ TEST_CASE("unet: a batch gives the same outputs as frames one at a time, forward
   }
 }
 
+// What a single-frame forward must read of the weights, from the convolutions' definitions and the
+// independent reference forward's activations: per row-product layer and kernel tap, the input
+// positions the tap joins to an output, and per source the channels nonzero at one of them.
+std::size_t expected_weight_bytes_read(const TensorMap& tensors, const float* input, int width, std::size_t product_weight_size) {
+  const std::vector<test::Grid> act = test::unet_reference_activations(tensors, input);  // e1 e2 e3 e4 d1 d2 d3 y
+  struct Layer {
+    int in, out, k, s, p;
+    bool transposed;
+    std::vector<int> sources;  // indices into act
+    int out_channels;
+  };
+  const int w = width;
+  const Layer products[] = {{5, 3, 3, 2, 1, false, {0}, 2 * w},     {3, 2, 3, 2, 1, false, {1}, 4 * w},
+                            {2, 1, 4, 2, 1, false, {2}, 8 * w},     {1, 2, 4, 2, 1, true, {3}, 4 * w},
+                            {2, 3, 3, 2, 1, true, {4, 2}, 2 * w},   {3, 5, 3, 2, 1, true, {5, 1}, w}};
+  const auto nonzero_rows = [&](const test::Grid& g, const std::vector<std::pair<int, int>>& positions) {
+    std::size_t rows = 0;
+    for (int c = 0; c < g.channels; ++c) {
+      bool any = false;
+      for (const auto& [y, x] : positions) any = any || g.at(c, y, x) != 0.0;
+      rows += any;
+    }
+    return rows;
+  };
+  std::size_t bytes = 25 * 2 * static_cast<std::size_t>(w) * 4;  // enc1 (F32): every tap of a 5x5 kernel, padding 2, meets input
+  for (const Layer& l : products)
+    for (int ky = 0; ky < l.k; ++ky)
+      for (int kx = 0; kx < l.k; ++kx) {
+        const auto joins = [&](int i, int kk) {  // does input index i meet some output along this tap?
+          for (int o = 0; o < l.out; ++o)
+            if ((l.transposed ? i * l.s - l.p + kk == o : o * l.s - l.p + kk == i)) return true;
+          return false;
+        };
+        std::vector<std::pair<int, int>> positions;
+        for (int y = 0; y < l.in; ++y)
+          for (int x = 0; x < l.in; ++x)
+            if (joins(y, ky) && joins(x, kx)) positions.emplace_back(y, x);
+        for (int src : l.sources)
+          bytes += nonzero_rows(act[static_cast<std::size_t>(src)], positions) * static_cast<std::size_t>(l.out_channels) * product_weight_size;
+      }
+  std::vector<std::pair<int, int>> everywhere;  // out (F32): a row per nonzero source channel, the 25 taps as its columns
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 5; ++x) everywhere.emplace_back(y, x);
+  const std::size_t tap_columns = (25 + kernels::SimdBackend::lanes - 1) / kernels::SimdBackend::lanes * kernels::SimdBackend::lanes;
+  for (int src : {6, 0}) bytes += nonzero_rows(act[static_cast<std::size_t>(src)], everywhere) * tap_columns * 4;
+  return bytes;
+}
+
+TEST_CASE("unet: weight_bytes_read counts the weight rows a single frame meets, as the convolutions and the reference forward say") {
+  const int width = 32;  // every hidden layer's channels are whole pairs of SIMD vectors: no padding but the last layer's
+  TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 23);
+  const std::vector<float> x = random_inputs(1, 8);
+  for (const WeightStorage storage : {WeightStorage::F32, WeightStorage::Fixed16}) {
+    CAPTURE(storage_name(storage));
+    const auto net = UNet<>::from_tensors(tensors, width, 1e-5, storage);
+    auto ws = net.make_workspace(1);
+    std::vector<float> y(kUNetOutputs);
+    REQUIRE(net.forward(x.data(), y.data(), 1, ws) == Status::Ok);
+    const std::size_t read = net.weight_bytes_read(ws);
+    const std::size_t expected = expected_weight_bytes_read(tensors, x.data(), width, storage == WeightStorage::F32 ? 4 : 2);
+    MESSAGE(std::string(storage_name(storage)) << ": " << read << " of " << net.weight_bytes() << " bytes read, expected " << expected);
+    // float against double: a pre-activation within rounding of zero may fall either side (one row of the widest layer).
+    CHECK(std::abs(static_cast<double>(read) - static_cast<double>(expected)) <= 8.0 * width * 4);
+    CHECK(read < net.weight_bytes());
+    const auto other = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(4), 9), 4);
+    CHECK_THROWS_WITH_AS((void)other.weight_bytes_read(ws), doctest::Contains("expected width 4"), Error);
+  }
+  // A first layer that only ever outputs -1 before its ReLU: no row fed by e1 is read.
+  std::fill(tensors.at("enc1.weight").values.begin(), tensors.at("enc1.weight").values.end(), 0.0f);
+  std::fill(tensors.at("enc1.bias").values.begin(), tensors.at("enc1.bias").values.end(), -1.0f);
+  const auto net = UNet<>::from_tensors(tensors, width);
+  auto ws = net.make_workspace(1);
+  std::vector<float> y(kUNetOutputs);
+  REQUIRE(net.forward(x.data(), y.data(), 1, ws) == Status::Ok);
+  CHECK(std::abs(static_cast<double>(net.weight_bytes_read(ws)) - static_cast<double>(expected_weight_bytes_read(tensors, x.data(), width, 4))) <=
+        8.0 * width * 4);
+}
+
 TEST_CASE("unet: zero_fractions counts the zeros each ReLU leaves as the independent reference forward does") {
   const int width = 16, frames = 3;
   TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 21);

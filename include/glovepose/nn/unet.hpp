@@ -358,6 +358,53 @@ class UNet {
     return fractions;
   }
 
+  /// @brief For the last forward on `ws`, which must have been of a single frame: the bytes of
+  /// packed weights that forward read (channel padding included). The row products (kernels/
+  /// sparse_row.hpp) read, per tap and source, the weight rows of the channels that are nonzero at
+  /// one or more of the input positions the tap joins; the first layer the rows of the taps that
+  /// meet input; the last, per source, the rows of its nonzero channels. At batch 1 these bytes come
+  /// from the L3 every frame (the w = 64 weights do not fit a core's L2), so they bound the forward's
+  /// time from below: docs/performance.md. Diagnostic, set-up code: throws glovepose::Error for a
+  /// workspace of another network.
+  std::size_t weight_bytes_read(const Workspace& ws) const {
+    if (ws.width_ != width_ || ws.buffers.size() != buffers_.size())
+      throw Error("UNet::weight_bytes_read: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " +
+                  std::to_string(width_));
+    std::vector<char> read;  // per weight row of the block at hand: whether the forward read it
+    // Marks the channels of buffer `id` that are nonzero at `position` (frame 0 of a single-frame forward).
+    const auto mark_nonzero = [&](int id, int position) {
+      const BufferSpec& spec = buffers_[static_cast<std::size_t>(id)];
+      const float* row = ws.buffers[static_cast<std::size_t>(id)].data() + static_cast<long>(position) * spec.stride;
+      for (int c = 0; c < spec.channels; ++c)
+        if (row[c] != 0.0f) read[static_cast<std::size_t>(c)] = 1;
+    };
+    const auto rows_read = [&] { return static_cast<std::size_t>(std::count(read.begin(), read.end(), 1)); };
+    std::size_t bytes = 0;
+    for (const PackedLayer& l : layers_) {
+      const std::size_t weight_size = l.w32.empty() ? 2 : 4;
+      const std::size_t out_stride = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].stride);
+      if (l.mode == Mode::Im2col) {
+        read.assign(static_cast<std::size_t>(l.kernel_taps * buffers_[static_cast<std::size_t>(l.sources[0])].channels), 0);
+        for (std::size_t i = 0; i < l.receptive_rows.size(); ++i) read[static_cast<std::size_t>(l.receptive_rows[i])] = 1;
+        bytes += rows_read() * out_stride * weight_size;
+      } else if (l.mode == Mode::TapColumns) {
+        for (int id : l.sources) {
+          read.assign(static_cast<std::size_t>(buffers_[static_cast<std::size_t>(id)].channels), 0);
+          for (int p = 0; p < buffers_[static_cast<std::size_t>(id)].positions; ++p) mark_nonzero(id, p);
+          bytes += rows_read() * static_cast<std::size_t>(l.tap_stride) * weight_size;
+        }
+      } else {
+        for (const PackedTap& tap : l.taps)
+          for (int id : l.sources) {
+            read.assign(static_cast<std::size_t>(buffers_[static_cast<std::size_t>(id)].channels), 0);
+            for (int p : tap.in_positions) mark_nonzero(id, p);
+            bytes += rows_read() * out_stride * weight_size;
+          }
+      }
+    }
+    return bytes;
+  }
+
  private:
   struct BufferSpec {
     int channels;
