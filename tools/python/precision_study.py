@@ -12,7 +12,8 @@ as int16 with one scale per output channel ('i16'; the first and last layers sta
 of their input rows (one grid position of one concatenated source) as 12-bit integers scaled by the
 row's largest |value| ('q12'): 12 bits let 8 pairs of products accumulate in int32 before a flush
 to float; 'q11' (11 bits) would let 16. Reported for the random model and for the shipped model
-(models/glovepose_unet64.safetensors).
+(models/glovepose_unet64.safetensors). For the shipped model also 12- and 8-bit integer weights
+('i12', 'i8'; activations exact): what fewer bytes per weight would cost.
 """
 import math
 import sys
@@ -38,9 +39,10 @@ def rb(x, mode):
     if mode == 'bf16': return x.float().to(torch.bfloat16).double()
     if mode == 'f16': return x.float().half().double()
     return x
-def int16_per_channel(w, transposed):  # 'i16': codes -32767..32767, scale = largest |weight| / 32767
+def int_per_channel(w, transposed, bits):  # 'i16', 'i12', 'i8': codes -(2^(bits-1) - 1)..2^(bits-1) - 1, one scale per output channel
     keep = [d for d in range(4) if d != (1 if transposed else 0)]
-    scale = w.abs().amax(dim=keep, keepdim=True).clamp_min(1e-300) / 32767
+    top = 2 ** (bits - 1) - 1
+    scale = w.abs().amax(dim=keep, keepdim=True).clamp_min(1e-300) / top
     return torch.round(w / scale) * scale
 def quantised_rows(x, bits):  # 'q12', 'q11': each (frame, position) row over its channels, in levels of its largest |value|
     top = x.abs().amax(dim=1, keepdim=True).clamp_min(1e-300)
@@ -54,7 +56,7 @@ def study(model, name, modes):
     def fwd(x, wmode, amode):
         def conv(i, sources):
             (w, b), (c, _, t) = folded[i], layers[i]
-            if wmode == 'i16': w = int16_per_channel(w, t) if i in ROW_PRODUCTS else w
+            if wmode in ('i16', 'i12', 'i8'): w = int_per_channel(w, t, int(wmode[1:])) if i in ROW_PRODUCTS else w
             else: w = rb(w, wmode)
             if amode in ('q12', 'q11'):
                 bits = int(amode[1:])
@@ -81,4 +83,4 @@ for d in range(25):
     slots.append(f * 5 + c)
 study(m, "random w = 64", [('f16', None), ('bf16', None), ('bf16', 'bf16'), ('f16', 'bf16'), ('i16', None), ('i16', 'q12')])
 shipped = import_model(Path(__file__).resolve().parents[2] / "models" / "glovepose_unet64.safetensors")
-study(shipped, "shipped model", [('f16', None), ('i16', None), ('i16', 'q12'), ('i16', 'q11')])
+study(shipped, "shipped model", [('f16', None), ('i16', None), ('i16', 'q12'), ('i16', 'q11'), ('i12', None), ('i8', None)])
