@@ -3,9 +3,11 @@
 //   BM_PeakDpwssd       the same for AVX-512 VNNI's 16-bit dot product (two multiply-adds per 32-bit
 //                       lane and instruction): whether integer weights could raise the compute ceiling
 //   BM_StreamBytes/N    the rate at which one core re-reads an N-byte buffer (the weights at batch 1)
-//   BM_StreamRows/KiB:N a random half of the 256-byte rows of an N KiB buffer, rows ascending and a
-//                       different half each pass: the rate at which the batch-1 forward's weights,
-//                       rows skipped where the activation is zero, can arrive at best
+//   BM_StreamRows/KiB:N/patterns:P  a random half of the 256-byte rows of an N KiB buffer, rows
+//                       ascending, the half chosen from P patterns in turn (1: the same rows every
+//                       pass, as a forward of one input over and over; 16: a different half each
+//                       pass): the rate at which the batch-1 forward's weights, rows skipped where
+//                       the activation is zero, can arrive at best
 //   BM_SparseRowKernel* the batch-1 product kernel itself, per weight storage: its multiply-adds per
 //                       second with the weights in the L1/L2 (KiB:32, what the widening of 16-bit
 //                       weights costs) and streamed from the L3 (KiB:4224, what the forward sees)
@@ -83,12 +85,13 @@ static void BM_StreamBytes(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes));
 }
 static void BM_StreamRows(benchmark::State& state) {
-  constexpr std::size_t kRowBytes = 256, kPatterns = 16;  // a row of one 128-column panel of 16-bit weights
+  constexpr std::size_t kRowBytes = 256;  // a row of one 128-column panel of 16-bit weights
   const std::size_t rows = static_cast<std::size_t>(state.range(0)) * 1024 / kRowBytes;
+  const auto pattern_count = static_cast<std::size_t>(state.range(1));
   constexpr std::size_t floats_per_row = kRowBytes / sizeof(float);
   glovepose::nn::AlignedVector<float> buffer(rows * floats_per_row, 1.0f);
   std::mt19937 rng(1);
-  std::vector<std::vector<std::size_t>> patterns(kPatterns);
+  std::vector<std::vector<std::size_t>> patterns(pattern_count);
   std::size_t chosen = 0;
   for (auto& pattern : patterns)
     for (std::size_t r = 0; r < rows; ++r)
@@ -97,7 +100,7 @@ static void BM_StreamRows(benchmark::State& state) {
   std::size_t pass = 0;
   for (auto _ : state) {
     Batch sum(0.0f);
-    for (std::size_t r : patterns[pass++ % kPatterns]) {
+    for (std::size_t r : patterns[pass++ % pattern_count]) {
       const float* row = &buffer[r * floats_per_row];
       Batch s0(0.0f), s1(0.0f);
       for (std::size_t i = 0; i < floats_per_row; i += 2 * Batch::size) {
@@ -109,9 +112,10 @@ static void BM_StreamRows(benchmark::State& state) {
     benchmark::DoNotOptimize(sum);
   }
   // Bytes of the rows read, averaged over the patterns.
-  state.SetBytesProcessed(static_cast<std::int64_t>(static_cast<double>(state.iterations()) * static_cast<double>(chosen * kRowBytes) / kPatterns));
+  state.SetBytesProcessed(
+      static_cast<std::int64_t>(static_cast<double>(state.iterations()) * static_cast<double>(chosen * kRowBytes) / static_cast<double>(pattern_count)));
 }
-BENCHMARK(BM_StreamRows)->ArgName("KiB")->Arg(4224);
+BENCHMARK(BM_StreamRows)->ArgNames({"KiB", "patterns"})->Args({4224, 1})->Args({4224, 16});
 
 // The packed weights of w = 64 (4.3 MB F16, 8.6 MB F32) and w = 100 (10.8 MB F16, 21.5 MB F32).
 BENCHMARK(BM_StreamBytes)->Arg(4321792)->Arg(8643584)->Arg(10757200)->Arg(21514400);
