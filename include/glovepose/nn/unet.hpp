@@ -381,11 +381,11 @@ class UNet {
     const auto rows_read = [&] { return static_cast<std::size_t>(std::count(read.begin(), read.end(), 1)); };
     std::size_t bytes = 0;
     for (const PackedLayer& l : layers_) {
-      const std::size_t weight_size = l.w32.empty() ? 2 : 4;
+      const std::size_t weight_size = l.w32.empty() ? 2 : 4;  // a layer keeps one storage; 16-bit ones leave w32 empty
       const std::size_t out_stride = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].stride);
       if (l.mode == Mode::Im2col) {
         read.assign(static_cast<std::size_t>(l.kernel_taps * buffers_[static_cast<std::size_t>(l.sources[0])].channels), 0);
-        for (std::size_t i = 0; i < l.receptive_rows.size(); ++i) read[static_cast<std::size_t>(l.receptive_rows[i])] = 1;
+        for (int row : l.receptive_rows) read[static_cast<std::size_t>(row)] = 1;
         bytes += rows_read() * out_stride * weight_size;
       } else if (l.mode == Mode::TapColumns) {
         for (int id : l.sources) {
