@@ -22,6 +22,7 @@
 #include <type_traits>
 #include <exception>
 #include <mutex>
+#include <numeric>
 #include <thread>
 #include <vector>
 
@@ -370,36 +371,35 @@ class UNet {
     if (ws.width_ != width_ || ws.buffers.size() != buffers_.size())
       throw Error("UNet::weight_bytes_read: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " +
                   std::to_string(width_));
-    std::vector<char> read;  // per weight row of the block at hand: whether the forward read it
-    // Marks the channels of buffer `id` that are nonzero at `position` (frame 0 of a single-frame forward).
-    const auto mark_nonzero = [&](int id, int position) {
+    // Rows of a block whose input channels of buffer `id` are nonzero at one or more of `positions`
+    // (frame 0 of a single-frame forward).
+    const auto nonzero_rows = [&](int id, const std::vector<int>& positions) {
       const BufferSpec& spec = buffers_[static_cast<std::size_t>(id)];
-      const float* row = ws.buffers[static_cast<std::size_t>(id)].data() + static_cast<long>(position) * spec.stride;
+      const float* values = ws.buffers[static_cast<std::size_t>(id)].data();
+      std::size_t rows = 0;
       for (int c = 0; c < spec.channels; ++c)
-        if (row[c] != 0.0f) read[static_cast<std::size_t>(c)] = 1;
+        rows += std::any_of(positions.begin(), positions.end(),
+                            [&](int p) { return values[static_cast<long>(p) * spec.stride + c] != 0.0f; });
+      return rows;
     };
-    const auto rows_read = [&] { return static_cast<std::size_t>(std::count(read.begin(), read.end(), 1)); };
     std::size_t bytes = 0;
     for (const PackedLayer& l : layers_) {
-      const std::size_t weight_size = l.w32.empty() ? 2 : 4;  // a layer keeps one storage; 16-bit ones leave w32 empty
+      // A layer keeps one storage: F32, or 16 bits (which leave w32 empty).
+      const std::size_t weight_size = l.w32.empty() ? sizeof(std::uint16_t) : sizeof(float);
       const std::size_t out_stride = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].stride);
-      if (l.mode == Mode::Im2col) {
-        read.assign(static_cast<std::size_t>(l.kernel_taps * buffers_[static_cast<std::size_t>(l.sources[0])].channels), 0);
-        for (int row : l.receptive_rows) read[static_cast<std::size_t>(row)] = 1;
-        bytes += rows_read() * out_stride * weight_size;
-      } else if (l.mode == Mode::TapColumns) {
+      if (l.mode == Mode::Im2col) {  // every row of a tap that meets input, whatever its value
+        std::vector<int> rows(l.receptive_rows);
+        std::sort(rows.begin(), rows.end());
+        bytes += static_cast<std::size_t>(std::unique(rows.begin(), rows.end()) - rows.begin()) * out_stride * weight_size;
+      } else if (l.mode == Mode::TapColumns) {  // per source, its nonzero channels anywhere; the taps are the columns
         for (int id : l.sources) {
-          read.assign(static_cast<std::size_t>(buffers_[static_cast<std::size_t>(id)].channels), 0);
-          for (int p = 0; p < buffers_[static_cast<std::size_t>(id)].positions; ++p) mark_nonzero(id, p);
-          bytes += rows_read() * static_cast<std::size_t>(l.tap_stride) * weight_size;
+          std::vector<int> everywhere(static_cast<std::size_t>(buffers_[static_cast<std::size_t>(id)].positions));
+          std::iota(everywhere.begin(), everywhere.end(), 0);
+          bytes += nonzero_rows(id, everywhere) * static_cast<std::size_t>(l.tap_stride) * weight_size;
         }
       } else {
         for (const PackedTap& tap : l.taps)
-          for (int id : l.sources) {
-            read.assign(static_cast<std::size_t>(buffers_[static_cast<std::size_t>(id)].channels), 0);
-            for (int p : tap.in_positions) mark_nonzero(id, p);
-            bytes += rows_read() * out_stride * weight_size;
-          }
+          for (int id : l.sources) bytes += nonzero_rows(id, tap.in_positions) * out_stride * weight_size;
       }
     }
     return bytes;
