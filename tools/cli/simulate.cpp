@@ -1,5 +1,6 @@
 // glovepose simulate --seed S --subjects N --sessions K --minutes M [--gloves G] --out FILE
-//                    [--raw-rows] [--calibration-seconds T] [--threads T] [--csv FILE]
+//                    [--raw-rows] [--mean-window N] [--calibration-seconds T | --calibration-sequence FILE] [--threads T] [--csv FILE]
+// glovepose simulate --print-calibration-sequence
 // glovepose simulate --report [--seed S] [--subjects N] [--sessions K] [--minutes M]
 //   Simulates the paper's capture protocol (defaults: 10 subjects x 5 sessions x 5 minutes, the
 //   glove kept on for 3, a 30 s calibration sequence before each session, 2 sessions with a second
@@ -22,7 +23,9 @@ namespace {
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "glovepose simulate: " << problem << "\n"
             << "usage: glovepose simulate [--seed S] [--subjects N] [--sessions K] [--minutes M] [--gloves G]\n"
-            << "                          [--calibration-seconds T] [--raw-rows] [--threads T] --out FILE [--csv FILE]\n"
+            << "                          [--calibration-seconds T | --calibration-sequence FILE] [--raw-rows] [--mean-window N] [--threads T]\n"
+            << "                          --out FILE [--csv FILE]\n"
+            << "       glovepose simulate --print-calibration-sequence   (the built-in guided sequence as JSON)\n"
             << "       glovepose simulate --report [--seed S] [--subjects N] [--sessions K] [--minutes M] [--threads T]\n";
   std::exit(2);
 }
@@ -40,7 +43,8 @@ T number(const std::string& option, const std::string& text) {
 int simulate(int argc, char** argv) {
   sim::CorpusConfig config;
   std::string out, csv;
-  bool report = false;
+  std::string sequence_file;
+  bool report = false, print_sequence = false;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -53,16 +57,27 @@ int simulate(int argc, char** argv) {
     else if (a == "--minutes") config.minutes = number<double>(a, value());
     else if (a == "--gloves") config.gloves = number<int>(a, value());
     else if (a == "--calibration-seconds") config.calibration_seconds = number<double>(a, value());
+    else if (a == "--calibration-sequence") sequence_file = value();
+    else if (a == "--print-calibration-sequence") print_sequence = true;
     else if (a == "--threads") config.threads = number<int>(a, value());
     else if (a == "--raw-rows") config.recording.raw_rows = true;
+    else if (a == "--mean-window") config.recording.readout.mean_window = number<int>(a, value());
     else if (a == "--out") out = value();
     else if (a == "--csv") csv = value();
     else if (a == "--report") report = true;
     else usage("unknown option " + a);
   }
   if (config.intra_sessions > config.sessions) config.intra_sessions = config.sessions;
+  if (print_sequence) {
+    std::cout << sim::guided_calibration_sequence(sim::pose_gallery()).to_json();
+    return 0;
+  }
   if (!report && out.empty()) usage("--out FILE is required (or --report)");
   try {
+    if (!sequence_file.empty()) {
+      config.guided_calibration = calibration::Sequence::read(sequence_file);
+      config.calibration_seconds = config.guided_calibration->total_seconds();
+    }
     const auto start = std::chrono::steady_clock::now();
     const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
     if (report) {

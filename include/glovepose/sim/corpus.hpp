@@ -14,10 +14,12 @@
 #include <cstdint>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "../calibration/sequence.hpp"
 #include "../config.hpp"
 #include "glove.hpp"
 #include "motion.hpp"
@@ -37,6 +39,9 @@ struct CorpusConfig {
   int gloves = 2;                     ///< Gloves simulated; gloves after the first record `other_glove_sessions`.
   int other_glove_sessions = 2;       ///< Sessions per subject with each further glove.
   double calibration_seconds = 30.0;  ///< Calibration sequence before every session (0: none).
+  /// When set, every calibration sequence follows these steps (a guided calibration, its own
+  /// length) instead of visiting the extreme poses in random order for calibration_seconds.
+  std::optional<calibration::Sequence> guided_calibration;
   int threads = 0;                    ///< 0: all hardware threads.
   RecordingConfig recording{};        ///< Readout settings (raw rows, noise).
 
@@ -77,6 +82,51 @@ inline std::vector<KeyPose> calibration_gallery(const std::vector<KeyPose>& gall
     for (const KeyPose& k : gallery)
       if (k.name == n) out.push_back(k);
   return out;
+}
+
+/// @brief The guided calibration sequence the simulated corpus and the shipped files use
+/// (models/calibration_glauser2019.json is its to_json()): the ten extreme poses of
+/// calibration_gallery(), 3 s each, the first one pressed flat on a table, which pins the flexions
+/// of the four long fingers at 0 (a person holds them within about 2 degrees; assumption: the
+/// table stops the fingers, the slight hyperextension a relaxed hand shows on a table is left out).
+inline calibration::Sequence guided_calibration_sequence(const std::vector<KeyPose>& gallery) {
+  struct Text {
+    const char* name;
+    const char* instruction;
+  };
+  const Text texts[] = {
+      {"flat", "Lay your hand flat on a table, palm down, fingers straight and together, and press it gently down."},
+      {"spread", "Lift your hand and spread all fingers as wide as you can."},
+      {"fist", "Make a tight fist, thumb across the fingers."},
+      {"claw", "Bend the end joints of your fingers into a claw, knuckles straight."},
+      {"thumbs_up", "Thumbs up: fist with the thumb pointing up."},
+      {"wave", "Open your hand and bend all fingers back as far as is comfortable."},
+      {"flat_bent", "Bend the fingers at the knuckles only, keeping them straight, like a flat plate."},
+      {"pinch_index", "Pinch: touch your thumb tip to your index fingertip."},
+      {"pinch_pinky", "Touch your thumb tip to your little fingertip."},
+      {"point", "Point with your index finger, the other fingers curled."},
+  };
+  std::vector<calibration::Step> steps;
+  for (const Text& t : texts)
+    for (const KeyPose& k : gallery)
+      if (k.name == t.name) {
+        calibration::Step s;
+        s.name = k.name == "flat" ? "flat_on_table" : k.name;
+        s.instruction = t.instruction;
+        s.seconds = 3.0;
+        s.pose = k.angles;
+        if (k.name == "flat") {
+          for (int f = 1; f <= 4; ++f)
+            for (hand::Motion m : {hand::Motion::BaseFlexion, hand::Motion::MiddleFlexion, hand::Motion::TipFlexion}) {
+              const std::size_t d = hand::dof_of(static_cast<hand::Finger>(f), m);
+              s.pose[d] = 0.0;
+              s.pinned[d] = true;
+            }
+          s.pinned_sd = 2.0 * M_PI / 180.0;
+        }
+        steps.push_back(s);
+      }
+  return calibration::Sequence("glauser2019-guided", std::move(steps), 1.8);
 }
 
 /// @brief The sessions of the protocol in a fixed order: subject, glove, session; each session's
@@ -152,7 +202,10 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   }
   const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
   const int stream = 2 * job.session + (calibration ? 1 : 0);
-  return SessionSetup{GlovePhysics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit),
+  GlovePhysics physics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit);
+  if (calibration && config.guided_calibration)
+    return SessionSetup{std::move(physics), MotionSequence(subject, *config.guided_calibration, id(4, stream), motion_config), id(5, stream)};
+  return SessionSetup{std::move(physics),
                       MotionSequence(subject, calibration ? world.extremes : world.gallery, seconds, id(4, stream), motion_config),
                       id(5, stream)};
 }

@@ -52,6 +52,8 @@ inline train::Dataset to_dataset(const std::vector<SessionRecording>& corpus, co
   out.metadata["gloves"] = std::to_string(config.gloves);
   out.metadata["other_glove_sessions"] = std::to_string(config.other_glove_sessions);
   out.metadata["calibration_seconds"] = std::to_string(config.calibration_seconds);
+  out.metadata["mean_window"] = std::to_string(config.recording.readout.mean_window);
+  if (config.guided_calibration) out.metadata["calibration_sequence"] = config.guided_calibration->id();
   std::string sizes = "[";
   for (const Subject& s : make_subjects(config.subjects, config.seed))
     sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " + std::to_string(s.size.height) + "]";

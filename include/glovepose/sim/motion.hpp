@@ -24,6 +24,7 @@
 #include "../hand/collision.hpp"
 #include "../hand/dofs.hpp"
 #include "../hand/kinematics.hpp"
+#include "../calibration/sequence.hpp"
 #include "pose_gallery.hpp"
 #include "random.hpp"
 #include "subject.hpp"
@@ -49,6 +50,9 @@ struct MotionSegment {
   hand::Angles from{};   ///< Pose at `start`.
   hand::Angles to{};     ///< Pose reached at `start + move`.
   int key = -1;          ///< Gallery index of the target (the first one when blended).
+  /// Angles `to` holds exactly (a guided calibration step, e.g. fingers pressed flat on a table):
+  /// no drift or tremor there once reached.
+  std::array<bool, hand::kDofCount> pinned{};
 };
 
 /// @brief The motion of one recording as a function of time. Immutable once made.
@@ -91,16 +95,49 @@ class MotionSequence {
       current = seg.to;
       t += seg.move + seg.hold;
     }
-    // Slow wandering and tremor: two sinusoids per band and DoF, random frequencies and phases.
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-      const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;
-      for (int k = 0; k < 2; ++k) {
-        drift_[d][static_cast<std::size_t>(k)] = {config.drift_amplitude * (small ? 0.5 : 1.0) * rng.uniform(0.5, 1.0),
-                                                  6.283185307179586 * rng.uniform(0.1, 0.5), 6.283185307179586 * rng.uniform()};
-        tremor_[d][static_cast<std::size_t>(k)] = {config.tremor_amplitude * rng.uniform(0.5, 1.0),
-                                                   6.283185307179586 * rng.uniform(8.0, 12.0), 6.283185307179586 * rng.uniform()};
+    make_wobble(config, rng);
+  }
+
+  /// @brief `subject` following a guided calibration sequence, from `seed`: at every step the person
+  /// reacts (0.2-0.6 s), moves to the step's pose formed in their own way (style, this visit's
+  /// spread, enslaving, as for gallery poses) at their speed and holds it until the next step; the
+  /// angles the step pins take the step's pose within its pinned_sd instead, without drift or
+  /// tremor once reached. Starts at the first step's pose.
+  MotionSequence(const Subject& subject, const calibration::Sequence& sequence, std::uint64_t seed, const MotionConfig& config = {})
+      : duration_(sequence.total_seconds()) {
+    Rng rng(seed);
+    const auto visit = [&](const calibration::Step& step) {
+      hand::Angles q = shape(step.pose, subject, config, rng);
+      for (std::size_t d = 0; d < hand::kDofCount; ++d)
+        if (step.pinned[d]) q[d] = step.pose[d] + rng.normal(0.0, step.pinned_sd);
+      return hand::JointLimits().clamp(q);
+    };
+    hand::Angles current = visit(sequence.steps().front());
+    std::array<bool, hand::kDofCount> current_pinned = sequence.steps().front().pinned;
+    double t = 0.0;
+    for (std::size_t i = 0; i < sequence.steps().size(); ++i) {
+      const calibration::Step& step = sequence.steps()[i];
+      MotionSegment seg;
+      seg.start = t + rng.uniform(0.2, 0.6);
+      seg.from = current;
+      seg.key = static_cast<int>(i);
+      seg.to = i == 0 ? current : visit(step);
+      seg.pinned = step.pinned;
+      double largest = 0.0;
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) largest = std::max(largest, std::abs(seg.to[d] - seg.from[d]));
+      seg.move = std::clamp((0.3 + 0.5 * largest) / (subject.speed * config.pace), 0.25, 1.6);
+      t += step.seconds;
+      seg.hold = std::max(0.0, t - seg.start - seg.move);
+      if (i == 0) {  // the sequence starts in the first pose
+        seg.start = 0.0;
+        seg.hold = step.seconds;
       }
+      from_pinned_.push_back(current_pinned);
+      segments_.push_back(seg);
+      current = seg.to;
+      current_pinned = step.pinned;
     }
+    make_wobble(config, rng);
   }
 
   /// @brief Seconds of motion.
@@ -114,7 +151,8 @@ class MotionSequence {
     t = std::clamp(t, 0.0, duration_);
     // The last segment starting at or before t.
     const auto it = std::upper_bound(segments_.begin(), segments_.end(), t, [](double v, const MotionSegment& s) { return v < s.start; });
-    const MotionSegment& seg = *(it == segments_.begin() ? it : it - 1);
+    const std::size_t index = static_cast<std::size_t>((it == segments_.begin() ? it : it - 1) - segments_.begin());
+    const MotionSegment& seg = segments_[index];
     const double s = std::clamp((t - seg.start) / seg.move, 0.0, 1.0);
     const double w = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));  // minimum jerk
     hand::Angles a{};
@@ -122,6 +160,9 @@ class MotionSequence {
       double wobble = 0.0;
       for (const Wave& v : drift_[d]) wobble += v.amplitude * std::sin(v.omega * t + v.phase);
       for (const Wave& v : tremor_[d]) wobble += v.amplitude * std::sin(v.omega * t + v.phase);
+      // A pinned angle does not wobble; the wobble fades in and out over the transitions.
+      if (!from_pinned_.empty() && from_pinned_[index][d]) wobble *= w;
+      if (seg.pinned[d]) wobble *= 1.0 - w;
       a[d] = seg.from[d] + (seg.to[d] - seg.from[d]) * w + wobble;
     }
     for (std::size_t f = 1; f < hand::kFingerCount; ++f) {  // the tip keeps following the middle joint
@@ -137,6 +178,19 @@ class MotionSequence {
   struct Wave {
     double amplitude, omega, phase;
   };
+
+  // Slow wandering and tremor: two sinusoids per band and DoF, random frequencies and phases.
+  void make_wobble(const MotionConfig& config, Rng& rng) {
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;
+      for (int k = 0; k < 2; ++k) {
+        drift_[d][static_cast<std::size_t>(k)] = {config.drift_amplitude * (small ? 0.5 : 1.0) * rng.uniform(0.5, 1.0),
+                                                  6.283185307179586 * rng.uniform(0.1, 0.5), 6.283185307179586 * rng.uniform()};
+        tremor_[d][static_cast<std::size_t>(k)] = {config.tremor_amplitude * rng.uniform(0.5, 1.0),
+                                                   6.283185307179586 * rng.uniform(8.0, 12.0), 6.283185307179586 * rng.uniform()};
+      }
+    }
+  }
 
   // A visit of a key pose: the person's style, this visit's variation, finger enslaving, the tip
   // coupling, the joint limits.
@@ -170,6 +224,7 @@ class MotionSequence {
 
   double duration_;
   std::vector<MotionSegment> segments_;
+  std::vector<std::array<bool, hand::kDofCount>> from_pinned_;  // per segment of a guided sequence: what `from` pins
   std::array<std::array<Wave, 2>, hand::kDofCount> drift_{};
   std::array<std::array<Wave, 2>, hand::kDofCount> tremor_{};
   hand::JointLimits limits_;
