@@ -379,3 +379,70 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
     CHECK(bad.out.find(message) != std::string::npos);
   }
 }
+
+TEST_CASE("cli: eval --predictions writes every frame's true and predicted angles, which recompute eval's mean error") {
+  const std::string data = temp("predictions_data.safetensors"), csv = temp("predictions.csv");
+  Run r = run("simulate --seed 6 --subjects 2 --sessions 1 --minutes 0.3 --gloves 1 --calibration-seconds 5 --raw-rows --out " + data);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + kModel + " --data " + data + " --json --predictions " + csv);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const double mean = json_number(r.out, "mean_deg");
+  const double frames = json_number(r.out, "frames");
+  CHECK(std::isfinite(json_number(r.out, "lag_ms")));
+  CHECK(r.out.find("\"calibration\": \"onthefly\"") != std::string::npos);
+  CHECK(json_number(r.out, "mean_window") == 5);  // the recorder's readout
+  std::ifstream in(csv);
+  std::string header, line;
+  REQUIRE(std::getline(in, header));
+  CHECK(header.rfind("frame,time,subject,session,true_thumb_base_abduction,", 0) == 0);
+  CHECK(header.find(",pred_pinky_base_twist") != std::string::npos);
+  double sum = 0.0;
+  long rows = 0;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream fields(line);
+    std::string field;
+    while (std::getline(fields, field, ',')) v.push_back(std::stod(field));
+    REQUIRE(v.size() == 4 + 50);
+    for (std::size_t d = 0; d < 25; ++d) sum += std::abs(v[4 + 25 + d] - v[4 + d]);
+    ++rows;
+  }
+  CHECK(rows == static_cast<long>(frames));
+  CHECK(sum / (25.0 * static_cast<double>(rows)) * 57.29577951308232 == doctest::Approx(mean).epsilon(1e-6));
+  // Replayed through the default readout (2-reading means): another window, another lag.
+  r = run("eval --model " + kModel + " --data " + data + " --json --replay-rows");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(json_number(r.out, "mean_window") == 2);
+  r = run("eval --model " + kModel + " --data " + data + " --mean-window 3");
+  CHECK(r.status == 2);
+  CHECK(r.out.find("--mean-window is for --replay-rows") != std::string::npos);
+  r = run("eval --model " + kModel + " --data " + data + " --calibration guided");
+  CHECK(r.status == 1);
+  CHECK(r.out.find("carries no pose-guided calibration") != std::string::npos);
+}
+
+TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed the sequence, eval and info use it") {
+  const std::string sequence = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json";
+  const std::string data = temp("guided_people.safetensors"), guided = temp("guided_w4.safetensors");
+  Run r = run("simulate --seed 7 --subjects 10 --sessions 1 --minutes 0.1 --gloves 1 --calibration-sequence " + sequence + " --out " + data);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("fit-guided --model " + kModel + " --data " + data + " --out " + guided);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("10 people's calibrations") != std::string::npos);
+  r = run("info --model " + guided);
+  CHECK(r.out.find("pose-guided calibration: sequence 'glauser2019-guided' (10 steps, 30.0 s), 690 features") != std::string::npos);
+  r = run("eval --model " + guided + " --data " + data + " --json");  // guided by default: the model carries one, the data followed it
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("\"calibration\": \"guided\"") != std::string::npos);
+  const std::string plain = temp("plain_people.safetensors");
+  r = run("simulate --seed 8 --subjects 10 --sessions 1 --minutes 0.1 --gloves 1 --out " + plain);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("fit-guided --model " + kModel + " --data " + plain + " --out " + temp("never.safetensors"));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("records no guided calibration") != std::string::npos);
+  r = run("simulate --print-calibration-sequence");
+  REQUIRE(r.status == 0);
+  std::ifstream file(sequence);
+  const std::string shipped((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  CHECK(r.out == shipped);
+}

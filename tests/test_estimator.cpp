@@ -51,8 +51,10 @@ const Session& session() {
   return s;
 }
 
+// The recorder's readout: its mean window (the paper's 5), a solve at every cycle end.
 EstimatorConfig cycle_config() {
   EstimatorConfig config;
+  config.readout.mean_window = sim::RecordingConfig{}.readout.mean_window;
   config.readout.solve_every = sim::kRows;
   return config;
 }

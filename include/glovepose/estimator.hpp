@@ -29,6 +29,8 @@
 
 #include <Eigen/Core>
 
+#include "calibration/pose_offset.hpp"
+#include "calibration/user_calibration.hpp"
 #include "config.hpp"
 #include "filter/one_euro.hpp"
 #include "grid/glove_description.hpp"
@@ -104,6 +106,12 @@ class BasicPoseModel {
       hi[d] = info_.joint_limits_max[d];
     }
     limits_ = hand::JointLimits(lo, hi);
+    if (!info_.pose_offset.empty()) {
+      pose_offset_.emplace(calibration::PoseOffsetModel::parse(info_.pose_offset, "metadata 'pose_offset'"));
+      if (pose_offset_->cells() != glove_.cell_count())
+        throw Error("metadata 'pose_offset' reads " + std::to_string(pose_offset_->cells()) + " cells, expected " +
+                    std::to_string(glove_.cell_count()) + " (the glove's)");
+    }
     if (info_.calibration_min && info_.calibration_max) {
       if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
         throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
@@ -128,6 +136,8 @@ class BasicPoseModel {
   const hand::JointLimits& joint_limits() const noexcept { return limits_; }
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
+  /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.
+  const std::optional<calibration::PoseOffsetModel>& pose_offset() const noexcept { return pose_offset_; }
 
   /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
   /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one
@@ -175,20 +185,45 @@ class BasicPoseModel {
   std::shared_ptr<const Solver> solver_;
   hand::JointLimits limits_;
   std::optional<sensor::CalibrationRange> training_range_;
+  std::optional<calibration::PoseOffsetModel> pose_offset_;
 };
 
 /// @brief The model of the default (SIMD) backend.
 using PoseModel = BasicPoseModel<>;
 
+/// @brief How finish_calibration() calibrates (docs/calibration.md).
+enum class CalibrationMethod : std::uint8_t {
+  /// Pose-guided when the model carries a pose-guided calibration, the whole sequence was performed
+  /// and the calibration looks like it (PoseOffsetModel::followed: a user who moved freely gets
+  /// min-max, not offsets fitted for poses they did not make); min-max otherwise.
+  /// calibration_method() tells which one was applied.
+  Auto,
+  MinMax,      ///< The paper's per-sensor min-max only (Sec. 4.3).
+  PoseGuided,  ///< Min-max plus the per-user angle offsets of the model's pose-guided calibration; finish_calibration() throws when it cannot.
+};
+
+/// @brief The estimator's default readout: the paper's solve cadence (every 16 rows) with a mean of
+/// the last 2 readings per row instead of the paper's 5. The 5-reading mean makes the pose trail
+/// the hand by about 27 ms; 2 readings by about 10 ms, at the same or lower angle error
+/// (docs/results.md, "Less lag"). Set mean_window = 5 for the paper's filter.
+inline sensor::ReadoutConfig realtime_readout() noexcept {
+  sensor::ReadoutConfig config;
+  config.mean_window = 2;
+  return config;
+}
+
 /// @brief Settings of one estimator (one glove stream).
 struct EstimatorConfig {
-  sensor::ReadoutConfig readout{};          ///< Mean window and solve cadence of the row stream (paper: 5, 16).
+  sensor::ReadoutConfig readout = realtime_readout();  ///< Mean window and solve cadence of the row stream (default 2, 16; paper: 5, 16).
   sensor::CalibrationConfig calibration{};  ///< Flat-sensor threshold and the clamp of normalised values.
   int calibration_median_window = 20;       ///< Frames of the on-the-fly calibration's median (paper: 20).
   /// Stream time between two frames the on-the-fly calibration takes (s). The median's window then
   /// spans the same time however often the readout solves: 20 frames at 60 Hz, a third of a second,
   /// as in the paper and in the training data's calibration.
   double calibration_sample_period = 1.0 / 60.0;
+  /// Min-max, or min-max plus the pose-guided offsets: then the user follows the model's calibration
+  /// sequence (PoseModel::pose_offset()->sequence()) from start_calibration() on.
+  CalibrationMethod calibration_method = CalibrationMethod::Auto;
   /// For C_c frames (push_cells): this many consecutive frames timestamped before the last accepted
   /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
   /// ReadoutConfig::clock_restart_readings.
@@ -212,6 +247,10 @@ struct CalibrationProgress {
   long frames = 0;          ///< Frames taken so far.
   int frames_needed = 0;    ///< Frames before finish_calibration() can succeed (the median window).
   bool ready = false;       ///< finish_calibration() would succeed now.
+  /// Guided calibration: seconds since the sequence started (its first frame), and the step under
+  /// way (index into the sequence's steps; -1 before the first frame and after the last step).
+  double sequence_seconds = 0.0;
+  int step = -1;
 };
 
 /// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
@@ -279,6 +318,15 @@ class BasicGlovePoseEstimator {
     cells_ = Eigen::VectorXd::Zero(model_->cell_count());
     normalized_ = Eigen::VectorXd::Zero(model_->cell_count());
     skeleton_.fill(Eigen::Affine3d::Identity());
+    if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
+      throw Error("GlovePoseEstimator: calibration_method PoseGuided, but the model carries no pose-guided calibration, expected a model fitted by glovepose fit-guided");
+    if (model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax) {
+      // Room for every frame the calibrator takes during the sequence (set-up: the per-frame path only copies).
+      const double period = std::max(config_.calibration_sample_period, 1e-3);
+      const auto capacity = static_cast<Eigen::Index>(std::ceil(model_->pose_offset()->sequence().total_seconds() / period)) + 2;
+      guided_cells_.resize(capacity, model_->cell_count());
+      guided_times_.resize(static_cast<std::size_t>(capacity));
+    }
   }
 
   // ---- input -------------------------------------------------------------------------------
@@ -346,21 +394,38 @@ class BasicGlovePoseEstimator {
   /// @brief Starts (or restarts) an on-the-fly calibration: from now on solved frames also feed the
   /// per-sensor min/max (median of calibration_median_window frames). The user moves through
   /// extreme poses; poses keep coming from the previous range, if any, flagged kPoseCalibrating.
+  /// With a pose-guided calibration the user follows the model's calibration sequence, whose clock
+  /// starts at the first frame taken (calibration_progress() says which step is under way).
   void start_calibration() noexcept {
     calibrator_.reset();
     collecting_ = true;
     next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+    guided_count_ = 0;
+    sequence_start_ = std::numeric_limits<double>::quiet_NaN();
+    sequence_now_ = 0.0;
   }
   /// @brief How far the calibration has come.
   CalibrationProgress calibration_progress() const noexcept {
-    return {collecting_, calibrator_.frames(), calibrator_.median_window(), calibrator_.ready()};
+    CalibrationProgress p{collecting_, calibrator_.frames(), calibrator_.median_window(), calibrator_.ready()};
+    if (collecting_ && model_->pose_offset() && !std::isnan(sequence_start_)) {
+      p.sequence_seconds = sequence_now_;
+      p.step = model_->pose_offset()->sequence().step_at(sequence_now_);
+    }
+    return p;
   }
   /// @brief Ends the calibration and uses its range. Throws glovepose::Error (and keeps collecting)
   /// when fewer frames than the median window arrived or no calibration was started. The range's
   /// flat sensors (too small a range) are listed by CalibrationRange::flat_sensors().
+  /// With CalibrationMethod::PoseGuided (or Auto when the model carries one and the whole sequence
+  /// was performed) it also estimates the user's angle offsets (calibration_offsets()); PoseGuided
+  /// throws glovepose::Error naming the first step that was not held. Bounded time: one network
+  /// forward per held frame of the sequence.
   const sensor::CalibrationRange& finish_calibration() {
     if (!collecting_) throw Error("GlovePoseEstimator::finish_calibration: no calibration running, expected start_calibration() first");
-    set_range(calibrator_.finish(), CalibrationSource::OnTheFly);
+    sensor::CalibrationRange range = calibrator_.finish();
+    std::optional<hand::Angles> offsets;
+    if (model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax) offsets = guided_offsets(range);
+    set_range(std::move(range), CalibrationSource::OnTheFly, offsets);
     collecting_ = false;
     return *range_;
   }
@@ -375,15 +440,26 @@ class BasicGlovePoseEstimator {
                   model_->glove().id() + "'");
     set_range(range, CalibrationSource::User);
   }
-  /// @brief Loads a range saved by save_calibration() for this glove.
-  void load_calibration(const std::string& path) {
-    set_range(sensor::CalibrationRange::load(path, model_->glove().id(), model_->glove().cell_names(), config_.calibration),
-              CalibrationSource::User);
+  /// @brief Uses a range and the pose-guided angle offsets (radians) the caller has.
+  void set_calibration(const sensor::CalibrationRange& range, const hand::Angles& offsets) {
+    for (double o : offsets)
+      if (!std::isfinite(o)) throw Error("GlovePoseEstimator::set_calibration: a non-finite angle offset, expected finite radians");
+    set_calibration(range);
+    offsets_ = offsets;
+    guided_ = true;
   }
-  /// @brief Saves the range in use (to load it for the same user and glove later).
+  /// @brief Loads a calibration saved by save_calibration() for this glove (its range and, when it
+  /// was pose-guided, its angle offsets).
+  void load_calibration(const std::string& path) {
+    calibration::UserCalibration user =
+        calibration::UserCalibration::load(path, model_->glove().id(), model_->glove().cell_names(), config_.calibration);
+    set_range(std::move(user.range), CalibrationSource::User, user.offsets);
+  }
+  /// @brief Saves the calibration in use, range and pose-guided offsets (to load it for the same
+  /// user and glove later).
   void save_calibration(const std::string& path) const {
     if (!range_) throw Error("GlovePoseEstimator::save_calibration: no calibration range set, expected one to save");
-    range_->save(path, model_->glove().id());
+    calibration::UserCalibration{*range_, guided_ ? std::optional<hand::Angles>(offsets_) : std::nullopt}.save(path, model_->glove().id());
   }
   /// @brief Uses the model's training-set range. Throws glovepose::Error when the file has none.
   void use_training_calibration() {
@@ -395,6 +471,10 @@ class BasicGlovePoseEstimator {
   const std::optional<sensor::CalibrationRange>& calibration() const noexcept { return range_; }
   /// @brief Where the range in use came from.
   CalibrationSource calibration_source() const noexcept { return source_; }
+  /// @brief The method of the calibration in use: PoseGuided when angle offsets are applied, MinMax otherwise.
+  CalibrationMethod calibration_method() const noexcept { return guided_ ? CalibrationMethod::PoseGuided : CalibrationMethod::MinMax; }
+  /// @brief The angle offsets (radians) added to every pose; zero unless pose-guided.
+  const hand::Angles& calibration_offsets() const noexcept { return offsets_; }
 
   // ---- state -------------------------------------------------------------------------------
 
@@ -418,9 +498,46 @@ class BasicGlovePoseEstimator {
     return model;
   }
 
-  void set_range(sensor::CalibrationRange range, CalibrationSource source) {
+  void set_range(sensor::CalibrationRange range, CalibrationSource source, const std::optional<hand::Angles>& offsets = std::nullopt) {
     range_.emplace(std::move(range));
     source_ = source;
+    guided_ = offsets.has_value();
+    offsets_ = offsets.value_or(hand::Angles{});
+  }
+
+  // The pose-guided offsets of the frames stored during the sequence, calibrated by `range`;
+  // nullopt when the sequence was not performed to the end (Auto falls back to min-max).
+  std::optional<hand::Angles> guided_offsets(const sensor::CalibrationRange& range) {
+    const calibration::PoseOffsetModel& model = *model_->pose_offset();
+    calibration::StepHoldMeans means(model.sequence(), model_->cell_count());
+    Eigen::VectorXd raw(model_->cell_count()), normalized(model_->cell_count());
+    std::vector<float> cells(static_cast<std::size_t>(model_->cell_count()));
+    for (Eigen::Index f = 0; f < guided_count_; ++f) {
+      const double t = guided_times_[static_cast<std::size_t>(f)];
+      if (!means.holding(t)) continue;
+      raw = guided_cells_.row(f).transpose();
+      if (range.normalize(raw, normalized) != Status::Ok || model_->glove().map().to_stretch_maps(normalized.data(), maps_) != Status::Ok ||
+          model_->network().forward(maps_, pose_map_, workspace_) != Status::Ok)
+        continue;
+      hand::Angles normalized_angles{};
+      model_->glove().map().from_pose_map(pose_map_, normalized_angles);
+      for (Eigen::Index c = 0; c < normalized.size(); ++c) cells[static_cast<std::size_t>(c)] = static_cast<float>(normalized(c));
+      means.add(t, model_->joint_limits().denormalize(normalized_angles), cells.data());
+    }
+    if (!means.missing_step().empty()) {
+      if (config_.calibration_method == CalibrationMethod::PoseGuided) (void)means.features();  // throws, naming the step
+      return std::nullopt;
+    }
+    const Eigen::VectorXd features = means.features();
+    if (!model.followed(features)) {
+      if (config_.calibration_method == CalibrationMethod::PoseGuided)
+        throw Error("GlovePoseEstimator::finish_calibration: the calibration does not look like sequence '" + model.sequence().id() +
+                    "' (RMS z-score " + std::to_string(model.rms_z(features)) + ", at most " +
+                    std::to_string(calibration::kFollowedMargin * model.max_rms_z()) +
+                    " among the people the model was fitted on), expected the user to follow its steps");
+      return std::nullopt;
+    }
+    return model.offsets(features);
   }
 
   Status estimate_from_readout(std::chrono::steady_clock::time_point start) noexcept {
@@ -448,8 +565,15 @@ class BasicGlovePoseEstimator {
     rejected_ += rejected;
     if (collecting_ && timestamp >= next_calibration_sample_) {
       // A small tolerance keeps frames that arrive on a period's grid from slipping by one.
-      if (calibrator_.add(cells) != Status::NonFinite)
+      if (calibrator_.add(cells) != Status::NonFinite) {
         next_calibration_sample_ = timestamp + config_.calibration_sample_period * (1.0 - 1e-6);
+        if (std::isnan(sequence_start_)) sequence_start_ = timestamp;
+        sequence_now_ = timestamp - sequence_start_;
+        if (guided_count_ < guided_cells_.rows()) {  // the sequence's frames, for finish_calibration()
+          guided_cells_.row(guided_count_) = cells.transpose();
+          guided_times_[static_cast<std::size_t>(guided_count_++)] = sequence_now_;
+        }
+      }
     }
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells, normalized_) != Status::Ok) return Status::NonFinite;
@@ -463,6 +587,8 @@ class BasicGlovePoseEstimator {
     hand::Angles normalized_angles{};
     model_->glove().map().from_pose_map(pose_map_, normalized_angles);
     pose_.raw_angles = model_->joint_limits().denormalize(normalized_angles);
+    if (guided_)
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) pose_.raw_angles[d] += offsets_[d];
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
     if (config_.joint_transforms) {
@@ -489,6 +615,13 @@ class BasicGlovePoseEstimator {
   double next_calibration_sample_ = -std::numeric_limits<double>::infinity();
   std::optional<sensor::CalibrationRange> range_;
   CalibrationSource source_ = CalibrationSource::None;
+  bool guided_ = false;       // offsets_ apply (pose-guided calibration in use)
+  hand::Angles offsets_{};    // per-user angle offsets, radians
+  Eigen::MatrixXd guided_cells_;      // frames the calibrator took during the sequence (rows), C_c
+  std::vector<double> guided_times_;  // their seconds since the sequence's first frame
+  Eigen::Index guided_count_ = 0;
+  double sequence_start_ = std::numeric_limits<double>::quiet_NaN();
+  double sequence_now_ = 0.0;
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   typename Model::Network::Workspace workspace_;
   hand::Kinematics kinematics_;

@@ -107,7 +107,9 @@ struct NewUser {
   double cycle_rate = 0.0;  // readout cycles per second
 };
 
-NewUser simulate_new_user(const DemoOptions& o) {
+// The user follows the model's guided calibration sequence when it carries one (pose-guided
+// calibration), else explores the extreme poses freely (min-max).
+NewUser simulate_new_user(const DemoOptions& o, const PoseModel& model) {
   sim::CorpusConfig config;
   config.seed = o.seed;
   config.subjects = 1;
@@ -115,6 +117,10 @@ NewUser simulate_new_user(const DemoOptions& o) {
   config.gloves = 1;
   config.minutes = o.minutes;
   config.recording.raw_rows = true;
+  if (model.pose_offset()) {
+    config.guided_calibration = model.pose_offset()->sequence();
+    config.calibration_seconds = config.guided_calibration->total_seconds();
+  }
   NewUser user;
   user.data = sim::to_dataset(sim::simulate_corpus(config), config);
   user.cycle_rate = config.recording.cycle_rate;
@@ -159,6 +165,7 @@ struct CalibrationResult {
   long frames = 0;
   double seconds = 0.0;
   std::vector<std::string> flat_sensors;
+  bool guided = false;  // pose-guided offsets applied
 };
 
 CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) {
@@ -168,6 +175,7 @@ CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) 
   result.frames = estimator.calibration_progress().frames;
   result.seconds = static_cast<double>(user.first_session_frame) / user.cycle_rate;
   result.flat_sensors = estimator.finish_calibration().flat_sensors();
+  result.guided = estimator.calibration_method() == CalibrationMethod::PoseGuided;
   return result;
 }
 
@@ -255,8 +263,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
 
   add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n",
       static_cast<unsigned long long>(o.seed), model_path.c_str(), nn::storage_name(o.storage));
-  add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s\n", calibration.seconds, calibration.frames,
-      flat.empty() ? "none" : flat.c_str());
+  add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s; %s\n", calibration.seconds, calibration.frames,
+      flat.empty() ? "none" : flat.c_str(), calibration.guided ? "pose-guided" : "min-max");
   add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
       run.rejected_rows, poses);
   add("             %zu cycle ends compared with the truth (%zu with a self-colliding true pose left out, as the paper does)\n\n",
@@ -425,8 +433,8 @@ int demo(int argc, char** argv) {
     if (error || !fs::is_directory(o.out))
       throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
 
-    const NewUser user = simulate_new_user(o);
-    EstimatorConfig config;  // the paper's readout cadence: a solve every 16 rows
+    const NewUser user = simulate_new_user(o, *model);
+    EstimatorConfig config;  // the default readout: a solve every 16 rows of 2-reading means
     config.joint_transforms = true;
     GlovePoseEstimator estimator(model, config);
     const CalibrationResult calibration = calibrate(estimator, user);

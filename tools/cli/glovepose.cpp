@@ -6,12 +6,13 @@
 //       what a model file holds.
 //   glovepose simulate ...
 //       the simulated glove corpus (simulate.cpp).
-//   glovepose train | finetune | eval ...
+//   glovepose train | finetune | eval | fit-guided ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
 //   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 //   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
+#include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -148,6 +149,13 @@ int info(const Options& o) {
               model.info.architecture.c_str(), model.info.width, model.info.glove.c_str(), model.unet.parameter_count(),
               model.unet.stored_weight_count(), model.unet.weight_bytes(), model.unet.mac_count(),
               model.info.calibration_min ? "yes" : "no");
+  if (model.info.pose_offset.empty()) {
+    std::printf("pose-guided calibration: none\n");
+  } else {
+    const calibration::PoseOffsetModel offsets = calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'");
+    std::printf("pose-guided calibration: sequence '%s' (%zu steps, %.1f s), %td features\n", offsets.sequence().id().c_str(),
+                offsets.sequence().steps().size(), offsets.sequence().total_seconds(), static_cast<std::ptrdiff_t>(offsets.feature_count()));
+  }
   return 0;
 }
 
@@ -155,7 +163,8 @@ int info(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "simulate") return cli::simulate(argc, argv);
-  if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval"))
+  if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval" ||
+                    std::string(argv[1]) == "fit-guided"))
     return cli::train_tools(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);

@@ -1,8 +1,15 @@
 // glovepose train    --data FILE --model unet:W|fcn[:H]|linear --out FILE [selection] [training options]
 // glovepose finetune --model FILE --data FILE --out FILE [selection] [training options]
-// glovepose eval     --model FILE --data FILE [selection] [--calibration none|training|onthefly] [--json]
+// glovepose eval     --model FILE --data FILE [selection] [--calibration none|training|onthefly|guided] [--json]
+//                    [--replay-rows [--mean-window N]] [--predictions FILE.csv]
+// glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]
+//   fits the model's pose-guided calibration on people it was not trained on (guided_calibration.hpp)
 //   Trains, fine-tunes and evaluates models on dataset files (train/dataset.hpp), on all cores.
 //   Selection: --subjects / --exclude-subjects / --sessions / --gloves take lists like "0-3,7".
+#include <glovepose/estimator.hpp>
+#include <glovepose/train/guided_calibration.hpp>
+#include <glovepose/train/lag.hpp>
+#include <glovepose/train/replay.hpp>
 #include <glovepose/train/linear_fit.hpp>
 #include <glovepose/train/metrics.hpp>
 #include <glovepose/train/model_file.hpp>
@@ -32,7 +39,9 @@ extern "C" void on_interrupt(int) { interrupted.store(true); }
   std::cerr << "glovepose " << command << ": " << problem << "\n"
             << "usage: glovepose train --data FILE --model unet:W|fcn[:H]|linear --out FILE [options]\n"
             << "       glovepose finetune --model FILE --data FILE --out FILE [options]\n"
-            << "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly] [--json] [selection]\n"
+            << "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly|guided] [--json] [selection]\n"
+            << "                      [--replay-rows [--mean-window N]] [--predictions FILE.csv]\n"
+            << "       glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]\n"
             << "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
             << "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
             << "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
@@ -65,7 +74,9 @@ std::vector<int> id_list(const std::string& command, const std::string& option, 
 }
 
 struct Options {
-  std::string command, data, model, out, glove_file;
+  std::string command, data, model, out, glove_file, sequence_file, predictions_file;
+  bool replay = false;
+  int mean_window = 0;  // --replay-rows: the readout's mean window; 0: the estimator's default
   std::string calibration;  // empty: the default of the command
   train::FrameFilter filter;
   std::vector<int> exclude_subjects;
@@ -89,6 +100,10 @@ Options parse(int argc, char** argv) {
     else if (a == "--model") o.model = value();
     else if (a == "--out") o.out = value();
     else if (a == "--glove") o.glove_file = value();
+    else if (a == "--sequence") o.sequence_file = value();
+    else if (a == "--predictions") o.predictions_file = value();
+    else if (a == "--replay-rows") o.replay = true;
+    else if (a == "--mean-window") o.mean_window = number<int>(o.command, a, value());
     else if (a == "--calibration") o.calibration = value();
     else if (a == "--subjects") o.filter.subjects = id_list(o.command, a, value());
     else if (a == "--exclude-subjects") o.exclude_subjects = id_list(o.command, a, value());
@@ -117,6 +132,7 @@ Options parse(int argc, char** argv) {
   if (o.data.empty()) usage(o.command, "--data FILE is required");
   if (o.model.empty()) usage(o.command, "--model is required");
   if (o.command != "eval" && o.out.empty()) usage(o.command, "--out FILE is required");
+  if (o.calibration == "guided" && o.command != "eval") usage(o.command, "--calibration guided is for eval (training calibrates on the fly)");
   if (o.threads <= 0) o.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return o;
 }
@@ -258,13 +274,12 @@ int train_command(Options o, int argc, char** argv) {
 }
 
 // The selected frames of --data as a loaded model sees them: its glove, its joint limits, and its
-// calibration mode unless --calibration overrides it.
-std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const train::TrainedModel& model) {
-  const train::Dataset data = train::Dataset::read(o.data);
-  apply_exclusions(o, data);
+// calibration mode unless --calibration overrides it ("guided" calibrates the inputs on the fly).
+std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const train::TrainedModel& model, const train::Dataset& data) {
   if (data.glove_layout() != model.glove.id())
     throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + model.glove.id() + "'");
-  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? model.info.calibration : o.calibration);
+  const std::string requested = o.calibration == "guided" ? "onthefly" : o.calibration;
+  const train::CalibrationMode mode = train::calibration_mode(requested.empty() ? model.info.calibration : requested);
   std::optional<sensor::CalibrationRange> range;
   if (mode == train::CalibrationMode::Training) range = model.training_range();
   return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride), mode};
@@ -277,38 +292,108 @@ int finetune_command(Options o, int argc, char** argv) {
   if (!o.epochs_set) o.training.epochs = 5;
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
   if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
-  const train::Samples all = samples_for(o, model).first;
+  train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  const train::Samples all = samples_for(o, model, data).first;
   std::map<std::string, std::string> provenance = model.metadata;
   provenance["finetune_command"] = command_line(argc, argv);
   provenance["finetune_data"] = o.data;
   return fit_network(o, *model.network, model.info, all, provenance);
 }
 
+// Whether eval calibrates guided: asked for, or by default when the model carries a pose-guided
+// calibration and the dataset's calibrations followed its sequence.
+bool eval_guided(const Options& o, const train::TrainedModel& model, const train::Dataset& data) {
+  if (o.calibration == "guided") return true;
+  if (!o.calibration.empty() || model.info.pose_offset.empty()) return false;
+  const auto it = data.metadata.find("calibration_sequence");
+  return it != data.metadata.end() &&
+         it->second == calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'").sequence().id();
+}
+
+// Writes one row per evaluated frame: where it comes from, the true and the predicted angles (radians).
+void write_predictions(const std::string& path, const train::Dataset& data, const train::Samples& samples, const std::vector<float>& predicted) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) throw Error("--predictions: cannot open '" + path + "' for writing");
+  std::fprintf(file, "frame,time,subject,session");
+  for (const char* prefix : {"true_", "pred_"})
+    for (const hand::Dof& d : hand::kDofs) std::fprintf(file, ",%s%s", prefix, d.name);
+  std::fprintf(file, "\n");
+  for (long f = 0; f < samples.frames(); ++f) {
+    const auto i = static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f)]);
+    std::fprintf(file, "%zu,%.9g,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i]);
+    for (const std::vector<float>* v : {&samples.angles, &predicted})
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) std::fprintf(file, ",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
+    std::fprintf(file, "\n");
+  }
+  if (std::fclose(file) != 0) throw Error("--predictions: writing '" + path + "' failed");
+}
+
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  const auto [samples, mode] = samples_for(o, model);
+  train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  if (o.mean_window != 0 && !o.replay) usage(o.command, "--mean-window is for --replay-rows");
+  sensor::ReadoutConfig readout = EstimatorConfig{}.readout;
+  if (o.mean_window != 0) readout.mean_window = o.mean_window;
+  if (o.replay) train::replay_rows(data, readout);
+  const auto [samples, mode] = samples_for(o, model, data);
   const hand::JointLimits limits = train::joint_limits(model.info);
   train::ThreadPool pool(o.threads);
+  const bool guided = eval_guided(o, model, data);
+  const std::map<std::int64_t, hand::Angles> offsets = guided ? train::guided_offsets(model, data, o.filter, pool) : std::map<std::int64_t, hand::Angles>{};
   const std::vector<float> normalized = model.predict(samples, pool);
   train::AngleErrorAccumulator errors;
-  std::vector<double> predicted(hand::kDofCount), truth(hand::kDofCount);
+  std::vector<float> predicted(normalized.size());
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
     const hand::Angles radians = limits.denormalize(n);
+    const hand::Angles* offset = guided ? &offsets.at(samples.run[static_cast<std::size_t>(f)]) : nullptr;
+    double p[hand::kDofCount], t[hand::kDofCount];
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-      predicted[d] = radians[d];
-      truth[d] = samples.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
+      p[d] = radians[d] + (offset ? (*offset)[d] : 0.0);
+      t[d] = samples.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
+      predicted[static_cast<std::size_t>(f) * hand::kDofCount + d] = static_cast<float>(p[d]);
     }
-    errors.add(predicted.data(), truth.data());
+    errors.add(p, t);
   }
   const train::AngleErrorReport report = errors.report();
+  const double frame_ms = 1000.0 / data.frame_rate();
+  const double lag_ms = train::lag_frames(predicted, samples.angles, samples.source, samples.run) * frame_ms;
+  if (!o.predictions_file.empty()) write_predictions(o.predictions_file, data, samples, predicted);
+  const std::string calibration = guided ? "guided" : train::to_string(mode);
+  const auto window = data.metadata.find("mean_window");
+  const std::string mean_window = window == data.metadata.end() ? "null" : window->second;
   if (o.json) {
-    std::printf("%s\n", train::to_json(report).c_str());
+    char lag[32];
+    std::snprintf(lag, sizeof lag, "%.3f", lag_ms);
+    std::printf("%s\n", train::to_json(report, {{"calibration", "\"" + calibration + "\""}, {"mean_window", mean_window}, {"lag_ms", lag}}).c_str());
   } else {
-    std::printf("model %s (%s), data %s, calibration %s\n", o.model.c_str(), model.info.architecture.c_str(), o.data.c_str(), train::to_string(mode));
+    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(), o.data.c_str(),
+                calibration.c_str(), mean_window.c_str(), o.replay ? " (rows replayed)" : "");
     std::printf("%s", train::format_table(report).c_str());
+    std::printf("Motion lag: %.1f ms (the shift that best aligns the frame-to-frame changes of predicted and true angles)\n", lag_ms);
   }
+  return 0;
+}
+
+// Fits the model's pose-guided calibration on the selected people and writes the model with it
+// (tensors and every other metadata entry unchanged, bit for bit).
+int fit_guided_command(Options o, int argc, char** argv) {
+  train::TrainedModel model = train::load_model(o.model, 1024);
+  train::Dataset data = train::Dataset::read(o.data);
+  apply_exclusions(o, data);
+  const std::string sequence_file = o.sequence_file.empty() ? std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json" : o.sequence_file;
+  const calibration::Sequence sequence = calibration::Sequence::read(sequence_file);
+  train::ThreadPool pool(o.threads);
+  const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);
+  io::TensorFile file = io::TensorFile::read(o.model, "model file");
+  file.metadata["pose_offset"] = fit.model.to_json();
+  file.metadata["pose_offset_command"] = command_line(argc, argv);
+  file.write(o.out, "model file");
+  std::printf("fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated); wrote %s\n",
+              fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg, o.out.c_str());
   return 0;
 }
 
@@ -319,6 +404,7 @@ int train_tools(int argc, char** argv) {
   try {
     if (o.command == "train") return train_command(o, argc, argv);
     if (o.command == "finetune") return finetune_command(o, argc, argv);
+    if (o.command == "fit-guided") return fit_guided_command(o, argc, argv);
     return eval_command(o);
   } catch (const Error& e) {
     std::cerr << "glovepose " << o.command << ": " << e.what() << "\n";

@@ -28,6 +28,9 @@ struct ModelInfo {
   std::vector<double> joint_limits_max;                ///< Per DoF, radians: what output +1 means.
   std::optional<std::vector<double>> calibration_min;  ///< Per cell, training-set minimum (optional).
   std::optional<std::vector<double>> calibration_max;  ///< Per cell, training-set maximum (optional).
+  /// The pose-guided calibration fitted for this model (calibration/pose_offset.hpp JSON, with its
+  /// calibration sequence); empty: min-max calibration only.
+  std::string pose_offset;
 
   /// @brief Reads and checks the metadata; throws glovepose::Error naming the key that is missing or wrong.
   static ModelInfo from(const WeightFile& file) {
@@ -58,6 +61,7 @@ struct ModelInfo {
       if (info.calibration_min->size() != info.calibration_max->size())
         throw Error("metadata 'calibration_min' and 'calibration_max' differ in length");
     }
+    if (file.metadata.count("pose_offset")) info.pose_offset = file.meta("pose_offset");
     return info;
   }
 
@@ -78,6 +82,7 @@ struct ModelInfo {
     file.metadata["joint_limits_max"] = WeightFile::format_numbers(joint_limits_max);
     if (calibration_min) file.metadata["calibration_min"] = WeightFile::format_numbers(*calibration_min);
     if (calibration_max) file.metadata["calibration_max"] = WeightFile::format_numbers(*calibration_max);
+    if (!pose_offset.empty()) file.metadata["pose_offset"] = pose_offset;
   }
 
  private:

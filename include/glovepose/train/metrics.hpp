@@ -412,13 +412,15 @@ class AngleErrorAccumulator {
 /// "share_under_15deg", "fingers" (array of {"finger", "mean_deg", "rms_deg", "max_deg"}),
 /// "dofs" (array of {"dof", "theta", "mean_deg", "rms_deg", "max_deg"}) and "cumulative"
 /// ({"threshold_deg": [0..45], "share": [...]}). Non-finite numbers are written as null.
-inline std::string to_json(const AngleErrorReport& r) {
+/// `extra` members (key, JSON value text) follow "version", e.g. how the frames were calibrated.
+inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pair<std::string, std::string>>& extra = {}) {
   const auto number = detail::json_number;
   const auto summary = [&](const ErrorSummary& e) {
     return "\"mean_deg\": " + number(e.mean_deg) + ", \"rms_deg\": " + number(e.rms_deg) + ", \"max_deg\": " + number(e.max_deg);
   };
   std::string out = "{\n";
   out += "  \"format\": \"glovepose-angle-errors\",\n  \"version\": 1,\n";
+  for (const auto& [key, value] : extra) out += "  \"" + key + "\": " + value + ",\n";
   out += "  \"frames\": " + std::to_string(r.frames) + ",\n";
   out += "  \"skipped_frames\": " + std::to_string(r.skipped_frames) + ",\n";
   out += "  \"angles\": " + std::to_string(r.angles) + ",\n";

@@ -60,9 +60,12 @@ struct FrameFilter {
 
   /// @brief Whether recording frame `i` of `data` is kept (calibration frames never are).
   bool keeps(const Dataset& data, std::size_t i) const noexcept {
+    return data.kind[i] == kKindRecording && (keep_outliers || data.outlier[i] == 0) && selects_run(data, i);
+  }
+  /// @brief Whether frame `i` of `data`, of any kind, belongs to a selected subject, session and glove.
+  bool selects_run(const Dataset& data, std::size_t i) const noexcept {
     const auto in = [](const std::vector<int>& list, int v) { return list.empty() || std::find(list.begin(), list.end(), v) != list.end(); };
-    return data.kind[i] == kKindRecording && (keep_outliers || data.outlier[i] == 0) && in(subjects, data.subject[i]) &&
-           in(sessions, data.session[i]) && in(gloves, data.glove[i]);
+    return in(subjects, data.subject[i]) && in(sessions, data.session[i]) && in(gloves, data.glove[i]);
   }
 };
 

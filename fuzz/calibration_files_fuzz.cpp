@@ -1,0 +1,52 @@
+/// @file calibration_files_fuzz.cpp
+/// @brief Fuzz target: the bytes through the three text readers of pose-guided calibration:
+/// calibration::Sequence::parse (a calibration sequence file), calibration::PoseOffsetModel::parse
+/// (the "pose_offset" metadata of model files) and calibration::UserCalibration::load (a saved user
+/// calibration with its offsets, from a stream).
+///
+/// Invariants: bad input is refused with glovepose::Error only; an accepted sequence writes text
+/// that parses to the same text and has steps within the joint limits; an accepted offset model
+/// round-trips and maps zero features to its finite bias; an accepted user calibration has finite
+/// offsets and a range that normalises to finite values.
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <glovepose/calibration/pose_offset.hpp>
+#include <glovepose/calibration/sequence.hpp>
+#include <glovepose/calibration/user_calibration.hpp>
+
+#include "fuzz_check.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace glovepose;
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const calibration::Sequence s = calibration::Sequence::parse(text, "fuzz");
+    const std::string again = calibration::Sequence::parse(s.to_json(), "again").to_json();
+    GLOVEPOSE_FUZZ_REQUIRE(again == s.to_json());
+    GLOVEPOSE_FUZZ_REQUIRE(!s.steps().empty() && std::isfinite(s.total_seconds()) && s.total_seconds() > 0.0);
+    GLOVEPOSE_FUZZ_REQUIRE(s.step_at(0.0) == 0 && s.step_at(s.total_seconds()) == -1);
+  } catch (const Error&) {
+  }
+  try {
+    const calibration::PoseOffsetModel m = calibration::PoseOffsetModel::parse(text, "fuzz");
+    const calibration::PoseOffsetModel again = calibration::PoseOffsetModel::parse(m.to_json(), "again");
+    GLOVEPOSE_FUZZ_REQUIRE(again.feature_count() == m.feature_count() && again.cells() == m.cells());
+    const hand::Angles zero = m.offsets(Eigen::VectorXd::Zero(m.feature_count()));
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) GLOVEPOSE_FUZZ_REQUIRE(zero[d] == m.bias()(static_cast<Eigen::Index>(d)));
+  } catch (const Error&) {
+  }
+  try {
+    std::istringstream stream(text);
+    const calibration::UserCalibration u = calibration::UserCalibration::load(stream, "fuzz", "g", {"a", "b"});
+    if (u.offsets)
+      for (double o : *u.offsets) GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(o));
+    Eigen::Vector2d raw(1.0, -1.0), out;
+    GLOVEPOSE_FUZZ_REQUIRE(u.range.normalize(raw, out) == Status::Ok && out.allFinite());
+  } catch (const Error&) {
+  }
+  return 0;
+}
