@@ -74,6 +74,13 @@ GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage) {
     (void)estimator.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[f]);
   }
   estimator.finish_calibration();
+  // The 3 s sequence is too short for the pose-guided calibration: set offsets as it would leave
+  // them, so that every pose pays for them as the default calibration's do.
+  if (estimator.model().pose_offset()) {
+    hand::Angles offsets{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) offsets[d] = 0.01 * (static_cast<double>(d % 5) - 2.0);
+    estimator.set_calibration(*estimator.calibration(), offsets);
+  }
   return estimator;
 }
 

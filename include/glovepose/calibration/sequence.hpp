@@ -28,6 +28,9 @@
 
 namespace glovepose::calibration {
 
+/// @brief Radians per degree (the file stores degrees).
+inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
+
 /// @brief One step: what the user is asked to do, for how long, and what it means for the angles.
 struct Step {
   std::string name;         ///< Short id, e.g. "flat_on_table".
@@ -72,7 +75,7 @@ class Sequence {
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (!(s.pose[d] >= limits.min()[d] - 1e-6 && s.pose[d] <= limits.max()[d] + 1e-6))  // slack: angles stored to 1e-6 degree
           throw Error("calibration sequence '" + id_ + "', step '" + s.name + "': " + hand::kDofs[d].name + " = " +
-                      std::to_string(s.pose[d] * 180.0 / M_PI) + " degrees, expected within the joint limits");
+                      std::to_string(s.pose[d] / kRadiansPerDegree) + " degrees, expected within the joint limits");
       total_ += s.seconds;
     }
   }
@@ -128,7 +131,7 @@ class Sequence {
         if (value.kind != Value::Kind::Number) throw fail(where + ": pose_degrees." + name + " is not a number");
         if (seen[d]) throw fail(where + ": pose_degrees." + name + " given twice");
         seen[d] = true;
-        s.pose[d] = value.number * M_PI / 180.0;
+        s.pose[d] = value.number * kRadiansPerDegree;
       }
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (!seen[d]) throw fail(where + ": pose_degrees lacks " + std::string(hand::kDofs[d].name) + ", expected all 25 angles");
@@ -138,7 +141,7 @@ class Sequence {
           if (name.kind != Value::Kind::String) throw fail(where + ": 'pinned' holds a non-string, expected DoF names");
           s.pinned[dof_or_fail(name.text, where, fail)] = true;
         }
-        s.pinned_sd = member(item, "pinned_sd_degrees", Value::Kind::Number, where).number * M_PI / 180.0;
+        s.pinned_sd = member(item, "pinned_sd_degrees", Value::Kind::Number, where).number * kRadiansPerDegree;
       }
       steps.push_back(std::move(s));
     }
@@ -161,7 +164,7 @@ class Sequence {
           << ",\n      \"seconds\": " << s.seconds << ",\n      \"pose_degrees\": {";
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         out << (d ? "," : "") << (d % 4 == 0 ? "\n        " : " ") << nn::json::quote(hand::kDofs[d].name) << ": "
-            << std::round(s.pose[d] * 180.0 / M_PI * 1e6) / 1e6;
+            << std::round(s.pose[d] / kRadiansPerDegree * 1e6) / 1e6;
       out << "\n      }";
       if (s.pins_any()) {
         out << ",\n      \"pinned\": [";
@@ -171,7 +174,7 @@ class Sequence {
             out << (first ? "" : ", ") << nn::json::quote(hand::kDofs[d].name);
             first = false;
           }
-        out << "],\n      \"pinned_sd_degrees\": " << s.pinned_sd * 180.0 / M_PI;
+        out << "],\n      \"pinned_sd_degrees\": " << s.pinned_sd / kRadiansPerDegree;
       }
       out << "\n    }" << (i + 1 < steps_.size() ? "," : "") << "\n";
     }

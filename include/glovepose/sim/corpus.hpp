@@ -122,7 +122,7 @@ inline calibration::Sequence guided_calibration_sequence(const std::vector<KeyPo
               s.pose[d] = 0.0;
               s.pinned[d] = true;
             }
-          s.pinned_sd = 2.0 * M_PI / 180.0;
+          s.pinned_sd = 2.0 * calibration::kRadiansPerDegree;
         }
         steps.push_back(s);
       }
