@@ -6,13 +6,13 @@
 #
 # For every model file: glovepose eval on TEST_SUBJECTS of a fresh seed (TEST_SEED) whose people
 # follow the guided calibration sequence, rows replayed through the readout with the paper's
-# 5-reading mean and with the default 2-reading mean, with min-max and (when the model carries one)
+# 5-reading mean and with fewer readings (the default: 1), with min-max and (when the model carries one)
 # pose-guided calibration. The classic data-glove baseline is trained first: a linear map on 10
 # people x 2 sessions x 2 min of LINEAR_SEED (the default protocol, min-max on the fly).
 # Prints a markdown table (mean, p95, share under 15 degrees, lag) and the ratio to the baseline.
 #
 # Knobs: GLOVEPOSE (build/tools/glovepose), OUT (beyond-out), TEST_SEED (2027), TEST_SUBJECTS (5),
-#        TEST_MINUTES (2), LINEAR_SEED (11), THREADS (all cores)
+#        TEST_MINUTES (2), LINEAR_SEED (11), WINDOWS ("5 2 1": readout mean windows), THREADS (all cores)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 G=${GLOVEPOSE:-$ROOT/build/tools/glovepose}
@@ -22,6 +22,7 @@ TEST_SUBJECTS=${TEST_SUBJECTS:-5}
 TEST_MINUTES=${TEST_MINUTES:-2}
 LINEAR_SEED=${LINEAR_SEED:-11}
 THREADS=${THREADS:-$(nproc)}
+WINDOWS=${WINDOWS:-5 2 1}
 SEQUENCE=$ROOT/models/calibration_glauser2019.json
 [ $# -ge 1 ] || { echo "usage: tools/experiments/beyond.sh MODEL [MODEL ...]" >&2; exit 2; }
 mkdir -p "$OUT"
@@ -52,9 +53,9 @@ echo "| model | calibration | mean window | mean (deg) | p95 | under 15 deg | la
 echo "|---|---|---:|---:|---:|---:|---:|"
 baseline=$(row "$linear" "linear map (baseline)" onthefly 5)
 echo "$baseline"
-row "$linear" "linear map (baseline)" onthefly 2
+for window in $WINDOWS; do [ "$window" = 5 ] || row "$linear" "linear map" onthefly "$window"; done
 for model in "$@"; do
-  for window in 5 2; do
+  for window in $WINDOWS; do
     row "$model" "$(basename "$model")" onthefly "$window"
     if "$G" info --model "$model" 2>/dev/null | grep -q "pose-guided calibration: sequence"; then row "$model" "$(basename "$model")" guided "$window"; fi
   done
