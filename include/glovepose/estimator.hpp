@@ -587,8 +587,10 @@ class BasicGlovePoseEstimator {
     hand::Angles normalized_angles{};
     model_->glove().map().from_pose_map(pose_map_, normalized_angles);
     pose_.raw_angles = model_->joint_limits().denormalize(normalized_angles);
-    if (guided_)
+    if (guided_) {  // the user's offsets, kept within the joint limits the network's tanh keeps to
       for (std::size_t d = 0; d < hand::kDofCount; ++d) pose_.raw_angles[d] += offsets_[d];
+      pose_.raw_angles = model_->joint_limits().clamp(pose_.raw_angles);
+    }
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
     if (config_.joint_transforms) {

@@ -348,11 +348,15 @@ int eval_command(Options o) {
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
-    const hand::Angles radians = limits.denormalize(n);
-    const hand::Angles* offset = guided ? &offsets.at(samples.run[static_cast<std::size_t>(f)]) : nullptr;
+    hand::Angles radians = limits.denormalize(n);
+    if (guided) {  // as the estimator applies them: offsets added, the sum kept within the joint limits
+      const hand::Angles& offset = offsets.at(samples.run[static_cast<std::size_t>(f)]);
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) radians[d] += offset[d];
+      radians = limits.clamp(radians);
+    }
     double p[hand::kDofCount], t[hand::kDofCount];
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-      p[d] = radians[d] + (offset ? (*offset)[d] : 0.0);
+      p[d] = radians[d];
       t[d] = samples.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
       predicted[static_cast<std::size_t>(f) * hand::kDofCount + d] = static_cast<float>(p[d]);
     }
