@@ -2,8 +2,8 @@
 /// @brief The collision energy of the reference hand tracker, the paper's outlier filter (Sec. 4.3:
 /// frames whose energy exceeds 80 are dropped, about 2% of the data).
 ///
-/// Source: Tkach et al. 2017, public repository anastasia-tkach/honline-cpp-public, as summarised in
-/// shared/reference/hand_model.md ("Collision energy"): each finger phalanx (ids 1..15) is the
+/// Source: Tkach et al. 2017, public repository anastasia-tkach/honline-cpp-public (its collision
+/// term): each finger phalanx (ids 1..15) is the
 /// segment from its frame's origin to (0, length, 0) in its frame; parent/child pairs, the palm and
 /// the wrist are skipped; for every other pair, with d the distance between the closest points of
 /// the two segments and r_i, r_j the phalanxes' distal radii, a penetration e = r_i + r_j - d > 0
@@ -28,7 +28,7 @@ inline constexpr double kCollisionOutlierThreshold = 80.0;
 
 /// @brief Distal sphere radius (mm) of each finger phalanx by phalanx id 1..15 (index 0 unused):
 /// thumb 10.31 / 7.31 / 7.03; pinky 6.23 / 4.77 / 4.18; ring 6.97 / 5.01 / 4.85; middle 7.64 /
-/// 5.68 / 5.58; index 7.55 / 5.85 / 5.17 (shared/reference/hand_model.md, from R.txt).
+/// 5.68 / 5.58; index 7.55 / 5.85 / 5.17 (honline-cpp-public's radii file R.txt).
 inline constexpr std::array<double, 16> kReferenceDistalRadius{0.0,  10.31, 7.31, 7.03, 6.23, 4.77, 4.18, 6.97,
                                                                5.01, 4.85,  7.64, 5.68, 5.58, 7.55, 5.85, 5.17};
 

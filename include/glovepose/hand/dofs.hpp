@@ -3,8 +3,8 @@
 /// normalisation of angles to [-1, 1].
 ///
 /// Source: the hand model of Tkach et al. 2017 ("Online Generative Model Personalization for Hand
-/// Tracking"), public repository anastasia-tkach/honline-cpp-public, tracker/HModel/ModelSemantics.cpp,
-/// as summarised in shared/reference/hand_model.md. The glove estimates theta[9..33] of the model's
+/// Tracking"), public repository anastasia-tkach/honline-cpp-public, tracker/HModel/ModelSemantics.cpp.
+/// The glove estimates theta[9..33] of the model's
 /// 34 pose parameters; theta[0..8] (global pose, wrist) cannot be sensed by stretch sensors.
 #pragma once
 
@@ -47,8 +47,7 @@ struct Dof {
 
 /// @brief The 25 DoFs in the reference order theta 9..33, limits in radians.
 ///
-/// Limits and phalanx ids: honline-cpp-public tracker/HModel/ModelSemantics.cpp (via
-/// shared/reference/hand_model.md, table "The 34 parameters"). Phalanx ids: 1-3 thumb, 4-6 pinky,
+/// Limits and phalanx ids: honline-cpp-public tracker/HModel/ModelSemantics.cpp. Phalanx ids: 1-3 thumb, 4-6 pinky,
 /// 7-9 ring, 10-12 middle, 13-15 index (base, middle, tip).
 inline constexpr std::array<Dof, kDofCount> kDofs{{
     {"thumb_base_abduction", 9, Finger::Thumb, Motion::Abduction, 1, Axis::Z, -0.1, 1.0},

@@ -4,7 +4,7 @@
 ///
 /// Source: Tkach et al. 2017, public repository anastasia-tkach/honline-cpp-public
 /// (tracker/HModel/Model.cpp for the chain and the order of rotations, data/models/anastasia/I.txt
-/// for the rest pose), as summarised in shared/reference/hand_model.md.
+/// for the rest pose).
 ///
 /// Frames: millimetres, in the model's root frame (the palm's frame at rest). Each phalanx's bone
 /// points along its local +Y; X is the flexion axis, Z abduction, Y twist. The global pose
@@ -53,8 +53,8 @@ struct RestTransform {
 
 /// @brief Rest matrices of the template hand, one per phalanx id, relative to the parent.
 ///
-/// Typed in from honline-cpp-public data/models/anastasia/I.txt (shared/reference/hmodel_rest_pose_I.txt,
-/// stored there column-major; here row-major). tests/test_kinematics.cpp checks this table against
+/// Typed in from honline-cpp-public data/models/anastasia/I.txt (stored there column-major; here
+/// row-major). tests/test_kinematics.cpp checks this table against
 /// that file and the posed chain against the template's sphere centres (C.txt).
 inline constexpr std::array<RestTransform, kPhalanxCount> kReferenceRest{{
     {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 0 hand (palm)
@@ -78,7 +78,7 @@ inline constexpr std::array<RestTransform, kPhalanxCount> kReferenceRest{{
 }};
 
 /// @brief Length (mm) of each finger's distal phalanx, which has no child frame to end it.
-/// Thumb, index, middle, ring, pinky; shared/reference/hand_model.md, "Phalanx lengths".
+/// Thumb, index, middle, ring, pinky; from honline-cpp-public's template (its phalanx lengths).
 inline constexpr std::array<double, kFingerCount> kReferenceTipLength{14.032, 12.833, 15.907, 13.601, 12.821};
 
 /// @brief Phalanx id of each finger's base (proximal) phalanx, fingers in pose-map order.

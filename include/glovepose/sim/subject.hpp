@@ -4,7 +4,7 @@
 ///
 /// Sizes. The paper's ten hands (Table 1, bounding boxes L x W x H in cm) are the default subjects
 /// 0..9; further subjects are drawn from the ranges of Sec. 5.1 (length 17-20.5 cm, width 9-11 cm,
-/// length/width 1.6-2.1, height 4-5 cm). The template (shared/reference/hand_model.md) is "roughly
+/// length/width 1.6-2.1, height 4-5 cm). The template (Tkach et al. 2017's hand model) is "roughly
 /// 18-19 cm long": we take 185 mm. Its width is not in the reference data (the rest-pose spheres
 /// span 83.7 mm across the splayed fingertips, thumb not included), so the template is taken to have
 /// the mean aspect ratio of the paper's ten hands (1.835): 100.8 mm, and their mean height, 42 mm.
