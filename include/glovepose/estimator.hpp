@@ -505,6 +505,18 @@ class BasicGlovePoseEstimator {
     offsets_ = offsets.value_or(hand::Angles{});
   }
 
+  // Calibrated cells -> stretch maps -> network -> pose map -> angles (radians), the network's
+  // angles as the pose and the pose-guided calibration both see them. `angles` is untouched on failure.
+  Status network_angles(const Eigen::VectorXd& normalized, hand::Angles& angles) noexcept {
+    if (model_->glove().map().to_stretch_maps(normalized.data(), maps_) != Status::Ok) return Status::NonFinite;
+    const Status net = model_->network().forward(maps_, pose_map_, workspace_);
+    if (net != Status::Ok) return net;
+    hand::Angles normalized_angles{};
+    model_->glove().map().from_pose_map(pose_map_, normalized_angles);
+    angles = model_->joint_limits().denormalize(normalized_angles);
+    return Status::Ok;
+  }
+
   // The pose-guided offsets of the frames stored during the sequence, calibrated by `range`;
   // nullopt when the sequence was not performed to the end (Auto falls back to min-max).
   std::optional<hand::Angles> guided_offsets(const sensor::CalibrationRange& range) {
@@ -516,13 +528,10 @@ class BasicGlovePoseEstimator {
       const double t = guided_times_[static_cast<std::size_t>(f)];
       if (!means.holding(t)) continue;
       raw = guided_cells_.row(f).transpose();
-      if (range.normalize(raw, normalized) != Status::Ok || model_->glove().map().to_stretch_maps(normalized.data(), maps_) != Status::Ok ||
-          model_->network().forward(maps_, pose_map_, workspace_) != Status::Ok)
-        continue;
-      hand::Angles normalized_angles{};
-      model_->glove().map().from_pose_map(pose_map_, normalized_angles);
+      hand::Angles angles{};
+      if (range.normalize(raw, normalized) != Status::Ok || network_angles(normalized, angles) != Status::Ok) continue;
       for (Eigen::Index c = 0; c < normalized.size(); ++c) cells[static_cast<std::size_t>(c)] = static_cast<float>(normalized(c));
-      means.add(t, model_->joint_limits().denormalize(normalized_angles), cells.data());
+      means.add(t, angles, cells.data());
     }
     if (!means.missing_step().empty()) {
       if (config_.calibration_method == CalibrationMethod::PoseGuided) (void)means.features();  // throws, naming the step
@@ -581,16 +590,9 @@ class BasicGlovePoseEstimator {
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
     if (collecting_) flags |= kPoseCalibrating;
-    if (model_->glove().map().to_stretch_maps(normalized_.data(), maps_) != Status::Ok) return Status::NonFinite;
-    const Status net = model_->network().forward(maps_, pose_map_, workspace_);
+    const Status net = network_angles(normalized_, pose_.raw_angles);
     if (net != Status::Ok) return net;
-    hand::Angles normalized_angles{};
-    model_->glove().map().from_pose_map(pose_map_, normalized_angles);
-    pose_.raw_angles = model_->joint_limits().denormalize(normalized_angles);
-    if (guided_) {  // the user's offsets, kept within the joint limits the network's tanh keeps to
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) pose_.raw_angles[d] += offsets_[d];
-      pose_.raw_angles = model_->joint_limits().clamp(pose_.raw_angles);
-    }
+    if (guided_) pose_.raw_angles = calibration::with_offsets(pose_.raw_angles, offsets_, model_->joint_limits());
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
     if (config_.joint_transforms) {

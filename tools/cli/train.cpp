@@ -349,11 +349,7 @@ int eval_command(Options o) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
     hand::Angles radians = limits.denormalize(n);
-    if (guided) {  // as the estimator applies them: offsets added, the sum kept within the joint limits
-      const hand::Angles& offset = offsets.at(samples.run[static_cast<std::size_t>(f)]);
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) radians[d] += offset[d];
-      radians = limits.clamp(radians);
-    }
+    if (guided) radians = calibration::with_offsets(radians, offsets.at(samples.run[static_cast<std::size_t>(f)]), limits);
     double p[hand::kDofCount], t[hand::kDofCount];
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       p[d] = radians[d];

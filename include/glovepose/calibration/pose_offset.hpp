@@ -39,6 +39,15 @@
 
 namespace glovepose::calibration {
 
+/// @brief A pose with a user's offsets applied: the sum, kept within the joint limits (the network's
+/// tanh keeps its own angles there). The estimator and the offline evaluation both apply them so.
+GLOVEPOSE_REALTIME inline hand::Angles with_offsets(const hand::Angles& angles, const hand::Angles& offsets,
+                                                   const hand::JointLimits& limits) noexcept {
+  hand::Angles out{};
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) out[d] = angles[d] + offsets[d];
+  return limits.clamp(out);
+}
+
 /// @brief Sums of what the model and the cells showed over each step's holding frames.
 class StepHoldMeans {
  public:
