@@ -157,7 +157,7 @@ typedef struct glovepose_estimator glovepose_estimator;
 /** @brief Settings of an estimator. Fill with glovepose_estimator_config_default(), then change fields. */
 typedef struct glovepose_estimator_config {
   uint32_t struct_size;               /**< sizeof(glovepose_estimator_config) (80 in ABI 1). */
-  int32_t readout_mean_window;        /**< Readings per row averaged before a solve (default 2; the paper: 5). */
+  int32_t readout_mean_window;        /**< Readings per row averaged before a solve (default 1; the paper: 5). */
   int32_t readout_solve_every;        /**< Solve after this many accepted row readings (default 16; 180 = once per cycle). */
   int32_t calibration_median_window;  /**< Frames of the on-the-fly calibration's median (default 20). */
   double calibration_sample_period;   /**< Stream time between two frames the calibration takes, s (default 1/60). */

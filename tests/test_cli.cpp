@@ -411,10 +411,10 @@ TEST_CASE("cli: eval --predictions writes every frame's true and predicted angle
   }
   CHECK(rows == static_cast<long>(frames));
   CHECK(sum / (25.0 * static_cast<double>(rows)) * 57.29577951308232 == doctest::Approx(mean).epsilon(1e-6));
-  // Replayed through the default readout (2-reading means): another window, another lag.
+  // Replayed through the default readout (1 reading per row): another window, another lag.
   r = run("eval --model " + kModel + " --data " + data + " --json --replay-rows");
   REQUIRE_MESSAGE(r.status == 0, r.out);
-  CHECK(json_number(r.out, "mean_window") == 2);
+  CHECK(json_number(r.out, "mean_window") == 1);
   r = run("eval --model " + kModel + " --data " + data + " --mean-window 3");
   CHECK(r.status == 2);
   CHECK(r.out.find("--mean-window is for --replay-rows") != std::string::npos);

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -83,11 +84,17 @@ struct Run {
   long rejected_statuses = 0;
 };
 
-// The session streamed row by row; `fault`, when given, turns the readings of frames
-// [kFaultBegin, kFaultEnd) into what the faulty glove delivers.
-Run stream(std::optional<sim::FaultInjector> fault) {
+// The estimator's default readout window; the tests that need partial rows (recovering) ask for more.
+const int kDefaultWindow = realtime_readout().mean_window;
+
+// The session streamed row by row through an estimator averaging `mean_window` readings per row;
+// `fault`, when given, turns the readings of frames [kFaultBegin, kFaultEnd) into what the faulty
+// glove delivers.
+Run stream(std::optional<sim::FaultInjector> fault, int mean_window) {
   const train::Dataset& d = faults_session();
-  GlovePoseEstimator estimator(faults_model());
+  EstimatorConfig config;
+  config.readout.mean_window = mean_window;
+  GlovePoseEstimator estimator(faults_model(), config);
   estimator.set_calibration(faults_range());
   Run run;
   std::uint64_t last_sequence = 0;
@@ -115,9 +122,11 @@ Run stream(std::optional<sim::FaultInjector> fault) {
   return run;
 }
 
-const Run& clean_run() {
-  static const Run run = stream(std::nullopt);
-  return run;
+const Run& clean_run(int mean_window) {
+  static std::map<int, Run> runs;
+  auto found = runs.find(mean_window);
+  if (found == runs.end()) found = runs.emplace(mean_window, stream(std::nullopt, mean_window)).first;
+  return found->second;
 }
 
 double mean_error_degrees(const Run& run, std::size_t begin, std::size_t end) {
@@ -151,9 +160,9 @@ double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
 // solve every 16 accepted readings) shifts with every lost or extra reading, and a pose depends on
 // the solve's place in the cycle by a few degrees, so trusted poses are compared with the truth
 // (the simulator's angles) as the clean stream is, not pose by pose with the clean stream.
-Run check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect) {
-  const Run& clean = clean_run();
-  Run run = stream(fault);
+Run check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect, int mean_window = kDefaultWindow) {
+  const Run& clean = clean_run(mean_window);
+  Run run = stream(fault, mean_window);
   REQUIRE(run.frames.size() == clean.frames.size());
   const std::size_t n = run.frames.size();
   const auto trusted = [](const FrameRecord& r) { return r.fresh && r.valid && (r.flags & kPoseFaultFlags) == 0; };
@@ -200,7 +209,7 @@ Run check_fault(const char* name, const sim::FaultInjector& fault, const Expecta
 }  // namespace
 
 TEST_CASE("faults: the clean stream is trusted and accurate") {
-  const Run& clean = clean_run();
+  const Run& clean = clean_run(kDefaultWindow);
   std::size_t flagged = 0;
   for (std::size_t i = 6; i < clean.frames.size(); ++i) flagged += (clean.frames[i].flags & kPoseFaultFlags) != 0;
   MESSAGE("clean stream: " << flagged << " of " << clean.frames.size() - 6 << " frames flagged; error "
@@ -243,7 +252,14 @@ TEST_CASE("faults: spikes") {
   sim::FaultSettings spikes;
   spikes.spike_one_in = 500;
   spikes.spike_pf = 30.0;
-  check_fault("spikes of +30 pF in 1 reading of 500", inject(sim::FaultKind::Spikes, spikes), {kPoseOutlierRows, 0.5, 0, 6});
+  // A spike stays in its row's mean for mean_window cycles of 180 readings: the share of frames
+  // whose rows hold one is 1 - (1 - 1/500)^(180 mean_window); at least 0.8 of it must be flagged.
+  for (int window : {kDefaultWindow, 2, 5}) {
+    CAPTURE(window);
+    const double holding_a_spike = 1.0 - std::pow(1.0 - 1.0 / 500.0, 180.0 * window);
+    check_fault("spikes of +30 pF in 1 reading of 500", inject(sim::FaultKind::Spikes, spikes),
+                {kPoseOutlierRows, 0.8 * holding_a_spike, 0, 6}, window);
+  }
 }
 
 TEST_CASE("faults: NaN and infinite readings") {
@@ -257,9 +273,14 @@ TEST_CASE("faults: NaN and infinite readings") {
 TEST_CASE("faults: glove unplugged and plugged back (a gap in the stream)") {
   // 2 s without any reading; then the readout starts over: no stale pre-gap readings are mixed in,
   // the first poses after it are flagged as recovering, and the smoothing restarts.
+  // With one reading per row (the default) the first solve after the gap already has whole rows.
   const Run run = check_fault("unplugged for 2 s", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6});
-  // During the gap the last pose stays (nothing arrives); the first frame after it is recovering.
-  CHECK((run.frames[kFaultEnd].flags & kPoseRecovering) != 0);
+  REQUIRE(kDefaultWindow == 1);
+  CHECK((run.frames[kFaultEnd].flags & kPoseFaultFlags) == 0);
+  // With a longer mean, during the gap the last pose stays (nothing arrives) and the first frame
+  // after it is recovering: its rows hold fewer readings than the window.
+  const Run mean_of_2 = check_fault("unplugged for 2 s, 2 readings per row", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6}, 2);
+  CHECK((mean_of_2.frames[kFaultEnd].flags & kPoseRecovering) != 0);
 }
 
 TEST_CASE("faults: clock jumps") {

@@ -2,6 +2,8 @@
 
 #include <doctest/doctest.h>
 
+#include <Eigen/LU>
+
 #include <limits>
 #include <random>
 #include <vector>
@@ -119,6 +121,37 @@ TEST_CASE("readout: window and solve interval are configurable") {
   config.solve_every = 0;
   CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("solve_every 0, expected at least 1"), Error);
   CHECK_THROWS_WITH_AS(GloveReadout(nullptr), doctest::Contains("no solver"), Error);
+}
+
+TEST_CASE("readout: a row is an outlier when its residual exceeds max_reading_residual / sqrt(readings it holds)") {
+  // A constant error d on row q of a static hand leaves the residual (1 - h_qq) d on that row, with
+  // h the least-squares hat matrix M (M^T M)^-1 M^T (computed here, apart from the solver's QR).
+  const auto& m = glove_solver()->measurement_matrix();
+  const Eigen::MatrixXd hat = m * (m.transpose() * m).inverse() * m.transpose();
+  constexpr int q = 37;
+  const double leverage_left = 1.0 - hat(q, q);
+  REQUIRE(leverage_left > 0.1);
+  ReadoutConfig config;
+  config.mean_window = 4;
+  const double bound = config.max_reading_residual;
+  const auto stream = [&](double residual, int frames) {
+    GloveReadout readout(glove_solver(), config);
+    GloveSolver::Measurements cm = frame_measurements(0);
+    cm(q) += residual / leverage_left;
+    for (int f = 0; f < frames; ++f) REQUIRE(readout.push_frame(cm, f * 180 * kRowPeriod) == Status::Solved);
+    CHECK(readout.frame().health.max_residual == doctest::Approx(residual).epsilon(1e-6));
+    CHECK(readout.frame().health.filling_rows == (frames < 4 ? 180 : 0));
+    return readout.frame().health.outlier_rows;
+  };
+  // Full rows (4 readings): the bound is bound / 2.
+  CHECK(stream(0.9 * bound / 2.0, 4) == 0);
+  CHECK(stream(1.1 * bound / 2.0, 4) == 1);
+  // The same disagreement backed by one reading is within that reading's noise; by four, it is not.
+  CHECK(stream(0.7 * bound, 1) == 0);
+  CHECK(stream(0.7 * bound, 4) == 1);
+  CHECK(stream(1.1 * bound, 1) == 1);
+  config.max_reading_residual = 0.0;
+  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("max_reading_residual > 0"), Error);
 }
 
 TEST_CASE("readout: bad readings get a status, are not mixed in, and the next good rows are used normally") {

@@ -230,7 +230,7 @@ static void test_create(glovepose_model* model) {
   CHECK_RESULT(glovepose_estimator_config_default(NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
   CHECK_RESULT(glovepose_estimator_config_default(&config), GLOVEPOSE_OK);
   CHECK(config.struct_size == sizeof config);
-  CHECK(config.readout_mean_window == 2); /* glovepose::realtime_readout(); the paper's is 5 */
+  CHECK(config.readout_mean_window == 1); /* glovepose::realtime_readout(); the paper's is 5 */
   CHECK(config.readout_solve_every == 16);
   CHECK(config.calibration_median_window == 20);
   CHECK(fabs(config.calibration_sample_period - 1.0 / 60.0) < 1e-15);

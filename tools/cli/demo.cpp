@@ -1,12 +1,12 @@
 // glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
 //   The product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
-//   default 2026; the shipped model was trained on seed 1) puts the glove on, performs the
-//   simulator's calibration sequence, then a session of poses. Every reading is streamed row by
-//   row through GlovePoseEstimator (default settings: a solve every 16 rows, joint transforms on),
-//   and the latest pose at each readout-cycle end is compared with the true angles. Prints a table
-//   (angle errors, speed, latency, calibration) and writes it and three SVG pictures to DIR:
-//   angles over time (paper Fig. 15), the cumulative error curve (Fig. 14) and predicted beside
-//   true skeletons (Fig. 11).
+//   default 2026; the shipped model was trained on seed 101 and its calibration fitted on seed 21)
+//   puts the glove on, performs the simulator's calibration sequence, then a session of poses.
+//   Every reading is streamed row by row through GlovePoseEstimator (default settings: a solve
+//   every 16 rows, joint transforms on), and the latest pose at each readout-cycle end is
+//   compared with the true angles. Prints a table (angle errors, speed, latency, calibration) and
+//   writes it and three SVG pictures to DIR: angles over time (paper Fig. 15), the cumulative
+//   error curve (Fig. 14) and predicted beside true skeletons (Fig. 11).
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/metrics.hpp>
@@ -50,7 +50,7 @@ struct DemoOptions {
             << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
             << "  --model FILE  weights (default: models/" << kShippedModelName << " of the source tree)\n"
             << "  --out DIR     where the table and pictures go (default: demo-out)\n"
-            << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seed 1)\n"
+            << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)\n"
             << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
             << "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)\n"
             << "  --f16         keep the weights as F16 in memory\n"
@@ -434,7 +434,7 @@ int demo(int argc, char** argv) {
       throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
 
     const NewUser user = simulate_new_user(o, *model);
-    EstimatorConfig config;  // the default readout: a solve every 16 rows of 2-reading means
+    EstimatorConfig config;  // the default readout: a solve every 16 rows of their latest readings
     config.joint_transforms = true;
     GlovePoseEstimator estimator(model, config);
     const CalibrationResult calibration = calibrate(estimator, user);

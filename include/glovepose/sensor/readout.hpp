@@ -43,10 +43,13 @@ struct ReadoutConfig {
   /// A row whose mean reading is below this (pF) reads through a disconnected trace: the paper's
   /// compound capacitances are tens of pF, an open trace leaves only stray capacitance.
   double disconnected_below = 1.0;
-  /// A row whose least-squares residual |M C_c - C_m| exceeds this (pF) disagrees with the others:
-  /// a spike or a failing cell. 1 pF is about 8 times the residual of the readout noise assumed in
-  /// docs/simulator.md (0.3 pF per reading, averaged over 5).
-  double max_residual = 1.0;
+  /// A row whose least-squares residual |M C_c - C_m| exceeds this (pF) divided by the square root
+  /// of the readings it holds disagrees with the others: a spike or a failing cell. Averaging n
+  /// readings divides the noise by sqrt(n), so the bound keeps the same distance from the noise at
+  /// every mean window (and while a row fills). 2.25 pF is about 8 times the residual of one reading
+  /// under the readout noise assumed in docs/simulator.md (0.3 pF per reading); 1 pF at the paper's
+  /// mean of 5.
+  double max_reading_residual = 2.25;
 };
 
 /// @brief Health of a solved frame: what the readout saw that makes it less trustworthy.
@@ -55,7 +58,7 @@ struct ReadoutHealth {
   std::uint16_t stale_rows = 0;         ///< Rows whose newest reading is older than ReadoutConfig::stale_cycles cycles.
   std::uint16_t stuck_rows = 0;         ///< Rows repeating one value (ReadoutConfig::stuck_readings).
   std::uint16_t disconnected_rows = 0;  ///< Rows reading below ReadoutConfig::disconnected_below.
-  std::uint16_t outlier_rows = 0;       ///< Rows whose residual exceeds ReadoutConfig::max_residual.
+  std::uint16_t outlier_rows = 0;       ///< Rows whose residual exceeds ReadoutConfig::max_reading_residual / sqrt(readings held).
   double max_residual = 0.0;            ///< Largest |M C_c - C_m| over the rows, pF.
   std::uint64_t restarts = 0;           ///< Times the readout started over (gaps, clock restarts) since construction.
 };
@@ -95,12 +98,12 @@ class Readout {
     if (config_.solve_every < 1)
       throw Error("Readout: solve_every " + std::to_string(config_.solve_every) + ", expected at least 1");
     if (!(config_.gap_seconds > 0.0) || config_.clock_restart_readings < 0 || config_.stuck_readings < 2 ||
-        !(config_.max_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below))
+        !(config_.max_reading_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below))
       throw Error("Readout: gap_seconds " + std::to_string(config_.gap_seconds) + ", clock_restart_readings " +
                   std::to_string(config_.clock_restart_readings) + ", stuck_readings " + std::to_string(config_.stuck_readings) +
-                  ", max_residual " + std::to_string(config_.max_residual) +
+                  ", max_reading_residual " + std::to_string(config_.max_reading_residual) +
                   ", stale_cycles " + std::to_string(config_.stale_cycles) +
-                  ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_residual > 0, stale_cycles > 1");
+                  ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_reading_residual > 0, stale_cycles > 1");
     rows_ = solver_->layout().row_count();
     if (config_.clock_restart_readings == 0) config_.clock_restart_readings = rows_;
     const auto slots = static_cast<std::size_t>(rows_) * static_cast<std::size_t>(config_.mean_window);
@@ -264,7 +267,7 @@ class Readout {
       health.stale_rows += newest_age_[r] > stale_age ? 1 : 0;
       health.stuck_rows += repeats_[r] >= config_.stuck_readings ? 1 : 0;
       health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
-      health.outlier_rows += std::abs(residual_(row)) > config_.max_residual ? 1 : 0;
+      health.outlier_rows += std::abs(residual_(row)) * std::sqrt(static_cast<double>(count_[r])) > config_.max_reading_residual ? 1 : 0;
     }
     frame_.timestamp = last_timestamp_;
     frame_.oldest_age = last_timestamp_ - oldest;

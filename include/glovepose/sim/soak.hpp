@@ -58,7 +58,7 @@ struct SoakConfig {
   double fault_seconds_min = 0.5;         ///< Shortest fault.
   double fault_seconds_max = 3.0;         ///< Longest fault.
   /// Most cycles after a fault's end before a cycle ends in a trusted pose again. A restart (gap,
-  /// clock jump) needs one cycle to see every row and mean_window (5) more to fill the rows' mean;
+  /// clock jump) needs one cycle to see every row and mean_window - 1 more to fill the rows' mean;
   /// tests/test_faults.cpp checks 6-7 frames; 12 (0.2 s) leaves room for the simulator's own rare
   /// spikes, which can flag a frame of the clean stream.
   int recovery_bound_cycles = 12;
@@ -68,6 +68,8 @@ struct SoakConfig {
   /// Process-wide count of heap allocations (e.g. tests/alloc_counter.hpp); when given, the run
   /// fails on any allocation between the warm-up and the end. Empty: not counted.
   std::function<std::size_t()> allocation_count;
+  /// Settings of every estimator (readout window, fault thresholds, smoothing).
+  EstimatorConfig estimator{};
 
   /// @brief Throws glovepose::Error naming the first setting out of range.
   void validate() const {
@@ -334,7 +336,7 @@ inline double cycle_rate(const train::Dataset& source) noexcept {
 class SoakStream {
  public:
   SoakStream(std::shared_ptr<const PoseModel> model, const train::Dataset& source, const SoakConfig& config, int index)
-      : estimator_(std::move(model)),
+      : estimator_(std::move(model), config.estimator),
         source_(source),
         config_(config),
         layout_(estimator_.model().solver()->layout()),
