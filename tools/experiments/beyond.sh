@@ -9,7 +9,9 @@
 # 5-reading mean and with fewer readings (the default: 1), with min-max and (when the model carries one)
 # pose-guided calibration. The classic data-glove baseline is trained first: a linear map on 10
 # people x 2 sessions x 2 min of LINEAR_SEED (the default protocol, min-max on the fly).
-# Prints a markdown table (mean, p95, share under 15 degrees, lag) and the ratio to the baseline.
+# Prints a markdown table (mean, p95, share under 15 degrees, lag) and the ratio to the baseline,
+# then each person's mean error and the worst ratio to the baseline over the people (does a model
+# ever lose to the linear map for someone?).
 #
 # Knobs: GLOVEPOSE (build/tools/glovepose), OUT (beyond-out), TEST_SEED (2027), TEST_SUBJECTS (5),
 #        TEST_MINUTES (2), LINEAR_SEED (11), WINDOWS ("5 2 1": readout mean windows), THREADS (all cores)
@@ -38,19 +40,36 @@ linear=$OUT/linear_seed${LINEAR_SEED}.model.safetensors
 [ -f "$linear" ] || log "$G" train --data "$linear_data" --model linear --out "$linear" > /dev/null
 
 row() {  # model label calibration window
-  local json=$OUT/$(basename "$1" .safetensors)_$3_w$4.json
-  log "$G" eval --model "$1" --data "$test_data" --calibration "$3" --replay-rows --mean-window "$4" --threads "$THREADS" --json > "$json"
-  /usr/bin/python3 - "$json" "$2" "$3" "$4" <<'PY'
+  local json=$OUT/$(basename "$1" .safetensors)_$3_w$4.json csv=$OUT/predictions.csv
+  log "$G" eval --model "$1" --data "$test_data" --calibration "$3" --replay-rows --mean-window "$4" --threads "$THREADS" --json \
+    --predictions "$csv" > "$json"
+  # Each person's mean error, from eval's per-frame predictions, for the per-person table.
+  /usr/bin/python3 - "$csv" "$2, $3, $4" >> "$OUT/people.tsv" <<'PY'
+import csv, math, sys
+sums, counts = {}, {}
+with open(sys.argv[1]) as f:
+    rows = csv.reader(f)
+    header = next(rows)
+    n = (len(header) - 4) // 2
+    for r in rows:
+        sums[r[2]] = sums.get(r[2], 0.0) + sum(abs(float(r[4 + k]) - float(r[4 + n + k])) for k in range(n))
+        counts[r[2]] = counts.get(r[2], 0) + n
+print("\t".join([sys.argv[2]] + [f"{s}:{math.degrees(sums[s] / counts[s]):.3f}" for s in sorted(sums, key=int)]))
+PY
+  rm -f "$csv"
+  /usr/bin/python3 - "$json" "$2" "$3" "$4" "$OUT/$(basename "$linear" .safetensors)_onthefly_w5.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {r['mean_deg']:.3f} | {r['p95_deg']:.2f} | {100 * r['share_under_15deg']:.1f}% | {r['lag_ms']:.1f} |")
+base = json.load(open(sys.argv[5]))["mean_deg"]
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {r['mean_deg']:.3f} | {r['p95_deg']:.2f} | {100 * r['share_under_15deg']:.1f}% | {r['lag_ms']:.1f} | {r['mean_deg'] / base:.2f} |")
 PY
 }
 
 echo "Test people: seed $TEST_SEED, subjects 0-$((TEST_SUBJECTS - 1)), 1 session x $TEST_MINUTES min each, guided calibration sequence; rows replayed."
 echo
-echo "| model | calibration | mean window | mean (deg) | p95 | under 15 deg | lag (ms) |"
-echo "|---|---|---:|---:|---:|---:|---:|"
+rm -f "$OUT/people.tsv"
+echo "| model | calibration | mean window | mean (deg) | p95 | under 15 deg | lag (ms) | vs baseline |"
+echo "|---|---|---:|---:|---:|---:|---:|---:|"
 baseline=$(row "$linear" "linear map (baseline)" onthefly 5)
 echo "$baseline"
 for window in $WINDOWS; do [ "$window" = 5 ] || row "$linear" "linear map" onthefly "$window"; done
@@ -60,3 +79,17 @@ for model in "$@"; do
     if "$G" info --model "$model" 2>/dev/null | grep -q "pose-guided calibration: sequence"; then row "$model" "$(basename "$model")" guided "$window"; fi
   done
 done
+
+# Per person: does any model lose to the baseline for anyone? (mean error of each person, degrees)
+echo
+/usr/bin/python3 - "$OUT/people.tsv" <<'PY'
+import sys
+lines = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
+people = [p.split(":")[0] for p in lines[0][1:]]
+base = {p.split(":")[0]: float(p.split(":")[1]) for p in lines[0][1:]}
+print("| model, calibration, window | " + " | ".join(f"person {p}" for p in people) + " | worst ratio to the baseline |")
+print("|---|" + "---:|" * (len(people) + 1))
+for l in lines:
+    means = {p.split(":")[0]: float(p.split(":")[1]) for p in l[1:]}
+    print(f"| {l[0]} | " + " | ".join(f"{means[p]:.2f}" for p in people) + f" | {max(means[p] / base[p] for p in people):.2f} |")
+PY
