@@ -2,12 +2,10 @@
 
 #include <doctest/doctest.h>
 
-#include <fstream>
-#include <regex>
 #include <set>
 #include <string>
 
-#include "reference_data.hpp"
+#include "reference/hmodel_template.hpp"
 
 using namespace glovepose;
 using namespace glovepose::hand;
@@ -26,33 +24,17 @@ TEST_CASE("dofs: the 25 DoFs are theta 9..33 in order, with unique names") {
   CHECK_THROWS_WITH_AS(dof_from_name("wrist_flexion"), doctest::Contains("unknown DoF 'wrist_flexion'"), Error);
 }
 
-TEST_CASE("dofs: limits, axes and phalanxes equal the reference hand model table") {
-  const auto path = test::reference_file("hand_model.md");
-  if (!path) return;
-  std::ifstream file(*path);
-  // | 14 | index base flexion | 13 Index1 | X | -1.3 | 1.6 |
-  const std::regex row(R"(^\|\s*(\d+)\s*\|\s*([a-z ]+?)\s*\|\s*(\d+) \w+\s*\|\s*([XYZ])\s*\|\s*(-?[\d.]+)\s*\|\s*(-?[\d.]+)\s*\|)");
-  std::string line;
-  int matched = 0;
-  while (std::getline(file, line)) {
-    std::smatch m;
-    if (!std::regex_search(line, m, row)) continue;
-    const int theta = std::stoi(m[1]);
-    if (theta < 9) continue;
-    const Dof& dof = kDofs[dof_from_theta(theta)];
-    INFO("theta " << theta << " (" << m[2] << ")");
-    std::string name = m[2];
-    for (char& c : name)
-      if (c == ' ') c = '_';
-    CHECK(name == dof.name);
-    CHECK(std::stoi(m[3]) == dof.phalanx);
+TEST_CASE("dofs: limits, axes and phalanxes equal the hand model's published parameters") {
+  for (const test::hmodel::FingerParameter& reference : test::hmodel::kFingerParameters) {
+    const Dof& dof = kDofs[dof_from_theta(reference.theta)];
+    INFO("theta " << reference.theta << " (" << reference.name << ")");
+    CHECK(std::string(reference.name) == dof.name);
+    CHECK(reference.phalanx == dof.phalanx);
     const char axis = dof.axis == Axis::X ? 'X' : (dof.axis == Axis::Y ? 'Y' : 'Z');
-    CHECK(std::string(1, axis) == m[4].str());
-    CHECK(std::stod(m[5]) == doctest::Approx(dof.min).epsilon(1e-12));
-    CHECK(std::stod(m[6]) == doctest::Approx(dof.max).epsilon(1e-12));
-    ++matched;
+    CHECK(axis == reference.axis);
+    CHECK(reference.min == doctest::Approx(dof.min).epsilon(1e-12));
+    CHECK(reference.max == doctest::Approx(dof.max).epsilon(1e-12));
   }
-  CHECK(matched == 25);
 }
 
 TEST_CASE("dofs: normalisation maps the limits to -1 and +1 and back") {

@@ -3,7 +3,7 @@
 #include <doctest/doctest.h>
 
 #include "alloc_counter.hpp"
-#include "reference_data.hpp"
+#include "reference/hmodel_template.hpp"
 
 using namespace glovepose;
 using namespace glovepose::hand;
@@ -12,15 +12,11 @@ namespace {
 Eigen::Vector3d origin(const Skeleton& s, Phalanx p) { return s[static_cast<std::size_t>(p)].translation(); }
 }  // namespace
 
-TEST_CASE("kinematics: the typed-in rest matrices equal the reference file I.txt") {
-  const auto path = test::reference_file("hmodel_rest_pose_I.txt");
-  if (!path) return;
-  const std::vector<double> v = test::read_numbers(*path);
-  REQUIRE(v.size() == 1 + 16 * kPhalanxCount);
-  CHECK(v[0] == 18);
+TEST_CASE("kinematics: the typed-in rest matrices equal the template's I.txt") {
+  static_assert(test::hmodel::kRestPose.size() == 16 * kPhalanxCount);
   const HandModel model = HandModel::reference();
   for (std::size_t p = 0; p < kPhalanxCount; ++p) {
-    const Eigen::Map<const Eigen::Matrix4d> reference(&v[1 + 16 * p]);  // column-major, like Eigen
+    const Eigen::Map<const Eigen::Matrix4d> reference(&test::hmodel::kRestPose[16 * p]);  // column-major, like Eigen
     INFO("phalanx " << p);
     CHECK((model.rest[p].matrix() - reference).cwiseAbs().maxCoeff() < 1e-12);
   }
@@ -37,7 +33,7 @@ TEST_CASE("kinematics: the zero pose reproduces the rest pose and the template's
     const Eigen::Affine3d expected = kParent[i] < 0 ? model.rest[i] : skeleton[static_cast<std::size_t>(kParent[i])] * model.rest[i];
     CHECK((skeleton[i].matrix() - expected.matrix()).cwiseAbs().maxCoeff() < 1e-12);
   }
-  // Finger base positions of shared/reference/hand_model.md ("Rest pose").
+  // Finger base positions of the template's rest pose (I.txt).
   CHECK((origin(skeleton, Phalanx::Index1) - Eigen::Vector3d(25.396, 50.819, 5.287)).norm() < 1e-3);
   CHECK((origin(skeleton, Phalanx::Thumb1) - Eigen::Vector3d(9.726, 3.872, -7.160)).norm() < 1e-3);
 
@@ -45,10 +41,7 @@ TEST_CASE("kinematics: the zero pose reproduces the rest pose and the template's
   // Per finger, C lists tip end, tip joint, middle joint, base joint; fingers pinky, ring, middle,
   // index, thumb (centres 0..19). The tip-end sphere lies at the distal length from the tip joint
   // but about 5 degrees off the bone's +Y axis, so for it only the distance is compared.
-  const auto path = test::reference_file("hmodel_centers_C.txt");
-  if (!path) return;
-  const std::vector<double> c = test::read_numbers(*path);
-  REQUIRE(c.size() >= 1 + 3 * 20);
+  const auto& c = test::hmodel::kSphereCentres;
   const Finger order[] = {Finger::Pinky, Finger::Ring, Finger::Middle, Finger::Index, Finger::Thumb};
   for (int k = 0; k < 5; ++k) {
     const auto base = static_cast<std::size_t>(kFingerBase[static_cast<std::size_t>(order[k])]);
@@ -56,7 +49,7 @@ TEST_CASE("kinematics: the zero pose reproduces the rest pose and the template's
                                        skeleton[base + 1].translation(), skeleton[base].translation()};
     Eigen::Vector3d centres[4];
     for (int j = 0; j < 4; ++j) {
-      const auto at = static_cast<std::size_t>(1 + 3 * (4 * k + j));
+      const auto at = static_cast<std::size_t>(3 * (4 * k + j));
       centres[j] = Eigen::Vector3d(c[at], c[at + 1], c[at + 2]);
     }
     INFO("finger row " << k);

@@ -4,8 +4,8 @@
 ///
 /// Sizes. The paper's ten hands (Table 1, bounding boxes L x W x H in cm) are the default subjects
 /// 0..9; further subjects are drawn from the ranges of Sec. 5.1 (length 17-20.5 cm, width 9-11 cm,
-/// length/width 1.6-2.1, height 4-5 cm). The template (Tkach et al. 2017's hand model) is "roughly
-/// 18-19 cm long": we take 185 mm. Its width is not in the reference data (the rest-pose spheres
+/// length/width 1.6-2.1, height 4-5 cm). The template (Tkach et al. 2017's hand model) is about
+/// 18-19 cm long: we take 185 mm. Its width is not in its published data (the rest-pose spheres
 /// span 83.7 mm across the splayed fingertips, thumb not included), so the template is taken to have
 /// the mean aspect ratio of the paper's ten hands (1.835): 100.8 mm, and their mean height, 42 mm.
 /// Lengths along the hand scale by L / 185 mm; the spacing of the knuckles by W / 100.8 mm; finger
@@ -26,7 +26,7 @@
 
 namespace glovepose::sim {
 
-/// @brief Template hand length (mm): hand_model.md, "roughly 18-19 cm long".
+/// @brief Template hand length (mm): the template hand of Tkach et al. 2017 is about 18-19 cm long.
 inline constexpr double kTemplateLength = 185.0;
 /// @brief Template hand width (mm): kTemplateLength / 1.835, the mean L/W of the paper's Table 1.
 inline constexpr double kTemplateWidth = 100.8;
@@ -34,7 +34,8 @@ inline constexpr double kTemplateWidth = 100.8;
 inline constexpr double kTemplateHeight = 42.0;
 
 /// @brief Radius (mm) of the template's sphere at each digit's base joint, pose-map order (thumb,
-/// index, middle, ring, pinky): spheres 19, 15, 11, 7, 3 of hmodel_radii_R.txt. With
+/// index, middle, ring, pinky): spheres 19, 15, 11, 7, 3 of the template's radii (R.txt of
+/// anastasia-tkach/honline-cpp-public, data/models/anastasia). With
 /// hand::kReferenceDistalRadius (the sphere at the far end of each phalanx) this gives the skin's
 /// distance from every joint axis.
 inline constexpr std::array<double, hand::kFingerCount> kReferenceKnuckleRadius{15.6827, 8.44143, 7.68834, 7.26768, 7.84562};

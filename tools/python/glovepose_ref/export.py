@@ -40,8 +40,8 @@ DEFAULT_GLOVE = "glauser2019-44"
 DEFAULT_GLOVE_CELLS = 44  # cells of the built-in glove; also the default of metadata `inputs`
 
 # The reference hand model's limits of theta[9..33], radians, in theta order (the order of
-# glovepose::kDofs). Source: shared/reference/hand_model.md, table "The 34 parameters, their order
-# and limits", rows 9..33 (Tkach et al. 2017, honline tracker ModelSemantics.cpp).
+# glovepose::kDofs). Source: the hand model of Tkach et al. 2017, public repository
+# anastasia-tkach/honline-cpp-public, tracker/HModel/ModelSemantics.cpp (tests/reference/hmodel_template.hpp).
 JOINT_LIMITS_MIN: tuple = (
     -0.1, -0.5, -0.9, -1.4,     # 9-12  thumb: base abduction, base flexion, middle, tip flexion
     -0.30, -1.3, -0.1, -0.1,    # 13-16 index
