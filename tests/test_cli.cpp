@@ -36,9 +36,29 @@ Run run(const std::string& args) {
   const int status = pclose(pipe);
   return {WEXITSTATUS(status), out};
 }
+// The command's stdout alone (`stream` 1) or its stderr alone (2), and its exit code.
+Run run_stream(const std::string& args, int stream) {
+  return run(args + (stream == 1 ? " 2>/dev/null" : " 2>&1 1>/dev/null") + " #");
+}
 const std::string kModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/unet_w4.safetensors";
 std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
 }  // namespace
+
+TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the usage on stderr") {
+  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak"}) {
+    CAPTURE(command);
+    for (const std::string help : {"--help", "-h"}) {
+      const Run asked = run_stream(command + " " + help, 1);
+      CHECK(asked.status == 0);
+      CHECK(asked.out.rfind("usage: glovepose ", 0) == 0);
+      CHECK(run_stream(command + " " + help, 2).out.empty());
+    }
+    const Run wrong = run_stream(command + " --no-such-option", 2);
+    CHECK(wrong.status == 2);
+    CHECK(wrong.out.find("usage: glovepose ") != std::string::npos);
+    CHECK(run_stream(command + " --no-such-option", 1).out.empty());
+  }
+}
 
 TEST_CASE("cli: glovepose predict gives the library's angles for rows of 44 calibrated cells") {
   std::mt19937 rng(2);

@@ -4,6 +4,8 @@
 #include <glovepose/config.hpp>
 
 #include <charconv>
+#include <cstdlib>
+#include <iostream>
 #include <string>
 
 namespace glovepose::cli {
@@ -19,6 +21,20 @@ int demo(int argc, char** argv);
 
 /// `glovepose soak ...` (soak.cpp); argv[1] is "soak". Returns the exit code.
 int soak(int argc, char** argv);
+
+/// Whether a command-line argument asks for the usage.
+inline bool asks_for_help(const std::string& argument) { return argument == "--help" || argument == "-h"; }
+
+/// Ends the process with a command's usage: on stdout with exit code 0 when the user asked for it
+/// (`problem` empty), else `problem` and the usage on stderr with exit code 2.
+[[noreturn]] inline void exit_with_usage(const std::string& command, const std::string& problem, const std::string& usage) {
+  if (problem.empty()) {
+    std::cout << usage << std::flush;
+    std::exit(0);
+  }
+  std::cerr << "glovepose" << (command.empty() ? "" : " " + command) << ": " << problem << "\n" << usage << std::flush;
+  std::exit(2);
+}
 
 /// The value `text` of command-line option `option` as a number of type T (locale-independent).
 /// Throws glovepose::Error naming the option and the text when it is not one.

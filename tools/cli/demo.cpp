@@ -45,17 +45,17 @@ struct DemoOptions {
   nn::WeightStorage storage = nn::WeightStorage::F32;
 };
 
+// `problem` empty: the usage was asked for (--help).
 [[noreturn]] void usage(const std::string& problem) {
-  std::cerr << "glovepose demo: " << problem << "\n"
-            << "usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
-            << "  --model FILE  weights (default: models/" << kShippedModelName << " of the source tree)\n"
-            << "  --out DIR     where the table and pictures go (default: demo-out)\n"
-            << "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)\n"
-            << "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
-            << "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)\n"
-            << "  --f16         keep the weights as F16 in memory\n"
-            << "  --bf16        keep the weights as BF16 in memory (the fastest)\n";
-  std::exit(2);
+  exit_with_usage("demo", problem,
+                  std::string("usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n")
+                  + "  --model FILE  weights (default: models/" + kShippedModelName + " of the source tree)\n"
+                  + "  --out DIR     where the table and pictures go (default: demo-out)\n"
+                  + "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)\n"
+                  + "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
+                  + "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)\n"
+                  + "  --f16         keep the weights as F16 in memory\n"
+                  + "  --bf16        keep the weights as BF16 in memory (the fastest)\n");
 }
 
 DemoOptions parse_options(int argc, char** argv) {
@@ -73,7 +73,7 @@ DemoOptions parse_options(int argc, char** argv) {
     else if (a == "--fixed16") o.storage = nn::WeightStorage::Fixed16;
     else if (a == "--f16") o.storage = nn::WeightStorage::F16;
     else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
-    else if (a == "--help" || a == "-h") usage("help");
+    else if (asks_for_help(a)) usage("");
     else usage("unknown option " + a);
   }
   if (!(o.minutes > 0.0 && o.minutes <= 600.0)) {

@@ -31,6 +31,8 @@
 #include "commands.hpp"
 
 using namespace glovepose;
+using cli::asks_for_help;
+using cli::exit_with_usage;
 
 namespace {
 
@@ -40,21 +42,22 @@ struct Options {
   bool header = true;
 };
 
+// `problem` empty: the usage was asked for (--help).
 [[noreturn]] void usage(const std::string& problem) {
-  std::cerr << "glovepose: " << problem << "\n"
-            << "usage: glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]\n"
-            << "       glovepose info --model FILE\n"
-            << "       glovepose simulate --help\n"
-            << "       glovepose train | finetune | eval --help\n"
-            << "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
-            << "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n";
-  std::exit(2);
+  exit_with_usage("", problem,
+                  "usage: glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]\n"
+                  "       glovepose info --model FILE\n"
+                  "       glovepose simulate --help\n"
+                  "       glovepose train | finetune | eval | fit-guided --help\n"
+                  "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
+                  "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n");
 }
 
 Options parse(int argc, char** argv) {
   if (argc < 2) usage("no command given");
   Options o;
   o.command = argv[1];
+  if (asks_for_help(o.command)) usage("");
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -67,6 +70,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--f16") o.storage = nn::WeightStorage::F16;
     else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
     else if (a == "--no-header") o.header = false;
+    else if (asks_for_help(a)) usage("");
     else usage("unknown option " + a);
   }
   if (o.command != "predict" && o.command != "info") usage("unknown command " + o.command);

@@ -20,14 +20,14 @@
 namespace glovepose::cli {
 namespace {
 
+// `problem` empty: the usage was asked for (--help).
 [[noreturn]] void usage(const std::string& problem) {
-  std::cerr << "glovepose simulate: " << problem << "\n"
-            << "usage: glovepose simulate [--seed S] [--subjects N] [--sessions K] [--minutes M] [--gloves G]\n"
-            << "                          [--calibration-seconds T | --calibration-sequence FILE] [--raw-rows] [--mean-window N] [--threads T]\n"
-            << "                          --out FILE [--csv FILE]\n"
-            << "       glovepose simulate --print-calibration-sequence   (the built-in guided sequence as JSON)\n"
-            << "       glovepose simulate --report [--seed S] [--subjects N] [--sessions K] [--minutes M] [--threads T]\n";
-  std::exit(2);
+  exit_with_usage("simulate", problem,
+                  "usage: glovepose simulate [--seed S] [--subjects N] [--sessions K] [--minutes M] [--gloves G]\n"
+                  "                          [--calibration-seconds T | --calibration-sequence FILE] [--raw-rows] [--mean-window N] [--threads T]\n"
+                  "                          --out FILE [--csv FILE]\n"
+                  "       glovepose simulate --print-calibration-sequence   (the built-in guided sequence as JSON)\n"
+                  "       glovepose simulate --report [--seed S] [--subjects N] [--sessions K] [--minutes M] [--threads T]\n");
 }
 
 template <typename T>
@@ -65,6 +65,7 @@ int simulate(int argc, char** argv) {
     else if (a == "--out") out = value();
     else if (a == "--csv") csv = value();
     else if (a == "--report") report = true;
+    else if (asks_for_help(a)) usage("");
     else usage("unknown option " + a);
   }
   if (config.intra_sessions > config.sessions) config.intra_sessions = config.sessions;

@@ -29,15 +29,15 @@ struct SoakOptions {
   std::string model = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
 };
 
+// `problem` empty: the usage was asked for (--help).
 [[noreturn]] void soak_usage(const std::string& problem) {
-  std::cerr << "glovepose soak: " << problem << "\n"
-            << "usage: glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
-            << "  --minutes M         stream per estimator, minutes of 60 Hz rows (default 30)\n"
-            << "  --estimators N      estimators on threads sharing the model (default 3)\n"
-            << "  --seed S            seed of the faults (default 1)\n"
-            << "  --source-minutes X  simulated motion looped, minutes (default 3; ~6 s of CPU per minute)\n"
-            << "  --model FILE        weights (default: models/glovepose_unet64.safetensors of the source tree)\n";
-  std::exit(2);
+  exit_with_usage("soak", problem,
+                  "usage: glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
+                  "  --minutes M         stream per estimator, minutes of 60 Hz rows (default 30)\n"
+                  "  --estimators N      estimators on threads sharing the model (default 3)\n"
+                  "  --seed S            seed of the faults (default 1)\n"
+                  "  --source-minutes X  simulated motion looped, minutes (default 3; ~6 s of CPU per minute)\n"
+                  "  --model FILE        weights (default: models/glovepose_unet64.safetensors of the source tree)\n");
 }
 
 SoakOptions parse_soak_options(int argc, char** argv) {
@@ -54,7 +54,7 @@ SoakOptions parse_soak_options(int argc, char** argv) {
     else if (a == "--seed") o.soak.seed = parse_number<std::uint64_t>(a, value());
     else if (a == "--source-minutes") o.source_minutes = parse_number<double>(a, value());
     else if (a == "--model") o.model = value();
-    else if (a == "--help" || a == "-h") soak_usage("help");
+    else if (asks_for_help(a)) soak_usage("");
     else soak_usage("unknown option " + a);
   }
   o.soak.validate();

@@ -35,18 +35,18 @@ namespace {
 std::atomic<bool> interrupted{false};
 extern "C" void on_interrupt(int) { interrupted.store(true); }
 
+// `problem` empty: the usage was asked for (--help).
 [[noreturn]] void usage(const std::string& command, const std::string& problem) {
-  std::cerr << "glovepose " << command << ": " << problem << "\n"
-            << "usage: glovepose train --data FILE --model unet:W|fcn[:H]|linear --out FILE [options]\n"
-            << "       glovepose finetune --model FILE --data FILE --out FILE [options]\n"
-            << "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly|guided] [--json] [selection]\n"
-            << "                      [--replay-rows [--mean-window N]] [--predictions FILE.csv]\n"
-            << "       glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]\n"
-            << "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
-            << "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
-            << "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
-            << "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n";
-  std::exit(2);
+  exit_with_usage(command, problem,
+                  "usage: glovepose train --data FILE --model unet:W|fcn[:H]|linear --out FILE [options]\n"
+                  "       glovepose finetune --model FILE --data FILE --out FILE [options]\n"
+                  "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly|guided] [--json] [selection]\n"
+                  "                      [--replay-rows [--mean-window N]] [--predictions FILE.csv]\n"
+                  "       glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]\n"
+                  "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
+                  "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
+                  "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
+                  "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n");
 }
 
 template <typename T>
@@ -127,6 +127,7 @@ Options parse(int argc, char** argv) {
       o.dtype = v == "f32" ? io::DType::F32 : (v == "f16" ? io::DType::F16 : io::DType::BF16);
     } else if (a == "--json") o.json = true;
     else if (a == "--quiet") o.quiet = true;
+    else if (asks_for_help(a)) usage(o.command, "");
     else usage(o.command, "unknown option " + a);
   }
   if (o.data.empty()) usage(o.command, "--data FILE is required");
