@@ -6,6 +6,7 @@
 
 #include <glovepose/estimator.hpp>
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstddef>
 #include <cstdio>
@@ -75,6 +76,9 @@ static_assert(offsetof(glovepose_pose, sequence) == 432, "ABI 1 layout");
 static_assert(sizeof(glovepose_joint) == 28, "ABI 1 layout");
 static_assert(sizeof(glovepose_calibration_progress) == 32, "ABI 1 layout");
 static_assert(offsetof(glovepose_calibration_progress, frames) == 8, "ABI 1 layout");
+static_assert(sizeof(glovepose_calibration_step) == 1184, "ABI 1 layout");
+static_assert(offsetof(glovepose_calibration_step, start_seconds) == 112, "ABI 1 layout");
+static_assert(offsetof(glovepose_calibration_step, instruction) == 160, "ABI 1 layout");
 
 // Fixed-size and trivially constructed: setting it never allocates, and a thread-local of a
 // trivial type needs no per-thread constructor or destructor.
@@ -132,6 +136,16 @@ const glovepose::PoseModel* model_of(const glovepose_model* handle) noexcept {
 glovepose::GlovePoseEstimator* estimator_of(const glovepose_estimator* handle) noexcept {
   return handle != nullptr && handle->tag == kEstimatorTag ? &const_cast<glovepose_estimator*>(handle)->estimator
                                                             : nullptr;
+}
+
+// Copies `text` into a C buffer of `capacity` bytes, NUL-terminated; a text too long is cut before
+// the first UTF-8 character that does not fit whole.
+void copy_text(const std::string& text, char* out, std::size_t capacity) noexcept {
+  std::size_t n = std::min(text.size(), capacity - 1);
+  if (n < text.size())
+    while (n > 0 && (static_cast<unsigned char>(text[n]) & 0xC0u) == 0x80u) --n;  // text[n] continues a character
+  std::memcpy(out, text.data(), n);
+  out[n] = '\0';
 }
 
 glovepose_result invalid_model() noexcept {
@@ -286,6 +300,41 @@ int32_t glovepose_model_has_training_range(const glovepose_model* model) noexcep
     return -1;
   }
   return m->training_range() ? 1 : 0;
+}
+
+int32_t glovepose_model_calibration_step_count(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->pose_offset() ? static_cast<int32_t>(m->pose_offset()->sequence().steps().size()) : 0;
+}
+
+glovepose_result glovepose_model_get_calibration_step(const glovepose_model* model, int32_t step,
+                                                  glovepose_calibration_step* out) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) return invalid_model();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: out is NULL");
+  if (out->struct_size != sizeof(glovepose_calibration_step))
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_model_get_calibration_step: out->struct_size is not "
+                                             "sizeof(glovepose_calibration_step) (call glovepose_calibration_step_init first)");
+  if (!m->pose_offset())
+    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: the model has no guided calibration sequence");
+  const auto& steps = m->pose_offset()->sequence().steps();
+  if (step < 0 || static_cast<std::size_t>(step) >= steps.size())
+    return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: step %d, expected 0..%d",
+                 static_cast<int>(step), static_cast<int>(steps.size()) - 1);
+  out->step = step;
+  out->step_count = static_cast<int32_t>(steps.size());
+  out->start_seconds = 0.0;
+  for (int32_t k = 0; k < step; ++k) out->start_seconds += steps[static_cast<std::size_t>(k)].seconds;
+  const glovepose::calibration::Step& s = steps[static_cast<std::size_t>(step)];
+  out->seconds = s.seconds;
+  for (std::size_t d = 0; d < glovepose::hand::kDofCount; ++d) out->pose[d] = static_cast<float>(s.pose[d]);
+  copy_text(s.name, out->name, sizeof out->name);
+  copy_text(s.instruction, out->instruction, sizeof out->instruction);
+  return GLOVEPOSE_OK;
 }
 
 // ---- estimator ---------------------------------------------------------------------------------
@@ -444,6 +493,16 @@ glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* e
   return GLOVEPOSE_OK;
 }
 
+glovepose_result glovepose_calibration_get_step(const glovepose_estimator* estimator, int32_t* step,
+                                            double* sequence_seconds) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  const glovepose::CalibrationProgress p = e->calibration_progress();
+  if (step != nullptr) *step = p.step;
+  if (sequence_seconds != nullptr) *sequence_seconds = p.sequence_seconds;
+  return GLOVEPOSE_OK;
+}
+
 glovepose_result glovepose_calibration_finish(glovepose_estimator* estimator) noexcept {
   glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
@@ -546,6 +605,12 @@ void glovepose_calibration_progress_init(glovepose_calibration_progress* progres
   if (progress == nullptr) return;
   std::memset(progress, 0, sizeof *progress);
   progress->struct_size = sizeof *progress;
+}
+
+void glovepose_calibration_step_init(glovepose_calibration_step* step) noexcept {
+  if (step == nullptr) return;
+  std::memset(step, 0, sizeof *step);
+  step->struct_size = sizeof *step;
 }
 
 }  // extern "C"

@@ -203,6 +203,18 @@ typedef struct glovepose_calibration_progress {
   int32_t flat_cells;        /**< Cells of the range in use too flat to normalise by (they read 0); 0 without a range. */
 } glovepose_calibration_progress;
 
+/** @brief One step of the model's guided calibration sequence: what to show the user. */
+typedef struct glovepose_calibration_step {
+  uint32_t struct_size;   /**< sizeof(glovepose_calibration_step) (1184); set by glovepose_calibration_step_init. */
+  int32_t step;           /**< Its index, 0-based. */
+  int32_t step_count;     /**< Steps in the sequence. */
+  float pose[25];         /**< The pose to copy, radians, in glovepose_dof_name order. */
+  double start_seconds;   /**< When the step starts, seconds after the sequence's first calibration frame. */
+  double seconds;         /**< How long it lasts. */
+  char name[32];          /**< Short id, e.g. "flat_on_table"; NUL-terminated, cut to 31 bytes if longer. */
+  char instruction[1024]; /**< What to tell the user; NUL-terminated UTF-8, cut at a character to 1023 bytes if longer. */
+} glovepose_calibration_step;
+
 /* ---- library ------------------------------------------------------------------------------- */
 
 /** @brief The library version, "major.minor.patch" (static string). */
@@ -250,6 +262,14 @@ GLOVEPOSE_C_API const char* glovepose_model_cell_name(const glovepose_model* mod
 /** @brief 1 when the model records its training-set range (glovepose_calibration_use_training
  * works), 0 when not, -1 for an invalid handle. */
 GLOVEPOSE_C_API int32_t glovepose_model_has_training_range(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Steps of the model's guided calibration sequence (docs/calibration.md): 0 when the model
+ * carries no pose-guided calibration (its calibration is min-max only), -1 for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_calibration_step_count(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Copies step `step` (0-based) of the model's guided calibration sequence into *out
+ * (struct_size set by glovepose_calibration_step_init). @return GLOVEPOSE_OK, _INVALID_HANDLE,
+ * _INVALID_ARGUMENT (out NULL, no sequence, step out of range) or _STRUCT_SIZE. */
+GLOVEPOSE_C_API glovepose_result glovepose_model_get_calibration_step(const glovepose_model* model, int32_t step,
+                                                                  glovepose_calibration_step* out) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- estimator ----------------------------------------------------------------------------- */
 
@@ -316,6 +336,13 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_start(glovepose_estimator
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
 GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator,
                                                                 glovepose_calibration_progress* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The guided step under way during a calibration: *step is its index (see
+ * glovepose_model_get_calibration_step), -1 before the first frame, after the last step, when no
+ * calibration is collecting or the model has no sequence; *sequence_seconds is the stream time
+ * since the sequence's first frame (0 before it). Either pointer may be NULL. Never allocates.
+ * @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_step(const glovepose_estimator* estimator, int32_t* step,
+                                                            double* sequence_seconds) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Ends the calibration and uses its range (set-up: allocates).
  * @return GLOVEPOSE_OK, or _CALIBRATION_STATE (none running, or fewer frames than the median window
  * so far: it keeps collecting), _INVALID_HANDLE, _OUT_OF_MEMORY. */
@@ -348,6 +375,8 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose
 GLOVEPOSE_C_API void glovepose_pose_init(glovepose_pose* pose) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Zeroes *progress and sets its struct_size. */
 GLOVEPOSE_C_API void glovepose_calibration_progress_init(glovepose_calibration_progress* progress) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Zeroes *step and sets its struct_size. */
+GLOVEPOSE_C_API void glovepose_calibration_step_init(glovepose_calibration_step* step) GLOVEPOSE_C_NOEXCEPT;
 
 #ifdef __cplusplus
 } /* extern "C" */

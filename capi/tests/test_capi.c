@@ -88,6 +88,7 @@ static void test_library(void) {
   CHECK(sizeof(glovepose_pose) == 448);
   CHECK(sizeof(glovepose_joint) == 28);
   CHECK(sizeof(glovepose_calibration_progress) == 32);
+  CHECK(sizeof(glovepose_calibration_step) == 1184);
 }
 
 static void test_model_errors(const char* model_path, const char* dir) {
@@ -514,6 +515,62 @@ static void test_joints(glovepose_model* model) {
   glovepose_estimator_free(full);
 }
 
+/* The guided calibration sequence the shipped model carries (models/calibration_glauser2019.json):
+ * its steps as data, and the step under way while a calibration collects. */
+static void test_guided_steps(glovepose_model* model) {
+  glovepose_calibration_step step;
+  glovepose_estimator* e = NULL;
+  double cells[44], seconds = -1.0;
+  int32_t under_way = 7, k, d;
+  glovepose_calibration_step_init(&step);
+  CHECK(step.struct_size == sizeof step);
+  CHECK(glovepose_model_calibration_step_count(model) == 10);
+  CHECK(glovepose_model_calibration_step_count(NULL) == -1);
+  for (k = 0; k < 10; ++k) {
+    CHECK_RESULT(glovepose_model_get_calibration_step(model, k, &step), GLOVEPOSE_OK);
+    CHECK(step.step == k && step.step_count == 10);
+    CHECK(fabs(step.seconds - 3.0) < 1e-12);
+    CHECK(fabs(step.start_seconds - 3.0 * k) < 1e-9);
+    CHECK(strlen(step.name) > 0 && strlen(step.name) < sizeof step.name);
+    CHECK(strlen(step.instruction) > 10 && strlen(step.instruction) < sizeof step.instruction);
+  }
+  /* Step 0: the hand pressed flat on a table, thumb abducted 5.729578 degrees, every flexion 0. */
+  CHECK_RESULT(glovepose_model_get_calibration_step(model, 0, &step), GLOVEPOSE_OK);
+  CHECK(strcmp(step.name, "flat_on_table") == 0);
+  CHECK(strncmp(step.instruction, "Lay your hand flat on a table", 29) == 0);
+  CHECK(fabs(step.pose[0] - 5.729578 * 3.14159265358979 / 180.0) < 1e-6);
+  for (d = 0; d < 25; ++d)
+    if (strstr(glovepose_dof_name(d), "flexion") != NULL) CHECK(step.pose[d] == 0.0f);
+  CHECK_RESULT(glovepose_model_get_calibration_step(model, 10, &step), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK(contains(glovepose_last_error(), "step 10, expected 0..9"));
+  CHECK_RESULT(glovepose_model_get_calibration_step(model, -1, &step), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK_RESULT(glovepose_model_get_calibration_step(model, 0, NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK_RESULT(glovepose_model_get_calibration_step(NULL, 0, &step), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  step.struct_size = 8;
+  CHECK_RESULT(glovepose_model_get_calibration_step(model, 0, &step), GLOVEPOSE_ERROR_STRUCT_SIZE);
+
+  /* The step under way follows the stream's clock from the sequence's first frame. */
+  CHECK_RESULT(glovepose_estimator_create(model, NULL, &e), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_get_step(e, &under_way, &seconds), GLOVEPOSE_OK);
+  CHECK(under_way == -1 && seconds == 0.0); /* not collecting */
+  CHECK_RESULT(glovepose_calibration_start(e), GLOVEPOSE_OK);
+  for (d = 0; d < 44; ++d) cells[d] = 20.0 + d;
+  for (k = 0; k <= 1860; ++k) { /* 31 s at 60 Hz, from t = 100 s */
+    const double t = 100.0 + k / 60.0;
+    cells[k % 44] += (k % 2 ? 0.5 : -0.5);
+    (void)glovepose_estimator_push_cells(e, cells, 44, t, 0.0);
+    if (k == 270) { /* 4.5 s in: the second step */
+      CHECK_RESULT(glovepose_calibration_get_step(e, &under_way, &seconds), GLOVEPOSE_OK);
+      CHECK(under_way == 1);
+      CHECK(fabs(seconds - 4.5) < 1e-6);
+    }
+  }
+  CHECK_RESULT(glovepose_calibration_get_step(e, &under_way, NULL), GLOVEPOSE_OK);
+  CHECK(under_way == -1); /* past the last step */
+  CHECK_RESULT(glovepose_calibration_get_step(NULL, &under_way, &seconds), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  glovepose_estimator_free(e);
+}
+
 int main(int argc, char** argv) {
   glovepose_model* model = NULL;
   glovepose_estimator* survivor = NULL;
@@ -534,6 +591,7 @@ int main(int argc, char** argv) {
   test_null_estimator();
   test_rows_and_calibration(model, argv[2]);
   test_joints(model);
+  test_guided_steps(model);
 
   /* Estimators share the model: freeing the caller's model handle leaves them working. */
   CHECK_RESULT(glovepose_estimator_create(model, NULL, &survivor), GLOVEPOSE_OK);

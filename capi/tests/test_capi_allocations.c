@@ -71,6 +71,8 @@ int main(int argc, char** argv) {
   glovepose_pose pose;
   glovepose_joint joints[GLOVEPOSE_JOINT_COUNT];
   glovepose_calibration_progress progress;
+  int32_t step = 0;
+  double sequence_seconds = 0.0;
   double cells[44], frame[180];
   unsigned long before, during;
   int f, r, solved = 0;
@@ -111,6 +113,7 @@ int main(int argc, char** argv) {
     glovepose_estimator_get_joints(estimator, joints, GLOVEPOSE_JOINT_COUNT);
     glovepose_estimator_get_cells(estimator, cells, 44);
     glovepose_calibration_get_progress(estimator, &progress);
+    glovepose_calibration_get_step(estimator, &step, &sequence_seconds);
   }
   for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;
   glovepose_estimator_push_measurements(estimator, frame, 180, 2.0);
