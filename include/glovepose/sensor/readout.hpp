@@ -261,13 +261,15 @@ class Readout {
     const auto middle = age_scratch_.begin() + rows_ / 2;
     std::nth_element(age_scratch_.begin(), middle, age_scratch_.end());
     const double stale_age = config_.stale_cycles * 2.0 * *middle;
+    // |residual| > bound / sqrt(n), squared: no square root per row.
+    const double bound_squared = config_.max_reading_residual * config_.max_reading_residual;
     for (int row = 0; row < rows_; ++row) {
       const auto r = static_cast<std::size_t>(row);
       health.filling_rows += count_[r] < config_.mean_window ? 1 : 0;
       health.stale_rows += newest_age_[r] > stale_age ? 1 : 0;
       health.stuck_rows += repeats_[r] >= config_.stuck_readings ? 1 : 0;
       health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
-      health.outlier_rows += std::abs(residual_(row)) * std::sqrt(static_cast<double>(count_[r])) > config_.max_reading_residual ? 1 : 0;
+      health.outlier_rows += residual_(row) * residual_(row) * count_[r] > bound_squared ? 1 : 0;
     }
     frame_.timestamp = last_timestamp_;
     frame_.oldest_age = last_timestamp_ - oldest;
