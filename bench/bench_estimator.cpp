@@ -2,7 +2,8 @@
 // build/bench/glovepose_bench --benchmark_filter=Estimator). The shipped model (U-Net, width 64),
 // calibrated on the fly on a simulated calibration sequence, with 1-euro smoothing and joint
 // transforms on; the input is a simulated session's raw rows. Argument: weight storage, 0 = F32,
-// 1 = F16, 2 = BF16, 3 = Fixed16 (the real-time choice; also the label).
+// 1 = F16, 2 = BF16, 3 = Fixed16 (the real-time choice; also the label). GLOVEPOSE_BENCH_MODEL=path
+// runs another model file instead (an FCN, a previous model) for a comparison in the same session.
 // - BM_EstimatorFrame/<storage>: one iteration = one frame: push_measurements of a whole C_m frame
 //   of 180 rows, which solves once (solve, calibrate, stretch maps, U-Net, 1-euro, kinematics and
 //   joint list). frames/s counts poses.
@@ -13,6 +14,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <vector>
@@ -54,7 +56,8 @@ std::shared_ptr<const PoseModel> shipped_model(nn::WeightStorage storage) {
   if (!model) {
     PoseModelOptions options;
     options.storage = storage;
-    model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors", options);
+    const char* path = std::getenv("GLOVEPOSE_BENCH_MODEL");
+    model = PoseModel::load(path && *path ? path : std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors", options);
   }
   return model;
 }

@@ -1,7 +1,7 @@
 /// @file tensor_file_fuzz.cpp
 /// @brief Fuzz target: the bytes as a weight or dataset file (weights_format.md). The container
 /// reader (io::TensorFile::parse), then everything that reads a container: nn::WeightFile,
-/// nn::ModelInfo::from, nn::UNet::from_tensors, the PoseModel built from them (glove description
+/// nn::ModelInfo::from, the network (U-Net or FCN) from_tensors, the PoseModel built from them (glove description
 /// in the metadata, joint limits, training range) and train::Dataset::from_tensor_file.
 ///
 /// Invariants: set-up code refuses bad input with glovepose::Error only (any other exception
@@ -29,8 +29,8 @@ std::shared_ptr<const glovepose::PoseModel> load_model(const glovepose::io::Tens
     const glovepose::nn::WeightFile weights = glovepose::nn::WeightFile::from(file);
     glovepose::nn::ModelInfo info = glovepose::nn::ModelInfo::from(weights);
     GLOVEPOSE_FUZZ_REQUIRE(info.joint_limits_min.size() == glovepose::hand::kDofCount);
-    if (info.architecture != "unet") return nullptr;
-    auto network = glovepose::PoseModel::Network::from_tensors(weights.tensors, info.width, info.bn_eps);
+    if (info.architecture == "linear") return nullptr;
+    auto network = glovepose::PoseModel::Network::from_tensors(info, weights.tensors, glovepose::nn::WeightStorage::F32);
     return std::make_shared<const glovepose::PoseModel>(std::move(info), std::move(network), glovepose::PoseModelOptions{});
   } catch (const glovepose::Error&) {
     return nullptr;

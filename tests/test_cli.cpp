@@ -230,6 +230,19 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   CHECK(std::isfinite(json_number(r.out, "mean_deg")));
   r = run("eval --model " + fcn + " --data " + data + " --subjects 2 --calibration onthefly --json");  // another mode than trained with
   REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("info --model " + fcn);  // the real-time path loads an FCN too
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("architecture: fcn") != std::string::npos);
+  CHECK(r.out.find("multiply-adds per frame: " + std::to_string(44 * 32 + 3 * 32 * 32 + 32 * 16 + 16 * 25)) != std::string::npos);
+  {
+    std::string row;
+    for (int c = 0; c < 44; ++c) row += (c ? "," : "") + std::string("0.25");
+    std::ofstream(temp("fcn_row.csv")) << row << "\n" << row << "\n";
+  }
+  r = run("predict --model " + fcn + " --fixed16 --no-header --in " + temp("fcn_row.csv"));
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 2);
+  CHECK(std::count(r.out.begin(), r.out.end(), ',') == 2 * 24);
 
   r = run("train --data " + data + " --model linear --exclude-subjects 2 --out " + lin);
   REQUIRE_MESSAGE(r.status == 0, r.out);

@@ -191,7 +191,9 @@ TEST_CASE("estimator: the shipped model leaves about half of each hidden layer e
   const train::Dataset& d = session().data;
   const GlovePoseEstimator estimator = calibrated(shipped());
   const PoseModel& model = *shipped();
-  auto ws = model.network().make_workspace(1);
+  REQUIRE(model.network().unet() != nullptr);
+  const auto& unet = *model.network().unet();
+  auto ws = unet.make_workspace(1);
   Eigen::VectorXd raw(model.cell_count()), normalized(model.cell_count());
   std::array<float, nn::kUNetInputs> maps{};
   std::array<float, nn::kUNetOutputs> pose_map{};
@@ -201,8 +203,8 @@ TEST_CASE("estimator: the shipped model leaves about half of each hidden layer e
     for (int c = 0; c < model.cell_count(); ++c) raw(c) = d.cells[f * d.cell_count + static_cast<std::size_t>(c)];
     REQUIRE(estimator.calibration()->normalize(raw, normalized) == Status::Ok);
     REQUIRE(model.glove().map().to_stretch_maps(normalized.data(), maps) == Status::Ok);
-    REQUIRE(model.network().forward(maps, pose_map, ws) == Status::Ok);
-    const auto fractions = model.network().zero_fractions(ws, 1);
+    REQUIRE(unet.forward(maps, pose_map, ws) == Status::Ok);
+    const auto fractions = unet.zero_fractions(ws, 1);
     for (std::size_t l = 0; l < mean.size(); ++l) mean[l] += fractions[l] / static_cast<double>(frames);
   }
   MESSAGE("shipped model, " << frames << " frames, mean share of exact zeros e1..d3: " << mean[0] << " " << mean[1] << " " << mean[2]

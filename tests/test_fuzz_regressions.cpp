@@ -29,7 +29,7 @@ std::string file_bytes(const std::string& path) {
 std::shared_ptr<const PoseModel> model_from_bytes(const std::string& bytes) {
   const nn::WeightFile weights = nn::WeightFile::parse(bytes);
   nn::ModelInfo info = nn::ModelInfo::from(weights);
-  auto network = PoseModel::Network::from_tensors(weights.tensors, info.width, info.bn_eps);
+  auto network = PoseModel::Network::from_tensors(info, weights.tensors, nn::WeightStorage::F32);
   return std::make_shared<const PoseModel>(std::move(info), std::move(network), PoseModelOptions{});
 }
 

@@ -159,7 +159,7 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
   TensorMap shaped = good;
   shaped["dec1.weight"].shape = {16, 8, 2, 8};
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(shaped, width), doctest::Contains("tensor 'dec1.weight' has shape [16, 8, 2, 8], expected [32, 16, 4, 4]"), Error);
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(good, 5), doctest::Contains("expected [10] (width 5)"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(good, 5), doctest::Contains("expected [10] (a width-5 U-Net)"), Error);
   TensorMap nan = good;
   nan["out.bias"].values[0] = std::numeric_limits<float>::quiet_NaN();
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(nan, width), doctest::Contains("tensor 'out.bias' contains NaN"), Error);

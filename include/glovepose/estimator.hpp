@@ -39,6 +39,7 @@
 #include "hand/joint_list.hpp"
 #include "hand/kinematics.hpp"
 #include "nn/model.hpp"
+#include "pose_network.hpp"
 #include "sensor/calibration.hpp"
 #include "sensor/layout.hpp"
 #include "sensor/readout.hpp"
@@ -69,15 +70,17 @@ class BasicPoseModel {
  public:
   /// @brief The solver of a glove wiring of any size.
   using Solver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
-  /// @brief The network.
-  using Network = nn::UNet<Backend>;
+  /// @brief The network: the U-Net or the FCN the model file holds.
+  using Network = BasicPoseNetwork<Backend>;
 
   /// @brief Loads a model file (weights_format.md). Throws glovepose::Error naming the file and what
-  /// is wrong: unreadable or malformed file, not a U-Net, or a glove or wiring that does not fit it.
+  /// is wrong: unreadable or malformed file, not a U-Net or FCN, or a glove or wiring that does not fit it.
   static std::shared_ptr<const BasicPoseModel> load(const std::string& path, PoseModelOptions options = {}) {
-    nn::Model<Backend> model = nn::Model<Backend>::load(path, options.storage);
+    const nn::WeightFile file = nn::WeightFile::read(path);
     try {
-      return std::make_shared<const BasicPoseModel>(std::move(model.info), std::move(model.unet), std::move(options));
+      nn::ModelInfo info = nn::ModelInfo::from(file);
+      Network network = Network::from_tensors(info, file.tensors, options.storage);
+      return std::make_shared<const BasicPoseModel>(std::move(info), std::move(network), std::move(options));
     } catch (const Error& e) {
       throw Error("model file '" + path + "': " + e.what());
     }
@@ -90,6 +93,9 @@ class BasicPoseModel {
     if (glove_.cell_count() != info_.inputs)
       throw Error("glove '" + glove_.id() + "' has " + std::to_string(glove_.cell_count()) + " cells, expected " +
                   std::to_string(info_.inputs) + " (the model's inputs)");
+    if (network_.required_cells() != 0 && network_.required_cells() != info_.inputs)
+      throw Error("the network reads " + std::to_string(network_.required_cells()) + " cells, expected " + std::to_string(info_.inputs) +
+                  " (metadata 'inputs')");
     if (glove_.id() != info_.glove)
       throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
     std::optional<sensor::TraceLayout> layout = std::move(options.layout);
@@ -147,25 +153,21 @@ class BasicPoseModel {
     const int n = cell_count();
     if (range.size() != n)
       throw Error("PoseModel::predict: calibration range of " + std::to_string(range.size()) + " cells, expected " + std::to_string(n));
-    std::vector<float> maps(static_cast<std::size_t>(frames) * grid::kStretchValues);
-    std::vector<float> pose_maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
+    std::vector<float> normalized_cells(static_cast<std::size_t>(frames) * static_cast<std::size_t>(n));
     Eigen::VectorXd raw(n), normalized(n);
-    std::array<float, grid::kStretchValues> frame_maps{};
     for (long f = 0; f < frames; ++f) {
       for (int c = 0; c < n; ++c) raw(c) = cells[f * n + c];
-      if (range.normalize(raw, normalized) != Status::Ok || glove_.map().to_stretch_maps(normalized.data(), frame_maps) != Status::Ok)
+      if (range.normalize(raw, normalized) != Status::Ok)
         throw Error("PoseModel::predict: frame " + std::to_string(f) + " has a non-finite cell value, expected finite C_c");
-      std::copy(frame_maps.begin(), frame_maps.end(), maps.begin() + f * grid::kStretchValues);
+      for (int c = 0; c < n; ++c) normalized_cells[static_cast<std::size_t>(f * n + c)] = static_cast<float>(normalized(c));
     }
-    network_.forward_batch(maps.data(), pose_maps.data(), frames, threads);
-    std::vector<hand::Angles> angles(static_cast<std::size_t>(frames));
-    std::array<float, grid::kMapSlots> pose_map{};
-    hand::Angles normalized_angles{};
-    for (long f = 0; f < frames; ++f) {
-      std::copy_n(pose_maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());
-      glove_.map().from_pose_map(pose_map, normalized_angles);
-      angles[static_cast<std::size_t>(f)] = limits_.denormalize(normalized_angles);
+    std::vector<hand::Angles> angles;
+    try {
+      angles = network_.normalized_dofs_batch(glove_.map(), normalized_cells.data(), n, frames, threads);
+    } catch (const Error& e) {
+      throw Error(std::string("PoseModel::predict: ") + e.what());
     }
+    for (hand::Angles& a : angles) a = limits_.denormalize(a);
     return angles;
   }
 
@@ -305,7 +307,7 @@ class BasicGlovePoseEstimator {
       : model_(checked(std::move(model))),
         config_(std::move(config)),
         calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
-        workspace_(model_->network().make_workspace(1)),
+        workspace_(model_->network().make_workspace()),
         kinematics_(config_.hand) {
     if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
       throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
@@ -507,14 +509,12 @@ class BasicGlovePoseEstimator {
     offsets_ = offsets.value_or(hand::Angles{});
   }
 
-  // Calibrated cells -> stretch maps -> network -> pose map -> angles (radians), the network's
+  // Calibrated cells -> network (the U-Net through the stretch maps and the pose map) -> angles (radians), the network's
   // angles as the pose and the pose-guided calibration both see them. `angles` is untouched on failure.
   Status network_angles(const Eigen::VectorXd& normalized, hand::Angles& angles) noexcept {
-    if (model_->glove().map().to_stretch_maps(normalized.data(), maps_) != Status::Ok) return Status::NonFinite;
-    const Status net = model_->network().forward(maps_, pose_map_, workspace_);
-    if (net != Status::Ok) return net;
     hand::Angles normalized_angles{};
-    model_->glove().map().from_pose_map(pose_map_, normalized_angles);
+    const Status net = model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_);
+    if (net != Status::Ok) return net;
     angles = model_->joint_limits().denormalize(normalized_angles);
     return Status::Ok;
   }
@@ -638,8 +638,6 @@ class BasicGlovePoseEstimator {
   int cells_backwards_run_ = 0;
   std::uint64_t readout_restarts_ = 0;
   std::uint32_t rejected_ = 0;
-  std::array<float, grid::kStretchValues> maps_{};
-  std::array<float, grid::kMapSlots> pose_map_{};
   Pose pose_;
   hand::Skeleton skeleton_;
   hand::JointList joints_{};

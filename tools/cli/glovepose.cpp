@@ -15,7 +15,7 @@
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
-#include <glovepose/nn/model.hpp>
+#include <glovepose/estimator.hpp>
 
 #include <array>
 #include <charconv>
@@ -100,21 +100,11 @@ std::vector<double> parse_row(const std::string& line, std::size_t line_no, std:
 }
 
 int predict(const Options& o) {
-  const auto model = nn::Model<>::load(o.model, o.storage);
-  hand::Angles lo{}, hi{};
-  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-    lo[d] = model.info.joint_limits_min[d];
-    hi[d] = model.info.joint_limits_max[d];
-  }
-  const hand::JointLimits limits(lo, hi);
-  // The glove the model was trained for: described in the file, or the built-in one.
-  const grid::GloveDescription glove = model.info.glove_description.empty() ? grid::GloveDescription::glauser2019()
-                                                                            : grid::GloveDescription::from_metadata(model.info.glove_description);
-  if (model.info.glove != glove.id())
-    throw Error("model '" + o.model + "' was trained for glove '" + model.info.glove +
-                "' and carries no glove_description, expected '" + glove.id() + "' (the built-in 44-cell layout) or a description");
-  const grid::GridMap& map = glove.map();
-  auto ws = model.unet.make_workspace();
+  PoseModelOptions options;
+  options.storage = o.storage;
+  const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model, options);  // the glove: from the file, or built in
+  const grid::GridMap& map = model->glove().map();
+  auto ws = model->network().make_workspace();
 
   std::ifstream file;
   if (!o.input.empty()) {
@@ -128,18 +118,15 @@ int predict(const Options& o) {
   }
   std::string line;
   std::size_t line_no = 0;
-  const auto cells = static_cast<std::size_t>(map.cell_count());
+  const auto cells = static_cast<std::size_t>(model->cell_count());
   while (std::getline(in, line)) {
     ++line_no;
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     const std::vector<double> values = parse_row(line, line_no, cells);
-    std::array<float, grid::kStretchValues> maps{};
-    std::array<float, grid::kMapSlots> pose{};
-    if (map.to_stretch_maps(values.data(), maps) != Status::Ok) throw Error("line " + std::to_string(line_no) + ": non-finite value");
-    if (model.unet.forward(maps, pose, ws) != Status::Ok) throw Error("line " + std::to_string(line_no) + ": the network refused the input");
     hand::Angles normalized{};
-    map.from_pose_map(pose, normalized);
-    const hand::Angles angles = limits.denormalize(normalized);
+    if (model->network().normalized_dofs(map, values.data(), normalized, ws) != Status::Ok)
+      throw Error("line " + std::to_string(line_no) + ": the network refused the input (a result beyond float's range)");
+    const hand::Angles angles = model->joint_limits().denormalize(normalized);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%.9g", d ? "," : "", angles[d]);
     std::printf("\n");
   }
@@ -147,16 +134,18 @@ int predict(const Options& o) {
 }
 
 int info(const Options& o) {
-  const auto model = nn::Model<>::load(o.model);
-  std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\nweights that can meet a 5x5 input: %zu\n"
-              "packed weight bytes (F32): %zu\nmultiply-adds per frame: %zu\ntraining-set calibration: %s\n",
-              model.info.architecture.c_str(), model.info.width, model.info.glove.c_str(), model.unet.parameter_count(),
-              model.unet.stored_weight_count(), model.unet.weight_bytes(), model.unet.mac_count(),
-              model.info.calibration_min ? "yes" : "no");
-  if (model.info.pose_offset.empty()) {
+  const std::shared_ptr<const PoseModel> loaded = PoseModel::load(o.model);
+  const PoseModel& model = *loaded;
+  const auto& net = model.network();
+  std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture.c_str(), model.info().width,
+              model.info().glove.c_str(), net.parameter_count());
+  if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
+  std::printf("packed weight bytes (F32): %zu\nmultiply-adds per frame: %zu\ntraining-set calibration: %s\n", net.weight_bytes(),
+              net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count(), model.info().calibration_min ? "yes" : "no");
+  if (!model.pose_offset()) {
     std::printf("pose-guided calibration: none\n");
   } else {
-    const calibration::PoseOffsetModel offsets = calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'");
+    const calibration::PoseOffsetModel& offsets = *model.pose_offset();
     std::printf("pose-guided calibration: sequence '%s' (%zu steps, %.1f s), %td features\n", offsets.sequence().id().c_str(),
                 offsets.sequence().steps().size(), offsets.sequence().total_seconds(), static_cast<std::ptrdiff_t>(offsets.feature_count()));
   }

@@ -46,9 +46,12 @@ constexpr int round_up(int n, int m) noexcept { return (n + m - 1) / m * m; }
 
 }  // namespace glovepose::nn
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
+
+#include "../config.hpp"
 
 namespace glovepose::nn {
 
@@ -74,6 +77,29 @@ inline std::string shape_string(const std::vector<std::int64_t>& shape) {
   std::string s = "[";
   for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
   return s + "]";
+}
+
+/// @brief Checks a network's tensors against the names and shapes it is made of: every expected
+/// tensor present, of its shape, with as many values, all finite, and no other tensor. Throws
+/// glovepose::Error naming the tensor; messages start with `who` and say `which` network was
+/// expected (e.g. "UNet", "a width-4 U-Net").
+inline void check_tensors(const TensorMap& tensors, const std::map<std::string, std::vector<std::int64_t>>& expected,
+                          const std::string& who, const std::string& which) {
+  for (const auto& [name, shape] : expected) {
+    const auto it = tensors.find(name);
+    if (it == tensors.end())
+      throw Error(who + ": tensor '" + name + "' is missing, expected shape " + shape_string(shape) + " (" + which + ")");
+    if (it->second.shape != shape)
+      throw Error(who + ": tensor '" + name + "' has shape " + shape_string(it->second.shape) + ", expected " + shape_string(shape) +
+                  " (" + which + ")");
+    if (static_cast<std::int64_t>(it->second.values.size()) != it->second.element_count())
+      throw Error(who + ": tensor '" + name + "' holds " + std::to_string(it->second.values.size()) + " values for shape " +
+                  shape_string(it->second.shape));
+    for (float v : it->second.values)
+      if (!std::isfinite(v)) throw Error(who + ": tensor '" + name + "' contains NaN or infinity, expected finite weights");
+  }
+  for (const auto& [name, t] : tensors)
+    if (!expected.count(name)) throw Error(who + ": tensor '" + name + "' is not part of " + which);
 }
 
 }  // namespace glovepose::nn

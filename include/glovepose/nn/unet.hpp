@@ -28,54 +28,19 @@
 
 #include "../config.hpp"
 #include "../status.hpp"
+#include "batching.hpp"
 #include "conv_plan.hpp"
 #include "fixed16.hpp"
 #include "half.hpp"
 #include "kernels/scalar.hpp"
 #include "kernels/simd.hpp"
 #include "kernels/sparse_row.hpp"
+#include "packed_weights.hpp"
 #include "tensor.hpp"
 #include "unet_topology.hpp"
+#include "weight_storage.hpp"
 
 namespace glovepose::nn {
-
-/// @brief How the weights are kept in memory.
-enum class WeightStorage : unsigned char {
-  F32,  ///< Exact: the file's values (with BN folded) in float.
-  F16,   ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
-  BF16,  ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
-         ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
-  Fixed16,  ///< 16-bit codes with one scale per output channel (fixed16.hpp): half the bytes, widened
-            ///< by 1.5 integer operations per vector; rounding at most 2^-16 of the channel's largest
-            ///< weight. The first and the last layer (few weights, not row products) stay F32.
-};
-
-static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEPOSE_WEIGHTS_* values are this order");
-
-/// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
-constexpr const char* storage_name(WeightStorage storage) noexcept {
-  switch (storage) {
-    case WeightStorage::F32: return "F32";
-    case WeightStorage::F16: return "F16";
-    case WeightStorage::BF16: return "BF16";
-    case WeightStorage::Fixed16: return "Fixed16";
-  }
-  return "unknown";
-}
-
-/// @brief The 16-bit storage for the real-time path with the instruction set the including code is
-/// compiled for: the fastest of those within 0.1 degree of F32 (Fixed16 and F16; test_estimator.cpp).
-/// With AVX-512 VBMI2 Fixed16 (three integer operations widen 32 weights); with F16C and no
-/// VBMI2, F16 (one hardware conversion per 8 weights, cheaper on AVX2 than Fixed16's five integer
-/// operations per 16: `BM_SparseRowKernel*` on Zen 3, docs/performance.md; AVX-512 without VBMI2
-/// also gets F16, unmeasured); otherwise Fixed16 (binary16 would be converted in software).
-constexpr WeightStorage realtime_storage() noexcept {
-#if defined(__F16C__) && !defined(__AVX512VBMI2__)
-  return WeightStorage::F16;
-#else
-  return WeightStorage::Fixed16;
-#endif
-}
 
 /// @brief Named widths: the paper's three sizes (Tables 4/5: about 3M, 13M, 50M parameters) and w = 64.
 struct UNetPreset {
@@ -87,18 +52,6 @@ inline constexpr std::array<UNetPreset, 4> kUNetPresets{{{"paper3m", 48}, {"w64"
 
 /// @brief Largest base width accepted (w = 4096 is already ~22G parameters).
 inline constexpr int kMaxWidth = 4096;
-/// @brief Largest batch a workspace may hold.
-inline constexpr int kMaxBatch = 1 << 16;
-
-/// @brief Up to this many frames per forward (forward_batch()'s default chunk), products take their
-/// inputs as nonzero entries (kernels/sparse_row.hpp) and skip the zeros that ReLU leaves (about
-/// half), their multiply-adds and, where a weight row meets a single activation, its reading. With
-/// several frames each weight block is read once from memory and then from the L1/L2 for the other
-/// rows, so skipping wins for batches too: at w = 64 a batch of 1024 frames in chunks of 32 ran
-/// 1.1-1.6 times as fast as with the dense, register-blocked products, for every weight storage
-/// (docs/performance.md). Larger calls keep the dense products, whose time does not depend on the input.
-inline constexpr int kSparseMaxFrames = 32;
-
 /// @brief Frames per chunk of the one-output-channel layer: its (row, tap) sums, 25 x 2 x 32 floats a
 /// frame (6.4 KB), stay in the L2 between the product that writes them and the sums that read them.
 inline constexpr int kTapColumnFrames = 16;
@@ -173,8 +126,7 @@ class UNet {
   std::size_t weight_bytes() const noexcept {
     std::size_t n = 0;
     for (const PackedLayer& l : layers_)
-      n += l.w32.size() * sizeof(float) + l.w16.size() * sizeof(std::uint16_t) + l.wbf16.size() * sizeof(kernels::BFloat16) +
-           (l.wfx16.size() * sizeof(kernels::Fixed16) + l.fixed_scale.size() * sizeof(float));
+      n += l.weights.bytes();
     return n;
   }
 
@@ -248,7 +200,7 @@ class UNet {
     }
     std::size_t input_rows = 0, output_rows = 0;
     for (const PackedLayer& l : layers_) {
-      if (l.wfx16.empty()) continue;
+      if (!l.weights.fixed16()) continue;
       std::size_t rows_in = 0;
       for (int s : l.sources) rows_in += static_cast<std::size_t>(buffers_[static_cast<std::size_t>(s)].positions);
       input_rows = std::max(input_rows, rows_in * static_cast<std::size_t>(capacity));
@@ -304,36 +256,15 @@ class UNet {
     for (long i = 0; i < frames * kUNetInputs; ++i)
       if (!std::isfinite(input[i])) throw Error("UNet::forward_batch: frame " + std::to_string(i / kUNetInputs) + " has a non-finite input");
     chunk = std::min(chunk, kMaxBatch);
-    std::mutex failure_mutex;
-    std::exception_ptr failure;
-    const auto work = [&](long begin, long end) {
-      try {
-        Workspace ws = make_workspace(chunk);
-        for (long f = begin; f < end; f += chunk) {
-          const int n = static_cast<int>(std::min<long>(chunk, end - f));
-          if (forward(input + f * kUNetInputs, output + f * kUNetOutputs, n, ws) != Status::Ok)
-            throw Error("UNet::forward_batch: frames " + std::to_string(f) + ".." + std::to_string(f + n - 1) +
-                        " overflowed inside the network (non-finite result)");
-        }
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
+    run_frame_shares(frames, threads, [&](long begin, long end) {
+      Workspace ws = make_workspace(chunk);
+      for (long f = begin; f < end; f += chunk) {
+        const int n = static_cast<int>(std::min<long>(chunk, end - f));
+        if (forward(input + f * kUNetInputs, output + f * kUNetOutputs, n, ws) != Status::Ok)
+          throw Error("UNet::forward_batch: frames " + std::to_string(f) + ".." + std::to_string(f + n - 1) +
+                      " overflowed inside the network (non-finite result)");
       }
-    };
-    std::vector<std::thread> pool;
-    const long per = (frames + threads - 1) / threads;
-    try {
-      for (int t = 1; t < threads; ++t) {
-        const long begin = t * per, end = std::min(frames, begin + per);
-        if (begin < end) pool.emplace_back(work, begin, end);
-      }
-    } catch (...) {
-      for (std::thread& th : pool) th.join();
-      throw;
-    }
-    work(0, std::min(frames, per));  // the calling thread takes the first share
-    for (std::thread& th : pool) th.join();
-    if (failure) std::rethrow_exception(failure);
+    });
   }
 
   /// @brief For the last `frames`-frame forward on `ws`: the fraction of each hidden activation
@@ -385,7 +316,7 @@ class UNet {
     std::size_t bytes = 0;
     for (const PackedLayer& l : layers_) {
       // A layer keeps one storage: F32, or 16 bits (which leave w32 empty).
-      const std::size_t weight_size = l.w32.empty() ? sizeof(std::uint16_t) : sizeof(float);
+      const std::size_t weight_size = l.weights.weight_size();
       const std::size_t out_stride = static_cast<std::size_t>(buffers_[static_cast<std::size_t>(l.out_buffer)].stride);
       if (l.mode == Mode::Im2col) {  // every row of a tap that meets input, whatever its value
         std::vector<int> rows(l.receptive_rows);
@@ -444,11 +375,8 @@ class UNet {
     int tap_stride = 0;                             // TapColumns: taps padded to the SIMD width
     Activation activation = Activation::Relu;
     AlignedVector<float> bias;   // padded output channels
-    AlignedVector<float> w32;    // per (tap, source): in channels x padded out channels, in column panels
-    AlignedVector<std::uint16_t> w16;
-    AlignedVector<kernels::BFloat16> wbf16;  // pair layout (kernels/weight_load.hpp)
-    AlignedVector<kernels::Fixed16> wfx16;   // Taps layers only, pair layout (fixed16.hpp)
-    AlignedVector<float> fixed_scale;        // Fixed16: per padded output channel
+    // per (tap, source): in channels x padded out channels, in column panels; Fixed16 in Taps layers only
+    PackedWeights weights;
     std::vector<std::size_t> block;  // offset of (tap, source) block
     std::size_t stored_weights = 0;
   };
@@ -457,7 +385,7 @@ class UNet {
     for (int id = 0; id < kUNetBufferCount; ++id) {
       const int c = unet_buffer_channels(id, width_);
       // BF16 and Fixed16 weights come in pairs of vectors (kernels/weight_load.hpp): whole pairs of output channels.
-      const bool paired = storage_ == WeightStorage::BF16 || storage_ == WeightStorage::Fixed16;
+      const bool paired = paired_storage(storage_);
       const int multiple = paired ? 2 * Backend::lanes : Backend::lanes;
       const int stride = (id == 0 || id == 8) ? c : round_up(c, multiple);
       buffers_.push_back({c, stride, unet_buffer_size(id), unet_buffer_size(id) * unet_buffer_size(id)});
@@ -465,23 +393,7 @@ class UNet {
   }
 
   static void check_tensor_names(const TensorMap& tensors, int width) {
-    const auto expected = expected_tensors(width);
-    for (const auto& [name, shape] : expected) {
-      const auto it = tensors.find(name);
-      if (it == tensors.end())
-        throw Error("UNet: tensor '" + name + "' is missing, expected shape " + shape_string(shape) + " (width " +
-                    std::to_string(width) + ")");
-      if (it->second.shape != shape)
-        throw Error("UNet: tensor '" + name + "' has shape " + shape_string(it->second.shape) + ", expected " +
-                    shape_string(shape) + " (width " + std::to_string(width) + ")");
-      if (static_cast<std::int64_t>(it->second.values.size()) != it->second.element_count())
-        throw Error("UNet: tensor '" + name + "' holds " + std::to_string(it->second.values.size()) + " values for shape " +
-                    shape_string(it->second.shape));
-      for (float v : it->second.values)
-        if (!std::isfinite(v)) throw Error("UNet: tensor '" + name + "' contains NaN or infinity, expected finite weights");
-    }
-    for (const auto& [name, t] : tensors)
-      if (!expected.count(name)) throw Error("UNet: tensor '" + name + "' is not part of a width-" + std::to_string(width) + " U-Net");
+    check_tensors(tensors, expected_tensors(width), "UNet", "a width-" + std::to_string(width) + " U-Net");
   }
 
   PackedLayer pack(const LayerSpec& spec, const TensorMap& tensors, double eps) const {
@@ -606,56 +518,12 @@ class UNet {
     }
     // Folding can scale weights far beyond what the file held (a tiny running variance); refuse what
     // the chosen storage cannot represent rather than compute with infinities.
-    // Fixed16: the channel's scale, largest |weight| / kFixed16Range, must be a float too.
-    const float limit = storage_ == WeightStorage::F16 ? 65504.0f
-                        : fixed                        ? static_cast<float>(std::numeric_limits<float>::max() * kFixed16Range)
-                                                       : std::numeric_limits<float>::max();
-    for (float v : packed)
-      if (!(std::abs(v) <= limit))
-        throw Error("UNet: layer " + spec.conv + (spec.bn.empty() ? "" : " with " + spec.bn + " folded in") + " has a weight of " +
-                    std::to_string(v) + ", expected magnitudes up to " + std::to_string(limit) + " for " +
-                    (storage_ == WeightStorage::F32 ? "F32" : std::string(storage_name(storage_)) + " storage (load as F32 instead)"));
     for (float v : layer.bias)
       if (!std::isfinite(v)) throw Error("UNet: layer " + spec.conv + " has a non-finite folded bias");
-    if (fixed) {
-      encode_fixed16(packed, column_of, out.stride, layer);
-    } else if (storage_ == WeightStorage::F32 || storage_ == WeightStorage::Fixed16) {
-      layer.w32.assign(packed.begin(), packed.end());
-    } else if (storage_ == WeightStorage::F16) {
-      layer.w16.resize(packed.size());
-      for (std::size_t i = 0; i < packed.size(); ++i) layer.w16[i] = float_to_f16(packed[i]);
-    } else {
-      layer.wbf16.resize(packed.size());
-      for (std::size_t i = 0; i < packed.size(); ++i) {
-        layer.wbf16[i] = static_cast<kernels::BFloat16>(float_to_bf16(packed[i]));
-        if (!std::isfinite(kernels::weight_value(layer.wbf16[i])))  // within float range, but rounds up past bfloat16's largest
-          throw Error("UNet: layer " + spec.conv + " has a weight of " + std::to_string(packed[i]) +
-                      ", too large for BF16 storage (load as F32 instead)");
-      }
-    }
+    const WeightStorage stored = fixed ? WeightStorage::Fixed16 : (storage_ == WeightStorage::Fixed16 ? WeightStorage::F32 : storage_);
+    layer.weights = encode_weights(packed, stored, column_of, out.stride,
+                                   "UNet: layer " + spec.conv + (spec.bn.empty() ? "" : " with " + spec.bn + " folded in"));
     return layer;
-  }
-
-  // Fixed16 codes of a packed layer: per output channel the scale that maps its largest |weight|
-  // to the largest code, then each 32-bit word's two codes (fixed16.hpp).
-  static void encode_fixed16(const std::vector<float>& packed, const std::vector<int>& column_of, int stride, PackedLayer& layer) {
-    std::vector<double> largest(static_cast<std::size_t>(stride), 0.0);
-    for (std::size_t i = 0; i < packed.size(); ++i) {
-      double& m = largest[static_cast<std::size_t>(column_of[i])];
-      m = std::max(m, static_cast<double>(std::abs(packed[i])));
-    }
-    layer.fixed_scale.assign(largest.size(), 0.0f);
-    for (std::size_t c = 0; c < largest.size(); ++c) layer.fixed_scale[c] = static_cast<float>(fixed16_scale(largest[c]));
-    const auto units = [&](std::size_t i) {  // against the float scale the layer multiplies by
-      const double s = layer.fixed_scale[static_cast<std::size_t>(column_of[i])];
-      return s > 0.0 ? packed[i] / s : 0.0;
-    };
-    layer.wfx16.resize(packed.size());  // whole words: blocks are whole rows of even width
-    for (std::size_t i = 0; i + 1 < packed.size(); i += 2) {
-      const std::uint32_t word = fixed16_encode_pair(units(i), units(i + 1));
-      layer.wfx16[i] = static_cast<kernels::Fixed16>(word & 0xFFFFu);
-      layer.wfx16[i + 1] = static_cast<kernels::Fixed16>(word >> 16);
-    }
   }
 
   template <typename W>
@@ -712,7 +580,7 @@ class UNet {
             met[tap.out_positions[j] * frames + f] += input_sum[first + static_cast<std::size_t>(tap.in_positions[j] * frames + f)];
       first += static_cast<std::size_t>(in_rows);
     }
-    const float* scale = layer.fixed_scale.data();
+    const float* scale = layer.weights.fixed_scale.data();
     const float* bias = layer.bias.data();
     for (int r = 0; r < out_rows; ++r) {
       float* row = out + static_cast<long>(r) * out_spec.stride;
@@ -831,16 +699,17 @@ class UNet {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
-    if (!layer.wfx16.empty()) {  // Fixed16: products of levels first, then scale, offset and bias
+    if (layer.weights.fixed16()) {  // Fixed16: products of levels first, then scale, offset and bias
       std::fill(out, out + static_cast<long>(rows) * out_spec.stride, 0.0f);
-      run_taps(layer, layer.wfx16.data(), frames, ws);
+      run_taps(layer, layer.weights.wfx16.data(), frames, ws);
       finish_fixed16(layer, frames, ws);
     } else {
       for (int r = 0; r < rows; ++r)
         std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
-      if (!layer.w32.empty()) run_products(layer, layer.w32.data(), frames, ws);
-      else if (!layer.w16.empty()) run_products(layer, layer.w16.data(), frames, ws);
-      else run_products(layer, layer.wbf16.data(), frames, ws);
+      layer.weights.visit([&](const auto* w) {
+        if constexpr (!std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(w)>>, kernels::Fixed16>)
+          run_products(layer, w, frames, ws);
+      });
     }
     if (layer.activation == Activation::Relu)
       Backend::relu(out, rows * out_spec.stride);

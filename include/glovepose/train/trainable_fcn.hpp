@@ -15,15 +15,14 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "../nn/fcn_topology.hpp"
 #include "../sim/random.hpp"
 #include "network.hpp"
 
 namespace glovepose::train {
 
-/// @brief Layer widths of an FCN with `inputs` inputs and hidden width `hidden`.
-inline std::vector<int> fcn_widths(int inputs, int hidden) {
-  return {inputs, hidden, hidden, hidden, hidden, hidden / 2, kTargets};
-}
+using nn::fcn_widths;
+static_assert(nn::kFcnOutputs == kTargets, "the FCN predicts every DoF");
 
 /// @brief The trainable FCN.
 class TrainableFcn final : public TrainableNetwork {

@@ -1,0 +1,51 @@
+/// @file weight_storage.hpp
+/// @brief How a network's weights are kept in memory after loading, for every architecture.
+#pragma once
+
+namespace glovepose::nn {
+
+/// @brief How the weights are kept in memory.
+enum class WeightStorage : unsigned char {
+  F32,  ///< Exact: the file's values (with BN folded) in float.
+  F16,   ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
+  BF16,  ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
+         ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
+  Fixed16,  ///< 16-bit codes with one scale per output channel (fixed16.hpp): half the bytes, widened
+            ///< by 1.5 integer operations per vector; rounding at most 2^-16 of the channel's largest
+            ///< weight. The U-Net's first and last layer (few weights, not row products) stay F32.
+};
+
+static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEPOSE_WEIGHTS_* values are this order");
+
+/// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
+constexpr const char* storage_name(WeightStorage storage) noexcept {
+  switch (storage) {
+    case WeightStorage::F32: return "F32";
+    case WeightStorage::F16: return "F16";
+    case WeightStorage::BF16: return "BF16";
+    case WeightStorage::Fixed16: return "Fixed16";
+  }
+  return "unknown";
+}
+
+/// @brief The 16-bit storage for the real-time path with the instruction set the including code is
+/// compiled for: the fastest of those within 0.1 degree of F32 (Fixed16 and F16; test_estimator.cpp).
+/// With AVX-512 VBMI2 Fixed16 (three integer operations widen 32 weights); with F16C and no
+/// VBMI2, F16 (one hardware conversion per 8 weights, cheaper on AVX2 than Fixed16's five integer
+/// operations per 16: `BM_SparseRowKernel*` on Zen 3, docs/performance.md; AVX-512 without VBMI2
+/// also gets F16, unmeasured); otherwise Fixed16 (binary16 would be converted in software).
+constexpr WeightStorage realtime_storage() noexcept {
+#if defined(__F16C__) && !defined(__AVX512VBMI2__)
+  return WeightStorage::F16;
+#else
+  return WeightStorage::Fixed16;
+#endif
+}
+
+/// @brief Whether matrices kept as `storage` are in pair layout (kernels/weight_load.hpp), so that
+/// output channels are padded to whole pairs of vectors.
+constexpr bool paired_storage(WeightStorage storage) noexcept {
+  return storage == WeightStorage::BF16 || storage == WeightStorage::Fixed16;
+}
+
+}  // namespace glovepose::nn

@@ -1,0 +1,152 @@
+/// @file pose_network.hpp
+/// @brief The network a PoseModel runs, whichever architecture its file holds: calibrated cell
+/// values -> normalised DoF values (-1 and +1 at the joint limits). The U-Net reads the cells as
+/// the glove's two stretch maps and answers a pose map, which the glove's grid map turns back into
+/// DoFs; the FCN reads the cells and answers the DoFs. Both keep their weights in the storage
+/// chosen at load and are immutable once loaded; each stream owns a Workspace.
+#pragma once
+
+#include <array>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "config.hpp"
+#include "grid/grid_map.hpp"
+#include "hand/dofs.hpp"
+#include "nn/fcn.hpp"
+#include "nn/model.hpp"
+#include "nn/unet.hpp"
+#include "status.hpp"
+
+namespace glovepose {
+
+/// @brief A U-Net or an FCN behind one per-frame call.
+template <typename Backend = nn::kernels::SimdBackend>
+class BasicPoseNetwork {
+ public:
+  /// @brief The U-Net of this backend.
+  using UNet = nn::UNet<Backend>;
+  /// @brief The FCN of this backend.
+  using Fcn = nn::Fcn<Backend>;
+
+  /// @brief Wraps a loaded U-Net.
+  BasicPoseNetwork(UNet unet) : net_(std::move(unet)) {}  // NOLINT: implicit, a U-Net is a pose network
+  /// @brief Wraps a loaded FCN.
+  BasicPoseNetwork(Fcn fcn) : net_(std::move(fcn)) {}  // NOLINT: implicit, an FCN is a pose network
+
+  /// @brief The network a model file's metadata names, built from its tensors with weights kept as
+  /// `storage`. Throws glovepose::Error for an architecture the real-time path does not run (a
+  /// linear map: train::load_model evaluates it) or tensors that do not make the network.
+  static BasicPoseNetwork from_tensors(const nn::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
+    if (info.architecture == "unet") return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
+    if (info.architecture == "fcn") return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
+    throw Error("architecture '" + info.architecture + "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
+  }
+
+  /// @brief "unet" or "fcn", as the model file names it.
+  std::string architecture() const { return unet() ? "unet" : "fcn"; }
+  /// @brief The U-Net, or null for an FCN.
+  const UNet* unet() const noexcept { return std::get_if<UNet>(&net_); }
+  /// @brief The FCN, or null for a U-Net.
+  const Fcn* fcn() const noexcept { return std::get_if<Fcn>(&net_); }
+  /// @brief Weight storage chosen at load.
+  nn::WeightStorage storage() const noexcept {
+    return std::visit([](const auto& net) { return net.storage(); }, net_);
+  }
+  /// @brief Trainable parameters of the network.
+  std::size_t parameter_count() const noexcept {
+    return std::visit([](const auto& net) { return net.parameter_count(); }, net_);
+  }
+  /// @brief Bytes of packed weights a dense forward streams.
+  std::size_t weight_bytes() const noexcept {
+    return std::visit([](const auto& net) { return net.weight_bytes(); }, net_);
+  }
+  /// @brief Cells a frame must hold: the FCN's inputs; 0 for a U-Net (any glove whose map fills its grid).
+  int required_cells() const noexcept { return fcn() ? fcn()->inputs() : 0; }
+
+  /// @brief One stream's scratch for single frames.
+  class Workspace {
+   private:
+    friend class BasicPoseNetwork;
+    std::variant<typename UNet::Workspace, typename Fcn::Workspace> net;
+    std::array<float, grid::kStretchValues> maps{};
+    std::array<float, grid::kMapSlots> pose_map{};
+    std::vector<float> cells;  // FCN input
+    std::array<float, nn::kFcnOutputs> dofs{};
+  };
+
+  /// @brief A workspace for single frames (set-up: allocates).
+  Workspace make_workspace() const {
+    Workspace ws;
+    if (const UNet* u = unet()) ws.net = u->make_workspace(1);
+    else {
+      ws.net = fcn()->make_workspace(1);
+      ws.cells.resize(static_cast<std::size_t>(fcn()->inputs()));
+    }
+    return ws;
+  }
+
+  /// @brief One frame: `cells` calibrated cell values (`map`'s glove) -> `normalized` DoF values.
+  /// Returns Status::NonFinite (normalized untouched) for a NaN or infinite cell or result,
+  /// Status::SizeMismatch for a workspace of another network; never allocates.
+  GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized,
+                                            Workspace& ws) const noexcept {
+    if (const UNet* u = unet()) {
+      auto* w = std::get_if<typename UNet::Workspace>(&ws.net);
+      if (!w) return Status::SizeMismatch;
+      if (map.to_stretch_maps(cells, ws.maps) != Status::Ok) return Status::NonFinite;
+      const Status status = u->forward(ws.maps, ws.pose_map, *w);
+      if (status != Status::Ok) return status;
+      map.from_pose_map(ws.pose_map, normalized);
+      return Status::Ok;
+    }
+    auto* w = std::get_if<typename Fcn::Workspace>(&ws.net);
+    if (!w || ws.cells.size() != static_cast<std::size_t>(fcn()->inputs())) return Status::SizeMismatch;
+    for (std::size_t c = 0; c < ws.cells.size(); ++c) ws.cells[c] = static_cast<float>(cells[c]);
+    const Status status = fcn()->forward(ws.cells.data(), ws.dofs.data(), 1, *w);
+    if (status != Status::Ok) return status;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) normalized[d] = ws.dofs[d];
+    return Status::Ok;
+  }
+
+  /// @brief The batch path for evaluation: `frames` rows of `cell_count` calibrated cell values ->
+  /// one row of normalised DoF values each, on `threads` threads. Set-up code: allocates; throws
+  /// glovepose::Error naming the first frame with a non-finite value.
+  std::vector<hand::Angles> normalized_dofs_batch(const grid::GridMap& map, const float* cells, int cell_count, long frames,
+                                                  int threads = 1) const {
+    std::vector<hand::Angles> out(static_cast<std::size_t>(frames));
+    if (frames <= 0) return out;
+    if (const UNet* u = unet()) {
+      std::vector<float> maps(static_cast<std::size_t>(frames) * grid::kStretchValues);
+      std::array<float, grid::kStretchValues> frame_maps{};
+      for (long f = 0; f < frames; ++f) {
+        if (map.to_stretch_maps(cells + f * cell_count, frame_maps) != Status::Ok)
+          throw Error("frame " + std::to_string(f) + " has a non-finite cell value, expected finite calibrated cells");
+        std::copy(frame_maps.begin(), frame_maps.end(), maps.begin() + f * grid::kStretchValues);
+      }
+      std::vector<float> pose_maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
+      u->forward_batch(maps.data(), pose_maps.data(), frames, threads);
+      std::array<float, grid::kMapSlots> pose_map{};
+      for (long f = 0; f < frames; ++f) {
+        std::copy_n(pose_maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());
+        map.from_pose_map(pose_map, out[static_cast<std::size_t>(f)]);
+      }
+      return out;
+    }
+    if (cell_count != fcn()->inputs())
+      throw Error("frames of " + std::to_string(cell_count) + " cells, expected " + std::to_string(fcn()->inputs()) + " (the FCN's inputs)");
+    std::vector<float> results(static_cast<std::size_t>(frames) * hand::kDofCount);
+    fcn()->forward_batch(cells, results.data(), frames, threads);
+    for (long f = 0; f < frames; ++f)
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) out[static_cast<std::size_t>(f)][d] = results[static_cast<std::size_t>(f) * hand::kDofCount + d];
+    return out;
+  }
+
+ private:
+  static_assert(nn::kFcnOutputs == static_cast<int>(hand::kDofCount), "the FCN answers one value per DoF");
+  std::variant<UNet, Fcn> net_;
+};
+
+}  // namespace glovepose
