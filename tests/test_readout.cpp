@@ -2,9 +2,11 @@
 
 #include <doctest/doctest.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include <limits>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -121,6 +123,57 @@ TEST_CASE("readout: window and solve interval are configurable") {
   config.solve_every = 0;
   CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("solve_every 0, expected at least 1"), Error);
   CHECK_THROWS_WITH_AS(GloveReadout(nullptr), doctest::Contains("no solver"), Error);
+}
+
+TEST_CASE("readout: streamed row by row, a static hand's cell estimates are the least-squares solve with its noise, w readings s^2/w") {
+  // The streaming estimate: every row's latest w readings, a solve every 16 rows. On a static hand
+  // each solve must be the least-squares solve of the rows' current means (computed here by the
+  // normal equations, apart from the readout's QR), and the estimates' spread s^2 (M^T M)^-1 / w.
+  const auto& m = glove_solver()->measurement_matrix();
+  const Eigen::MatrixXd normal_inverse = (m.transpose() * m).ldlt().solve(Eigen::MatrixXd::Identity(44, 44));
+  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 30.0);
+  const GloveSolver::Measurements clean = m * truth;
+  const double sigma = 0.05;  // pF per reading
+  for (int window : {1, 4}) {
+    CAPTURE(window);
+    ReadoutConfig config;
+    config.mean_window = window;
+    GloveReadout readout(glove_solver(), config);
+    std::mt19937 rng(17 + window);
+    std::normal_distribution<double> noise(0.0, sigma);
+    std::vector<std::vector<double>> held(180);  // each row's readings, newest last
+    Eigen::VectorXd squared_error = Eigen::VectorXd::Zero(44);
+    double worst_solve_gap = 0.0;
+    int solves = 0;
+    const int cycles = 1500;
+    for (int f = 0; f < cycles; ++f)
+      for (int r = 0; r < 180; ++r) {
+        const double reading = clean(r) + noise(rng);
+        held[static_cast<std::size_t>(r)].push_back(reading);
+        if (static_cast<int>(held[static_cast<std::size_t>(r)].size()) > window) held[static_cast<std::size_t>(r)].erase(held[static_cast<std::size_t>(r)].begin());
+        if (readout.push_row(r, reading, (f * 180 + r) * kRowPeriod) != Status::Solved || f < window) continue;
+        Eigen::VectorXd means(180);
+        for (int q = 0; q < 180; ++q) {
+          const auto& h = held[static_cast<std::size_t>(q)];
+          means(q) = std::accumulate(h.begin(), h.end(), 0.0) / static_cast<double>(h.size());
+        }
+        const Eigen::VectorXd batch = normal_inverse * (m.transpose() * means);
+        worst_solve_gap = std::max(worst_solve_gap, (readout.frame().cells - batch).cwiseAbs().maxCoeff());
+        squared_error += (readout.frame().cells - truth).cwiseAbs2();
+        ++solves;
+      }
+    squared_error /= solves;
+    CHECK(worst_solve_gap < 1e-9);
+    const double expected_total = sigma * sigma * normal_inverse.trace() / window;
+    MESSAGE("window " << window << ", " << solves << " solves: mean squared error of C_c " << squared_error.sum() << ", theory " << expected_total);
+    // Consecutive solves share most readings, so the spread is estimated from fewer independent
+    // samples than solves: the cells' total within 10%, each cell within 35%.
+    CHECK(squared_error.sum() == doctest::Approx(expected_total).epsilon(0.10));
+    for (int c = 0; c < 44; ++c) {
+      INFO("cell " << c);
+      CHECK(squared_error(c) == doctest::Approx(sigma * sigma * normal_inverse(c, c) / window).epsilon(0.35));
+    }
+  }
 }
 
 TEST_CASE("readout: a row is an outlier when its residual exceeds max_reading_residual / sqrt(readings it holds)") {
