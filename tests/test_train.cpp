@@ -3,6 +3,7 @@
 // references), against finite differences, and the eval-mode forward against the inference U-Net.
 #include <glovepose/io/tensor_file.hpp>
 #include <glovepose/nn/unet.hpp>
+#include <glovepose/train/augmentation.hpp>
 #include <glovepose/train/optimizer.hpp>
 #include <glovepose/train/trainable_fcn.hpp>
 #include <glovepose/train/trainable_unet.hpp>
@@ -284,4 +285,38 @@ TEST_CASE("train: gradients equal PyTorch autograd for a wider U-Net and FCN (fi
   }
   std::remove((base + "unet.safetensors").c_str());
   std::remove((base + "fcn.safetensors").c_str());
+}
+
+TEST_CASE("train: augmentation perturbs each value as (1 + g) x + o + n with the configured deviations") {
+  const long frames = 4000;
+  const int cells = 5;
+  std::vector<float> base(static_cast<std::size_t>(frames * cells));
+  for (long i = 0; i < frames * cells; ++i) base[static_cast<std::size_t>(i)] = (i % 2 == 0) ? 1.0f : 0.0f;  // x = 1 and x = 0
+  train::Augmentation a;
+  std::vector<float> x = base;
+  sim::Rng rng(3);
+  train::augment(x.data(), frames, cells, a, rng);
+  CHECK(x == base);  // inactive: untouched
+  a.gain = 0.1;
+  a.offset = 0.05;
+  a.noise = 0.02;
+  sim::Rng first(3), second(3);
+  train::augment(x.data(), frames, cells, a, first);
+  std::vector<float> again = base;
+  train::augment(again.data(), frames, cells, a, second);
+  CHECK(x == again);  // the same draws for the same seed
+  // Variance of the change: g^2 x^2 + o^2 + n^2, i.e. 0.0129 at x = 1 and 0.0029 at x = 0; mean 0.
+  double sum1 = 0, sq1 = 0, sum0 = 0, sq0 = 0;
+  for (long i = 0; i < frames * cells; ++i) {
+    const double d = x[static_cast<std::size_t>(i)] - base[static_cast<std::size_t>(i)];
+    (i % 2 == 0 ? sum1 : sum0) += d;
+    (i % 2 == 0 ? sq1 : sq0) += d * d;
+  }
+  const double n = static_cast<double>(frames * cells) / 2.0;
+  CHECK(std::abs(sum1 / n) < 4.0 * std::sqrt(0.0129 / n));
+  CHECK(std::abs(sum0 / n) < 4.0 * std::sqrt(0.0029 / n));
+  CHECK(sq1 / n == doctest::Approx(0.0129).epsilon(0.05));
+  CHECK(sq0 / n == doctest::Approx(0.0029).epsilon(0.05));
+  a.noise = -0.1;
+  CHECK_THROWS_WITH_AS(a.validate(), doctest::Contains("augmentation noise deviation"), Error);
 }

@@ -46,7 +46,9 @@ extern "C" void on_interrupt(int) { interrupted.store(true); }
                   "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
                   "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
                   "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
-                  "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n");
+                  "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n"
+                  "           --augment GAIN,OFFSET,NOISE (deviations of each training frame's cell perturbation,\n"
+                  "           normalised units: (1 + g) x + o + n; default none)\n");
 }
 
 template <typename T>
@@ -115,6 +117,19 @@ Options parse(int argc, char** argv) {
     else if (a == "--batch") o.training.batch = number<int>(o.command, a, value()), o.batch_set = true;
     else if (a == "--lr") o.training.optimizer.learning_rate = number<double>(o.command, a, value()), o.lr_set = true;
     else if (a == "--seed") o.training.seed = number<std::uint64_t>(o.command, a, value());
+    else if (a == "--augment") {
+      const std::string v = value();
+      const std::size_t c1 = v.find(','), c2 = c1 == std::string::npos ? c1 : v.find(',', c1 + 1);
+      if (c2 == std::string::npos) usage(o.command, "--augment '" + v + "', expected GAIN,OFFSET,NOISE");
+      o.training.augmentation.gain = number<double>(o.command, a, v.substr(0, c1));
+      o.training.augmentation.offset = number<double>(o.command, a, v.substr(c1 + 1, c2 - c1 - 1));
+      o.training.augmentation.noise = number<double>(o.command, a, v.substr(c2 + 1));
+      try {
+        o.training.augmentation.validate();
+      } catch (const Error& e) {
+        usage(o.command, std::string("--augment: ") + e.what());
+      }
+    }
     else if (a == "--validation") o.validation = number<double>(o.command, a, value());
     else if (a == "--max-minutes") o.training.max_seconds = 60.0 * number<double>(o.command, a, value());
     else if (a == "--optimizer") {

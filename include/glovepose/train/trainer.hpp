@@ -18,6 +18,7 @@
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../sim/random.hpp"
+#include "augmentation.hpp"
 #include "network.hpp"
 #include "optimizer.hpp"
 #include "samples.hpp"
@@ -50,7 +51,8 @@ struct TrainConfig {
   int epochs = 10;                  ///< Passes over the training frames.
   int batch = 1024;                 ///< Frames per step (the paper: 1024 generic, 256 personalised, 64 fine-tuning).
   OptimizerConfig optimizer;        ///< Update rule (default: the paper's Adam).
-  std::uint64_t seed = 1;           ///< Shuffling seed.
+  std::uint64_t seed = 1;           ///< Shuffling (and augmentation) seed.
+  Augmentation augmentation;        ///< Perturbation of the training frames' inputs (default none).
   double max_seconds = 0.0;         ///< Stop after this much wall time (0: no limit).
   const std::atomic<bool>* stop = nullptr;  ///< Set from elsewhere (a signal handler) to stop between steps.
   std::function<void(const Progress&)> on_progress;  ///< Called after every step.
@@ -102,6 +104,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
     throw Error("train: the samples have " + std::to_string(train.cells) + " cells per frame, the network takes " + std::to_string(net.inputs()));
   if (train.frames() < 1) throw Error("train: no training frames");
   if (config.epochs < 1 || config.batch < 1) throw Error("train: expected epochs >= 1 and batch >= 1");
+  config.augmentation.validate();
   const int batch = static_cast<int>(std::min<long>({static_cast<long>(config.batch), train.frames(), static_cast<long>(net.max_batch())}));
   const long steps_per_epoch = train.frames() / batch;  // the remainder waits for the next shuffle
   Optimizer optimizer(net.parameters(), config.optimizer);
@@ -135,6 +138,10 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
         const long i = order[static_cast<std::size_t>(step * batch + b)];
         std::copy(train.inputs.begin() + i * train.cells, train.inputs.begin() + (i + 1) * train.cells, x.begin() + static_cast<long>(b) * train.cells);
         std::copy(train.targets.begin() + i * kTargets, train.targets.begin() + (i + 1) * kTargets, t.begin() + static_cast<long>(b) * kTargets);
+      }
+      if (config.augmentation.active()) {
+        sim::Rng draw(sim::derive_seed(config.seed, {0x4155474dULL, static_cast<std::uint64_t>(epoch), static_cast<std::uint64_t>(step)}));
+        augment(x.data(), batch, train.cells, config.augmentation, draw);
       }
       net.forward(x.data(), batch, true, pool);
       const double loss = mse_loss(net.output(), t.data(), static_cast<long>(batch) * kTargets, grad.data());
