@@ -21,6 +21,7 @@
 namespace {
 constexpr std::uint32_t kModelTag = 0x4d4f444cu;      // "MODL"
 constexpr std::uint32_t kEstimatorTag = 0x45535449u;  // "ESTI"
+constexpr std::uint32_t kLatestTag = 0x4c415453u;     // "LATS"
 }  // namespace
 
 struct glovepose_model {
@@ -33,6 +34,11 @@ struct glovepose_estimator {
       : estimator(std::move(model), std::move(config)) {}
   std::uint32_t tag = kEstimatorTag;
   glovepose::GlovePoseEstimator estimator;
+};
+
+struct glovepose_latest {
+  std::uint32_t tag = kLatestTag;
+  glovepose::LatestHand latest;
 };
 
 namespace {
@@ -126,6 +132,29 @@ glovepose_result fail_from_exception(const char* reading, glovepose_result error
     return fail(GLOVEPOSE_ERROR_INTERNAL, e.what());
   } catch (...) {
     return fail(GLOVEPOSE_ERROR_INTERNAL, "unknown exception");
+  }
+}
+
+glovepose::LatestHand* latest_of(const glovepose_latest* handle) noexcept {
+  return handle != nullptr && handle->tag == kLatestTag ? &const_cast<glovepose_latest*>(handle)->latest : nullptr;
+}
+
+void copy_pose(const glovepose::Pose& p, glovepose_pose& out) noexcept {
+  std::memcpy(out.angles, p.angles.data(), sizeof out.angles);
+  std::memcpy(out.raw_angles, p.raw_angles.data(), sizeof out.raw_angles);
+  out.flags = p.flags;
+  out.timestamp = p.timestamp;
+  out.oldest_age = p.oldest_age;
+  out.compute_seconds = p.compute_seconds;
+  out.sequence = p.sequence;
+  out.rejected = p.rejected;
+  out.valid = p.valid ? 1 : 0;
+}
+
+void copy_joints(const glovepose::hand::JointList& joints, glovepose_joint* out) noexcept {
+  for (std::size_t j = 0; j < glovepose::hand::kJointCount; ++j) {
+    std::memcpy(out[j].position, joints[j].position.data(), sizeof out[j].position);
+    std::memcpy(out[j].rotation, joints[j].rotation.data(), sizeof out[j].rotation);
   }
 }
 
@@ -419,16 +448,7 @@ glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimat
   if (out->struct_size != sizeof(glovepose_pose))
     return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_get_pose: out->struct_size is not sizeof(glovepose_pose) "
                                              "(call glovepose_pose_init first)");
-  const glovepose::Pose& p = e->pose();
-  std::memcpy(out->angles, p.angles.data(), sizeof out->angles);
-  std::memcpy(out->raw_angles, p.raw_angles.data(), sizeof out->raw_angles);
-  out->flags = p.flags;
-  out->timestamp = p.timestamp;
-  out->oldest_age = p.oldest_age;
-  out->compute_seconds = p.compute_seconds;
-  out->sequence = p.sequence;
-  out->rejected = p.rejected;
-  out->valid = p.valid ? 1 : 0;
+  copy_pose(e->pose(), *out);
   return GLOVEPOSE_OK;
 }
 
@@ -441,11 +461,7 @@ glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estim
     return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_joints: count is not GLOVEPOSE_JOINT_COUNT (21)");
   if (!e->config().joint_transforms)
     return fail(GLOVEPOSE_ERROR_DISABLED, "glovepose_estimator_get_joints: the estimator was created with joint_transforms = 0");
-  const glovepose::hand::JointList& joints = e->joints();
-  for (std::size_t j = 0; j < glovepose::hand::kJointCount; ++j) {
-    std::memcpy(out[j].position, joints[j].position.data(), sizeof out[j].position);
-    std::memcpy(out[j].rotation, joints[j].rotation.data(), sizeof out[j].rotation);
-  }
+  copy_joints(e->joints(), out);
   return GLOVEPOSE_OK;
 }
 
@@ -463,6 +479,48 @@ glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) noexc
   glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   e->reset();
+  return GLOVEPOSE_OK;
+}
+
+// ---- the latest hand ---------------------------------------------------------------------------
+
+glovepose_result glovepose_latest_create(glovepose_latest** out_latest) noexcept {
+  if (out_latest == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_latest_create: out_latest is NULL");
+  *out_latest = new (std::nothrow) glovepose_latest;
+  if (*out_latest == nullptr) return fail(GLOVEPOSE_ERROR_OUT_OF_MEMORY, "glovepose_latest_create: out of memory");
+  return GLOVEPOSE_OK;
+}
+
+void glovepose_latest_free(glovepose_latest* latest) noexcept {
+  if (latest_of(latest) == nullptr) return;
+  latest->tag = 0;
+  delete latest;
+}
+
+glovepose_result glovepose_latest_publish(glovepose_latest* latest, const glovepose_estimator* estimator) noexcept {
+  glovepose::LatestHand* l = latest_of(latest);
+  if (l == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_publish: not a snapshot from glovepose_latest_create");
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  l->publish(e->state());
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose, glovepose_joint* joints,
+                                       int32_t joint_count, uint64_t* number) noexcept {
+  const glovepose::LatestHand* l = latest_of(latest);
+  if (l == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_read: not a snapshot from glovepose_latest_create");
+  if (pose != nullptr && pose->struct_size != sizeof(glovepose_pose))
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_latest_read: pose->struct_size is not sizeof(glovepose_pose) "
+                                             "(call glovepose_pose_init first)");
+  if (joint_count != (joints == nullptr ? 0 : GLOVEPOSE_JOINT_COUNT))
+    return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_latest_read: joint_count must be GLOVEPOSE_JOINT_COUNT (21) with joints, 0 without");
+  glovepose::HandState state;
+  const std::uint64_t n = l->read(state);
+  if (number != nullptr) *number = n;
+  if (n == 0) return GLOVEPOSE_OK;
+  if (pose != nullptr) copy_pose(state.pose, *pose);
+  if (joints != nullptr) copy_joints(state.joints, joints);
   return GLOVEPOSE_OK;
 }
 

@@ -153,6 +153,9 @@ typedef int32_t glovepose_result;
 typedef struct glovepose_model glovepose_model;
 /** @brief One glove stream (opaque). One thread at a time. */
 typedef struct glovepose_estimator glovepose_estimator;
+/** @brief The newest hand of one estimator for any number of reader threads (opaque): the
+ * estimator's thread publishes, an engine's update and render threads read. */
+typedef struct glovepose_latest glovepose_latest;
 
 /** @brief Settings of an estimator. Fill with glovepose_estimator_config_default(), then change fields. */
 typedef struct glovepose_estimator_config {
@@ -325,6 +328,28 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_cells(const glovepose_e
 /** @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged;
  * keeps the calibration and the last pose. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+
+/* ---- the latest hand, for other threads ------------------------------------------------------ */
+
+/** @brief Creates an empty snapshot (set-up: allocates). Free it with glovepose_latest_free after
+ * every thread has stopped using it. @return GLOVEPOSE_OK or _INVALID_ARGUMENT (NULL out). */
+GLOVEPOSE_C_API glovepose_result glovepose_latest_create(glovepose_latest** out_latest) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Frees a snapshot (NULL is ignored). */
+GLOVEPOSE_C_API void glovepose_latest_free(glovepose_latest* latest) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Writer, on the estimator's thread (one writer per snapshot): makes the estimator's current
+ * pose and joint list the newest. Per-frame: wait-free, allocation-free; call it after a push that
+ * returned GLOVEPOSE_SOLVED. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_latest_publish(glovepose_latest* latest,
+                                                         const glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Reader, any thread, any number of them: copies the newest published pose into *pose and
+ * its joint list into joints[0..joint_count-1] (either may be NULL; joint_count must then be 0, else
+ * GLOVEPOSE_JOINT_COUNT; without joint transforms in the estimator, rest values), and its number
+ * (1 for the first publish; 0: nothing published yet, outputs untouched) into *number if not NULL.
+ * Never blocks the writer, never returns a torn pose, allocation-free.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _STRUCT_SIZE (pose->struct_size) or GLOVEPOSE_SIZE_MISMATCH. */
+GLOVEPOSE_C_API glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose,
+                                                      glovepose_joint* joints, int32_t joint_count,
+                                                      uint64_t* number) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- calibration --------------------------------------------------------------------------- */
 

@@ -27,42 +27,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// The newest value from one writer thread for one reader thread, lock-free and wait-free on both
-// sides: a triple buffer. The writer fills its own slot and swaps it with the shared middle slot;
-// the reader swaps the middle slot for its own only when something newer is there. Each thread only
-// touches the slot it holds, so a copy can never be torn, and neither side ever waits.
-template <typename T>
-class LatestValue {
- public:
-  // Writer: fill back(), then publish() it.
-  T& back() noexcept { return slots_[back_]; }
-  void publish() noexcept { back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kSlot; }
-
-  // Reader: the newest published value (the same as last time when nothing new was published).
-  // Valid until the next read().
-  const T& read() noexcept {
-    if (middle_.load(std::memory_order_relaxed) & kFresh) front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kSlot;
-    return slots_[front_];
-  }
-
- private:
-  static constexpr unsigned kSlot = 3, kFresh = 4;  // middle_ holds a slot index and a "not read yet" bit
-  std::array<T, 3> slots_{};
-  std::atomic<unsigned> middle_{1};
-  unsigned back_ = 0;   // the writer's slot
-  unsigned front_ = 2;  // the reader's slot
-};
-
-// What the sensor thread hands to the game: a plain copy, no pointers into the estimator.
-struct HandState {
-  Pose pose;                         // pose.valid is false until the calibration is done
-  hand::JointList joints{};          // global (hand root frame) joint transforms of that pose
-  CalibrationProgress calibration;
-};
-
 // The sensor thread: owns the estimator, calibrates it on the first 2 s, then streams.
-void stream_glove(GlovePoseEstimator& estimator, const train::Dataset& glove, Clock::time_point start,
-                  LatestValue<HandState>& latest) {
+// After each pose it publishes the estimator's state (pose, joints, calibration progress): a plain
+// copy that the game reads whenever it likes, never waiting for this thread nor making it wait.
+void stream_glove(GlovePoseEstimator& estimator, const train::Dataset& glove, Clock::time_point start, LatestHand& latest) {
   const std::size_t rows = glove.row_count;
   estimator.start_calibration();
   for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
@@ -73,11 +41,7 @@ void stream_glove(GlovePoseEstimator& estimator, const train::Dataset& glove, Cl
       std::this_thread::sleep_until(start + std::chrono::duration<double>(t));  // stands in for a blocking read from the glove
       const Status status = estimator.push_row(static_cast<int>(r), glove.raw_rows[frame * rows + r], t);
       if (status != Status::Solved && status != Status::Uncalibrated) continue;  // no frame solved by this row
-      HandState& state = latest.back();
-      state.pose = estimator.pose();
-      state.joints = estimator.joints();
-      state.calibration = estimator.calibration_progress();
-      latest.publish();
+      latest.publish(estimator.state());
     }
   }
 }
@@ -143,7 +107,7 @@ int main(int argc, char** argv) {
     const train::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
 
     // The estimator belongs to the sensor thread from here on; the game only sees `latest`.
-    LatestValue<HandState> latest;
+    LatestHand latest;
     std::atomic<bool> glove_done{false};
     std::exception_ptr sensor_failure;
     const Clock::time_point start = Clock::now();
@@ -161,7 +125,8 @@ int main(int argc, char** argv) {
     HandRig rig;
     Clock::time_point next_step = start;
     for (long step = 0; !glove_done; ++step) {
-      const HandState& hand = latest.read();  // never waits: the newest pose, or the last one again
+      HandState hand;
+      (void)latest.read(hand);  // never waits: the newest state (pose.valid false before the first pose)
       if (hand.pose.valid) drive_rig(hand.joints, rig);
       if (step % 45 == 0) {  // "render" twice a second
         const double now = std::chrono::duration<double>(Clock::now() - start).count();
@@ -184,7 +149,8 @@ int main(int argc, char** argv) {
     }
     sensor.join();
     if (sensor_failure) std::rethrow_exception(sensor_failure);
-    return latest.read().pose.valid ? 0 : 1;
+    HandState last;
+    return latest.read(last) > 0 && last.pose.valid ? 0 : 1;
   } catch (const Error& e) {
     std::fprintf(stderr, "game_loop: %s\n", e.what());
     return 2;

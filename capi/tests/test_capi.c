@@ -515,6 +515,58 @@ static void test_joints(glovepose_model* model) {
   glovepose_estimator_free(full);
 }
 
+/* The latest hand for other threads (here read on the same thread: the threaded behaviour is the
+ * C++ library's, tested under ThreadSanitizer in tests/test_latest.cpp). */
+static void test_latest(glovepose_model* model) {
+  glovepose_estimator_config config;
+  glovepose_estimator* estimator = NULL;
+  glovepose_latest* latest = NULL;
+  glovepose_pose pose, direct;
+  glovepose_joint joints[GLOVEPOSE_JOINT_COUNT], direct_joints[GLOVEPOSE_JOINT_COUNT];
+  uint64_t number = 99;
+  double lo[44], hi[44];
+  int c;
+  for (c = 0; c < 44; ++c) {
+    lo[c] = 15.0 + 0.1 * c;
+    hi[c] = 25.0 + 0.1 * c;
+  }
+  glovepose_estimator_config_default(&config);
+  config.joint_transforms = 1;
+  CHECK_RESULT(glovepose_estimator_create(model, &config, &estimator), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_set_range(estimator, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_create(&latest), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_create(NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  glovepose_pose_init(&pose);
+  pose.timestamp = -5.0;
+  CHECK_RESULT(glovepose_latest_read(latest, &pose, joints, GLOVEPOSE_JOINT_COUNT, &number), GLOVEPOSE_OK);
+  CHECK(number == 0);
+  CHECK(pose.timestamp == -5.0); /* nothing published: untouched */
+  CHECK(push_synthetic(estimator, 0.0, 3) == 3);
+  CHECK_RESULT(glovepose_latest_publish(latest, estimator), GLOVEPOSE_OK);
+  CHECK(push_synthetic(estimator, 0.05, 2) == 2);
+  CHECK_RESULT(glovepose_latest_publish(latest, estimator), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_read(latest, &pose, joints, GLOVEPOSE_JOINT_COUNT, &number), GLOVEPOSE_OK);
+  CHECK(number == 2);
+  glovepose_pose_init(&direct);
+  CHECK_RESULT(glovepose_estimator_get_pose(estimator, &direct), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_get_joints(estimator, direct_joints, GLOVEPOSE_JOINT_COUNT), GLOVEPOSE_OK);
+  CHECK(pose.sequence == direct.sequence && pose.sequence == 5);
+  CHECK(memcmp(pose.angles, direct.angles, sizeof pose.angles) == 0);
+  CHECK(memcmp(joints, direct_joints, sizeof joints) == 0);
+  CHECK_RESULT(glovepose_latest_read(latest, NULL, NULL, 0, &number), GLOVEPOSE_OK);
+  CHECK(number == 2);
+  CHECK_RESULT(glovepose_latest_read(latest, &pose, joints, 20, NULL), GLOVEPOSE_SIZE_MISMATCH);
+  CHECK_RESULT(glovepose_latest_read(latest, NULL, NULL, GLOVEPOSE_JOINT_COUNT, NULL), GLOVEPOSE_SIZE_MISMATCH);
+  pose.struct_size = 3;
+  CHECK_RESULT(glovepose_latest_read(latest, &pose, NULL, 0, NULL), GLOVEPOSE_ERROR_STRUCT_SIZE);
+  CHECK_RESULT(glovepose_latest_publish(latest, NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_latest_publish((glovepose_latest*)estimator, estimator), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_latest_read(NULL, NULL, NULL, 0, NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  glovepose_latest_free(latest);
+  glovepose_latest_free(NULL);
+  glovepose_estimator_free(estimator);
+}
+
 /* The guided calibration sequence the shipped model carries (models/calibration_glauser2019.json):
  * its steps as data, and the step under way while a calibration collects. */
 static void test_guided_steps(glovepose_model* model) {
@@ -592,6 +644,7 @@ int main(int argc, char** argv) {
   test_rows_and_calibration(model, argv[2]);
   test_joints(model);
   test_guided_steps(model);
+  test_latest(model);
 
   /* Estimators share the model: freeing the caller's model handle leaves them working. */
   CHECK_RESULT(glovepose_estimator_create(model, NULL, &survivor), GLOVEPOSE_OK);

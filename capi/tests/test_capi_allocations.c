@@ -71,6 +71,8 @@ int main(int argc, char** argv) {
   glovepose_pose pose;
   glovepose_joint joints[GLOVEPOSE_JOINT_COUNT];
   glovepose_calibration_progress progress;
+  glovepose_latest* latest = NULL;
+  uint64_t number = 0;
   int32_t step = 0;
   double sequence_seconds = 0.0;
   double cells[44], frame[180];
@@ -100,6 +102,7 @@ int main(int argc, char** argv) {
     for (r = 0; r < 180; ++r) glovepose_estimator_push_row(estimator, r, cells[r % 44] + cells[(r / 15) % 44], f / 60.0 + r / 10800.0);
   }
   check(glovepose_calibration_finish(estimator) == GLOVEPOSE_OK, "finish the calibration");
+  check(glovepose_latest_create(&latest) == GLOVEPOSE_OK, "create the latest-hand snapshot");
 
   before = allocations;
   glovepose_calibration_start(estimator); /* while a calibration collects, and after */
@@ -114,6 +117,8 @@ int main(int argc, char** argv) {
     glovepose_estimator_get_cells(estimator, cells, 44);
     glovepose_calibration_get_progress(estimator, &progress);
     glovepose_calibration_get_step(estimator, &step, &sequence_seconds);
+    glovepose_latest_publish(latest, estimator);
+    glovepose_latest_read(latest, &pose, joints, GLOVEPOSE_JOINT_COUNT, &number);
   }
   for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;
   glovepose_estimator_push_measurements(estimator, frame, 180, 2.0);
@@ -131,6 +136,8 @@ int main(int argc, char** argv) {
   check(solved > 400, "poses were computed (11.25 per 180-row cycle)");
   check(during == 0, "no heap allocation in the per-frame calls");
 
+  check(number > 0, "the snapshot was read");
+  glovepose_latest_free(latest);
   glovepose_estimator_free(estimator);
   glovepose_model_free(model);
   printf("%d passed, %d failed\n", passed, failed);

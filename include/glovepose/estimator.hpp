@@ -38,6 +38,7 @@
 #include "hand/dofs.hpp"
 #include "hand/joint_list.hpp"
 #include "hand/kinematics.hpp"
+#include "latest.hpp"
 #include "nn/model.hpp"
 #include "pose_network.hpp"
 #include "sensor/calibration.hpp"
@@ -290,6 +291,19 @@ struct Pose {
   bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
 };
 
+/// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
+/// update and render threads through LatestHand.
+struct HandState {
+  Pose pose;                                ///< The pose (pose.valid false before the first).
+  hand::JointList joints{};                 ///< Its joint list (when EstimatorConfig::joint_transforms is on).
+  CalibrationProgress calibration;          ///< Where the calibration is.
+};
+
+/// @brief The newest HandState of one estimator for any number of reader threads (latest.hpp):
+/// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
+/// block it and never see a torn state.
+using LatestHand = Latest<HandState>;
+
 /// @brief One glove stream: rows, frames or solved cells in, poses out. See the file comment.
 ///
 /// Per-frame calls (push_*, pose(), joints(), calibration_progress(), start/cancel_calibration(),
@@ -392,6 +406,8 @@ class BasicGlovePoseEstimator {
   const hand::JointList& joints() const noexcept { return joints_; }
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
   const Eigen::VectorXd& cells() const noexcept { return cells_; }
+  /// @brief The latest pose, joint list and calibration progress together (for LatestHand).
+  HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress()}; }
 
   // ---- calibration -------------------------------------------------------------------------
 
