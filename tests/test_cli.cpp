@@ -259,6 +259,17 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::isfinite(json_number(r.out, "mean_deg")));
 
+  r = run("train --data " + data + " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --augment 0.05,0.05,0.02 --out " + temp("t_aug.safetensors"));
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("train --data " + data + " --model linear --augment 0.05,0.05,0.02 --out " + temp("x.safetensors"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("--augment trains networks") != std::string::npos);
+  r = run("train --data " + data + " --model fcn:16 --augment 0.05,0.05 --out " + temp("x.safetensors"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("expected GAIN,OFFSET,NOISE") != std::string::npos);
+  r = run("train --data " + data + " --model fcn:16 --augment 0.05,2,0 --out " + temp("x.safetensors"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("augmentation offset deviation") != std::string::npos);
   r = run("train --data " + data + " --model lstm --out " + temp("x.safetensors"));
   CHECK(r.status == 2);
   CHECK(r.out.find("expected unet:W, fcn[:H] or linear") != std::string::npos);

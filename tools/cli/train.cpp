@@ -269,6 +269,8 @@ int train_command(Options o, int argc, char** argv) {
                                                 {"training_seed", std::to_string(o.training.seed)},
                                                 {"training_data", o.data}};
   if (architecture == "linear") {
+    if (o.training.augmentation.active())
+      usage(o.command, "--augment trains networks; a linear map is fitted by least squares on the frames as they are");
     const auto [training, validation] = train::split_validation(all, o.validation);
     const nn::LinearMap map = train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
     std::vector<float> predicted(static_cast<std::size_t>(validation.frames()) * train::kTargets);

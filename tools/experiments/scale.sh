@@ -9,7 +9,9 @@
 #        MODELS ("linear fcn:512 unet:64"), CORPUS (made here when missing: seed 101, 100 people x
 #        2 sessions x 1.5 min, guided sequence, 2-reading cells), FIT (made when missing: seed 21,
 #        400 people x 1.5 min, for glovepose fit-guided), TEST (made when missing: seed 2027, 5
-#        people x 2 min with raw rows), THREADS (1: the published figures' setting).
+#        people x 2 min with raw rows), THREADS (1: the published figures' setting),
+#        AUGMENT ("none": training augmentation settings to compare, e.g. "none 0.05,0.05,0.02" for
+#        glovepose train --augment GAIN,OFFSET,NOISE).
 # Every command is logged in OUT/commands.log; the table goes to stdout.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -18,6 +20,7 @@ OUT=${OUT:-scale-out}
 PEOPLE=${PEOPLE:-10 30 100}
 MODELS=${MODELS:-linear fcn:512 unet:64}
 THREADS=${THREADS:-1}
+AUGMENT=${AUGMENT:-none}
 SEQUENCE=$ROOT/models/calibration_glauser2019.json
 mkdir -p "$OUT"
 CORPUS=${CORPUS:-$OUT/corpus100.safetensors}
@@ -37,17 +40,24 @@ mean() {  # model calibration -> "mean lag" of glovepose eval on the test people
     /usr/bin/python3 -c 'import json, sys; r = json.load(sys.stdin); print("%.3f %.1f" % (r["mean_deg"], r["lag_ms"]))'
 }
 
-echo "| model | training people | min-max (deg) | pose-guided (deg) | lag (ms) |"
-echo "|---|---:|---:|---:|---:|"
+echo "| model | augmentation | training people | min-max (deg) | pose-guided (deg) | lag (ms) |"
+echo "|---|---|---:|---:|---:|---:|"
 for model in $MODELS; do
+  for augment in $AUGMENT; do
   for n in $PEOPLE; do
     name=$OUT/$(echo "$model" | tr -d ':')_p$n
+    extra=()
+    if [ "$augment" != none ]; then
+      name=${name}_aug$(echo "$augment" | tr ',' '_')
+      extra=(--augment "$augment")
+    fi
     [ -f "$name.safetensors" ] || log "$G" train --data "$CORPUS" --model "$model" --gloves 0 --subjects "0-$((n - 1))" --stride 2 \
-      --epochs 10 --seed 1 --dtype f16 --threads "$THREADS" --quiet --out "$name.safetensors" > /dev/null
+      --epochs 10 --seed 1 --dtype f16 --threads "$THREADS" --quiet "${extra[@]}" --out "$name.safetensors" > /dev/null
     [ -f "${name}_g.safetensors" ] || log "$G" fit-guided --model "$name.safetensors" --data "$FIT" --threads "$THREADS" \
       --out "${name}_g.safetensors" > /dev/null
     minmax=$(mean "${name}_g.safetensors" onthefly)
     guided=$(mean "${name}_g.safetensors" guided)
-    echo "| $model | $n | ${minmax% *} | ${guided% *} | ${minmax#* } |"
+    echo "| $model | $augment | $n | ${minmax% *} | ${guided% *} | ${minmax#* } |"
+  done
   done
 done
