@@ -1,11 +1,11 @@
 // Google Benchmark cases for GlovePoseEstimator, the whole per-frame pipeline (run:
-// build/bench/glovepose_bench --benchmark_filter=Estimator). The shipped model (U-Net, width 64),
+// build/bench/glovepose_bench --benchmark_filter=Estimator). The shipped model (FCN 4 x 512),
 // calibrated on the fly on a simulated calibration sequence, with 1-euro smoothing and joint
 // transforms on; the input is a simulated session's raw rows. Argument: weight storage, 0 = F32,
 // 1 = F16, 2 = BF16, 3 = Fixed16 (the real-time choice; also the label). GLOVEPOSE_BENCH_MODEL=path
 // runs another model file instead (an FCN, a previous model) for a comparison in the same session.
 // - BM_EstimatorFrame/<storage>: one iteration = one frame: push_measurements of a whole C_m frame
-//   of 180 rows, which solves once (solve, calibrate, stretch maps, U-Net, 1-euro, kinematics and
+//   of 180 rows, which solves once (solve, calibrate, network, 1-euro, kinematics and
 //   joint list). frames/s counts poses.
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
@@ -57,7 +57,7 @@ std::shared_ptr<const PoseModel> shipped_model(nn::WeightStorage storage) {
     PoseModelOptions options;
     options.storage = storage;
     const char* path = std::getenv("GLOVEPOSE_BENCH_MODEL");
-    model = PoseModel::load(path && *path ? path : std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors", options);
+    model = PoseModel::load(path && *path ? path : std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors", options);
   }
   return model;
 }

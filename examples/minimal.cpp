@@ -1,7 +1,7 @@
 // The smallest complete program: load a model, create an estimator, calibrate on the fly, push the
 // glove's rows, read poses.
 //
-// Usage: minimal MODEL.safetensors   (the shipped model: models/glovepose_unet64.safetensors)
+// Usage: minimal MODEL.safetensors   (the shipped model: models/glovepose_fcn512.safetensors)
 //
 // The glove here is the simulator: one person moving through extreme poses for 3 s (the on-the-fly
 // calibration), then moving naturally for 5 s, read out row by row (180 rows per 60 Hz cycle) as a

@@ -19,7 +19,9 @@ using namespace glovepose;
 
 namespace {
 
-const std::string kShippedModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
+const std::string kShippedModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+// The paper's architecture, shipped beside the default: for what only a U-Net has.
+const std::string kUNetModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
 
 // One simulated subject: a 3 s calibration sequence, then a 6 s session, with the raw rows, solved
 // once per readout cycle (so the recorded C_c frames are the ones a row stream solves at cycle ends).
@@ -90,6 +92,11 @@ std::shared_ptr<const PoseModel> shipped() {
   return model;
 }
 
+std::shared_ptr<const PoseModel> shipped_unet() {
+  static const auto model = PoseModel::load(kUNetModel);
+  return model;
+}
+
 double max_difference(const hand::Angles& a, const hand::Angles& b) {
   double worst = 0.0;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) worst = std::max(worst, std::abs(a[d] - b[d]));
@@ -155,7 +162,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   CHECK(error < 10.0);
 }
 
-TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 and F16 within 0.1 degree of F32 over a session, BF16 measured") {
+TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 degree of F32 over a session, F16 exact, BF16 measured") {
   const train::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame, end = d.frames();
   const GlovePoseEstimator estimator = calibrated(shipped());
@@ -179,18 +186,20 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 and F16 withi
   }
   MESSAGE("shipped model, " << exact.size() << " frames, largest angle difference to F32 (mean): Fixed16 " << worst[0] << " degrees ("
                             << mean[0] << "), F16 " << worst[1] << " (" << mean[1] << "), BF16 " << worst[2] << " (" << mean[2] << ")");
-  CHECK(worst[0] > 0.0);
-  CHECK(worst[0] < worst[1] / 4.0);  // 2^-16 of the channel's largest weight against 11 significant bits
-  CHECK(worst[1] < 0.1);
-  CHECK(worst[2] > worst[1]);  // 8 significant bits: BF16 is not a bounded path
+  CHECK(worst[0] > 0.0);  // Fixed16 rounds (2^-16 of the channel's largest weight)
+  CHECK(worst[0] < 0.1);
+  // The file stores binary16 weights and an FCN has no batch norm to fold: F16 keeps them exactly.
+  CHECK(worst[1] == 0.0);
+  CHECK(worst[2] > worst[0]);  // 8 significant bits: BF16 is not a bounded path
+  CHECK(worst[2] > 0.05);
 }
 
-TEST_CASE("estimator: the shipped model leaves about half of each hidden layer exactly zero over a session") {
+TEST_CASE("estimator: the shipped U-Net leaves about half of each hidden layer exactly zero over a session") {
   // docs/performance.md: the single-frame products skip zero activations, so this share sets how
   // much of the weights a frame reads. Measured, not assumed: the band is the claim the docs make.
   const train::Dataset& d = session().data;
-  const GlovePoseEstimator estimator = calibrated(shipped());
-  const PoseModel& model = *shipped();
+  const GlovePoseEstimator estimator = calibrated(shipped_unet());
+  const PoseModel& model = *shipped_unet();
   REQUIRE(model.network().unet() != nullptr);
   const auto& unet = *model.network().unet();
   auto ws = unet.make_workspace(1);
@@ -293,7 +302,7 @@ TEST_CASE("estimator: calibration state machine, saved calibrations, training ra
 
   // The model's training range: absent in the shipped (on-the-fly) model; present when recorded.
   CHECK_THROWS_WITH_AS(other.use_training_calibration(), doctest::Contains("no training-set range"), Error);
-  nn::Model<> loaded = nn::Model<>::load(kShippedModel);
+  nn::Model<> loaded = nn::Model<>::load(kUNetModel);
   loaded.info.calibration_min = std::vector<double>(44, 10.0);
   loaded.info.calibration_max = std::vector<double>(44, 30.0);
   const auto with_range = std::make_shared<const PoseModel>(loaded.info, loaded.unet, PoseModelOptions{});

@@ -17,7 +17,7 @@ using namespace glovepose;
 namespace {
 
 std::shared_ptr<const PoseModel> soak_model() {
-  static const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");
+  static const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors");
   return model;
 }
 

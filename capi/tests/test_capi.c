@@ -178,10 +178,10 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
                GLOVEPOSE_OK);
   CHECK(glovepose_model_has_training_range(with_training) == 1);
 
-  /* 16-bit weights: the pose of F32 up to rounding. F16 stays within the 0.1 degree bound (this
-   * synthetic input: 0.016 degree, hence 0.05 here); BF16 does not on the shipped model (0.24
-   * degree here; docs/performance.md), so only its order of magnitude is checked. Fixed16 rounds
-   * each weight to 2^-16 of its channel's largest: well inside F16's difference. */
+  /* 16-bit weights: the pose of F32 up to rounding. The shipped FCN's file holds binary16 weights
+   * and an FCN has no batch norm to fold, so F16 keeps them exactly; Fixed16 rounds each weight to
+   * 2^-16 of its channel's largest (this synthetic input: 0.0012 degree, bound 0.05); BF16 keeps 8
+   * significant bits (0.082 degree here), so only its order of magnitude is checked. */
   {
     glovepose_estimator* a = NULL;
     double f16_degrees, bf16_degrees, fixed16_degrees;
@@ -195,10 +195,9 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
     printf("16-bit vs F32 weights: largest angle difference %.3g degrees (F16), %.3g degrees (BF16), %.3g degrees (Fixed16)\n",
            f16_degrees, bf16_degrees, fixed16_degrees);
     CHECK(fixed16_degrees > 0.0);
-    CHECK(fixed16_degrees < f16_degrees / 4.0);
-    CHECK(f16_degrees > 0.0);
-    CHECK(f16_degrees < 0.05);
-    CHECK(bf16_degrees > f16_degrees);
+    CHECK(fixed16_degrees < 0.05);
+    CHECK(f16_degrees == 0.0);
+    CHECK(bf16_degrees > fixed16_degrees);
     CHECK(bf16_degrees < 1.0);
   }
 

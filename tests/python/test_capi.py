@@ -39,7 +39,7 @@ import numpy as np  # noqa: E402
 
 from glovepose_ref import safetensors_io  # noqa: E402
 
-MODEL = ROOT / "models" / "glovepose_unet64.safetensors"
+MODEL = ROOT / "models" / "glovepose_fcn512.safetensors"
 DOFS, JOINTS = 25, 21
 OK, SOLVED = 0, 1
 ERROR_FILE_NOT_FOUND = -4

@@ -30,7 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kShippedModelName = "glovepose_unet64.safetensors";
+constexpr const char* kShippedModelName = "glovepose_fcn512.safetensors";
 // The DoFs of the angles-over-time picture: the index finger's three flexions (paper Fig. 15) and
 // the thumb's base flexion.
 constexpr const char* kPlottedDofs[] = {"index_base_flexion", "index_middle_flexion", "index_tip_flexion", "thumb_base_flexion"};

@@ -26,7 +26,7 @@ constexpr double kCalibrationSeconds = 30.0;
 struct SoakOptions {
   sim::SoakConfig soak;
   double source_minutes = 3.0;
-  std::string model = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
+  std::string model = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
 };
 
 // `problem` empty: the usage was asked for (--help).
@@ -37,7 +37,7 @@ struct SoakOptions {
                   "  --estimators N      estimators on threads sharing the model (default 3)\n"
                   "  --seed S            seed of the faults (default 1)\n"
                   "  --source-minutes X  simulated motion looped, minutes (default 3; ~6 s of CPU per minute)\n"
-                  "  --model FILE        weights (default: models/glovepose_unet64.safetensors of the source tree)\n");
+                  "  --model FILE        weights (default: models/glovepose_fcn512.safetensors of the source tree)\n");
 }
 
 SoakOptions parse_soak_options(int argc, char** argv) {
