@@ -207,8 +207,8 @@ enum class CalibrationMethod : std::uint8_t {
 
 /// @brief The estimator's default readout: the paper's solve cadence (every 16 rows) on each row's
 /// latest reading instead of the mean of its last 5. The 5-reading mean makes the pose trail the
-/// hand by about 30-40 ms; the latest reading by about 6-8 ms, and the shipped network (trained on
-/// cells of 2-reading means) loses nothing by it (docs/results.md, "Less lag"). The outlier bound
+/// hand by about 30-47 ms; the latest reading by about 5-11 ms, and the shipped networks (trained on
+/// cells of 2-reading means) lose nothing by it (docs/results.md, "Lag"). The outlier bound
 /// scales with the readings averaged (ReadoutConfig::max_reading_residual). Set mean_window = 5 for
 /// the paper's filter.
 inline sensor::ReadoutConfig realtime_readout() noexcept {
