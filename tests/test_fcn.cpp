@@ -115,7 +115,9 @@ TEST_CASE("fcn: every storage and both backends against the double-precision def
   // largest weight; binary16 keeps 11 significant bits, bfloat16 8.
   const std::vector<std::pair<WeightStorage, double>> bounds = {
       {WeightStorage::F32, 1e-5}, {WeightStorage::Fixed16, 2e-4}, {WeightStorage::F16, 3e-3}, {WeightStorage::BF16, 3e-2}};
-  for (const auto& [storage, bound] : bounds) {
+  for (const auto& entry : bounds) {
+    const WeightStorage storage = entry.first;  // named copies: clang's lambdas (CAPTURE) cannot capture bindings
+    const double bound = entry.second;
     CAPTURE(storage_name(storage));
     for (int frames : {1, 5, kSparseMaxFrames, kSparseMaxFrames + 9}) {  // sparse products up to 32 frames, dense beyond
       CAPTURE(frames);
@@ -224,7 +226,9 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
         w = std::max(w, std::abs(got[static_cast<std::size_t>(f)][d] - expected[static_cast<std::size_t>(f)][d]));
     return w * 180.0 / M_PI;  // degrees
   };
-  for (const auto& [storage, bound_deg] : std::vector<std::pair<WeightStorage, double>>{{WeightStorage::F32, 1e-4}, {WeightStorage::Fixed16, 0.01}}) {
+  for (const auto& entry : std::vector<std::pair<WeightStorage, double>>{{WeightStorage::F32, 1e-4}, {WeightStorage::Fixed16, 0.01}}) {
+    const WeightStorage storage = entry.first;
+    const double bound_deg = entry.second;
     CAPTURE(storage_name(storage));
     PoseModelOptions options;
     options.storage = storage;
