@@ -228,8 +228,7 @@ class Fcn {
       const float* scale = layer.weights.fixed_scale.data();
       for (int f = 0; f < frames; ++f) {
         float* row = y + f * out_stride;
-        const float offset = kFixed16Offset * Backend::sum(x + f * in_stride, k);
-        for (long c = 0; c < out_stride; ++c) row[c] = scale[c] * (row[c] - offset) + layer.bias[static_cast<std::size_t>(c)];
+        finish_fixed16_row(row, static_cast<int>(out_stride), scale, layer.bias.data(), Backend::sum(x + f * in_stride, k));
       }
     }
     if (l + 1 < kFcnLayers) Backend::relu(y, static_cast<int>(frames * out_stride));

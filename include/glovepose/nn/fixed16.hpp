@@ -55,4 +55,11 @@ inline std::uint32_t fixed16_encode_pair(double low, double high) noexcept {
   return hi << 16 | lo;
 }
 
+/// @brief Finishes one output row of a product of levels: row[c] = scale[c] * (row[c] -
+/// kFixed16Offset * input_sum) + bias[c] for c < count, `input_sum` the sum of the inputs the row met.
+inline void finish_fixed16_row(float* row, int count, const float* scale, const float* bias, float input_sum) noexcept {
+  const float offset = kFixed16Offset * input_sum;
+  for (int c = 0; c < count; ++c) row[c] = scale[c] * (row[c] - offset) + bias[c];
+}
+
 }  // namespace glovepose::nn

@@ -584,8 +584,7 @@ class UNet {
     const float* bias = layer.bias.data();
     for (int r = 0; r < out_rows; ++r) {
       float* row = out + static_cast<long>(r) * out_spec.stride;
-      const float offset = kFixed16Offset * met[r];
-      for (int c = 0; c < out_spec.stride; ++c) row[c] = scale[c] * (row[c] - offset) + bias[c];
+      finish_fixed16_row(row, out_spec.stride, scale, bias, met[r]);
     }
   }
 
