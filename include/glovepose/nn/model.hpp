@@ -119,7 +119,7 @@ struct Model {
     try {
       ModelInfo info = ModelInfo::from(file);
       if (info.architecture != "unet")
-        throw Error("architecture '" + info.architecture + "' is not a U-Net; train::load_predictor reads every architecture");
+        throw Error("architecture '" + info.architecture + "' is not a U-Net; PoseModel::load runs U-Nets and FCNs, train::load_model every architecture");
       UNet<Backend> net = UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
       return Model{std::move(info), std::move(net)};
     } catch (const Error& e) {
