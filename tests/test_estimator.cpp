@@ -32,9 +32,9 @@ struct Session {
   std::size_t first_session_frame = 0;
 };
 
-const Session& session() {
-  static const Session s = [] {
+Session simulate_session(hand::Handedness side) {
     sim::CorpusConfig config;
+    config.handedness = side;
     config.seed = 41;
     config.subjects = 1;
     config.sessions = 1;
@@ -49,7 +49,10 @@ const Session& session() {
     out.data = sim::to_dataset(sim::simulate_corpus(config), config);
     while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
     return out;
-  }();
+}
+
+const Session& session() {
+  static const Session s = simulate_session(hand::Handedness::Right);
   return s;
 }
 
@@ -66,10 +69,9 @@ double row_time(const train::Dataset& d, std::size_t frame, int row) {
   return d.timestamps[frame] - static_cast<double>(d.row_count - 1 - static_cast<std::size_t>(row)) / (d.row_count * 60.0);
 }
 
-// Streams frames [begin, end) row by row; calls on_pose(frame) whenever a frame's rows produced a pose.
+// Streams frames [begin, end) of `d` row by row; calls on_pose(frame) whenever a frame's rows produced a pose.
 template <typename Estimator, typename OnPose>
-void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose) {
-  const train::Dataset& d = session().data;
+void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose, const train::Dataset& d = session().data) {
   for (std::size_t f = begin; f < end; ++f) {
     bool solved = false;
     for (int r = 0; r < static_cast<int>(d.row_count); ++r)
@@ -79,10 +81,11 @@ void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPos
 }
 
 // An estimator calibrated on the session's calibration sequence (streamed row by row).
-GlovePoseEstimator calibrated(const std::shared_ptr<const PoseModel>& model, EstimatorConfig config = cycle_config()) {
+GlovePoseEstimator calibrated(const std::shared_ptr<const PoseModel>& model, EstimatorConfig config = cycle_config(),
+                              const Session& on = session()) {
   GlovePoseEstimator estimator(model, std::move(config));
   estimator.start_calibration();
-  stream_rows(estimator, 0, session().first_session_frame, [](std::size_t) {});
+  stream_rows(estimator, 0, on.first_session_frame, [](std::size_t) {}, on.data);
   estimator.finish_calibration();
   return estimator;
 }
@@ -396,6 +399,11 @@ TEST_CASE("estimator: no heap allocation per row, per frame, while calibrating o
     (void)estimator.push_cells(cells.data(), static_cast<int>(cells.size()), d.timestamps[begin + 60]);
     (void)estimator.push_row(3, std::nan(""), 1e9);
     (void)estimator.calibration_progress();
+    PredictedPose ahead;
+    XrHandJoints joints;
+    (void)estimator.pose_at(estimator.pose().timestamp + 0.02, ahead);
+    (void)estimator.joints_at(estimator.pose().timestamp + 0.02, joints);
+    (void)estimator.joints_at(estimator.pose().timestamp - 0.01, joints);
     estimator.reset();
   });
   CHECK(poses == 60);
@@ -458,4 +466,127 @@ TEST_CASE("estimator: set-up errors name what is wrong") {
   EstimatorConfig config;
   config.calibration_sample_period = -1.0;
   CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("calibration_sample_period"), Error);
+  config = EstimatorConfig{};
+  config.prediction_window = 0.0;
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("prediction_window 0.000000 s, expected a positive time"), Error);
+  config = EstimatorConfig{};
+  config.max_prediction = std::nan("");
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("max_prediction"), Error);
+}
+
+TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates their least-squares slope up to the bound") {
+  const auto model = shipped();
+  const train::Dataset& d = session().data;
+  EstimatorConfig config;  // the paper's cadence: a pose every 16 rows
+  GlovePoseEstimator estimator = calibrated(model, config);
+  PredictedPose out;
+  XrHandJoints joints;
+  GlovePoseEstimator fresh(model, config);
+  CHECK(fresh.pose_at(0.0, out) == Status::NotReady);
+  CHECK(fresh.joints_at(0.0, joints) == Status::NotReady);
+  CHECK_FALSE(joints.active);
+  std::vector<double> times;
+  std::vector<hand::Angles> poses;
+  const std::size_t begin = session().first_session_frame;
+  for (std::size_t f = begin; f < begin + 20; ++f)
+    for (int r = 0; r < static_cast<int>(d.row_count); ++r)
+      if (estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], row_time(d, f, r)) == Status::Solved) {
+        times.push_back(estimator.pose().timestamp);
+        poses.push_back(estimator.pose().angles);
+      }
+  REQUIRE(poses.size() > 200);
+  const std::size_t n = poses.size();
+  // Between two poses: the straight line between them.
+  const double mid = 0.25 * times[n - 3] + 0.75 * times[n - 2];
+  REQUIRE(estimator.pose_at(mid, out) == Status::Ok);
+  CHECK_FALSE(out.predicted);
+  CHECK(out.horizon == doctest::Approx(mid - times[n - 1]));
+  for (std::size_t k = 0; k < hand::kDofCount; ++k) CHECK(out.angles[k] == doctest::Approx(0.25 * poses[n - 3][k] + 0.75 * poses[n - 2][k]).epsilon(1e-12));
+  // Ahead: the newest pose moved along the least-squares line through the poses of the window.
+  std::vector<std::size_t> window;
+  for (std::size_t i = 0; i < n; ++i)
+    if (times[n - 1] - times[i] <= config.prediction_window) window.push_back(i);
+  REQUIRE(window.size() > 10);
+  Eigen::MatrixXd design(static_cast<Eigen::Index>(window.size()), 2);
+  Eigen::MatrixXd values(static_cast<Eigen::Index>(window.size()), static_cast<Eigen::Index>(hand::kDofCount));
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    design(static_cast<Eigen::Index>(i), 0) = 1.0;
+    design(static_cast<Eigen::Index>(i), 1) = times[window[i]] - times[n - 1];
+    for (std::size_t k = 0; k < hand::kDofCount; ++k) values(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = poses[window[i]][k];
+  }
+  const Eigen::MatrixXd line = design.colPivHouseholderQr().solve(values);
+  const double t = times[n - 1] + 0.02;
+  REQUIRE(estimator.pose_at(t, out) == Status::Ok);
+  CHECK(out.predicted);
+  CHECK_FALSE(out.clamped);
+  CHECK(out.has_rate);
+  const hand::JointLimits& limits = model->joint_limits();
+  for (std::size_t k = 0; k < hand::kDofCount; ++k) {
+    const double slope = line(1, static_cast<Eigen::Index>(k));
+    CHECK(out.rate[k] == doctest::Approx(slope).epsilon(1e-9));
+    CHECK(out.angles[k] == doctest::Approx(std::clamp(poses[n - 1][k] + 0.02 * slope, limits.min()[k], limits.max()[k])).epsilon(1e-9));
+  }
+  // Beyond the bound: located at the bound, flagged, not tracked.
+  REQUIRE(estimator.pose_at(times[n - 1] + 1.0, out) == Status::Ok);
+  CHECK(out.clamped);
+  CHECK(out.horizon == doctest::Approx(config.max_prediction));
+  REQUIRE(estimator.joints_at(times[n - 1] + 1.0, joints) == Status::Ok);
+  CHECK(joints.active);
+  CHECK(joints.locations[0].location_flags == (hand::kXrOrientationValid | hand::kXrPositionValid));
+  REQUIRE(estimator.joints_at(times[n - 1], joints) == Status::Ok);
+  CHECK(joints.locations[0].location_flags == (estimator.pose().trusted() ? 0xFu : 0x3u));
+  CHECK(joints.velocities[5].velocity_flags == (hand::kXrLinearVelocityValid | hand::kXrAngularVelocityValid));
+  CHECK(estimator.pose_at(std::nan(""), out) == Status::NonFinite);
+  // A reader of LatestHand predicts the same from the published state.
+  PredictedPose from_state;
+  REQUIRE(predict(estimator.state(), estimator.locator(), t, config.max_prediction, from_state) == Status::Ok);
+  REQUIRE(estimator.pose_at(t, out) == Status::Ok);
+  for (std::size_t k = 0; k < hand::kDofCount; ++k) CHECK(from_state.angles[k] == out.angles[k]);
+  estimator.reset();
+  CHECK(estimator.pose_at(t, out) == Status::NotReady);
+}
+
+TEST_CASE("estimator: a left-hand session gives the mirrored joints of the right-hand session") {
+  const Session& right_session = session();
+  static const Session left_session = simulate_session(hand::Handedness::Left);
+  // The mirrored hand in the mirrored glove stretches every cell as the right one does.
+  REQUIRE(left_session.data.raw_rows.size() == right_session.data.raw_rows.size());
+  CHECK(left_session.data.raw_rows == right_session.data.raw_rows);
+  EstimatorConfig config = cycle_config();
+  config.joint_transforms = true;
+  GlovePoseEstimator right = calibrated(shipped(), config, right_session);
+  config.handedness = hand::Handedness::Left;
+  GlovePoseEstimator left = calibrated(shipped(), config, left_session);
+  const std::size_t begin = right_session.first_session_frame;
+  double worst_xr = 0.0, worst_list = 0.0, thumb_x = 0.0;
+  int poses = 0;
+  stream_rows(right, begin, begin + 60, [&](std::size_t f) {
+    stream_rows(left, f, f + 1, [](std::size_t) {}, left_session.data);
+    ++poses;
+    XrHandJoints r, l;
+    REQUIRE(right.joints_at(right.pose().timestamp + 0.01, r) == Status::Ok);
+    REQUIRE(left.joints_at(right.pose().timestamp + 0.01, l) == Status::Ok);
+    CHECK(l.side == hand::Handedness::Left);
+    for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
+      const hand::XrPose& a = r.locations[j].pose;
+      const hand::XrPose& b = l.locations[j].pose;
+      for (float diff : {b.position.x + a.position.x, b.position.y - a.position.y, b.position.z - a.position.z, b.orientation.x - a.orientation.x,
+                         b.orientation.y + a.orientation.y, b.orientation.z + a.orientation.z, b.orientation.w - a.orientation.w,
+                         l.velocities[j].linear_velocity.x + r.velocities[j].linear_velocity.x,
+                         l.velocities[j].linear_velocity.y - r.velocities[j].linear_velocity.y})
+        worst_xr = std::max(worst_xr, static_cast<double>(std::abs(diff)));
+    }
+    thumb_x = l.locations[static_cast<std::size_t>(hand::XrJoint::ThumbTip)].pose.position.x;
+    for (std::size_t j = 0; j < hand::kJointCount; ++j) {
+      const auto& a = right.joints()[j].position;
+      const auto& b = left.joints()[j].position;
+      worst_list = std::max({worst_list, static_cast<double>(std::abs(a[0] + b[0])), static_cast<double>(std::abs(a[1] - b[1])),
+                             static_cast<double>(std::abs(a[2] - b[2]))});
+    }
+  }, right_session.data);
+  CHECK(poses == 60);
+  MESSAGE("left vs mirrored right: OpenXR joints " << worst_xr << ", joint list " << worst_list << " m");
+  CHECK(worst_xr < 1e-5);
+  CHECK(worst_list < 1e-6);
+  CHECK(thumb_x < 0.0);
 }

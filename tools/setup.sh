@@ -5,7 +5,9 @@ set -euo pipefail
 # python3-torch: the PyTorch reference the numerics tests compare with (Debian's, for /usr/bin/python3).
 # mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
-packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs "$@")
+# libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
+packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
+          libopenxr-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

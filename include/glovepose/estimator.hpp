@@ -33,6 +33,7 @@
 #include "calibration/user_calibration.hpp"
 #include "config.hpp"
 #include "filter/one_euro.hpp"
+#include "filter/trend.hpp"
 #include "grid/glove_description.hpp"
 #include "grid/grid_map.hpp"
 #include "hand/dofs.hpp"
@@ -46,6 +47,7 @@
 #include "sensor/readout.hpp"
 #include "sensor/solver.hpp"
 #include "status.hpp"
+#include "xr_hand.hpp"
 
 namespace glovepose {
 
@@ -236,6 +238,16 @@ struct EstimatorConfig {
   std::optional<filter::OneEuroConfig> smoothing;  ///< 1-euro smoothing of the angles; none: the network's output.
   bool joint_transforms = false;                  ///< Compute the skeleton and the joint list with every pose.
   hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
+  /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
+  /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,
+  /// and only the skeleton, the joint list and the OpenXR joints are mirrored (hand/handedness.hpp).
+  hand::Handedness handedness = hand::Handedness::Right;
+  /// Seconds of recent poses whose least-squares slope gives the angles' rate of change, for
+  /// pose_at()/joints_at() ahead of the newest pose and the joints' velocities (filter/trend.hpp).
+  double prediction_window = 0.03;
+  /// How far (s) past the newest pose pose_at()/joints_at() extrapolate; later times are located at
+  /// this bound and flagged clamped.
+  double max_prediction = 0.05;
 };
 
 /// @brief Where the estimator's calibration range comes from.
@@ -291,13 +303,60 @@ struct Pose {
   bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
 };
 
+/// @brief The hand at a requested time (GlovePoseEstimator::pose_at).
+struct PredictedPose {
+  hand::Angles angles{};   ///< Radians, within the joint limits.
+  hand::Angles rate{};     ///< Rate of change (rad/s): the slope of the recent poses.
+  bool has_rate = false;   ///< Whether rate comes from at least two poses.
+  double time = 0.0;       ///< The time asked for (the stream's clock, s).
+  double horizon = 0.0;    ///< Time located minus the newest pose's timestamp: > 0 predicted, <= 0 from the recent poses.
+  bool predicted = false;  ///< Extrapolated past the newest pose.
+  bool clamped = false;    ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
+  std::uint32_t flags = 0; ///< The newest pose's PoseFlag bits.
+  bool trusted = false;    ///< The newest pose's trusted().
+};
+
 /// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
 /// update and render threads through LatestHand.
 struct HandState {
   Pose pose;                                ///< The pose (pose.valid false before the first).
   hand::JointList joints{};                 ///< Its joint list (when EstimatorConfig::joint_transforms is on).
   CalibrationProgress calibration;          ///< Where the calibration is.
+  hand::Angles rate{};                      ///< The angles' rate of change (rad/s), for predicting ahead.
+  bool has_rate = false;                    ///< Whether rate is known.
 };
+
+/// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
+/// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
+/// before the first pose, NonFinite for a non-finite t.
+GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
+                                         PredictedPose& out) noexcept {
+  if (!state.pose.valid) return Status::NotReady;
+  if (!std::isfinite(t)) return Status::NonFinite;
+  out.time = t;
+  out.horizon = std::min(t - state.pose.timestamp, max_prediction);
+  out.clamped = t - state.pose.timestamp > max_prediction;
+  out.predicted = out.horizon > 0.0;
+  out.rate = state.rate;
+  out.has_rate = state.has_rate;
+  out.flags = state.pose.flags;
+  out.trusted = state.pose.trusted();
+  out.angles = out.predicted ? locator.extrapolate(state.pose.angles, state.rate, out.horizon) : state.pose.angles;
+  return Status::Ok;
+}
+
+/// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
+/// trusted and the time was within the prediction bound; velocities when the rate is known.
+GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLocator& locator, XrHandJoints& out) noexcept {
+  std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
+  if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
+  locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);
+  out.time = pose.time;
+  out.horizon = pose.horizon;
+  out.predicted = pose.predicted;
+  out.clamped = pose.clamped;
+  out.active = true;
+}
 
 /// @brief The newest HandState of one estimator for any number of reader threads (latest.hpp):
 /// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
@@ -322,10 +381,16 @@ class BasicGlovePoseEstimator {
         config_(std::move(config)),
         calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
         workspace_(model_->network().make_workspace()),
-        kinematics_(config_.hand) {
+        kinematics_(config_.hand, config_.handedness),
+        trend_(config_.prediction_window),
+        locator_(config_.hand, config_.handedness, model_->joint_limits()) {
     if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
       throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
                   " s, expected a finite value >= 0");
+    if (!(config_.prediction_window > 0.0) || !std::isfinite(config_.prediction_window))
+      throw Error("GlovePoseEstimator: prediction_window " + std::to_string(config_.prediction_window) + " s, expected a positive time");
+    if (!(config_.max_prediction >= 0.0) || !std::isfinite(config_.max_prediction))
+      throw Error("GlovePoseEstimator: max_prediction " + std::to_string(config_.max_prediction) + " s, expected a time of at least 0");
     if (config_.clock_restart_frames < 1)
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
@@ -406,8 +471,37 @@ class BasicGlovePoseEstimator {
   const hand::JointList& joints() const noexcept { return joints_; }
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
   const Eigen::VectorXd& cells() const noexcept { return cells_; }
-  /// @brief The latest pose, joint list and calibration progress together (for LatestHand).
-  HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress()}; }
+  /// @brief The latest pose, joint list, calibration progress and rate together (for LatestHand).
+  HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress(), trend_.slope(), trend_.has_slope()}; }
+
+  /// @brief The pose at time t (the stream's clock): from the recent poses when t is not after the
+  /// newest (interpolated; the oldest held for earlier times), else extrapolated along the recent
+  /// poses' slope for at most EstimatorConfig::max_prediction seconds, held within the joint limits.
+  /// Status::NotReady before the first pose (since the last reset), NonFinite for a non-finite t.
+  GLOVEPOSE_REALTIME Status pose_at(double t, PredictedPose& out) const noexcept {
+    if (!pose_.valid || trend_.size() == 0) return Status::NotReady;
+    HandState now = HandState{pose_, {}, {}, trend_.slope(), trend_.has_slope()};
+    const Status status = predict(now, locator_, t, config_.max_prediction, out);
+    if (status != Status::Ok || out.predicted) return status;
+    out.horizon = t - pose_.timestamp;
+    return trend_.at(t, out.angles);
+  }
+
+  /// @brief The OpenXR joints (xr_hand.hpp) at time t, located from pose_at(t), with velocities.
+  GLOVEPOSE_REALTIME Status joints_at(double t, XrHandJoints& out) const noexcept {
+    PredictedPose pose;
+    const Status status = pose_at(t, pose);
+    if (status != Status::Ok) {
+      out.active = false;
+      return status;
+    }
+    locate(pose, locator_, out);
+    return Status::Ok;
+  }
+
+  /// @brief The locator of this estimator's hand (side, hand model, joint limits), for readers of
+  /// LatestHand that locate joints on their own thread (predict() and locate()).
+  const XrHandLocator& locator() const noexcept { return locator_; }
 
   // ---- calibration -------------------------------------------------------------------------
 
@@ -503,6 +597,7 @@ class BasicGlovePoseEstimator {
   void reset() noexcept {
     if (readout_) readout_->reset();
     if (smoothing_) smoothing_->reset();
+    trend_.reset();
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
     cells_backwards_run_ = 0;
     next_calibration_sample_ = -std::numeric_limits<double>::infinity();
@@ -571,7 +666,10 @@ class BasicGlovePoseEstimator {
     const auto& frame = readout_->frame();
     // A gap or a clock restart started the readout over: the smoothing follows (its clock and its
     // history belong to the stream before).
-    if (frame.health.restarts != readout_restarts_ && smoothing_) smoothing_->reset();
+    if (frame.health.restarts != readout_restarts_) {
+      if (smoothing_) smoothing_->reset();
+      trend_.reset();
+    }
     readout_restarts_ = frame.health.restarts;
     return estimate(frame.cells, frame.timestamp, frame.oldest_age, frame.rejected, frame.health, start);
   }
@@ -617,6 +715,7 @@ class BasicGlovePoseEstimator {
       kinematics_.pose(pose_.angles, skeleton_);
       hand::to_joint_list(kinematics_, skeleton_, joints_);
     }
+    (void)trend_.add(timestamp, pose_.angles);  // refuses non-finite angles, keeping the trend as it was
     pose_.timestamp = timestamp;
     pose_.oldest_age = oldest_age;
     pose_.rejected = rejected_;
@@ -647,6 +746,8 @@ class BasicGlovePoseEstimator {
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   typename Model::Network::Workspace workspace_;
   hand::Kinematics kinematics_;
+  filter::Trend<hand::kDofCount> trend_;
+  XrHandLocator locator_;
   Eigen::VectorXd measurements_;
   Eigen::VectorXd cells_;
   Eigen::VectorXd normalized_;

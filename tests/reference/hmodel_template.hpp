@@ -1,9 +1,10 @@
 // Numbers of the template hand of the hand model behind the paper's angles (Tkach et al. 2017),
 // carried here as facts for the tests, with their source: the public repository
 // anastasia-tkach/honline-cpp-public: data/models/anastasia/I.txt (rest-pose matrices), C.txt
-// (sphere centres), tracker/HModel/ModelSemantics.cpp and Model.cpp (parameters and limits). That
-// repository states no license; only its numbers are used, rewritten as these tables (the library
-// types the same values in by hand: include/glovepose/hand/dofs.hpp and kinematics.hpp).
+// (sphere centres), R.txt (sphere radii), tracker/HModel/ModelSemantics.cpp and Model.cpp
+// (parameters and limits). That repository states no license; only its numbers are used, rewritten
+// as these tables (the library types the same values in by hand: include/glovepose/hand/dofs.hpp,
+// kinematics.hpp and openxr_joints.hpp).
 #pragma once
 
 #include <array>
@@ -83,6 +84,12 @@ inline constexpr std::array<double, 20 * 3> kSphereCentres = {
     30.9986, 87.4094, 6.97586, 25.3963, 50.8191, 5.28708,
     26.7855, 47.9654, -70.3597, 26.0498, 38.8509, -59.7168,
     21.59, 21.5548, -37.5908, 9.72575, 3.87206, -7.16046,
+};
+
+/// The radii (mm) of the same 20 spheres, in the same order (R.txt, its first 20 values).
+inline constexpr std::array<double, 20> kSphereRadii = {
+    4.18002, 4.77166, 6.22559, 7.84562, 4.84959, 5.01217, 6.97092, 7.26768, 5.58432, 5.67621,
+    7.64302, 7.68834, 5.17427, 5.85299, 7.55251, 8.44143, 7.0311, 7.30846, 10.3118, 15.6827,
 };
 
 /// One of the 25 finger parameters the glove estimates (theta 9..33 of the model's 34).

@@ -9,8 +9,10 @@
 /// at the end of it. Coordinates: the hand model's root frame (right hand), right-handed, metres.
 /// At rest the fingers point along +Y, +X points from the pinky side towards the thumb side, and
 /// flexing a finger moves its tip towards -Z: the palm faces -Z, the back of the hand +Z
-/// (tests/test_estimator.cpp checks these directions). An engine with a left-handed, Y-up frame
-/// (e.g. Unity) mirrors X (x -> -x) and negates the quaternion's y and z.
+/// (tests/test_estimator.cpp checks these directions). A left hand's list (Kinematics of
+/// Handedness::Left) is the right hand's mirrored: x -> -x, the thumb towards -X. An engine with a
+/// left-handed, Y-up frame (e.g. Unity) mirrors X (x -> -x) and negates the quaternion's y and z.
+/// OpenXR's 26-joint layout with its own conventions: openxr_joints.hpp.
 #pragma once
 
 #include <array>

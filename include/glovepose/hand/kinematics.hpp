@@ -20,6 +20,7 @@
 
 #include "../config.hpp"
 #include "dofs.hpp"
+#include "handedness.hpp"
 
 namespace glovepose::hand {
 
@@ -116,10 +117,13 @@ struct HandModel {
 /// Local transform of phalanx p: rest[p] * Rx(flexion) * Rz(abduction) * Ry(twist), the reference
 /// tracker's order (it right-multiplies all flexions, then all abductions, then all twists); a
 /// phalanx without a DoF on an axis gets the identity there. Global = parent global * local.
+/// A left hand's chain is the right hand's mirrored (handedness.hpp): the same angles give the
+/// mirror image of the right hand's pose.
 class Kinematics {
  public:
-  /// @brief Kinematics of the given hand (default: the reference template hand).
-  explicit Kinematics(HandModel model = HandModel::reference()) : model_(std::move(model)) {
+  /// @brief Kinematics of the given hand (default: the reference template hand, right side).
+  explicit Kinematics(HandModel model = HandModel::reference(), Handedness side = Handedness::Right)
+      : model_(std::move(model)), side_(side) {
     flexion_.fill(-1);
     abduction_.fill(-1);
     twist_.fill(-1);
@@ -132,19 +136,25 @@ class Kinematics {
 
   /// @brief The hand geometry in use.
   const HandModel& model() const noexcept { return model_; }
+  /// @brief The side the chain is for.
+  Handedness side() const noexcept { return side_; }
 
   /// @brief Global transform of every phalanx for the given angles (radians, kDofs order), with the
-  /// root (Position) frame at `root`.
+  /// root (Position) frame at `root`. A left hand: the right hand's frames mirrored, then `root`.
   GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out,
                                const Eigen::Affine3d& root = Eigen::Affine3d::Identity()) const noexcept {
+    const bool left = side_ == Handedness::Left;
     for (int p : kChainOrder) {
       const auto i = static_cast<std::size_t>(p);
       Eigen::Affine3d local = model_.rest[i];
       if (flexion_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(flexion_[i])], Eigen::Vector3d::UnitX()));
       if (abduction_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(abduction_[i])], Eigen::Vector3d::UnitZ()));
       if (twist_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(twist_[i])], Eigen::Vector3d::UnitY()));
-      out[i] = kParent[i] < 0 ? root * local : out[static_cast<std::size_t>(kParent[i])] * local;
+      const Eigen::Affine3d& parent = kParent[i] < 0 ? (left ? identity_ : root) : out[static_cast<std::size_t>(kParent[i])];
+      out[i] = parent * local;
     }
+    if (left)
+      for (Eigen::Affine3d& frame : out) frame = root * mirrored(frame);
   }
 
   /// @brief End point of a finger's distal phalanx (its tip), in the root frame.
@@ -156,6 +166,8 @@ class Kinematics {
 
  private:
   HandModel model_;
+  Handedness side_ = Handedness::Right;
+  Eigen::Affine3d identity_ = Eigen::Affine3d::Identity();
   std::array<int, kPhalanxCount> flexion_{};    // DoF index rotating phalanx p about X, or -1
   std::array<int, kPhalanxCount> abduction_{};  // ... about Z
   std::array<int, kPhalanxCount> twist_{};      // ... about Y

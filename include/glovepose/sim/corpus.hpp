@@ -44,6 +44,9 @@ struct CorpusConfig {
   std::optional<calibration::Sequence> guided_calibration;
   int threads = 0;                    ///< 0: all hardware threads.
   RecordingConfig recording{};        ///< Readout settings (raw rows, noise).
+  /// The hand the glove is worn on: a left hand is the right one mirrored, wearing the right glove's
+  /// sheet turned over (the same cells at the mirrored places).
+  hand::Handedness handedness = hand::Handedness::Right;
 
   /// @brief Throws glovepose::Error naming the first setting out of range.
   void validate() const {
@@ -202,7 +205,7 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   }
   const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
   const int stream = 2 * job.session + (calibration ? 1 : 0);
-  GlovePhysics physics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit);
+  GlovePhysics physics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit, config.handedness);
   if (calibration && config.guided_calibration)
     return SessionSetup{std::move(physics), MotionSequence(subject, *config.guided_calibration, id(4, stream), motion_config), id(5, stream)};
   return SessionSetup{std::move(physics),

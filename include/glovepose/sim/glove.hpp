@@ -204,9 +204,10 @@ inline GloveFit don_glove(const Subject& subject, Rng& rng) {
 /// Immutable after construction; the per-pose calls are noexcept and allocation-free.
 class GlovePhysics {
  public:
-  /// @brief Physics for `glove` worn by `subject` as `fit` describes.
-  GlovePhysics(const Subject& subject, const Glove& glove, const GloveFit& fit)
-      : kinematics_(subject.hand_model()),
+  /// @brief Physics for `glove` worn by `subject` as `fit` describes, on the subject's right hand or
+  /// left (the mirrored hand wearing the mirrored glove: hand/handedness.hpp).
+  GlovePhysics(const Subject& subject, const Glove& glove, const GloveFit& fit, hand::Handedness side = hand::Handedness::Right)
+      : kinematics_(subject.hand_model(), side),
         glove_(glove),
         fit_(fit),
         skin_(subject.skin),

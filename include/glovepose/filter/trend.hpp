@@ -1,0 +1,135 @@
+/// @file trend.hpp
+/// @brief The recent course of N channels (e.g. the 25 angles of the latest poses): values between
+/// two samples by linear interpolation, and the rate of change as the least-squares slope over a
+/// time window, which a caller extrapolates to predict a little ahead.
+///
+/// Why a fitted slope: the newest poses differ by the network's frame-to-frame noise as much as by
+/// the motion, so the difference of the last two poses is mostly noise at several hundred poses a
+/// second; a line through the poses of the last few tens of milliseconds keeps the motion and
+/// averages the noise (docs/results.md, "Poses at a requested time", measures the window).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include "../config.hpp"
+#include "../status.hpp"
+
+namespace glovepose::filter {
+
+/// @brief The last up to Capacity samples of N channels and their fitted slope.
+template <std::size_t N, std::size_t Capacity = 64>
+class Trend {
+  static_assert(Capacity >= 2, "a slope needs two samples");
+
+ public:
+  /// @brief The values of one sample.
+  using Values = std::array<double, N>;
+
+  /// @brief A trend whose slope is fitted over the samples of the last `window` seconds (at least
+  /// the two newest; at most Capacity).
+  explicit Trend(double window = 0.03) noexcept : window_(window) {}
+
+  /// @brief Seconds the slope is fitted over.
+  double window() const noexcept { return window_; }
+  /// @brief Samples held.
+  std::size_t size() const noexcept { return count_; }
+  /// @brief Timestamp of the newest sample (NaN when empty).
+  double newest_time() const noexcept { return count_ ? time_[index(0)] : std::nan(""); }
+  /// @brief Timestamp of the oldest sample held (NaN when empty).
+  double oldest_time() const noexcept { return count_ ? time_[index(count_ - 1)] : std::nan(""); }
+  /// @brief The newest sample's values.
+  const Values& newest() const noexcept { return values_[index(0)]; }
+  /// @brief The fitted rate of change per second (zero until two samples within the window).
+  const Values& slope() const noexcept { return slope_; }
+  /// @brief Whether slope() comes from at least two samples.
+  bool has_slope() const noexcept { return has_slope_; }
+
+  /// @brief Forgets every sample.
+  void reset() noexcept {
+    count_ = 0;
+    has_slope_ = false;
+    slope_.fill(0.0);
+  }
+
+  /// @brief Adds the newest sample. A timestamp not after the newest, or a non-finite one, starts
+  /// the trend over from this sample (a clock restart); non-finite values are refused.
+  GLOVEPOSE_REALTIME Status add(double t, const Values& values) noexcept {
+    for (double v : values)
+      if (!std::isfinite(v)) return Status::NonFinite;
+    if (!std::isfinite(t)) return Status::NonFinite;
+    if (count_ > 0 && !(t > newest_time())) reset();
+    head_ = (head_ + 1) % Capacity;
+    time_[head_] = t;
+    values_[head_] = values;
+    count_ = std::min(count_ + 1, Capacity);
+    fit();
+    return Status::Ok;
+  }
+
+  /// @brief The values at time t: interpolated between the two samples around it, the oldest
+  /// sample's before it, and extrapolated along slope() after the newest (the caller bounds how
+  /// far). Status::NotReady when empty, NonFinite for a non-finite t.
+  GLOVEPOSE_REALTIME Status at(double t, Values& out) const noexcept {
+    if (count_ == 0) return Status::NotReady;
+    if (!std::isfinite(t)) return Status::NonFinite;
+    const double newest_t = newest_time();
+    if (t >= newest_t) {
+      const Values& last = newest();
+      for (std::size_t c = 0; c < N; ++c) out[c] = last[c] + slope_[c] * (t - newest_t);
+      return Status::Ok;
+    }
+    for (std::size_t k = 1; k < count_; ++k) {
+      const std::size_t older = index(k), newer = index(k - 1);
+      if (t >= time_[older]) {
+        const double w = (t - time_[older]) / (time_[newer] - time_[older]);
+        for (std::size_t c = 0; c < N; ++c) out[c] = values_[older][c] + w * (values_[newer][c] - values_[older][c]);
+        return Status::Ok;
+      }
+    }
+    out = values_[index(count_ - 1)];
+    return Status::Ok;
+  }
+
+ private:
+  // Position in the ring of the k-th newest sample.
+  std::size_t index(std::size_t k) const noexcept { return (head_ + Capacity - k) % Capacity; }
+
+  // Least-squares slope over the samples within the window (times relative to the newest).
+  void fit() noexcept {
+    const double newest_t = newest_time();
+    std::size_t n = 0;
+    double mean_t = 0.0;
+    while (n < count_ && (n < 2 || newest_t - time_[index(n)] <= window_)) mean_t += time_[index(n++)] - newest_t;
+    has_slope_ = n >= 2;
+    if (!has_slope_) {
+      slope_.fill(0.0);
+      return;
+    }
+    mean_t /= static_cast<double>(n);
+    Values mean_v{};
+    for (std::size_t k = 0; k < n; ++k)
+      for (std::size_t c = 0; c < N; ++c) mean_v[c] += values_[index(k)][c];
+    for (double& m : mean_v) m /= static_cast<double>(n);
+    double stt = 0.0;
+    slope_.fill(0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double dt = time_[index(k)] - newest_t - mean_t;
+      stt += dt * dt;
+      for (std::size_t c = 0; c < N; ++c) slope_[c] += dt * (values_[index(k)][c] - mean_v[c]);
+    }
+    for (double& s : slope_) s /= stt;
+  }
+
+  double window_;
+  std::array<double, Capacity> time_{};
+  std::array<Values, Capacity> values_{};
+  std::size_t head_ = Capacity - 1;
+  std::size_t count_ = 0;
+  Values slope_{};
+  bool has_slope_ = false;
+};
+
+}  // namespace glovepose::filter
