@@ -74,6 +74,21 @@ static_assert(GLOVEPOSE_CALIBRATION_NONE == static_cast<int>(glovepose::Calibrat
               "calibration sources");
 // The documented ABI-1 sizes: no implicit padding, the same layout in C, C# and ctypes.
 static_assert(sizeof(glovepose_estimator_config) == 80, "ABI 1 layout");
+static_assert(sizeof(glovepose_hand_options) == 24 && offsetof(glovepose_hand_options, prediction_window) == 8, "ABI 1 layout");
+// OpenXR's layout (tests/test_openxr_joints.cpp checks hand::XrJointLocation against openxr.h).
+static_assert(sizeof(glovepose_xr_joint_location) == sizeof(glovepose::hand::XrJointLocation), "OpenXR layout");
+static_assert(offsetof(glovepose_xr_joint_location, orientation) == offsetof(glovepose::hand::XrJointLocation, pose), "OpenXR layout");
+static_assert(offsetof(glovepose_xr_joint_location, radius) == offsetof(glovepose::hand::XrJointLocation, radius), "OpenXR layout");
+static_assert(sizeof(glovepose_xr_joint_velocity) == sizeof(glovepose::hand::XrJointVelocity), "OpenXR layout");
+static_assert(offsetof(glovepose_xr_joint_velocity, angular_velocity) == offsetof(glovepose::hand::XrJointVelocity, angular_velocity),
+              "OpenXR layout");
+static_assert(sizeof(glovepose_xr_hand) == 1912 && offsetof(glovepose_xr_hand, locations) == 40, "ABI 1 layout");
+static_assert(sizeof(glovepose_predicted_pose) == 440 && offsetof(glovepose_predicted_pose, time) == 408, "ABI 1 layout");
+static_assert(GLOVEPOSE_XR_JOINT_COUNT == glovepose::hand::kXrJointCount, "OpenXR joint count");
+static_assert(GLOVEPOSE_XR_POSITION_TRACKED == glovepose::hand::kXrPositionTracked &&
+                  GLOVEPOSE_XR_ANGULAR_VELOCITY_VALID == glovepose::hand::kXrAngularVelocityValid,
+              "OpenXR flags");
+static_assert(GLOVEPOSE_HAND_LEFT == static_cast<int>(glovepose::hand::Handedness::Left), "handedness");
 static_assert(offsetof(glovepose_estimator_config, calibration_sample_period) == 16, "ABI 1 layout");
 static_assert(offsetof(glovepose_estimator_config, smoothing_frequency) == 48, "ABI 1 layout");
 static_assert(sizeof(glovepose_pose) == 448, "ABI 1 layout");
@@ -201,6 +216,35 @@ glovepose::EstimatorConfig to_config(const glovepose_estimator_config& c) {
   return config;
 }
 
+void apply(const glovepose_hand_options& o, glovepose::EstimatorConfig& config) {
+  if (o.handedness != GLOVEPOSE_HAND_RIGHT && o.handedness != GLOVEPOSE_HAND_LEFT)
+    throw glovepose::Error("glovepose_estimator_create_for_hand: handedness " + std::to_string(o.handedness) +
+                           ", expected GLOVEPOSE_HAND_RIGHT (0) or GLOVEPOSE_HAND_LEFT (1)");
+  config.handedness = static_cast<glovepose::hand::Handedness>(o.handedness);
+  config.prediction_window = o.prediction_window;
+  config.max_prediction = o.max_prediction;
+}
+
+void copy_xr_hand(const glovepose::XrHandJoints& in, glovepose_xr_hand& out) noexcept {
+  out.active = in.active ? 1 : 0;
+  out.predicted = in.predicted ? 1 : 0;
+  out.clamped = in.clamped ? 1 : 0;
+  out.handedness = static_cast<int32_t>(in.side);
+  out.reserved = 0;
+  out.time = in.time;
+  out.horizon = in.horizon;
+  std::memcpy(out.locations, in.locations.data(), sizeof out.locations);
+  std::memcpy(out.velocities, in.velocities.data(), sizeof out.velocities);
+}
+
+glovepose_result check_xr_hand(glovepose_xr_hand* out, const char* function) noexcept {
+  if (out == nullptr) return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "%s: out is NULL", function);
+  if (out->struct_size != sizeof(glovepose_xr_hand))
+    return failf(GLOVEPOSE_ERROR_STRUCT_SIZE, "%s: out->struct_size is not sizeof(glovepose_xr_hand) (call glovepose_xr_hand_init first)",
+                 function);
+  return GLOVEPOSE_OK;
+}
+
 }  // namespace
 
 extern "C" {
@@ -241,6 +285,16 @@ const char* glovepose_joint_name(int32_t joint) noexcept {
 int32_t glovepose_joint_parent(int32_t joint) noexcept {
   if (joint < 0 || joint >= GLOVEPOSE_JOINT_COUNT) return -2;
   return glovepose::hand::kJointParent[static_cast<std::size_t>(joint)];
+}
+
+const char* glovepose_xr_joint_name(int32_t joint) noexcept {
+  if (joint < 0 || joint >= GLOVEPOSE_XR_JOINT_COUNT) return nullptr;
+  return glovepose::hand::kXrJointNames[static_cast<std::size_t>(joint)];
+}
+
+int32_t glovepose_xr_joint_parent(int32_t joint) noexcept {
+  if (joint < 0 || joint >= GLOVEPOSE_XR_JOINT_COUNT) return -2;
+  return glovepose::hand::kXrJointParent[static_cast<std::size_t>(joint)];
 }
 
 // ---- model -------------------------------------------------------------------------------------
@@ -389,8 +443,24 @@ glovepose_result glovepose_estimator_config_default(glovepose_estimator_config* 
   return GLOVEPOSE_OK;
 }
 
+glovepose_result glovepose_hand_options_default(glovepose_hand_options* options) noexcept {
+  if (options == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_hand_options_default: options is NULL");
+  const glovepose::EstimatorConfig defaults;
+  std::memset(options, 0, sizeof *options);
+  options->struct_size = sizeof *options;
+  options->handedness = static_cast<int32_t>(defaults.handedness);
+  options->prediction_window = defaults.prediction_window;
+  options->max_prediction = defaults.max_prediction;
+  return GLOVEPOSE_OK;
+}
+
 glovepose_result glovepose_estimator_create(const glovepose_model* model, const glovepose_estimator_config* config,
                                             glovepose_estimator** out_estimator) noexcept {
+  return glovepose_estimator_create_for_hand(model, config, nullptr, out_estimator);
+}
+
+glovepose_result glovepose_estimator_create_for_hand(const glovepose_model* model, const glovepose_estimator_config* config,
+                                                     const glovepose_hand_options* options, glovepose_estimator** out_estimator) noexcept {
   if (out_estimator == nullptr)
     return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_create: out_estimator is NULL");
   *out_estimator = nullptr;
@@ -405,8 +475,14 @@ glovepose_result glovepose_estimator_create(const glovepose_model* model, const 
                    GLOVEPOSE_C_ABI_VERSION);
     settings = *config;
   }
+  if (options != nullptr && options->struct_size != sizeof(glovepose_hand_options))
+    return failf(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_create_for_hand: options struct_size %u, expected %u (ABI %d)",
+                 static_cast<unsigned>(options->struct_size), static_cast<unsigned>(sizeof(glovepose_hand_options)),
+                 GLOVEPOSE_C_ABI_VERSION);
   try {
-    *out_estimator = new glovepose_estimator(model->model, to_config(settings));
+    glovepose::EstimatorConfig estimator_config = to_config(settings);
+    if (options != nullptr) apply(*options, estimator_config);
+    *out_estimator = new glovepose_estimator(model->model, std::move(estimator_config));
     return GLOVEPOSE_OK;
   } catch (...) {
     // Every glovepose::Error here is about the settings (the model was checked above).
@@ -462,6 +538,43 @@ glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estim
   if (!e->config().joint_transforms)
     return fail(GLOVEPOSE_ERROR_DISABLED, "glovepose_estimator_get_joints: the estimator was created with joint_transforms = 0");
   copy_joints(e->joints(), out);
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_get_pose_at(const glovepose_estimator* estimator, double time,
+                                                 glovepose_predicted_pose* out) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_pose_at: out is NULL");
+  if (out->struct_size != sizeof(glovepose_predicted_pose))
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_get_pose_at: out->struct_size is not sizeof(glovepose_predicted_pose) "
+                                             "(call glovepose_predicted_pose_init first)");
+  glovepose::PredictedPose pose;
+  const Status status = e->pose_at(time, pose);
+  if (status != Status::Ok) return to_result(status);
+  out->flags = pose.flags;
+  std::memcpy(out->angles, pose.angles.data(), sizeof out->angles);
+  std::memcpy(out->rate, pose.rate.data(), sizeof out->rate);
+  out->time = pose.time;
+  out->horizon = pose.horizon;
+  out->predicted = pose.predicted ? 1 : 0;
+  out->clamped = pose.clamped ? 1 : 0;
+  out->has_rate = pose.has_rate ? 1 : 0;
+  out->trusted = pose.trusted ? 1 : 0;
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_get_xr_joints(const glovepose_estimator* estimator, double time, glovepose_xr_hand* out) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (const glovepose_result bad = check_xr_hand(out, "glovepose_estimator_get_xr_joints"); bad != GLOVEPOSE_OK) return bad;
+  glovepose::XrHandJoints joints;
+  const Status status = e->joints_at(time, joints);
+  if (status != Status::Ok) {
+    out->active = 0;
+    return to_result(status);
+  }
+  copy_xr_hand(joints, *out);
   return GLOVEPOSE_OK;
 }
 
@@ -521,6 +634,27 @@ glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose
   if (n == 0) return GLOVEPOSE_OK;
   if (pose != nullptr) copy_pose(state.pose, *pose);
   if (joints != nullptr) copy_joints(state.joints, joints);
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, const glovepose_estimator* estimator, double time,
+                                               glovepose_xr_hand* out) noexcept {
+  const glovepose::LatestHand* l = latest_of(latest);
+  if (l == nullptr)
+    return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_get_xr_joints: not a snapshot from glovepose_latest_create");
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (const glovepose_result bad = check_xr_hand(out, "glovepose_latest_get_xr_joints"); bad != GLOVEPOSE_OK) return bad;
+  glovepose::HandState state;
+  glovepose::PredictedPose pose;
+  const Status status = l->read(state) == 0 ? Status::NotReady : glovepose::predict(state, e->locator(), time, e->config().max_prediction, pose);
+  if (status != Status::Ok) {
+    out->active = 0;
+    return to_result(status);
+  }
+  glovepose::XrHandJoints joints;
+  glovepose::locate(pose, e->locator(), joints);
+  copy_xr_hand(joints, *out);
   return GLOVEPOSE_OK;
 }
 
@@ -669,6 +803,18 @@ void glovepose_calibration_step_init(glovepose_calibration_step* step) noexcept 
   if (step == nullptr) return;
   std::memset(step, 0, sizeof *step);
   step->struct_size = sizeof *step;
+}
+
+void glovepose_xr_hand_init(glovepose_xr_hand* hand) noexcept {
+  if (hand == nullptr) return;
+  std::memset(hand, 0, sizeof *hand);
+  hand->struct_size = sizeof *hand;
+}
+
+void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) noexcept {
+  if (pose == nullptr) return;
+  std::memset(pose, 0, sizeof *pose);
+  pose->struct_size = sizeof *pose;
 }
 
 }  // extern "C"

@@ -1,8 +1,8 @@
 /**
  * @file glovepose_c.h
- * @brief The C ABI of glovepose: a stretch-sensing glove's readings in, 25 hand angles (and a
- * 21-joint list) out, for game engines, VR runtimes and any language with a C foreign-function
- * interface (C# P/Invoke, Python ctypes).
+ * @brief The C ABI of glovepose: a stretch-sensing glove's readings in, 25 hand angles (a 21-joint
+ * list, and OpenXR's 26 hand joints) out, for game engines, VR runtimes and any language with a C
+ * foreign-function interface (C# P/Invoke, Python ctypes).
  *
  * Pure C (C89 with <stdint.h>, or C99 and later); no C++ types cross it. Two opaque handles:
  * - glovepose_model: a loaded model, immutable, shared by any number of estimators on any threads.
@@ -58,6 +58,22 @@ extern "C" {
 #define GLOVEPOSE_DOF_COUNT 25
 /** @brief Number of joints in the joint list. */
 #define GLOVEPOSE_JOINT_COUNT 21
+/** @brief Number of OpenXR hand joints (XR_HAND_JOINT_COUNT_EXT), in XrHandJointEXT order. */
+#define GLOVEPOSE_XR_JOINT_COUNT 26
+
+/** @brief Handedness: the glove is on the right hand (the hand model's side). */
+#define GLOVEPOSE_HAND_RIGHT 0
+/** @brief Handedness: the glove is on the left hand (outputs mirrored; the same model serves). */
+#define GLOVEPOSE_HAND_LEFT 1
+
+/** @brief OpenXR location flag bits (the values of XrSpaceLocationFlags). */
+#define GLOVEPOSE_XR_ORIENTATION_VALID 0x1u
+#define GLOVEPOSE_XR_POSITION_VALID 0x2u
+#define GLOVEPOSE_XR_ORIENTATION_TRACKED 0x4u
+#define GLOVEPOSE_XR_POSITION_TRACKED 0x8u
+/** @brief OpenXR velocity flag bits (the values of XrSpaceVelocityFlags). */
+#define GLOVEPOSE_XR_LINEAR_VELOCITY_VALID 0x1u
+#define GLOVEPOSE_XR_ANGULAR_VELOCITY_VALID 0x2u
 
 /** @brief Result of a call: one of the GLOVEPOSE_* codes below (32-bit on every platform). */
 typedef int32_t glovepose_result;
@@ -174,6 +190,15 @@ typedef struct glovepose_estimator_config {
   double smoothing_d_cutoff;          /**< 1-euro: cutoff of the derivative's low-pass, Hz (default 1). */
 } glovepose_estimator_config;
 
+/** @brief The hand an estimator serves and how it predicts ahead (glovepose_estimator_create_for_hand).
+ * Fill with glovepose_hand_options_default(), then change fields. */
+typedef struct glovepose_hand_options {
+  uint32_t struct_size;     /**< sizeof(glovepose_hand_options) (24 in ABI 1). */
+  int32_t handedness;       /**< GLOVEPOSE_HAND_RIGHT (default) or GLOVEPOSE_HAND_LEFT. */
+  double prediction_window; /**< Seconds of recent poses whose slope predicts ahead (default 0.15). */
+  double max_prediction;    /**< How far past the newest pose poses are predicted, s (default 0.05). */
+} glovepose_hand_options;
+
 /** @brief One estimated hand pose. Set struct_size (glovepose_pose_init) before asking for one. */
 typedef struct glovepose_pose {
   uint32_t struct_size;                   /**< sizeof(glovepose_pose) (448 in ABI 1); set by the caller. */
@@ -194,6 +219,52 @@ typedef struct glovepose_joint {
   float position[3]; /**< Metres: x, y, z. */
   float rotation[4]; /**< Unit quaternion: x, y, z, w. */
 } glovepose_joint;
+
+/** @brief One OpenXR hand joint, laid out as XrHandJointLocationEXT (copy it as it is): pose in the
+ * wrist joint's frame (metres, right-handed, +Z along the bone away from the tip, +Y out of the
+ * back of the hand; include/glovepose/hand/openxr_joints.hpp). An array element: never changes. */
+typedef struct glovepose_xr_joint_location {
+  uint64_t location_flags; /**< GLOVEPOSE_XR_ORIENTATION_* / POSITION_* bits. */
+  float orientation[4];    /**< Unit quaternion x, y, z, w (XrQuaternionf). */
+  float position[3];       /**< Metres (XrVector3f). */
+  float radius;            /**< Metres. */
+} glovepose_xr_joint_location;
+
+/** @brief One OpenXR joint velocity, laid out as XrHandJointVelocityEXT (wrist frame). An array
+ * element: never changes. */
+typedef struct glovepose_xr_joint_velocity {
+  uint64_t velocity_flags;   /**< GLOVEPOSE_XR_*_VELOCITY_VALID bits. */
+  float linear_velocity[3];  /**< m/s. */
+  float angular_velocity[3]; /**< rad/s, axis times rate. */
+} glovepose_xr_joint_velocity;
+
+/** @brief One hand's OpenXR joints at one time. Set struct_size (glovepose_xr_hand_init) first. */
+typedef struct glovepose_xr_hand {
+  uint32_t struct_size;  /**< sizeof(glovepose_xr_hand) (1912 in ABI 1); set by the caller. */
+  int32_t active;        /**< 1 when a pose exists (XrHandJointLocationsEXT::isActive). */
+  int32_t predicted;     /**< 1 when extrapolated past the newest pose. */
+  int32_t clamped;       /**< 1 when asked further ahead than max_prediction: located at the bound. */
+  int32_t handedness;    /**< GLOVEPOSE_HAND_*. */
+  int32_t reserved;      /**< 0. */
+  double time;           /**< The time located (the glove stream's clock, s). */
+  double horizon;        /**< time minus the newest pose's timestamp, s (> 0 predicted). */
+  glovepose_xr_joint_location locations[GLOVEPOSE_XR_JOINT_COUNT]; /**< XrHandJointEXT order. */
+  glovepose_xr_joint_velocity velocities[GLOVEPOSE_XR_JOINT_COUNT];
+} glovepose_xr_hand;
+
+/** @brief The hand at a requested time (glovepose_estimator_get_pose_at). */
+typedef struct glovepose_predicted_pose {
+  uint32_t struct_size;               /**< sizeof(glovepose_predicted_pose) (440 in ABI 1); set by the caller. */
+  uint32_t flags;                     /**< The newest pose's GLOVEPOSE_POSE_* bits. */
+  double angles[GLOVEPOSE_DOF_COUNT]; /**< Radians, within the joint limits. */
+  double rate[GLOVEPOSE_DOF_COUNT];   /**< Rate of change, rad/s (the recent poses' slope). */
+  double time;                        /**< The time asked for (the stream's clock, s). */
+  double horizon;                     /**< Time located minus the newest pose's timestamp, s. */
+  int32_t predicted;                  /**< 1 when extrapolated past the newest pose. */
+  int32_t clamped;                    /**< 1 when asked further ahead than max_prediction. */
+  int32_t has_rate;                   /**< 1 when rate comes from at least two poses. */
+  int32_t trusted;                    /**< 1 when the newest pose has no fault flag. */
+} glovepose_predicted_pose;
 
 /** @brief How far an on-the-fly calibration has come, and the range in use. */
 typedef struct glovepose_calibration_progress {
@@ -235,6 +306,10 @@ GLOVEPOSE_C_API const char* glovepose_dof_name(int32_t dof) GLOVEPOSE_C_NOEXCEPT
 GLOVEPOSE_C_API const char* glovepose_joint_name(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Parent of joint `joint` in the list (-1 for the palm); -2 when out of range. */
 GLOVEPOSE_C_API int32_t glovepose_joint_parent(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Name of OpenXR joint 0..25, e.g. "index_metacarpal" (NULL out of range). */
+GLOVEPOSE_C_API const char* glovepose_xr_joint_name(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Parent of OpenXR joint 0..25 (-1 for the wrist, -2 out of range). */
+GLOVEPOSE_C_API int32_t glovepose_xr_joint_parent(int32_t joint) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- model --------------------------------------------------------------------------------- */
 
@@ -291,6 +366,15 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_create(const glovepose_mode
                                                             const glovepose_estimator_config* config,
                                                             glovepose_estimator** out_estimator) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Frees an estimator. NULL is ignored. */
+/** @brief Fills *options with the defaults (a right hand) and sets struct_size. */
+GLOVEPOSE_C_API glovepose_result glovepose_hand_options_default(glovepose_hand_options* options) GLOVEPOSE_C_NOEXCEPT;
+/** @brief glovepose_estimator_create for a given hand: `options` NULL means the defaults (right hand,
+ * glovepose_estimator_create's behaviour). A left glove is the right glove's sensor sheet turned
+ * over, so the same model serves it and the joints come out mirrored. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_create_for_hand(const glovepose_model* model,
+                                                                     const glovepose_estimator_config* config,
+                                                                     const glovepose_hand_options* options,
+                                                                     glovepose_estimator** out_estimator) GLOVEPOSE_C_NOEXCEPT;
 GLOVEPOSE_C_API void glovepose_estimator_free(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
 
 /**
@@ -323,6 +407,15 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_joints(const glovepose_
 /** @brief Copies the latest solved cell capacitances (pF, the network's input before calibration)
  * into out[0..count-1]; `count` must be the model's cell count.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or GLOVEPOSE_SIZE_MISMATCH. */
+/** @brief The pose at `time` (the stream's clock): interpolated between recent poses, or
+ * extrapolated along their slope for at most max_prediction seconds. GLOVEPOSE_NOT_READY before
+ * the first pose, GLOVEPOSE_NON_FINITE for a non-finite time. Per-frame: never allocates. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose_at(const glovepose_estimator* estimator, double time,
+                                                                 glovepose_predicted_pose* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The 26 OpenXR joints at `time` with velocities (from the pose at that time).
+ * GLOVEPOSE_NOT_READY (out->active = 0) before the first pose. Per-frame: never allocates. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_xr_joints(const glovepose_estimator* estimator, double time,
+                                                                   glovepose_xr_hand* out) GLOVEPOSE_C_NOEXCEPT;
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estimator, double* out,
                                                                int32_t count) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged;
@@ -394,6 +487,13 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_set_range(glovepose_estim
 GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min,
                                                                  double* max, int32_t count) GLOVEPOSE_C_NOEXCEPT;
 
+/** @brief A reader thread's OpenXR joints at `time`, predicted from the newest published hand with
+ * the hand model, side and prediction bound of `estimator` (only its immutable parts are read, so
+ * any thread may call this while the estimator's own thread streams). GLOVEPOSE_NOT_READY
+ * (out->active = 0) before the first published pose. Never allocates; never blocks the writer. */
+GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, const glovepose_estimator* estimator,
+                                                                double time, glovepose_xr_hand* out) GLOVEPOSE_C_NOEXCEPT;
+
 /* ---- struct helpers ------------------------------------------------------------------------ */
 
 /** @brief Zeroes *pose and sets its struct_size (call once before glovepose_estimator_get_pose). */
@@ -402,6 +502,10 @@ GLOVEPOSE_C_API void glovepose_pose_init(glovepose_pose* pose) GLOVEPOSE_C_NOEXC
 GLOVEPOSE_C_API void glovepose_calibration_progress_init(glovepose_calibration_progress* progress) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Zeroes *step and sets its struct_size. */
 GLOVEPOSE_C_API void glovepose_calibration_step_init(glovepose_calibration_step* step) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Zeroes *hand and sets its struct_size. */
+GLOVEPOSE_C_API void glovepose_xr_hand_init(glovepose_xr_hand* hand) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Zeroes *pose and sets its struct_size. */
+GLOVEPOSE_C_API void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) GLOVEPOSE_C_NOEXCEPT;
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -50,6 +50,46 @@ static class GlovePose
         public int FramesNeeded, Ready, Source, FlatCells;
     }
 
+    // OpenXR's hand joints (XrHandJointLocationEXT / XrHandJointVelocityEXT layouts), in the wrist's frame.
+    [StructLayout(LayoutKind.Sequential)]
+    public struct XrJointLocation
+    {
+        public ulong LocationFlags;
+        public float Qx, Qy, Qz, Qw;
+        public float Px, Py, Pz;
+        public float Radius;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct XrJointVelocity
+    {
+        public ulong VelocityFlags;
+        public float Vx, Vy, Vz;
+        public float Wx, Wy, Wz;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct XrHand
+    {
+        public uint StructSize;
+        public int Active, Predicted, Clamped, Handedness, Reserved;
+        public double Time, Horizon;
+        [MarshalAs(UnmanagedType.ByValArray, SizeConst = 26)] public XrJointLocation[] Locations;
+        [MarshalAs(UnmanagedType.ByValArray, SizeConst = 26)] public XrJointVelocity[] Velocities;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
+    public struct HandOptions
+    {
+        public uint StructSize;
+        public int Handedness;
+        public double PredictionWindow, MaxPrediction;
+    }
+
+    public const int HandRight = 0, HandLeft = 1;
+    public const ulong XrOrientationValid = 0x1, XrPositionValid = 0x2, XrOrientationTracked = 0x4, XrPositionTracked = 0x8;
+    public const ulong XrLinearVelocityValid = 0x1, XrAngularVelocityValid = 0x2;
+
     [DllImport(Lib)] public static extern int glovepose_abi_version();
     [DllImport(Lib)] public static extern IntPtr glovepose_version();
     [DllImport(Lib)] public static extern IntPtr glovepose_last_error();
@@ -63,6 +103,10 @@ static class GlovePose
     [DllImport(Lib)] public static extern int glovepose_estimator_config_default(out EstimatorConfig config);
     [DllImport(Lib)] public static extern int glovepose_estimator_create(IntPtr model, ref EstimatorConfig config, out IntPtr estimator);
     [DllImport(Lib)] public static extern void glovepose_estimator_free(IntPtr estimator);
+    [DllImport(Lib)] public static extern int glovepose_hand_options_default(out HandOptions options);
+    [DllImport(Lib)] public static extern int glovepose_estimator_create_for_hand(IntPtr model, ref EstimatorConfig config, ref HandOptions options, out IntPtr estimator);
+    [DllImport(Lib)] public static extern int glovepose_estimator_get_xr_joints(IntPtr estimator, double time, ref XrHand hand);
+    [DllImport(Lib)] public static extern IntPtr glovepose_xr_joint_name(int joint);
     [DllImport(Lib)] public static extern int glovepose_estimator_push_row(IntPtr estimator, int row, double value, double timestamp);
     [DllImport(Lib)] public static extern int glovepose_estimator_push_measurements(IntPtr estimator, double[] values, int count, double timestamp);
     [DllImport(Lib)] public static extern int glovepose_estimator_push_cells(IntPtr estimator, double[] cells, int count, double timestamp, double oldestAge);
@@ -75,6 +119,20 @@ static class GlovePose
     [DllImport(Lib)] public static extern int glovepose_calibration_cancel(IntPtr estimator);
 
     public static string Str(IntPtr p) { return p == IntPtr.Zero ? null : Marshal.PtrToStringAnsi(p); }
+
+    public static XrHand NewXrHand()
+    {
+        return new XrHand { StructSize = 1912, Locations = new XrJointLocation[26], Velocities = new XrJointVelocity[26] };
+    }
+
+    // OpenXR (right-handed, -Z forward) to Unity (left-handed, +Z forward): mirror Z. A position
+    // keeps x and y and negates z; a rotation keeps z and w and negates x and y. (capi/README.md's
+    // Unity snippet does this with Vector3 and Quaternion.)
+    public static void ToUnity(XrJointLocation j, out float[] position, out float[] rotation)
+    {
+        position = new float[] { j.Px, j.Py, -j.Pz };
+        rotation = new float[] { -j.Qx, -j.Qy, j.Qz, j.Qw };
+    }
 }
 
 static class Smoke
@@ -152,6 +210,41 @@ static class Smoke
         Check(GlovePose.glovepose_estimator_get_joints(estimator, joints, 21) == GlovePose.Ok, "get joints");
         var q = joints[12];
         Check(Math.Abs(q.Qx * q.Qx + q.Qy * q.Qy + q.Qz * q.Qz + q.Qw * q.Qw - 1.0) < 1e-5, "unit quaternion");
+
+        // OpenXR joints of a left hand from the same stream: the right hand's mirrored (x -> -x).
+        Check(Marshal.SizeOf(typeof(GlovePose.XrJointLocation)) == 40 && Marshal.SizeOf(typeof(GlovePose.XrJointVelocity)) == 32,
+              "OpenXR joint structs 40 and 32 bytes");
+        Check(Marshal.SizeOf(typeof(GlovePose.XrHand)) == 1912 && Marshal.SizeOf(typeof(GlovePose.HandOptions)) == 24, "sizeof xr hand, hand options");
+        Check(GlovePose.Str(GlovePose.glovepose_xr_joint_name(6)) == "index_metacarpal", "OpenXR joint name");
+        GlovePose.HandOptions options;
+        Check(GlovePose.glovepose_hand_options_default(out options) == GlovePose.Ok && options.StructSize == 24, "default hand options");
+        options.Handedness = GlovePose.HandLeft;
+        IntPtr left;
+        Check(GlovePose.glovepose_estimator_create_for_hand(model, ref config, ref options, out left) == GlovePose.Ok, "create a left-hand estimator");
+        GlovePose.glovepose_calibration_start(left);
+        for (int f = 0; f < 120; ++f)  // the right estimator's stream and calibration
+        {
+            double t = f / 60.0;
+            for (int c = 0; c < 44; ++c) cells[c] = 20.0 + 5.0 * Math.Sin(2 * Math.PI * (0.7 + 0.05 * c) * t + c);
+            if (f == 60) GlovePose.glovepose_calibration_finish(left);
+            GlovePose.glovepose_estimator_push_cells(left, cells, 44, t, 0.0);
+        }
+        var rightHand = GlovePose.NewXrHand();
+        var leftHand = GlovePose.NewXrHand();
+        Check(GlovePose.glovepose_estimator_get_xr_joints(estimator, 119 / 60.0 + 0.01, ref rightHand) == GlovePose.Ok, "right OpenXR joints");
+        Check(rightHand.Active == 1 && rightHand.Predicted == 1 && rightHand.Handedness == GlovePose.HandRight, "right hand header");
+        Check((rightHand.Locations[15].LocationFlags & GlovePose.XrPositionValid) != 0, "position valid");
+        Check(GlovePose.glovepose_estimator_get_xr_joints(left, 119 / 60.0 + 0.01, ref leftHand) == GlovePose.Ok, "left OpenXR joints");
+        double mirror = 0.0;
+        for (int j = 0; j < 26; ++j)
+            mirror = Math.Max(mirror, Math.Abs(leftHand.Locations[j].Px + rightHand.Locations[j].Px) +
+                                      Math.Abs(leftHand.Locations[j].Py - rightHand.Locations[j].Py) +
+                                      Math.Abs(leftHand.Locations[j].Qy + rightHand.Locations[j].Qy));
+        Check(leftHand.Handedness == GlovePose.HandLeft && mirror < 1e-6, "the left hand is the right hand mirrored");
+        float[] unityPosition, unityRotation;
+        GlovePose.ToUnity(rightHand.Locations[15], out unityPosition, out unityRotation);
+        Check(unityPosition[2] > 0.05f && Math.Abs(unityRotation[3]) <= 1.0f, "the middle fingertip is forward (+Z) in Unity's frame");
+        GlovePose.glovepose_estimator_free(left);
 
         Check(GlovePose.glovepose_estimator_reset(estimator) == GlovePose.Ok, "reset");
         GlovePose.glovepose_estimator_free(estimator);

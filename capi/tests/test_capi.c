@@ -85,6 +85,19 @@ static void test_library(void) {
   CHECK(glovepose_joint_parent(-1) == -2);
   /* The documented ABI-1 sizes (C# and ctypes mirror them). */
   CHECK(sizeof(glovepose_estimator_config) == 80);
+  CHECK(sizeof(glovepose_hand_options) == 24);
+  CHECK(sizeof(glovepose_xr_joint_location) == 40);
+  CHECK(sizeof(glovepose_xr_joint_velocity) == 32);
+  CHECK(sizeof(glovepose_xr_hand) == 1912);
+  CHECK(sizeof(glovepose_predicted_pose) == 440);
+  CHECK(strcmp(glovepose_xr_joint_name(0), "palm") == 0);
+  CHECK(strcmp(glovepose_xr_joint_name(6), "index_metacarpal") == 0);
+  CHECK(strcmp(glovepose_xr_joint_name(25), "little_tip") == 0);
+  CHECK(glovepose_xr_joint_name(GLOVEPOSE_XR_JOINT_COUNT) == NULL);
+  CHECK(glovepose_xr_joint_parent(1) == -1);
+  CHECK(glovepose_xr_joint_parent(0) == 1);
+  CHECK(glovepose_xr_joint_parent(7) == 6);
+  CHECK(glovepose_xr_joint_parent(26) == -2);
   CHECK(sizeof(glovepose_pose) == 448);
   CHECK(sizeof(glovepose_joint) == 28);
   CHECK(sizeof(glovepose_calibration_progress) == 32);
@@ -566,6 +579,98 @@ static void test_latest(glovepose_model* model) {
   glovepose_estimator_free(estimator);
 }
 
+/* OpenXR joints and poses at a requested time: a left and a right estimator on the same stream give
+ * mirrored joints; the latest published hand gives a reader the estimator's own prediction. */
+static void test_xr_joints(glovepose_model* model) {
+  glovepose_hand_options options;
+  glovepose_estimator *right = NULL, *left = NULL, *old = NULL;
+  glovepose_latest* latest = NULL;
+  glovepose_xr_hand r, l, read;
+  glovepose_predicted_pose ahead;
+  double lo[44], hi[44], worst = 0.0;
+  const double t = 29.0 / 60.0 + 0.02; /* 20 ms after the newest pose of push_synthetic(.., 0.0, 30) */
+  int c, j;
+  for (c = 0; c < 44; ++c) {
+    lo[c] = 15.0 + 0.1 * c;
+    hi[c] = 25.0 + 0.1 * c;
+  }
+  CHECK_RESULT(glovepose_hand_options_default(&options), GLOVEPOSE_OK);
+  CHECK(options.struct_size == sizeof options);
+  CHECK(options.handedness == GLOVEPOSE_HAND_RIGHT && options.prediction_window > 0.0 && options.max_prediction == 0.05);
+  options.handedness = 2;
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &right), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK(contains(glovepose_last_error(), "handedness 2"));
+  options.handedness = GLOVEPOSE_HAND_RIGHT;
+  options.struct_size = 16;
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &right), GLOVEPOSE_ERROR_STRUCT_SIZE);
+  options.struct_size = sizeof options;
+  CHECK_RESULT(glovepose_estimator_create(model, NULL, &old), GLOVEPOSE_OK); /* the defaults: a right hand */
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &right), GLOVEPOSE_OK);
+  options.handedness = GLOVEPOSE_HAND_LEFT;
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &left), GLOVEPOSE_OK);
+  glovepose_xr_hand_init(&r);
+  glovepose_xr_hand_init(&l);
+  glovepose_predicted_pose_init(&ahead);
+  r.active = 7;
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(right, 0.0, &r), GLOVEPOSE_NOT_READY);
+  CHECK(r.active == 0);
+  CHECK_RESULT(glovepose_estimator_get_pose_at(right, 0.0, &ahead), GLOVEPOSE_NOT_READY);
+  CHECK_RESULT(glovepose_calibration_set_range(right, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_set_range(left, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_set_range(old, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK(push_synthetic(right, 0.0, 30) == 30);
+  CHECK(push_synthetic(left, 0.0, 30) == 30);
+  CHECK(push_synthetic(old, 0.0, 30) == 30);
+  CHECK_RESULT(glovepose_estimator_get_pose_at(right, t, &ahead), GLOVEPOSE_OK);
+  CHECK(ahead.predicted == 1 && ahead.clamped == 0 && ahead.has_rate == 1);
+  CHECK(fabs(ahead.horizon - 0.02) < 1e-12);
+  CHECK_RESULT(glovepose_estimator_get_pose_at(right, 100.0, &ahead), GLOVEPOSE_OK);
+  CHECK(ahead.clamped == 1 && fabs(ahead.horizon - 0.05) < 1e-12);
+  CHECK_RESULT(glovepose_estimator_get_pose_at(right, NAN, &ahead), GLOVEPOSE_NON_FINITE);
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(right, t, &r), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(left, t, &l), GLOVEPOSE_OK);
+  CHECK(r.active == 1 && r.predicted == 1 && r.handedness == GLOVEPOSE_HAND_RIGHT && l.handedness == GLOVEPOSE_HAND_LEFT);
+  CHECK((r.locations[1].location_flags & (GLOVEPOSE_XR_ORIENTATION_VALID | GLOVEPOSE_XR_POSITION_VALID)) ==
+        (GLOVEPOSE_XR_ORIENTATION_VALID | GLOVEPOSE_XR_POSITION_VALID));
+  CHECK(r.velocities[10].velocity_flags == (GLOVEPOSE_XR_LINEAR_VELOCITY_VALID | GLOVEPOSE_XR_ANGULAR_VELOCITY_VALID));
+  CHECK(r.locations[1].orientation[3] == 1.0f && r.locations[1].position[2] == 0.0f); /* the wrist: identity */
+  CHECK(r.locations[15].position[2] < -0.05f);                                         /* the middle tip: fingers along -Z */
+  for (j = 0; j < GLOVEPOSE_XR_JOINT_COUNT; ++j) {
+    CHECK(r.locations[j].radius > 0.003f && r.locations[j].radius < 0.02f);
+    worst = fmax(worst, fabs(l.locations[j].position[0] + r.locations[j].position[0]));
+    worst = fmax(worst, fabs(l.locations[j].position[1] - r.locations[j].position[1]));
+    worst = fmax(worst, fabs(l.locations[j].orientation[1] + r.locations[j].orientation[1]));
+  }
+  CHECK(worst < 1e-6); /* the left hand is the right hand mirrored (x -> -x) */
+  r.struct_size = 12;
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(right, t, &r), GLOVEPOSE_ERROR_STRUCT_SIZE);
+  CHECK(contains(glovepose_last_error(), "glovepose_xr_hand_init"));
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(right, t, NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(NULL, t, &l), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  /* The same stream through glovepose_estimator_create: the same joints as the right estimator. */
+  glovepose_xr_hand_init(&r);
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(right, t, &r), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_get_xr_joints(old, t, &l), GLOVEPOSE_OK);
+  CHECK(memcmp(r.locations, l.locations, sizeof r.locations) == 0);
+
+  /* A reader thread: the published hand, predicted with the estimator's locator. */
+  CHECK_RESULT(glovepose_latest_create(&latest), GLOVEPOSE_OK);
+  glovepose_xr_hand_init(&read);
+  CHECK_RESULT(glovepose_latest_get_xr_joints(latest, right, t, &read), GLOVEPOSE_NOT_READY);
+  CHECK(read.active == 0);
+  CHECK_RESULT(glovepose_latest_publish(latest, right), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_get_xr_joints(latest, right, t, &read), GLOVEPOSE_OK);
+  CHECK(read.active == 1 && read.predicted == 1);
+  CHECK(memcmp(read.locations, r.locations, sizeof r.locations) == 0);
+  CHECK(memcmp(read.velocities, r.velocities, sizeof r.velocities) == 0);
+  CHECK_RESULT(glovepose_latest_get_xr_joints(NULL, right, t, &read), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_latest_get_xr_joints(latest, NULL, t, &read), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  glovepose_latest_free(latest);
+  glovepose_estimator_free(old);
+  glovepose_estimator_free(left);
+  glovepose_estimator_free(right);
+}
+
 /* The guided calibration sequence the shipped model carries (models/calibration_glauser2019.json):
  * its steps as data, and the step under way while a calibration collects. */
 static void test_guided_steps(glovepose_model* model) {
@@ -644,6 +749,7 @@ int main(int argc, char** argv) {
   test_joints(model);
   test_guided_steps(model);
   test_latest(model);
+  test_xr_joints(model);
 
   /* Estimators share the model: freeing the caller's model handle leaves them working. */
   CHECK_RESULT(glovepose_estimator_create(model, NULL, &survivor), GLOVEPOSE_OK);

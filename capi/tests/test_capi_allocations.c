@@ -72,6 +72,8 @@ int main(int argc, char** argv) {
   glovepose_joint joints[GLOVEPOSE_JOINT_COUNT];
   glovepose_calibration_progress progress;
   glovepose_latest* latest = NULL;
+  glovepose_xr_hand hand;
+  glovepose_predicted_pose ahead;
   uint64_t number = 0;
   int32_t step = 0;
   double sequence_seconds = 0.0;
@@ -95,6 +97,8 @@ int main(int argc, char** argv) {
   check(glovepose_estimator_create(model, &config, &estimator) == GLOVEPOSE_OK, "create");
   glovepose_pose_init(&pose);
   glovepose_calibration_progress_init(&progress);
+  glovepose_xr_hand_init(&hand);
+  glovepose_predicted_pose_init(&ahead);
   /* Calibrate from rows of a synthetic glove (set-up: finish allocates the range). */
   glovepose_calibration_start(estimator);
   for (f = 0; f < 40; ++f) {
@@ -119,6 +123,10 @@ int main(int argc, char** argv) {
     glovepose_calibration_get_step(estimator, &step, &sequence_seconds);
     glovepose_latest_publish(latest, estimator);
     glovepose_latest_read(latest, &pose, joints, GLOVEPOSE_JOINT_COUNT, &number);
+    glovepose_estimator_get_pose_at(estimator, f / 60.0 + 0.02, &ahead);
+    glovepose_estimator_get_xr_joints(estimator, f / 60.0 + 0.02, &hand);
+    glovepose_estimator_get_xr_joints(estimator, f / 60.0 - 0.01, &hand);
+    glovepose_latest_get_xr_joints(latest, estimator, f / 60.0 + 0.02, &hand);
   }
   for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;
   glovepose_estimator_push_measurements(estimator, frame, 180, 2.0);
@@ -137,6 +145,7 @@ int main(int argc, char** argv) {
   check(during == 0, "no heap allocation in the per-frame calls");
 
   check(number > 0, "the snapshot was read");
+  check(hand.active == 1, "OpenXR joints were located");
   glovepose_latest_free(latest);
   glovepose_estimator_free(estimator);
   glovepose_model_free(model);
