@@ -7,6 +7,7 @@
 // - BM_EstimatorFrame/<storage>: one iteration = one frame: push_measurements of a whole C_m frame
 //   of 180 rows, which solves once (solve, calibrate, network, 1-euro, kinematics and
 //   joint list). frames/s counts poses.
+// - BM_EstimatorFrameXr/3: BM_EstimatorFrame/3 plus joints_at (OpenXR joints, predicted, with velocities).
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
 #include <glovepose/estimator.hpp>
@@ -63,8 +64,7 @@ std::shared_ptr<const PoseModel> shipped_model(nn::WeightStorage storage) {
 }
 
 // An estimator with smoothing and joint transforms, calibrated on the calibration sequence's frames.
-GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage) {
-  EstimatorConfig config;
+GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage, EstimatorConfig config = {}) {
   config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
   config.joint_transforms = true;
   GlovePoseEstimator estimator(shipped_model(storage), config);
@@ -125,6 +125,29 @@ void BM_EstimatorFrame(benchmark::State& state) {
   state.SetLabel(nn::storage_name(storage_of(state)));
 }
 
+// BM_EstimatorFrame plus the OpenXR joints an engine asks for (joints_at 11 ms past the newest
+// pose: slope fit, prediction, three kinematics for the velocities). The prediction window spans
+// the trend's 128 poses, the most a fit ever reads (a real stream at 675 poses/s fills it as well).
+void BM_EstimatorFrameXr(benchmark::State& state) {
+  EstimatorConfig config;
+  config.prediction_window = 128.0 / 60.0;
+  GlovePoseEstimator estimator = calibrated_estimator(storage_of(state), config);
+  const int rows = static_cast<int>(recording().data.row_count);
+  SessionClock clock;
+  XrHandJoints joints;
+  for (auto _ : state) {
+    if (estimator.push_measurements(clock.rows(), rows, clock.timestamp()) != Status::Solved ||
+        estimator.joints_at(estimator.pose().timestamp + 0.011, joints) != Status::Ok) {
+      state.SkipWithError("no pose or no joints");
+      break;
+    }
+    benchmark::DoNotOptimize(joints);
+    clock.next();
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.SetLabel(nn::storage_name(storage_of(state)));
+}
+
 void BM_EstimatorRow(benchmark::State& state) {
   GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
   const std::size_t rows = recording().data.row_count;
@@ -150,4 +173,5 @@ void BM_EstimatorRow(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_EstimatorFrame)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();
+BENCHMARK(BM_EstimatorFrameXr)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorRow)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();

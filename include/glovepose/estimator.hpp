@@ -243,8 +243,11 @@ struct EstimatorConfig {
   /// and only the skeleton, the joint list and the OpenXR joints are mirrored (hand/handedness.hpp).
   hand::Handedness handedness = hand::Handedness::Right;
   /// Seconds of recent poses whose least-squares slope gives the angles' rate of change, for
-  /// pose_at()/joints_at() ahead of the newest pose and the joints' velocities (filter/trend.hpp).
-  double prediction_window = 0.03;
+  /// pose_at()/joints_at() ahead of the newest pose and the joints' velocities (filter/trend.hpp;
+  /// at most the newest 128 poses: 0.19 s at the default cadence). Shorter windows follow turns
+  /// sooner but carry more of the network's pose-to-pose noise into the prediction: 0.03 s made
+  /// 40 ms ahead worse than holding the newest pose (docs/results.md, "Poses at a requested time").
+  double prediction_window = 0.15;
   /// How far (s) past the newest pose pose_at()/joints_at() extrapolate; later times are located at
   /// this bound and flagged clamped.
   double max_prediction = 0.05;
@@ -329,20 +332,26 @@ struct HandState {
 /// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
 /// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
 /// before the first pose, NonFinite for a non-finite t.
-GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
-                                         PredictedPose& out) noexcept {
-  if (!state.pose.valid) return Status::NotReady;
+GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const XrHandLocator& locator, double t,
+                                         double max_prediction, PredictedPose& out) noexcept {
+  if (!pose.valid) return Status::NotReady;
   if (!std::isfinite(t)) return Status::NonFinite;
   out.time = t;
-  out.horizon = std::min(t - state.pose.timestamp, max_prediction);
-  out.clamped = t - state.pose.timestamp > max_prediction;
+  out.horizon = std::min(t - pose.timestamp, max_prediction);
+  out.clamped = t - pose.timestamp > max_prediction;
   out.predicted = out.horizon > 0.0;
-  out.rate = state.rate;
-  out.has_rate = state.has_rate;
-  out.flags = state.pose.flags;
-  out.trusted = state.pose.trusted();
-  out.angles = out.predicted ? locator.extrapolate(state.pose.angles, state.rate, out.horizon) : state.pose.angles;
+  out.rate = rate;
+  out.has_rate = has_rate;
+  out.flags = pose.flags;
+  out.trusted = pose.trusted();
+  out.angles = out.predicted ? locator.extrapolate(pose.angles, rate, out.horizon) : pose.angles;
   return Status::Ok;
+}
+
+/// @brief predict() from a HandState (LatestHand's value).
+GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
+                                         PredictedPose& out) noexcept {
+  return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
 }
 
 /// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
@@ -472,6 +481,7 @@ class BasicGlovePoseEstimator {
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
   const Eigen::VectorXd& cells() const noexcept { return cells_; }
   /// @brief The latest pose, joint list, calibration progress and rate together (for LatestHand).
+  /// Fits the rate (filter::Trend::slope()): a few microseconds, once per call.
   HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress(), trend_.slope(), trend_.has_slope()}; }
 
   /// @brief The pose at time t (the stream's clock): from the recent poses when t is not after the
@@ -480,8 +490,7 @@ class BasicGlovePoseEstimator {
   /// Status::NotReady before the first pose (since the last reset), NonFinite for a non-finite t.
   GLOVEPOSE_REALTIME Status pose_at(double t, PredictedPose& out) const noexcept {
     if (!pose_.valid || trend_.size() == 0) return Status::NotReady;
-    HandState now = HandState{pose_, {}, {}, trend_.slope(), trend_.has_slope()};
-    const Status status = predict(now, locator_, t, config_.max_prediction, out);
+    const Status status = predict(pose_, trend_.slope(), trend_.has_slope(), locator_, t, config_.max_prediction, out);
     if (status != Status::Ok || out.predicted) return status;
     out.horizon = t - pose_.timestamp;
     return trend_.at(t, out.angles);

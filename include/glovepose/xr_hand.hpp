@@ -37,12 +37,14 @@ struct XrHandJoints {
 /// is noexcept and allocation-free, so one locator may serve any number of threads.
 class XrHandLocator {
  public:
-  /// @brief Time step (s) of the central difference that turns the angles' rate into joint velocities.
-  static constexpr double kVelocityStep = 0.002;
-
   /// @brief A locator for a hand of `model` on `side` whose angles stay within `limits`.
   XrHandLocator(hand::HandModel model, hand::Handedness side, hand::JointLimits limits = {})
-      : mapper_(hand::Kinematics(std::move(model), side)), limits_(std::move(limits)) {}
+      : mapper_(hand::Kinematics(std::move(model), side)), limits_(std::move(limits)) {
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      auto& list = phalanx_dofs_[static_cast<std::size_t>(hand::kDofs[d].phalanx)];
+      list[static_cast<std::size_t>(list[3]++)] = static_cast<int>(d);  // slot 3 counts (at most 3 DoFs a phalanx)
+    }
+  }
 
   /// @brief The side located.
   hand::Handedness side() const noexcept { return mapper_.kinematics().side(); }
@@ -56,37 +58,40 @@ class XrHandLocator {
   GLOVEPOSE_REALTIME void locate(const hand::Angles& angles, const hand::Angles* rate, std::uint64_t location_flags,
                                  XrHandJoints& out) const noexcept {
     hand::Skeleton skeleton;
-    mapper_.kinematics().pose(angles, skeleton);
-    mapper_.locate(skeleton, location_flags, out.locations);
+    hand::DofAxes axes;
+    hand::XrJointFrames joints;
+    if (rate != nullptr)
+      mapper_.kinematics().pose(angles, skeleton, axes);
+    else
+      mapper_.kinematics().pose(angles, skeleton);
+    mapper_.frames(skeleton, joints);
+    mapper_.write(joints, location_flags, out.locations);
     out.side = side();
-    if (rate == nullptr) {
-      for (auto& v : out.velocities) v = hand::XrJointVelocity{};
-      return;
-    }
-    // Central difference of the joints along the rate: d/dt of joints(angles + rate t) at t = 0.
-    hand::XrJointLocations ahead, behind;
-    hand::Angles shifted{};
-    for (std::size_t i = 0; i < hand::kDofCount; ++i) shifted[i] = angles[i] + (*rate)[i] * kVelocityStep;
-    mapper_.kinematics().pose(shifted, skeleton);
-    mapper_.locate(skeleton, 0, ahead);
-    for (std::size_t i = 0; i < hand::kDofCount; ++i) shifted[i] = angles[i] - (*rate)[i] * kVelocityStep;
-    mapper_.kinematics().pose(shifted, skeleton);
-    mapper_.locate(skeleton, 0, behind);
-    const double scale = 1.0 / (2.0 * kVelocityStep);
-    for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
-      const hand::XrPose& a = ahead[j].pose;
-      const hand::XrPose& b = behind[j].pose;
-      hand::XrJointVelocity& v = out.velocities[j];
-      v.velocity_flags = hand::kXrLinearVelocityValid | hand::kXrAngularVelocityValid;
-      v.linear_velocity = {static_cast<float>((a.position.x - b.position.x) * scale),
-                           static_cast<float>((a.position.y - b.position.y) * scale),
-                           static_cast<float>((a.position.z - b.position.z) * scale)};
-      // The rotation from `behind` to `ahead`, in the wrist frame, as an axis times an angle.
-      const Eigen::Quaterniond qa(a.orientation.w, a.orientation.x, a.orientation.y, a.orientation.z);
-      const Eigen::Quaterniond qb(b.orientation.w, b.orientation.x, b.orientation.y, b.orientation.z);
-      const Eigen::AngleAxisd turn(qa * qb.conjugate());  // angle in [0, pi]: the short way round
-      const Eigen::Vector3d w = turn.axis() * turn.angle() * scale;
-      v.angular_velocity = {static_cast<float>(w.x()), static_cast<float>(w.y()), static_cast<float>(w.z())};
+    for (auto& v : out.velocities) v = hand::XrJointVelocity{};
+    if (rate == nullptr) return;
+    // Velocities in closed form: DoF d turning at rate r about its axis a through its phalanx's
+    // origin o moves a point p beyond it at r a x (p - o) and turns its frame at r a. The palm,
+    // the wrist and the finger metacarpals sit on the palm, which the glove does not move.
+    const Eigen::Matrix3d to_wrist = joints.wrist_rotation.transpose();
+    for (auto& v : out.velocities) v.velocity_flags = hand::kXrLinearVelocityValid | hand::kXrAngularVelocityValid;
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      const auto base = static_cast<std::size_t>(hand::kFingerBase[f]);
+      const auto first = static_cast<std::size_t>(hand::kXrDigitFirst[f]);
+      const std::size_t phalanx_joint = f == 0 ? first : first + 1;
+      Eigen::Vector3d angular = Eigen::Vector3d::Zero();
+      for (std::size_t k = 0; k < 3; ++k) {  // phalanx base + k: its DoFs move the joints from phalanx_joint + k + 1 on
+        const std::size_t phalanx = base + k;
+        const Eigen::Vector3d origin = to_wrist * (skeleton[phalanx].translation() - joints.wrist_position) * 1e-3;
+        const auto& dofs = phalanx_dofs_[phalanx];
+        for (int n = 0; n < dofs[3]; ++n) {
+          const auto d = static_cast<std::size_t>(dofs[static_cast<std::size_t>(n)]);
+          const Eigen::Vector3d turn = (*rate)[d] * (to_wrist * axes[d]);
+          angular += turn;
+          for (std::size_t j = phalanx_joint + k + 1; j <= phalanx_joint + 3; ++j) add(out.velocities[j].linear_velocity, turn.cross(joints.position[j] - origin));
+        }
+        set(out.velocities[phalanx_joint + k].angular_velocity, angular);
+      }
+      set(out.velocities[phalanx_joint + 3].angular_velocity, angular);  // the tip turns with its distal bone
     }
   }
 
@@ -99,8 +104,18 @@ class XrHandLocator {
   }
 
  private:
+  static void set(hand::XrVector3& out, const Eigen::Vector3d& v) noexcept {
+    out = {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+  }
+  static void add(hand::XrVector3& out, const Eigen::Vector3d& v) noexcept {
+    out.x += static_cast<float>(v.x());
+    out.y += static_cast<float>(v.y());
+    out.z += static_cast<float>(v.z());
+  }
+
   hand::XrJointMapper mapper_;
   hand::JointLimits limits_;
+  std::array<std::array<int, 4>, hand::kPhalanxCount> phalanx_dofs_{};  // DoFs turning each phalanx; [3]: how many
 };
 
 }  // namespace glovepose

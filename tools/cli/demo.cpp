@@ -12,6 +12,8 @@
 #include <glovepose/train/metrics.hpp>
 
 #include <algorithm>
+#include <array>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -36,6 +38,10 @@ constexpr const char* kShippedModelName = "glovepose_fcn512.safetensors";
 constexpr const char* kPlottedDofs[] = {"index_base_flexion", "index_middle_flexion", "index_tip_flexion", "thumb_base_flexion"};
 constexpr double kPlottedSeconds = 20.0;  // of the session, in the angles-over-time picture
 constexpr int kSkeletonFrames = 4;        // frames of the skeleton picture, evenly spaced in the session
+// How long before a cycle end the newest reading is when the pose at that cycle end is asked for
+// (GlovePoseEstimator::pose_at): an engine rendering ahead of the glove.
+constexpr double kHorizons[] = {0.0, 0.010, 0.020, 0.040};
+constexpr std::size_t kHorizonCount = std::size(kHorizons);
 
 struct DemoOptions {
   std::string model;  // empty: the shipped model
@@ -141,19 +147,25 @@ struct SessionRun {
   std::vector<std::size_t> skeleton_frames;  // dataset frames of the skeleton picture
   std::vector<hand::JointList> skeleton_joints;  // the estimator's joint list at those frames
   std::vector<hand::Angles> skeleton_angles;     // and its angles
+  // Per horizon, per session frame: the newest pose and pose_at(cycle end) when the newest reading
+  // was the horizon before the cycle end, and how far ahead of the newest pose that was.
+  std::array<std::vector<hand::Angles>, kHorizonCount> held, ahead;
+  std::array<std::vector<double>, kHorizonCount> ahead_of_pose;
   std::size_t rows = 0, rejected_rows = 0;
   double wall_seconds = 0.0;  // streaming the session, all rows
 };
 
 // Streams frame f's readings row by row, each at the end of its row slot (sim/recorder.hpp);
-// calls on_pose() after every reading that produced a pose. Returns the readings rejected.
-template <typename OnPose>
-std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std::size_t f, OnPose on_pose) {
+// calls before_row(time) before each reading and on_pose() after every reading that produced a
+// pose. Returns the readings rejected.
+template <typename OnPose, typename BeforeRow>
+std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std::size_t f, OnPose on_pose, BeforeRow before_row) {
   const train::Dataset& d = user.data;
   const auto rows = static_cast<int>(d.row_count);
   std::size_t rejected = 0;
   for (int r = 0; r < rows; ++r) {
     const double time = d.timestamps[f] - static_cast<double>(rows - 1 - r) / (rows * user.cycle_rate);
+    before_row(time);
     const Status status = estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], time);
     if (status == Status::Solved) on_pose();
     else if (status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated) ++rejected;
@@ -170,7 +182,7 @@ struct CalibrationResult {
 
 CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) {
   estimator.start_calibration();
-  for (std::size_t f = 0; f < user.first_session_frame; ++f) stream_frame(estimator, user, f, [] {});
+  for (std::size_t f = 0; f < user.first_session_frame; ++f) stream_frame(estimator, user, f, [] {}, [](double) {});
   CalibrationResult result;
   result.frames = estimator.calibration_progress().frames;
   result.seconds = static_cast<double>(user.first_session_frame) / user.cycle_rate;
@@ -200,12 +212,27 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
   run.compute_seconds.reserve(frames * 12);
   run.oldest_age.reserve(frames * 12);
   run.predicted.reserve(frames);
+  // Per horizon h, the next session frame whose pose_at(cycle end) is asked for once the stream
+  // reaches its cycle end less h (before the first later reading is pushed).
+  std::array<std::size_t, kHorizonCount> next_query;
+  next_query.fill(user.first_session_frame);
+  const auto query = [&](double now) {
+    for (std::size_t h = 0; h < kHorizonCount; ++h)
+      while (next_query[h] < d.frames() && d.timestamps[next_query[h]] - kHorizons[h] < now) {
+        const double t = d.timestamps[next_query[h]++];
+        PredictedPose pose;
+        if (estimator.pose_at(t, pose) != Status::Ok) pose.angles = estimator.pose().angles;  // no pose yet: counted as held
+        run.held[h].push_back(estimator.pose().angles);
+        run.ahead[h].push_back(pose.angles);
+        run.ahead_of_pose[h].push_back(t - estimator.pose().timestamp);
+      }
+  };
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t f = user.first_session_frame; f < d.frames(); ++f) {
     run.rejected_rows += stream_frame(estimator, user, f, [&] {
       run.compute_seconds.push_back(estimator.pose().compute_seconds);
       run.oldest_age.push_back(estimator.pose().oldest_age);
-    });
+    }, query);
     run.rows += d.row_count;
     if (!estimator.pose().valid) continue;
     if (std::find(run.skeleton_frames.begin(), run.skeleton_frames.end(), f) != run.skeleton_frames.end())
@@ -218,6 +245,7 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
     run.predicted.push_back(estimator.pose().angles);
   }
   run.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  query(std::numeric_limits<double>::infinity());  // the last cycle ends
   if (run.predicted.empty() || run.skeleton_joints.size() != run.skeleton_frames.size())
     throw Error("the session gave " + std::to_string(run.predicted.size()) + " poses to compare, expected one per readout cycle");
   return run;
@@ -226,6 +254,17 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
 const double* true_angles(const train::Dataset& d, std::size_t f, hand::Angles& out) {
   for (std::size_t k = 0; k < hand::kDofCount; ++k) out[k] = d.angles[f * hand::kDofCount + k];
   return out.data();
+}
+
+// Mean angle error (degrees) of per-session-frame angles against the truth, collision outliers left out.
+double mean_error(const NewUser& user, const std::vector<hand::Angles>& per_frame) {
+  train::AngleErrorAccumulator errors;
+  hand::Angles truth{};
+  for (std::size_t i = 0; i < per_frame.size(); ++i) {
+    const std::size_t f = user.first_session_frame + i;
+    if (!user.data.outlier[f]) errors.add(per_frame[i].data(), true_angles(user.data, f, truth));
+  }
+  return errors.report().overall.mean_deg;
 }
 
 train::AngleErrorReport measure_errors(const NewUser& user, const SessionRun& run) {
@@ -281,6 +320,11 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * percentile(run.oldest_age, 0.5), 1e3 * percentile(run.oldest_age, 0.99));
   add("  whole stream                  %.1f s of glove time in %.2f s wall (%.1fx real time)\n", session_seconds, run.wall_seconds,
       session_seconds / run.wall_seconds);
+  add("\npose at a requested time: the pose at each cycle end asked for when the newest reading is the horizon before it\n");
+  add("  %-12s %22s %26s %18s\n", "horizon (ms)", "newest pose held (deg)", "pose_at, extrapolated (deg)", "ahead of pose (ms)");
+  for (std::size_t h = 0; h < kHorizonCount; ++h)
+    add("  %-12.0f %22.2f %26.2f %18.1f\n", 1e3 * kHorizons[h], mean_error(user, run.held[h]), mean_error(user, run.ahead[h]),
+        1e3 * percentile(run.ahead_of_pose[h], 0.5));
   return out;
 }
 

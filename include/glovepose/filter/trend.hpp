@@ -6,7 +6,8 @@
 /// Why a fitted slope: the newest poses differ by the network's frame-to-frame noise as much as by
 /// the motion, so the difference of the last two poses is mostly noise at several hundred poses a
 /// second; a line through the poses of the last few tens of milliseconds keeps the motion and
-/// averages the noise (docs/results.md, "Poses at a requested time", measures the window).
+/// averages the noise (docs/results.md, "Poses at a requested time", measures the window). The
+/// slope is fitted when asked for, so adding a sample costs a copy.
 #pragma once
 
 #include <algorithm>
@@ -20,7 +21,7 @@
 namespace glovepose::filter {
 
 /// @brief The last up to Capacity samples of N channels and their fitted slope.
-template <std::size_t N, std::size_t Capacity = 64>
+template <std::size_t N, std::size_t Capacity = 128>
 class Trend {
   static_assert(Capacity >= 2, "a slope needs two samples");
 
@@ -30,7 +31,7 @@ class Trend {
 
   /// @brief A trend whose slope is fitted over the samples of the last `window` seconds (at least
   /// the two newest; at most Capacity).
-  explicit Trend(double window = 0.03) noexcept : window_(window) {}
+  explicit Trend(double window = 0.15) noexcept : window_(window) {}
 
   /// @brief Seconds the slope is fitted over.
   double window() const noexcept { return window_; }
@@ -42,17 +43,41 @@ class Trend {
   double oldest_time() const noexcept { return count_ ? time_[index(count_ - 1)] : std::nan(""); }
   /// @brief The newest sample's values.
   const Values& newest() const noexcept { return values_[index(0)]; }
-  /// @brief The fitted rate of change per second (zero until two samples within the window).
-  const Values& slope() const noexcept { return slope_; }
   /// @brief Whether slope() comes from at least two samples.
-  bool has_slope() const noexcept { return has_slope_; }
+  bool has_slope() const noexcept { return count_ >= 2; }
+
+  /// @brief The rate of change per second: the least-squares slope through the samples within the
+  /// window (at least the two newest); zero with fewer than two samples.
+  GLOVEPOSE_REALTIME Values slope() const noexcept {
+    Values slope{};
+    if (!has_slope()) return slope;
+    // One pass of sums over times relative to the newest sample and values relative to it (small
+    // numbers: no cancellation in the closed form n Stv - St Sv over n Stt - St^2).
+    const double newest_t = newest_time();
+    const Values& newest_v = newest();
+    Values sum_v{}, sum_tv{};
+    double sum_t = 0.0, sum_tt = 0.0;
+    std::size_t n = 0;
+    for (; n < count_; ++n) {
+      const std::size_t k = index(n);
+      const double dt = time_[k] - newest_t;
+      if (n >= 2 && -dt > window_) break;
+      sum_t += dt;
+      sum_tt += dt * dt;
+      for (std::size_t c = 0; c < N; ++c) {
+        const double v = values_[k][c] - newest_v[c];
+        sum_v[c] += v;
+        sum_tv[c] += dt * v;
+      }
+    }
+    const double count = static_cast<double>(n);
+    const double denominator = count * sum_tt - sum_t * sum_t;
+    for (std::size_t c = 0; c < N; ++c) slope[c] = (count * sum_tv[c] - sum_t * sum_v[c]) / denominator;
+    return slope;
+  }
 
   /// @brief Forgets every sample.
-  void reset() noexcept {
-    count_ = 0;
-    has_slope_ = false;
-    slope_.fill(0.0);
-  }
+  void reset() noexcept { count_ = 0; }
 
   /// @brief Adds the newest sample. A timestamp not after the newest, or a non-finite one, starts
   /// the trend over from this sample (a clock restart); non-finite values are refused.
@@ -65,7 +90,6 @@ class Trend {
     time_[head_] = t;
     values_[head_] = values;
     count_ = std::min(count_ + 1, Capacity);
-    fit();
     return Status::Ok;
   }
 
@@ -78,7 +102,8 @@ class Trend {
     const double newest_t = newest_time();
     if (t >= newest_t) {
       const Values& last = newest();
-      for (std::size_t c = 0; c < N; ++c) out[c] = last[c] + slope_[c] * (t - newest_t);
+      const Values rate = slope();
+      for (std::size_t c = 0; c < N; ++c) out[c] = last[c] + rate[c] * (t - newest_t);
       return Status::Ok;
     }
     for (std::size_t k = 1; k < count_; ++k) {
@@ -97,39 +122,11 @@ class Trend {
   // Position in the ring of the k-th newest sample.
   std::size_t index(std::size_t k) const noexcept { return (head_ + Capacity - k) % Capacity; }
 
-  // Least-squares slope over the samples within the window (times relative to the newest).
-  void fit() noexcept {
-    const double newest_t = newest_time();
-    std::size_t n = 0;
-    double mean_t = 0.0;
-    while (n < count_ && (n < 2 || newest_t - time_[index(n)] <= window_)) mean_t += time_[index(n++)] - newest_t;
-    has_slope_ = n >= 2;
-    if (!has_slope_) {
-      slope_.fill(0.0);
-      return;
-    }
-    mean_t /= static_cast<double>(n);
-    Values mean_v{};
-    for (std::size_t k = 0; k < n; ++k)
-      for (std::size_t c = 0; c < N; ++c) mean_v[c] += values_[index(k)][c];
-    for (double& m : mean_v) m /= static_cast<double>(n);
-    double stt = 0.0;
-    slope_.fill(0.0);
-    for (std::size_t k = 0; k < n; ++k) {
-      const double dt = time_[index(k)] - newest_t - mean_t;
-      stt += dt * dt;
-      for (std::size_t c = 0; c < N; ++c) slope_[c] += dt * (values_[index(k)][c] - mean_v[c]);
-    }
-    for (double& s : slope_) s /= stt;
-  }
-
   double window_;
   std::array<double, Capacity> time_{};
   std::array<Values, Capacity> values_{};
   std::size_t head_ = Capacity - 1;
   std::size_t count_ = 0;
-  Values slope_{};
-  bool has_slope_ = false;
 };
 
 }  // namespace glovepose::filter

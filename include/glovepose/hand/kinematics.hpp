@@ -89,6 +89,11 @@ inline constexpr std::array<Phalanx, kFingerCount> kFingerBase{Phalanx::Thumb1, 
 /// @brief Global transform (root frame, mm) of every phalanx, indexed by phalanx id.
 using Skeleton = std::array<Eigen::Affine3d, kPhalanxCount>;
 
+/// @brief The world direction (root frame, unit) of each DoF's rotation axis in a pose, kDofs
+/// order: turning DoF d by a small angle e turns everything beyond it by e about this axis through
+/// its phalanx's origin. What joint velocities are made of (xr_hand.hpp).
+using DofAxes = std::array<Eigen::Vector3d, kDofCount>;
+
 /// @brief A hand's rest geometry: rest transform of each phalanx relative to its parent, and the
 /// distal phalanx lengths. The default is the reference template hand; the simulator scales it.
 struct HandModel {
@@ -143,18 +148,12 @@ class Kinematics {
   /// root (Position) frame at `root`. A left hand: the right hand's frames mirrored, then `root`.
   GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out,
                                const Eigen::Affine3d& root = Eigen::Affine3d::Identity()) const noexcept {
-    const bool left = side_ == Handedness::Left;
-    for (int p : kChainOrder) {
-      const auto i = static_cast<std::size_t>(p);
-      Eigen::Affine3d local = model_.rest[i];
-      if (flexion_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(flexion_[i])], Eigen::Vector3d::UnitX()));
-      if (abduction_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(abduction_[i])], Eigen::Vector3d::UnitZ()));
-      if (twist_[i] >= 0) local.rotate(Eigen::AngleAxisd(angles[static_cast<std::size_t>(twist_[i])], Eigen::Vector3d::UnitY()));
-      const Eigen::Affine3d& parent = kParent[i] < 0 ? (left ? identity_ : root) : out[static_cast<std::size_t>(kParent[i])];
-      out[i] = parent * local;
-    }
-    if (left)
-      for (Eigen::Affine3d& frame : out) frame = root * mirrored(frame);
+    compose(angles, out, root, nullptr);
+  }
+
+  /// @brief pose() with the root at the identity, and the world axis of every DoF.
+  GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out, DofAxes& axes) const noexcept {
+    compose(angles, out, identity_, &axes);
   }
 
   /// @brief End point of a finger's distal phalanx (its tip), in the root frame.
@@ -165,6 +164,38 @@ class Kinematics {
   }
 
  private:
+  void compose(const Angles& angles, Skeleton& out, const Eigen::Affine3d& root, DofAxes* axes) const noexcept {
+    const bool left = side_ == Handedness::Left;
+    for (int p : kChainOrder) {
+      const auto i = static_cast<std::size_t>(p);
+      const Eigen::Affine3d& parent = kParent[i] < 0 ? (left ? identity_ : root) : out[static_cast<std::size_t>(kParent[i])];
+      Eigen::Affine3d local = model_.rest[i];
+      // Each rotation turns about the frame's local axis as it stands after the rotations before
+      // it; `turned` is that frame's orientation in the root frame (only when axes are asked for).
+      Eigen::Matrix3d turned;
+      if (axes) turned = parent.linear() * local.linear();
+      const auto turn = [&](int dof, const Eigen::Vector3d& local_axis) {
+        if (dof < 0) return;
+        // The matrix rotate() would make of the angle-axis itself: the same bits either way.
+        const Eigen::Matrix3d rotation = Eigen::AngleAxisd(angles[static_cast<std::size_t>(dof)], local_axis).toRotationMatrix();
+        if (axes) {
+          (*axes)[static_cast<std::size_t>(dof)] = turned * local_axis;
+          turned = turned * rotation;
+        }
+        local.rotate(rotation);
+      };
+      turn(flexion_[i], Eigen::Vector3d::UnitX());
+      turn(abduction_[i], Eigen::Vector3d::UnitZ());
+      turn(twist_[i], Eigen::Vector3d::UnitY());
+      out[i] = parent * local;
+    }
+    if (!left) return;
+    for (Eigen::Affine3d& frame : out) frame = root * mirrored(frame);
+    // Mirrored, a turn by +e about axis a becomes a turn by +e about -S a (S = diag(-1, 1, 1)).
+    if (axes)
+      for (Eigen::Vector3d& a : *axes) a = root.linear() * Eigen::Vector3d(a.x(), -a.y(), -a.z());
+  }
+
   HandModel model_;
   Handedness side_ = Handedness::Right;
   Eigen::Affine3d identity_ = Eigen::Affine3d::Identity();

@@ -125,6 +125,15 @@ struct XrJointVelocity {
 /// @brief All joint locations, in XrHandJointEXT order.
 using XrJointLocations = std::array<XrJointLocation, kXrJointCount>;
 
+/// @brief The joints' frames in double precision, in the wrist joint's frame: positions (metres)
+/// and rotations (columns X, Y, Z), XrHandJointEXT order.
+struct XrJointFrames {
+  std::array<Eigen::Vector3d, kXrJointCount> position;
+  std::array<Eigen::Matrix3d, kXrJointCount> rotation;
+  Eigen::Matrix3d wrist_rotation;  ///< The wrist joint's frame in the skeleton's root frame.
+  Eigen::Vector3d wrist_position;  ///< The wrist joint in the root frame (mm).
+};
+
 /// @brief Turns a posed skeleton into the 26 OpenXR joint locations of one hand model.
 /// Immutable after construction; locate() is noexcept and allocation-free.
 class XrJointMapper {
@@ -144,14 +153,26 @@ class XrJointMapper {
   /// @brief The joint locations of `skeleton` (posed by kinematics()) in the wrist joint's frame,
   /// each with `location_flags`.
   GLOVEPOSE_REALTIME void locate(const Skeleton& skeleton, std::uint64_t location_flags, XrJointLocations& out) const noexcept {
-    std::array<Eigen::Vector3d, kXrJointCount> position;
-    std::array<Eigen::Matrix3d, kXrJointCount> rotation;
+    XrJointFrames joints;
+    frames(skeleton, joints);
+    write(joints, location_flags, out);
+  }
+
+  /// @brief The joints' frames of `skeleton` in the wrist joint's frame (metres).
+  GLOVEPOSE_REALTIME void frames(const Skeleton& skeleton, XrJointFrames& out) const noexcept {
+    std::array<Eigen::Vector3d, kXrJointCount>& position = out.position;
+    std::array<Eigen::Matrix3d, kXrJointCount>& rotation = out.rotation;
     const Eigen::Vector3d wrist = skeleton[static_cast<std::size_t>(Phalanx::Wrist)].translation();
     const Eigen::Vector3d back = skeleton[static_cast<std::size_t>(Phalanx::Hand)].linear().col(2);
     // The model's phalanx frames: bone along +y, flexion turns +y towards +z, so the back of the
     // digit is -z; OpenXR's (x, y, z) = (-x, -z, -y) of the phalanx frame.
-    Eigen::Matrix3d to_xr;
-    to_xr << -1, 0, 0, 0, 0, -1, 0, -1, 0;
+    const auto to_xr = [](const Eigen::Matrix3d& phalanx) {
+      Eigen::Matrix3d r;
+      r.col(0) = -phalanx.col(0);
+      r.col(1) = -phalanx.col(2);
+      r.col(2) = -phalanx.col(1);
+      return r;
+    };
     for (std::size_t f = 0; f < kFingerCount; ++f) {
       const auto base = static_cast<std::size_t>(kFingerBase[f]);
       const auto first = static_cast<std::size_t>(kXrDigitFirst[f]);
@@ -163,7 +184,7 @@ class XrJointMapper {
       }
       for (std::size_t k = 0; k < 3; ++k) {
         position[phalanx_joint + k] = skeleton[base + k].translation();
-        rotation[phalanx_joint + k] = skeleton[base + k].linear() * to_xr;
+        rotation[phalanx_joint + k] = to_xr(skeleton[base + k].linear());
       }
       position[phalanx_joint + 3] = kinematics_.fingertip(skeleton, static_cast<Finger>(f));
       rotation[phalanx_joint + 3] = rotation[phalanx_joint + 2];
@@ -176,10 +197,20 @@ class XrJointMapper {
     position[palm] = 0.5 * (position[middle_metacarpal] + position[middle_knuckle]);
     rotation[palm] = frame(position[middle_knuckle] - position[middle_metacarpal], back);
     // Into the wrist's frame, metres.
+    out.wrist_rotation = rotation[wrist_joint];
+    out.wrist_position = wrist;
     const Eigen::Matrix3d inverse = rotation[wrist_joint].transpose();
     for (std::size_t j = 0; j < kXrJointCount; ++j) {
-      const Eigen::Vector3d p = inverse * (position[j] - wrist) * 1e-3;
-      Eigen::Quaterniond q(inverse * rotation[j]);
+      position[j] = inverse * (position[j] - wrist) * 1e-3;
+      rotation[j] = inverse * rotation[j];
+    }
+  }
+
+  /// @brief `joints` as OpenXR locations with `location_flags` and this hand's radii.
+  GLOVEPOSE_REALTIME void write(const XrJointFrames& joints, std::uint64_t location_flags, XrJointLocations& out) const noexcept {
+    for (std::size_t j = 0; j < kXrJointCount; ++j) {
+      const Eigen::Vector3d& p = joints.position[j];
+      Eigen::Quaterniond q(joints.rotation[j]);
       q.normalize();
       if (q.w() < 0) q.coeffs() = -q.coeffs();  // one of the two signs, the same on both hands
       XrJointLocation& joint = out[j];
