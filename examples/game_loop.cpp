@@ -1,7 +1,8 @@
 // A game loop driven by the glove. A sensor thread owns the estimator and pushes the glove's rows as
 // they arrive; the game runs a fixed 90 Hz step that takes the newest pose without ever waiting for
 // the sensor thread (nor making it wait), turns the 21-joint list into the parent-relative bone
-// transforms an engine animates a skeleton with, and "renders" a few frames as text.
+// transforms an engine animates a skeleton with, and "renders" a few frames as text, with the
+// OpenXR hand joints predicted for the frame's display time (11 ms after it is drawn).
 //
 // Usage: game_loop MODEL.safetensors [SECONDS]   (SECONDS of play after a 2 s calibration; default 3)
 //
@@ -106,7 +107,9 @@ int main(int argc, char** argv) {
     simulated.recording.raw_rows = true;
     const train::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
 
-    // The estimator belongs to the sensor thread from here on; the game only sees `latest`.
+    // The estimator belongs to the sensor thread from here on; the game only sees `latest`, and the
+    // locator (the estimator's hand model and side), which never changes and so serves any thread.
+    const XrHandLocator& locator = estimator.locator();
     LatestHand latest;
     std::atomic<bool> glove_done{false};
     std::exception_ptr sensor_failure;
@@ -142,6 +145,20 @@ int main(int argc, char** argv) {
           std::printf("%5.2f s  pose %6llu, %4.1f ms old  index bones bent %5.1f %5.1f deg  index tip at (%5.1f %5.1f %5.1f) mm\n",
                       now, static_cast<unsigned long long>(hand.pose.sequence), 1e3 * (now - hand.pose.timestamp),
                       bend_degrees(middle), bend_degrees(distal), tip.x(), tip.y(), tip.z());
+          // OpenXR joints for the display time (the stream's clock here is seconds since start):
+          // what an OpenXR layer copies into XrHandJointLocationEXT, wrist-relative.
+          PredictedPose ahead;
+          XrHandJoints xr;
+          if (predict(hand, locator, now + 0.011, config.max_prediction, ahead) == Status::Ok) {
+            locate(ahead, locator, xr);
+            const hand::XrJointLocation& index_tip = xr.locations[static_cast<int>(hand::XrJoint::IndexTip)];
+            const hand::XrJointVelocity& speed = xr.velocities[static_cast<int>(hand::XrJoint::IndexTip)];
+            std::printf("          OpenXR, %4.1f ms ahead: index tip (%5.1f %5.1f %5.1f) mm from the wrist, moving %5.1f cm/s\n",
+                        1e3 * ahead.horizon, 1e3 * index_tip.pose.position.x, 1e3 * index_tip.pose.position.y,
+                        1e3 * index_tip.pose.position.z,
+                        100.0 * std::sqrt(speed.linear_velocity.x * speed.linear_velocity.x + speed.linear_velocity.y * speed.linear_velocity.y +
+                                          speed.linear_velocity.z * speed.linear_velocity.z));
+          }
         }
       }
       next_step += std::chrono::duration_cast<Clock::duration>(kStep);

@@ -8,9 +8,13 @@
 /// noexcept call; the status is a Status enumerator; a pose's sequence never decreases and grows by
 /// exactly one on Status::Solved and not otherwise; every angle of a solved pose is finite, the raw
 /// angles lie within the model's joint limits; timestamps, ages and joint transforms are finite.
+/// After every solved pose, pose_at/joints_at at times around it (before, ahead, far ahead, NaN) and
+/// on either hand (the side follows from a setting the input already chose): a status, angles
+/// within the joint limits, finite joints with unit quaternions, finite velocities.
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -124,6 +128,7 @@ class StreamChecker {
       if (joint_transforms_)
         for (const glovepose::hand::JointTransform& joint : estimator_.joints())
           GLOVEPOSE_FUZZ_REQUIRE(glovepose::fuzz::all_finite(joint.position) && glovepose::fuzz::all_finite(joint.rotation));
+      for (double offset : {-0.005, 0.0, 0.02, 10.0, std::numeric_limits<double>::quiet_NaN()}) check_at(pose.timestamp + offset);
     } else {
       GLOVEPOSE_FUZZ_REQUIRE(pose.sequence == last_sequence_);  // nothing new without Solved
     }
@@ -131,6 +136,33 @@ class StreamChecker {
   }
 
  private:
+  void check_at(double t) {
+    glovepose::PredictedPose at;
+    const Status status = estimator_.pose_at(t, at);
+    GLOVEPOSE_FUZZ_REQUIRE(status == Status::Ok || status == Status::NonFinite);
+    glovepose::XrHandJoints joints;
+    GLOVEPOSE_FUZZ_REQUIRE(estimator_.joints_at(t, joints) == status);
+    if (status != Status::Ok) return;
+    const auto& limits = estimator_.model().joint_limits();
+    for (std::size_t d = 0; d < glovepose::hand::kDofCount; ++d) {
+      const double slack = 1e-9 * (limits.max()[d] - limits.min()[d]);
+      GLOVEPOSE_FUZZ_REQUIRE(at.angles[d] >= limits.min()[d] - slack && at.angles[d] <= limits.max()[d] + slack);
+      GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(at.rate[d]));
+    }
+    GLOVEPOSE_FUZZ_REQUIRE(at.horizon <= estimator_.config().max_prediction);
+    for (std::size_t j = 0; j < glovepose::hand::kXrJointCount; ++j) {
+      const glovepose::hand::XrPose& p = joints.locations[j].pose;
+      GLOVEPOSE_FUZZ_REQUIRE(std::abs(p.position.x) < 1.0f && std::abs(p.position.y) < 1.0f && std::abs(p.position.z) < 1.0f);
+      const float norm = p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z +
+                         p.orientation.w * p.orientation.w;
+      GLOVEPOSE_FUZZ_REQUIRE(std::abs(norm - 1.0f) < 1e-4f);
+      const glovepose::hand::XrJointVelocity& v = joints.velocities[j];
+      GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v.linear_velocity.x) && std::isfinite(v.linear_velocity.y) && std::isfinite(v.linear_velocity.z));
+      GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v.angular_velocity.x) && std::isfinite(v.angular_velocity.y) &&
+                             std::isfinite(v.angular_velocity.z));
+    }
+  }
+
   const glovepose::GlovePoseEstimator& estimator_;
   bool joint_transforms_;
   std::uint64_t last_sequence_ = 0;
@@ -153,6 +185,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   config.calibration_sample_period = in.ConsumeBool() ? 0.0 : 1.0 / 60.0;
   if (in.ConsumeBool()) config.smoothing = glovepose::filter::OneEuroConfig{60.0, 1.0, in.ConsumeFloatingPointInRange<double>(0.0, 10.0), 1.0};
   config.joint_transforms = in.ConsumeBool();
+  // The side from a setting already drawn, so that stored inputs keep their meaning.
+  config.handedness = config.readout.stuck_readings % 2 == 0 ? glovepose::hand::Handedness::Right : glovepose::hand::Handedness::Left;
   glovepose::GlovePoseEstimator estimator(f.model, config);
   StreamChecker check(estimator, config.joint_transforms);
 

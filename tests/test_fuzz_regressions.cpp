@@ -8,6 +8,8 @@
 #include <glovepose/nn/model.hpp>
 #include <glovepose/sensor/calibration.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iterator>

@@ -13,5 +13,8 @@
 #include "sensor/calibration.hpp"
 #include "grid/grid_map.hpp"
 #include "filter/one_euro.hpp"
+#include "filter/trend.hpp"
 #include "hand/joint_list.hpp"
+#include "hand/openxr_joints.hpp"
+#include "xr_hand.hpp"
 #include "estimator.hpp"

@@ -98,8 +98,10 @@ class XrHandLocator {
   /// @brief `angles` moved along `rate` for `horizon` seconds, held within limits().
   GLOVEPOSE_REALTIME hand::Angles extrapolate(const hand::Angles& angles, const hand::Angles& rate, double horizon) const noexcept {
     hand::Angles out{};
-    for (std::size_t i = 0; i < hand::kDofCount; ++i)
-      out[i] = std::clamp(angles[i] + rate[i] * horizon, limits_.min()[i], limits_.max()[i]);
+    for (std::size_t i = 0; i < hand::kDofCount; ++i) {
+      const double moved = angles[i] + rate[i] * horizon;
+      out[i] = std::isfinite(moved) ? std::clamp(moved, limits_.min()[i], limits_.max()[i]) : angles[i];
+    }
     return out;
   }
 

@@ -72,7 +72,11 @@ class Trend {
     }
     const double count = static_cast<double>(n);
     const double denominator = count * sum_tt - sum_t * sum_t;
-    for (std::size_t c = 0; c < N; ++c) slope[c] = (count * sum_tv[c] - sum_t * sum_v[c]) / denominator;
+    for (std::size_t c = 0; c < N; ++c) {
+      slope[c] = (count * sum_tv[c] - sum_t * sum_v[c]) / denominator;
+      // Timestamps near the ends of the double range overflow the sums: no slope rather than NaN.
+      if (!std::isfinite(slope[c])) slope[c] = 0.0;
+    }
     return slope;
   }
 
@@ -109,7 +113,8 @@ class Trend {
     for (std::size_t k = 1; k < count_; ++k) {
       const std::size_t older = index(k), newer = index(k - 1);
       if (t >= time_[older]) {
-        const double w = (t - time_[older]) / (time_[newer] - time_[older]);
+        double w = (t - time_[older]) / (time_[newer] - time_[older]);
+        if (!(w >= 0.0 && w <= 1.0)) w = 1.0;  // a time difference overflowed: the newer sample
         for (std::size_t c = 0; c < N; ++c) out[c] = values_[older][c] + w * (values_[newer][c] - values_[older][c]);
         return Status::Ok;
       }
