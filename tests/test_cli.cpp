@@ -4,6 +4,7 @@
 #include <glovepose/train/dataset.hpp>
 
 #include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -45,7 +46,7 @@ std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TM
 }  // namespace
 
 TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the usage on stderr") {
-  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak"}) {
+  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
@@ -491,4 +492,34 @@ TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed
   std::ifstream file(sequence);
   const std::string shipped((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   CHECK(r.out == shipped);
+}
+
+TEST_CASE("cli: glovepose bench --json times every stage for every weight storage and names the machine") {
+  const Run r = run_stream("bench --poses 30 --json --model " + kModel, 1);
+  REQUIRE(r.status == 0);
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  CHECK(!out["machine"]["cpu"].get<std::string>().empty());
+  CHECK(out["machine"]["logical_cores"].get<int>() >= 1);
+  CHECK(!out["machine"]["simd"].get<std::string>().empty());
+  CHECK(out["poses"].get<int>() == 30);
+  CHECK(out["budget_ms"].get<double>() == 5.0);
+  REQUIRE(out["results"].size() == 4);
+  std::vector<std::string> storages;
+  for (const auto& result : out["results"]) {
+    storages.push_back(result["weights"].get<std::string>());
+    CHECK(result["architecture"].get<std::string>() == "unet");
+    for (const char* stage : {"solve", "calibration", "stretch maps", "network", "pose map", "angles", "1-euro", "joint list", "OpenXR joints"}) {
+      CAPTURE(stage);
+      const auto& s = result["stages"].at(stage);
+      CHECK(s["p50_us"].get<double>() > 0.0);
+      CHECK(s["p50_us"].get<double>() <= s["p99_us"].get<double>());
+      CHECK(s["p99_us"].get<double>() <= s["max_us"].get<double>());
+    }
+    const auto& frame = result["frame"];
+    CHECK(frame["p50_us"].get<double>() >= result["stages"]["network"]["p50_us"].get<double>());
+    CHECK(result["frame_p99_budget_share"].get<double>() == doctest::Approx(frame["p99_us"].get<double>() / 5000.0));
+    CHECK(result["batch_frames_per_second"]["threads_1"].get<double>() > 0.0);
+  }
+  CHECK(storages == std::vector<std::string>{"F32", "F16", "BF16", "Fixed16"});
+  CHECK(run_stream("bench --poses 3", 2).status == 2);  // too few poses to say anything
 }

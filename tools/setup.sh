@@ -6,8 +6,9 @@ set -euo pipefail
 # mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
+# nlohmann-json3-dev: JSON in the tools (glovepose bench --json) and their tests.
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
-          libopenxr-dev "$@")
+          libopenxr-dev nlohmann-json3-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -5,8 +5,11 @@
 
 #include <charconv>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <string>
+#include <system_error>
+#include <vector>
 
 namespace glovepose::cli {
 
@@ -21,6 +24,27 @@ int demo(int argc, char** argv);
 
 /// `glovepose soak ...` (soak.cpp); argv[1] is "soak". Returns the exit code.
 int soak(int argc, char** argv);
+
+/// `glovepose bench ...` (bench.cpp); argv[1] is "bench". Returns the exit code.
+int bench(int argc, char** argv);
+
+/// A shipped model file (models/NAME): beside the executable's build folder (build/tools/glovepose
+/// in a clone), else in the source tree this tool was built from. Throws glovepose::Error naming
+/// the places tried.
+inline std::string shipped_model_path(const std::string& name) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates;
+  std::error_code error;
+  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
+  if (!error) candidates.push_back(executable.parent_path() / ".." / ".." / "models" / name);
+  candidates.push_back(fs::path(GLOVEPOSE_SOURCE_DIR) / "models" / name);
+  std::string tried;
+  for (const fs::path& candidate : candidates) {
+    if (fs::is_regular_file(candidate, error)) return candidate.lexically_normal().string();
+    tried += (tried.empty() ? "'" : ", '") + candidate.lexically_normal().string() + "'";
+  }
+  throw Error("the shipped model is in none of " + tried + ", expected --model FILE");
+}
 
 /// Whether a command-line argument asks for the usage.
 inline bool asks_for_help(const std::string& argument) { return argument == "--help" || argument == "-h"; }

@@ -90,22 +90,6 @@ DemoOptions parse_options(int argc, char** argv) {
   return o;
 }
 
-// The shipped model: beside the executable's build folder (build/tools/glovepose in a clone), else
-// in the source tree this tool was built from.
-std::string shipped_model_path() {
-  std::vector<fs::path> candidates;
-  std::error_code error;
-  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
-  if (!error) candidates.push_back(executable.parent_path() / ".." / ".." / "models" / kShippedModelName);
-  candidates.push_back(fs::path(GLOVEPOSE_SOURCE_DIR) / "models" / kShippedModelName);
-  std::string tried;
-  for (const fs::path& candidate : candidates) {
-    if (fs::is_regular_file(candidate, error)) return candidate.lexically_normal().string();
-    tried += (tried.empty() ? "'" : ", '") + candidate.lexically_normal().string() + "'";
-  }
-  throw Error("the shipped model is in none of " + tried + ", expected --model FILE");
-}
-
 // A new user in memory: the calibration sequence, then the session, with every raw reading.
 struct NewUser {
   train::Dataset data;
@@ -468,7 +452,7 @@ void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::Hand
 int demo(int argc, char** argv) {
   try {
     const DemoOptions o = parse_options(argc, argv);
-    const std::string model_path = o.model.empty() ? shipped_model_path() : o.model;
+    const std::string model_path = o.model.empty() ? shipped_model_path(kShippedModelName) : o.model;
     PoseModelOptions model_options;
     model_options.storage = o.storage;
     const auto model = PoseModel::load(model_path, model_options);

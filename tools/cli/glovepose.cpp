@@ -12,6 +12,8 @@
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 //   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
+//   glovepose bench [--model FILE]... [--poses N] [--json]
+//       per-stage latency of one pose on this machine against the paper's 5 ms budget (bench.cpp).
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
@@ -50,7 +52,8 @@ struct Options {
                   "       glovepose simulate --help\n"
                   "       glovepose train | finetune | eval | fit-guided --help\n"
                   "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
-                  "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n");
+                  "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
+                  "       glovepose bench [--model FILE]... [--poses N] [--json]\n");
 }
 
 Options parse(int argc, char** argv) {
@@ -161,6 +164,14 @@ int main(int argc, char** argv) {
     return cli::train_tools(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "bench") {
+    try {
+      return cli::bench(argc, argv);
+    } catch (const Error& e) {
+      std::cerr << "glovepose bench: " << e.what() << "\n";
+      return 2;
+    }
+  }
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);
