@@ -46,7 +46,7 @@ std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TM
 }  // namespace
 
 TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the usage on stderr") {
-  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench"}) {
+  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);

@@ -6,9 +6,10 @@ set -euo pipefail
 # mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
-# nlohmann-json3-dev: JSON in the tools (glovepose bench --json) and their tests.
+# nlohmann-json3-dev: JSON in the tools (glovepose bench --json, glovepose view) and their tests.
+# chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
-          libopenxr-dev nlohmann-json3-dev "$@")
+          libopenxr-dev nlohmann-json3-dev chromium "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

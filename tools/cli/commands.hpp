@@ -28,6 +28,9 @@ int soak(int argc, char** argv);
 /// `glovepose bench ...` (bench.cpp); argv[1] is "bench". Returns the exit code.
 int bench(int argc, char** argv);
 
+/// `glovepose view ...` (view.cpp); argv[1] is "view". Returns the exit code.
+int view(int argc, char** argv);
+
 /// A shipped model file (models/NAME): beside the executable's build folder (build/tools/glovepose
 /// in a clone), else in the source tree this tool was built from. Throws glovepose::Error naming
 /// the places tried.

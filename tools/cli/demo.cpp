@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "new_user.hpp"
 #include "svg.hpp"
 
 namespace glovepose::cli {
@@ -90,38 +91,6 @@ DemoOptions parse_options(int argc, char** argv) {
   return o;
 }
 
-// A new user in memory: the calibration sequence, then the session, with every raw reading.
-struct NewUser {
-  train::Dataset data;
-  std::size_t first_session_frame = 0;
-  double cycle_rate = 0.0;  // readout cycles per second
-};
-
-// The user follows the model's guided calibration sequence when it carries one (pose-guided
-// calibration), else explores the extreme poses freely (min-max).
-NewUser simulate_new_user(const DemoOptions& o, const PoseModel& model) {
-  sim::CorpusConfig config;
-  config.seed = o.seed;
-  config.subjects = 1;
-  config.sessions = 1;
-  config.gloves = 1;
-  config.minutes = o.minutes;
-  config.recording.raw_rows = true;
-  if (model.pose_offset()) {
-    config.guided_calibration = model.pose_offset()->sequence();
-    config.calibration_seconds = config.guided_calibration->total_seconds();
-  }
-  NewUser user;
-  user.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  user.cycle_rate = config.recording.cycle_rate;
-  while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)
-    ++user.first_session_frame;
-  if (user.first_session_frame == 0 || user.first_session_frame == user.data.frames())
-    throw Error("the simulated user has " + std::to_string(user.first_session_frame) + " calibration frames of " +
-                std::to_string(user.data.frames()) + ", expected a calibration sequence followed by a session");
-  return user;
-}
-
 // What streaming the session produced.
 struct SessionRun {
   std::vector<std::size_t> compared_frames;  // dataset frames compared with the truth (collision outliers left out)
@@ -148,7 +117,7 @@ std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std
   const auto rows = static_cast<int>(d.row_count);
   std::size_t rejected = 0;
   for (int r = 0; r < rows; ++r) {
-    const double time = d.timestamps[f] - static_cast<double>(rows - 1 - r) / (rows * user.cycle_rate);
+    const double time = row_time(user, f, static_cast<std::size_t>(r));
     before_row(time);
     const Status status = estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], time);
     if (status == Status::Solved) on_pose();
@@ -461,7 +430,7 @@ int demo(int argc, char** argv) {
     if (error || !fs::is_directory(o.out))
       throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
 
-    const NewUser user = simulate_new_user(o, *model);
+    const NewUser user = simulate_new_user(o.seed, o.minutes, *model);
     EstimatorConfig config;  // the default readout: a solve every 16 rows of their latest readings
     config.joint_transforms = true;
     GlovePoseEstimator estimator(model, config);

@@ -14,6 +14,8 @@
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
 //   glovepose bench [--model FILE]... [--poses N] [--json]
 //       per-stage latency of one pose on this machine against the paper's 5 ms budget (bench.cpp).
+//   glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]
+//       the hand live in the browser, from a simulated, replayed or real glove (view.cpp).
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
@@ -53,7 +55,8 @@ struct Options {
                   "       glovepose train | finetune | eval | fit-guided --help\n"
                   "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
                   "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
-                  "       glovepose bench [--model FILE]... [--poses N] [--json]\n");
+                  "       glovepose bench [--model FILE]... [--poses N] [--json]\n"
+                  "       glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]\n");
 }
 
 Options parse(int argc, char** argv) {
@@ -164,14 +167,15 @@ int main(int argc, char** argv) {
     return cli::train_tools(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);
-  if (argc >= 2 && std::string(argv[1]) == "bench") {
-    try {
-      return cli::bench(argc, argv);
-    } catch (const Error& e) {
-      std::cerr << "glovepose bench: " << e.what() << "\n";
-      return 2;
+  for (const auto& [name, command] : {std::pair{"bench", &cli::bench}, std::pair{"view", &cli::view}})
+    if (argc >= 2 && std::string(argv[1]) == name) {
+      try {
+        return command(argc, argv);
+      } catch (const Error& e) {
+        std::cerr << "glovepose " << name << ": " << e.what() << "\n";
+        return 2;
+      }
     }
-  }
   const Options o = parse(argc, argv);
   try {
     return o.command == "predict" ? predict(o) : info(o);

@@ -1,0 +1,265 @@
+// glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]
+//   A live view of the hand in the browser: a local web server (loopback only) whose page draws the
+//   estimator's OpenXR joints in 3D with WebGL, the 25 angles, the trust flags, the calibration step
+//   with its target pose, and the latency. The glove is a simulated new user streamed in real time
+//   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove's
+//   rows on stdin, one "row,value,timestamp" line each (--stdin; the first 30 s of stream time are
+//   the calibration). The page asks for the newest hand (GET /state) about 30 times a second.
+#include <glovepose/estimator.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "commands.hpp"
+#include "new_user.hpp"
+#include "view_page.hpp"
+
+namespace glovepose::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+constexpr double kStdinCalibrationSeconds = 30.0;
+
+struct ViewOptions {
+  int port = 8765;
+  std::string model;  // empty: the shipped one
+  std::uint64_t seed = 2026;
+  std::string replay;
+  bool from_stdin = false;
+  double seconds = 0.0;  // 0: until the glove's stream ends (or Ctrl-C)
+};
+
+[[noreturn]] void usage(const std::string& problem) {
+  exit_with_usage("view", problem,
+                  "usage: glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]\n"
+                  "  --port P       port on 127.0.0.1 (default 8765; 0: any free one); the address is printed\n"
+                  "  --model FILE   weights (default: the shipped model)\n"
+                  "  --seed S       simulation seed of the simulated user (default 2026)\n"
+                  "  --replay FILE  a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time\n"
+                  "  --stdin        a real glove's rows on stdin, one 'row,value,timestamp' line each;\n"
+                  "                 the first 30 s of stream time calibrate\n"
+                  "  --seconds N    stop serving after N seconds (default: when the stream ends)\n");
+}
+
+ViewOptions parse_options(int argc, char** argv) {
+  ViewOptions o;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--port") o.port = parse_number<int>(a, value());
+    else if (a == "--model") o.model = value();
+    else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
+    else if (a == "--replay") o.replay = value();
+    else if (a == "--stdin") o.from_stdin = true;
+    else if (a == "--seconds") o.seconds = parse_number<double>(a, value());
+    else if (asks_for_help(a)) usage("");
+    else usage("unknown option " + a);
+  }
+  if (o.port < 0 || o.port > 65535) throw Error("--port " + std::to_string(o.port) + ", expected 0..65535");
+  if (!o.replay.empty() && o.from_stdin) usage("--replay and --stdin both given, expected one source");
+  if (o.seconds < 0.0) throw Error("--seconds " + std::to_string(o.seconds) + ", expected a time of at least 0");
+  return o;
+}
+
+const char* const kFlagNames[] = {"readings rejected", "input clamped", "training calibration", "calibrating", "stale readings",
+                                  "recovering",        "stuck rows",    "disconnected rows",     "outlier rows"};
+
+// The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
+// 0 is `start`), publishing the hand after each pose and the calibration's progress after each frame.
+class GloveStream {
+ public:
+  GloveStream(GlovePoseEstimator& estimator, LatestHand& latest, std::atomic<bool>& stop)
+      : estimator_(estimator), latest_(latest), stop_(stop) {}
+
+  void recorded(const NewUser& user) {
+    const Clock::time_point start = Clock::now();
+    const double t0 = row_time(user, 0, 0);
+    estimator_.start_calibration();
+    for (std::size_t f = 0; f < user.data.frames() && !stop_; ++f) {
+      if (f == user.first_session_frame) estimator_.finish_calibration();
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
+      for (std::size_t r = 0; r < user.data.row_count; ++r) push(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
+      latest_.publish(estimator_.state());
+    }
+  }
+
+  void from_stdin() {
+    std::string line;
+    double first = std::nan("");
+    estimator_.start_calibration();
+    while (!stop_ && std::getline(std::cin, line)) {
+      std::istringstream fields(line);
+      int row = 0;
+      double value = 0.0, t = 0.0;
+      char comma1 = 0, comma2 = 0;
+      if (!(fields >> row >> comma1 >> value >> comma2 >> t) || comma1 != ',' || comma2 != ',') continue;  // not a row: skipped
+      if (std::isnan(first)) first = t;
+      if (estimator_.calibration_progress().collecting && t - first >= kStdinCalibrationSeconds) estimator_.finish_calibration();
+      push(row, value, t);
+      latest_.publish(estimator_.state());
+    }
+  }
+
+ private:
+  void push(int row, double value, double t) { (void)estimator_.push_row(row, value, t); }
+
+  GlovePoseEstimator& estimator_;
+  LatestHand& latest_;
+  std::atomic<bool>& stop_;
+};
+
+// The newest hand as the page's JSON: pose, OpenXR joints (wrist frame, metres), the calibration
+// step and its target pose's joints, latency.
+json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, Clock::time_point stream_start, double stream_t0) {
+  HandState state;
+  (void)latest.read(state);
+  json out = {{"active", state.pose.valid}, {"calibrating", state.calibration.collecting}};
+  const XrHandLocator& locator = estimator.locator();
+  const auto joints_of = [&](const hand::Angles& angles) {
+    XrHandJoints joints;
+    locator.locate(angles, nullptr, 0, joints);
+    json list = json::array();
+    for (const auto& j : joints.locations) list.push_back({j.pose.position.x, j.pose.position.y, j.pose.position.z});
+    return list;
+  };
+  out["step"] = state.calibration.step;
+  out["step_name"] = "";
+  out["target_joints"] = nullptr;
+  if (state.calibration.collecting && state.calibration.step >= 0 && estimator.model().pose_offset()) {
+    const auto& steps = estimator.model().pose_offset()->sequence().steps();
+    const auto& step = steps[static_cast<std::size_t>(state.calibration.step)];
+    out["step_name"] = step.name;
+    out["instruction"] = step.instruction;
+    out["target_joints"] = joints_of(step.pose);
+  }
+  if (!state.pose.valid) return out;
+  json names = json::array(), flags = json::array();
+  for (const hand::Dof& dof : hand::kDofs) names.push_back(dof.name);
+  for (std::size_t b = 0; b < std::size(kFlagNames); ++b)
+    if (state.pose.flags & (1u << b)) flags.push_back(kFlagNames[b]);
+  const double stream_now = stream_t0 + std::chrono::duration<double>(Clock::now() - stream_start).count();
+  out["seq"] = state.pose.sequence;
+  out["angles"] = state.pose.angles;
+  out["dof_names"] = names;
+  out["trusted"] = state.pose.trusted();
+  out["flag_names"] = flags;
+  out["joints"] = joints_of(state.pose.angles);
+  out["compute_us"] = 1e6 * state.pose.compute_seconds;
+  out["oldest_age_ms"] = 1e3 * state.pose.oldest_age;
+  out["age_ms"] = 1e3 * std::max(0.0, stream_now - state.pose.timestamp);
+  return out;
+}
+
+// A listening socket on 127.0.0.1:port (0: any free port); returns it and the port it got.
+std::pair<int, int> listen_on_loopback(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw Error("cannot create a socket");
+  const int yes = 1;
+  (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 || ::listen(fd, 16) != 0) {
+    ::close(fd);
+    throw Error("cannot listen on 127.0.0.1:" + std::to_string(port) + ", expected a free port (--port)");
+  }
+  socklen_t length = sizeof address;
+  (void)::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  return {fd, ntohs(address.sin_port)};
+}
+
+void send_all(int fd, const std::string& data) {
+  std::size_t sent = 0;
+  while (sent < data.size()) {
+    const ssize_t n = ::send(fd, data.data() + sent, data.size() - sent, MSG_NOSIGNAL);
+    if (n <= 0) return;  // the browser went away
+    sent += static_cast<std::size_t>(n);
+  }
+}
+
+void respond(int fd, const char* status, const char* type, const std::string& body) {
+  send_all(fd, std::string("HTTP/1.1 ") + status + "\r\nContent-Type: " + type + "\r\nContent-Length: " + std::to_string(body.size()) +
+                   "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + body);
+}
+
+}  // namespace
+
+int view(int argc, char** argv) {
+  const ViewOptions o = parse_options(argc, argv);
+  const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
+  if (!model->solver()) throw Error("the model's glove has no wiring to solve rows with, expected a model of a glove with a trace layout");
+  NewUser user;
+  if (!o.replay.empty()) {
+    user.data = train::Dataset::read(o.replay);
+    if (!user.data.has_raw_rows()) throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
+    user.cycle_rate = user.data.frame_rate();
+    while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)
+      ++user.first_session_frame;
+    if (user.first_session_frame == 0)
+      throw Error("'" + o.replay + "' starts with no calibration frames (kind 1), expected a calibration sequence before the session");
+  } else if (!o.from_stdin) {
+    user = simulate_new_user(o.seed, 10.0, *model);
+  }
+  GlovePoseEstimator estimator(model, EstimatorConfig{});
+  LatestHand latest;
+  std::atomic<bool> stop{false}, stream_done{false};
+  const auto [server, port] = listen_on_loopback(o.port);
+  std::printf("glovepose view: http://127.0.0.1:%d/\n", port);
+  std::fflush(stdout);
+  const Clock::time_point start = Clock::now();
+  const double stream_t0 = o.from_stdin ? 0.0 : row_time(user, 0, 0);
+  std::thread glove([&] {
+    try {
+      GloveStream stream(estimator, latest, stop);
+      if (o.from_stdin) stream.from_stdin();
+      else stream.recorded(user);
+    } catch (const Error& e) {
+      std::cerr << "glovepose view: the glove's stream stopped: " << e.what() << "\n";
+    }
+    stream_done = true;
+  });
+  while (!(o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : stream_done.load())) {
+    pollfd waiting{server, POLLIN, 0};
+    if (::poll(&waiting, 1, 100) <= 0) continue;
+    const int client = ::accept(server, nullptr, nullptr);
+    if (client < 0) continue;
+    char request[2048];
+    const ssize_t n = ::recv(client, request, sizeof request - 1, 0);
+    const std::string line = n > 0 ? std::string(request, static_cast<std::size_t>(n)).substr(0, std::string(request, static_cast<std::size_t>(n)).find('\r')) : "";
+    if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0) respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
+    else if (line.rfind("GET /state", 0) == 0) respond(client, "200 OK", "application/json", state_json(latest, estimator, start, stream_t0).dump());
+    else respond(client, "404 Not Found", "text/plain", "not found\n");
+    ::close(client);
+  }
+  stop = true;
+  ::close(server);
+  if (o.from_stdin) {
+    glove.detach();  // blocked reading stdin; the process ends here
+    return 0;
+  }
+  glove.join();
+  return 0;
+}
+
+}  // namespace glovepose::cli
