@@ -126,7 +126,7 @@ void BM_EstimatorFrame(benchmark::State& state) {
 }
 
 // BM_EstimatorFrame plus the OpenXR joints an engine asks for (joints_at 11 ms past the newest
-// pose: slope fit, prediction, three kinematics for the velocities). The prediction window spans
+// pose: slope, prediction, kinematics with each DoF's axis for the velocities). The prediction window spans
 // the trend's 128 poses, the most a fit ever reads (a real stream at 675 poses/s fills it as well).
 void BM_EstimatorFrameXr(benchmark::State& state) {
   EstimatorConfig config;

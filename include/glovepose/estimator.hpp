@@ -481,7 +481,7 @@ class BasicGlovePoseEstimator {
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
   const Eigen::VectorXd& cells() const noexcept { return cells_; }
   /// @brief The latest pose, joint list, calibration progress and rate together (for LatestHand).
-  /// Fits the rate (filter::Trend::slope()): a few microseconds, once per call.
+  /// The rate is filter::Trend::slope(), kept as poses arrive: a few dozen nanoseconds.
   HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress(), trend_.slope(), trend_.has_slope()}; }
 
   /// @brief The pose at time t (the stream's clock): from the recent poses when t is not after the

@@ -57,13 +57,13 @@ class XrHandLocator {
   /// from `rate` (rad/s) when given (their flags 0 otherwise). Leaves out's timing fields alone.
   GLOVEPOSE_REALTIME void locate(const hand::Angles& angles, const hand::Angles* rate, std::uint64_t location_flags,
                                  XrHandJoints& out) const noexcept {
-    hand::Skeleton skeleton;
+    hand::Skeleton skeleton;  // in the wrist joint's frame (mm)
     hand::DofAxes axes;
     hand::XrJointFrames joints;
     if (rate != nullptr)
-      mapper_.kinematics().pose(angles, skeleton, axes);
+      mapper_.kinematics().pose(angles, skeleton, axes, mapper_.root());
     else
-      mapper_.kinematics().pose(angles, skeleton);
+      mapper_.kinematics().pose(angles, skeleton, mapper_.root());
     mapper_.frames(skeleton, joints);
     mapper_.write(joints, location_flags, out.locations);
     out.side = side();
@@ -72,20 +72,18 @@ class XrHandLocator {
     // Velocities in closed form: DoF d turning at rate r about its axis a through its phalanx's
     // origin o moves a point p beyond it at r a x (p - o) and turns its frame at r a. The palm,
     // the wrist and the finger metacarpals sit on the palm, which the glove does not move.
-    const Eigen::Matrix3d to_wrist = joints.wrist_rotation.transpose();
     for (auto& v : out.velocities) v.velocity_flags = hand::kXrLinearVelocityValid | hand::kXrAngularVelocityValid;
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
       const auto base = static_cast<std::size_t>(hand::kFingerBase[f]);
-      const auto first = static_cast<std::size_t>(hand::kXrDigitFirst[f]);
-      const std::size_t phalanx_joint = f == 0 ? first : first + 1;
+      const std::size_t phalanx_joint = hand::XrJointMapper::digit_joint(f);
       Eigen::Vector3d angular = Eigen::Vector3d::Zero();
       for (std::size_t k = 0; k < 3; ++k) {  // phalanx base + k: its DoFs move the joints from phalanx_joint + k + 1 on
         const std::size_t phalanx = base + k;
-        const Eigen::Vector3d origin = to_wrist * (skeleton[phalanx].translation() - joints.wrist_position) * 1e-3;
+        const Eigen::Vector3d origin = skeleton[phalanx].translation() * 1e-3;
         const auto& dofs = phalanx_dofs_[phalanx];
         for (int n = 0; n < dofs[3]; ++n) {
           const auto d = static_cast<std::size_t>(dofs[static_cast<std::size_t>(n)]);
-          const Eigen::Vector3d turn = (*rate)[d] * (to_wrist * axes[d]);
+          const Eigen::Vector3d turn = (*rate)[d] * axes[d];
           angular += turn;
           for (std::size_t j = phalanx_joint + k + 1; j <= phalanx_joint + 3; ++j) add(out.velocities[j].linear_velocity, turn.cross(joints.position[j] - origin));
         }

@@ -51,37 +51,25 @@ class Trend {
   GLOVEPOSE_REALTIME Values slope() const noexcept {
     Values slope{};
     if (!has_slope()) return slope;
-    // One pass of sums over times relative to the newest sample and values relative to it (small
-    // numbers: no cancellation in the closed form n Stv - St Sv over n Stt - St^2).
-    const double newest_t = newest_time();
-    const Values& newest_v = newest();
-    Values sum_v{}, sum_tv{};
-    double sum_t = 0.0, sum_tt = 0.0;
-    std::size_t n = 0;
-    for (; n < count_; ++n) {
-      const std::size_t k = index(n);
-      const double dt = time_[k] - newest_t;
-      if (n >= 2 && -dt > window_) break;
-      sum_t += dt;
-      sum_tt += dt * dt;
-      for (std::size_t c = 0; c < N; ++c) {
-        const double v = values_[k][c] - newest_v[c];
-        sum_v[c] += v;
-        sum_tv[c] += dt * v;
-      }
-    }
-    const double count = static_cast<double>(n);
-    const double denominator = count * sum_tt - sum_t * sum_t;
+    // Closed form n Stv - St Sv over n Stt - St^2 (times and values about the reference sample).
+    const double count = static_cast<double>(in_window_);
+    const double denominator = count * sum_tt_ - sum_t_ * sum_t_;
     for (std::size_t c = 0; c < N; ++c) {
-      slope[c] = (count * sum_tv[c] - sum_t * sum_v[c]) / denominator;
+      slope[c] = (count * sum_tv_[c] - sum_t_ * sum_v_[c]) / denominator;
       // Timestamps near the ends of the double range overflow the sums: no slope rather than NaN.
       if (!std::isfinite(slope[c])) slope[c] = 0.0;
     }
     return slope;
   }
 
+  /// @brief Samples the slope is fitted over: those of the last window() seconds, at least two.
+  std::size_t fitted() const noexcept { return in_window_; }
+
   /// @brief Forgets every sample.
-  void reset() noexcept { count_ = 0; }
+  void reset() noexcept {
+    count_ = in_window_ = 0;
+    since_rebase_ = 0;
+  }
 
   /// @brief Adds the newest sample. A timestamp not after the newest, or a non-finite one, starts
   /// the trend over from this sample (a clock restart); non-finite values are refused.
@@ -90,10 +78,19 @@ class Trend {
       if (!std::isfinite(v)) return Status::NonFinite;
     if (!std::isfinite(t)) return Status::NonFinite;
     if (count_ > 0 && !(t > newest_time())) reset();
+    if (in_window_ == Capacity) exclude(index(Capacity - 1));  // the ring is about to overwrite it
     head_ = (head_ + 1) % Capacity;
     time_[head_] = t;
     values_[head_] = values;
     count_ = std::min(count_ + 1, Capacity);
+    ++in_window_;
+    while (in_window_ > 2 && t - time_[index(in_window_ - 1)] > window_) exclude(index(in_window_ - 1));
+    // Recomputed when the reference has left the window (differences to it stay within the
+    // window's span, against cancellation) or every Capacity additions (rounding).
+    if (++since_rebase_ >= Capacity || in_window_ == 1 || !(time_[index(in_window_ - 1)] <= reference_t_))
+      rebase();
+    else
+      include(head_);
     return Status::Ok;
   }
 
@@ -127,11 +124,45 @@ class Trend {
   // Position in the ring of the k-th newest sample.
   std::size_t index(std::size_t k) const noexcept { return (head_ + Capacity - k) % Capacity; }
 
+  // Adds ring sample k to the sums / takes it out of them (and out of the window).
+  void include(std::size_t k) noexcept { accumulate(k, 1.0); }
+  void exclude(std::size_t k) noexcept {
+    accumulate(k, -1.0);
+    --in_window_;
+  }
+  void accumulate(std::size_t k, double sign) noexcept {
+    const double dt = time_[k] - reference_t_;
+    sum_t_ += sign * dt;
+    sum_tt_ += sign * dt * dt;
+    for (std::size_t c = 0; c < N; ++c) {
+      const double v = values_[k][c] - reference_v_[c];
+      sum_v_[c] += sign * v;
+      sum_tv_[c] += sign * dt * v;
+    }
+  }
+
+  // The sums afresh over the window, about the newest sample.
+  void rebase() noexcept {
+    since_rebase_ = 0;
+    reference_t_ = time_[head_];
+    reference_v_ = values_[head_];
+    sum_t_ = sum_tt_ = 0.0;
+    sum_v_ = Values{};
+    sum_tv_ = Values{};
+    for (std::size_t n = 0; n < in_window_; ++n) accumulate(index(n), 1.0);
+  }
+
   double window_;
   std::array<double, Capacity> time_{};
   std::array<Values, Capacity> values_{};
   std::size_t head_ = Capacity - 1;
   std::size_t count_ = 0;
+  std::size_t in_window_ = 0;     // the newest samples the sums cover
+  std::size_t since_rebase_ = 0;  // additions since the sums were last recomputed
+  double reference_t_ = 0.0;
+  Values reference_v_{};
+  double sum_t_ = 0.0, sum_tt_ = 0.0;
+  Values sum_v_{}, sum_tv_{};
 };
 
 }  // namespace glovepose::filter

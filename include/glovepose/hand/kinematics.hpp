@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <utility>
 
@@ -151,9 +152,10 @@ class Kinematics {
     compose(angles, out, root, nullptr);
   }
 
-  /// @brief pose() with the root at the identity, and the world axis of every DoF.
-  GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out, DofAxes& axes) const noexcept {
-    compose(angles, out, identity_, &axes);
+  /// @brief pose() and the axis of every DoF in the same frame.
+  GLOVEPOSE_REALTIME void pose(const Angles& angles, Skeleton& out, DofAxes& axes,
+                               const Eigen::Affine3d& root = Eigen::Affine3d::Identity()) const noexcept {
+    compose(angles, out, root, &axes);
   }
 
   /// @brief End point of a finger's distal phalanx (its tip), in the root frame.
@@ -174,19 +176,28 @@ class Kinematics {
       // it; `turned` is that frame's orientation in the root frame (only when axes are asked for).
       Eigen::Matrix3d turned;
       if (axes) turned = parent.linear() * local.linear();
-      const auto turn = [&](int dof, const Eigen::Vector3d& local_axis) {
+      // Turning about local axis a by theta mixes the two other columns (i, j) = (a+1, a+2) of a
+      // frame M: M R_a(theta) has columns c M_i + s M_j and c M_j - s M_i there (a 3x3 product
+      // written out, a quarter of the work).
+      const auto turn = [&](int dof, int axis) {
         if (dof < 0) return;
-        // The matrix rotate() would make of the angle-axis itself: the same bits either way.
-        const Eigen::Matrix3d rotation = Eigen::AngleAxisd(angles[static_cast<std::size_t>(dof)], local_axis).toRotationMatrix();
+        const double angle = angles[static_cast<std::size_t>(dof)];
+        const double c = std::cos(angle), s = std::sin(angle);
+        const Eigen::Index first = (axis + 1) % 3, second = (axis + 2) % 3;
+        const auto rotate = [&](auto&& frame) {
+          const Eigen::Vector3d m_first = frame.col(first), m_second = frame.col(second);
+          frame.col(first) = c * m_first + s * m_second;
+          frame.col(second) = c * m_second - s * m_first;
+        };
         if (axes) {
-          (*axes)[static_cast<std::size_t>(dof)] = turned * local_axis;
-          turned = turned * rotation;
+          (*axes)[static_cast<std::size_t>(dof)] = turned.col(axis);
+          rotate(turned);
         }
-        local.rotate(rotation);
+        rotate(local.linear());
       };
-      turn(flexion_[i], Eigen::Vector3d::UnitX());
-      turn(abduction_[i], Eigen::Vector3d::UnitZ());
-      turn(twist_[i], Eigen::Vector3d::UnitY());
+      turn(flexion_[i], 0);
+      turn(abduction_[i], 2);
+      turn(twist_[i], 1);
       out[i] = parent * local;
     }
     if (!left) return;

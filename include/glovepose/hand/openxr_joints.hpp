@@ -130,12 +130,14 @@ using XrJointLocations = std::array<XrJointLocation, kXrJointCount>;
 struct XrJointFrames {
   std::array<Eigen::Vector3d, kXrJointCount> position;
   std::array<Eigen::Matrix3d, kXrJointCount> rotation;
-  Eigen::Matrix3d wrist_rotation;  ///< The wrist joint's frame in the skeleton's root frame.
-  Eigen::Vector3d wrist_position;  ///< The wrist joint in the root frame (mm).
 };
 
 /// @brief Turns a posed skeleton into the 26 OpenXR joint locations of one hand model.
-/// Immutable after construction; locate() is noexcept and allocation-free.
+///
+/// The palm is one rigid body whatever the angles (no DoF turns it), so the wrist joint's frame,
+/// the palm joint and the finger metacarpal joints are fixed: found once here. A skeleton posed
+/// with root() comes out in the wrist joint's frame, leaving only the digits to convert per pose.
+/// Immutable after construction; every call is noexcept and allocation-free.
 class XrJointMapper {
  public:
   /// @brief A mapper for the given kinematics (its hand model sets the joint radii: the reference
@@ -143,85 +145,93 @@ class XrJointMapper {
   explicit XrJointMapper(const Kinematics& kinematics) : kinematics_(kinematics) {
     const double scale = middle_length(kinematics.model()) / middle_length(HandModel::reference());
     for (std::size_t j = 0; j < kXrJointCount; ++j) radius_[j] = static_cast<float>(kXrReferenceRadius[j] * scale * 1e-3);
+    palm_joints(kinematics);
   }
 
   /// @brief The kinematics the skeletons come from.
   const Kinematics& kinematics() const noexcept { return kinematics_; }
   /// @brief Radius of each joint (metres).
   const std::array<float, kXrJointCount>& radii() const noexcept { return radius_; }
+  /// @brief The root to pose skeletons with (Kinematics::pose) so that they lie in the wrist
+  /// joint's frame (mm): the inverse of the wrist joint's pose in the kinematics' root frame.
+  const Eigen::Affine3d& root() const noexcept { return root_; }
 
-  /// @brief The joint locations of `skeleton` (posed by kinematics()) in the wrist joint's frame,
-  /// each with `location_flags`.
+  /// @brief The joint locations of `skeleton` (posed by kinematics() with root()), each with
+  /// `location_flags`.
   GLOVEPOSE_REALTIME void locate(const Skeleton& skeleton, std::uint64_t location_flags, XrJointLocations& out) const noexcept {
     XrJointFrames joints;
     frames(skeleton, joints);
     write(joints, location_flags, out);
   }
 
-  /// @brief The joints' frames of `skeleton` in the wrist joint's frame (metres).
+  /// @brief The joints' frames of `skeleton` (posed with root()) in the wrist joint's frame (metres).
   GLOVEPOSE_REALTIME void frames(const Skeleton& skeleton, XrJointFrames& out) const noexcept {
-    std::array<Eigen::Vector3d, kXrJointCount>& position = out.position;
-    std::array<Eigen::Matrix3d, kXrJointCount>& rotation = out.rotation;
-    const Eigen::Vector3d wrist = skeleton[static_cast<std::size_t>(Phalanx::Wrist)].translation();
-    const Eigen::Vector3d back = skeleton[static_cast<std::size_t>(Phalanx::Hand)].linear().col(2);
-    // The model's phalanx frames: bone along +y, flexion turns +y towards +z, so the back of the
-    // digit is -z; OpenXR's (x, y, z) = (-x, -z, -y) of the phalanx frame.
-    const auto to_xr = [](const Eigen::Matrix3d& phalanx) {
-      Eigen::Matrix3d r;
-      r.col(0) = -phalanx.col(0);
-      r.col(1) = -phalanx.col(2);
-      r.col(2) = -phalanx.col(1);
-      return r;
-    };
     for (std::size_t f = 0; f < kFingerCount; ++f) {
       const auto base = static_cast<std::size_t>(kFingerBase[f]);
-      const auto first = static_cast<std::size_t>(kXrDigitFirst[f]);
-      const std::size_t phalanx_joint = f == 0 ? first : first + 1;  // the thumb has no separate metacarpal
-      if (f != 0) {
-        const Eigen::Vector3d knuckle = skeleton[base].translation();
-        position[first] = wrist + kMetacarpalStart * (knuckle - wrist);
-        rotation[first] = frame(knuckle - position[first], back);
-      }
+      const std::size_t joint = digit_joint(f);
       for (std::size_t k = 0; k < 3; ++k) {
-        position[phalanx_joint + k] = skeleton[base + k].translation();
-        rotation[phalanx_joint + k] = to_xr(skeleton[base + k].linear());
+        out.position[joint + k] = skeleton[base + k].translation() * 1e-3;
+        out.rotation[joint + k] = to_xr(skeleton[base + k].linear());
       }
-      position[phalanx_joint + 3] = kinematics_.fingertip(skeleton, static_cast<Finger>(f));
-      rotation[phalanx_joint + 3] = rotation[phalanx_joint + 2];
+      out.position[joint + 3] = kinematics_.fingertip(skeleton, static_cast<Finger>(f)) * 1e-3;
+      out.rotation[joint + 3] = out.rotation[joint + 2];
     }
-    const auto wrist_joint = static_cast<std::size_t>(XrJoint::Wrist), palm = static_cast<std::size_t>(XrJoint::Palm);
-    const auto middle_metacarpal = static_cast<std::size_t>(XrJoint::MiddleMetacarpal);
-    const auto middle_knuckle = static_cast<std::size_t>(XrJoint::MiddleProximal);
-    position[wrist_joint] = wrist;
-    rotation[wrist_joint] = frame(position[middle_metacarpal] - wrist, back);
-    position[palm] = 0.5 * (position[middle_metacarpal] + position[middle_knuckle]);
-    rotation[palm] = frame(position[middle_knuckle] - position[middle_metacarpal], back);
-    // Into the wrist's frame, metres.
-    out.wrist_rotation = rotation[wrist_joint];
-    out.wrist_position = wrist;
-    const Eigen::Matrix3d inverse = rotation[wrist_joint].transpose();
-    for (std::size_t j = 0; j < kXrJointCount; ++j) {
-      position[j] = inverse * (position[j] - wrist) * 1e-3;
-      rotation[j] = inverse * rotation[j];
+    for (std::size_t k = 0; k < kPalmJoints.size(); ++k) {
+      const auto j = static_cast<std::size_t>(kPalmJoints[k]);
+      out.position[j] = palm_.position[k];
+      out.rotation[j] = palm_.rotation[k];
     }
+  }
+
+  /// @brief The first joint of digit f (kFingerBase order) that the model's phalanges move: its
+  /// proximal joint, or the thumb's metacarpal (the model's first thumb phalanx).
+  static constexpr std::size_t digit_joint(std::size_t f) noexcept {
+    const auto first = static_cast<std::size_t>(kXrDigitFirst[f]);
+    return f == 0 ? first : first + 1;
   }
 
   /// @brief `joints` as OpenXR locations with `location_flags` and this hand's radii.
   GLOVEPOSE_REALTIME void write(const XrJointFrames& joints, std::uint64_t location_flags, XrJointLocations& out) const noexcept {
     for (std::size_t j = 0; j < kXrJointCount; ++j) {
       const Eigen::Vector3d& p = joints.position[j];
-      Eigen::Quaterniond q(joints.rotation[j]);
-      q.normalize();
-      if (q.w() < 0) q.coeffs() = -q.coeffs();  // one of the two signs, the same on both hands
       XrJointLocation& joint = out[j];
       joint.location_flags = location_flags;
-      joint.pose.orientation = {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()), static_cast<float>(q.w())};
       joint.pose.position = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
       joint.radius = radius_[j];
+    }
+    // Orientations: the palm's are fixed, a tip's is its distal joint's; the rest are converted.
+    for (std::size_t k = 0; k < kPalmJoints.size(); ++k) out[static_cast<std::size_t>(kPalmJoints[k])].pose.orientation = palm_.orientation[k];
+    for (std::size_t f = 0; f < kFingerCount; ++f) {
+      const std::size_t joint = digit_joint(f);
+      for (std::size_t k = 0; k < 3; ++k) out[joint + k].pose.orientation = quaternion(joints.rotation[joint + k]);
+      out[joint + 3].pose.orientation = out[joint + 2].pose.orientation;
     }
   }
 
  private:
+  // The joints on the palm, which no angle moves.
+  static constexpr std::array<XrJoint, 6> kPalmJoints{XrJoint::Palm, XrJoint::Wrist, XrJoint::IndexMetacarpal,
+                                                       XrJoint::MiddleMetacarpal, XrJoint::RingMetacarpal,
+                                                       XrJoint::LittleMetacarpal};
+
+  // A rotation as a unit quaternion with w >= 0 (one of the two signs, the same on both hands).
+  static XrQuaternion quaternion(const Eigen::Matrix3d& rotation) noexcept {
+    Eigen::Quaterniond q(rotation);
+    q.normalize();
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    return {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()), static_cast<float>(q.w())};
+  }
+
+  // The model's phalanx frames: bone along +y, flexion turns +y towards +z, so the back of the
+  // digit is -z; OpenXR's (x, y, z) = (-x, -z, -y) of the phalanx frame.
+  static Eigen::Matrix3d to_xr(const Eigen::Matrix3d& phalanx) noexcept {
+    Eigen::Matrix3d r;
+    r.col(0) = -phalanx.col(0);
+    r.col(1) = -phalanx.col(2);
+    r.col(2) = -phalanx.col(1);
+    return r;
+  }
+
   // An OpenXR joint frame for a bone running along `bone` on a hand whose back faces `back`:
   // +Z = -bone, +Y = back made perpendicular to it, X = Y x Z.
   static Eigen::Matrix3d frame(const Eigen::Vector3d& bone, const Eigen::Vector3d& back) noexcept {
@@ -234,6 +244,35 @@ class XrJointMapper {
     return r;
   }
 
+  // The wrist joint's pose (root()) and the palm's joints in its frame, from the rest pose.
+  void palm_joints(const Kinematics& kinematics) {
+    Skeleton skeleton;
+    kinematics.pose(Angles{}, skeleton);
+    const Eigen::Vector3d wrist = skeleton[static_cast<std::size_t>(Phalanx::Wrist)].translation();
+    const Eigen::Vector3d back = skeleton[static_cast<std::size_t>(Phalanx::Hand)].linear().col(2);
+    const auto knuckle = [&](Finger f) { return Eigen::Vector3d(skeleton[static_cast<std::size_t>(kFingerBase[static_cast<std::size_t>(f)])].translation()); };
+    std::array<Eigen::Vector3d, 6> position;
+    std::array<Eigen::Matrix3d, 6> rotation;
+    const Finger fingers[] = {Finger::Index, Finger::Middle, Finger::Ring, Finger::Pinky};
+    for (std::size_t k = 0; k < 4; ++k) {
+      position[k + 2] = wrist + kMetacarpalStart * (knuckle(fingers[k]) - wrist);
+      rotation[k + 2] = frame(knuckle(fingers[k]) - position[k + 2], back);
+    }
+    const Eigen::Vector3d& middle_metacarpal = position[3];
+    position[1] = wrist;
+    rotation[1] = frame(middle_metacarpal - wrist, back);
+    position[0] = 0.5 * (middle_metacarpal + knuckle(Finger::Middle));
+    rotation[0] = frame(knuckle(Finger::Middle) - middle_metacarpal, back);
+    root_ = Eigen::Affine3d::Identity();
+    root_.linear() = rotation[1].transpose();
+    root_.translation() = -(rotation[1].transpose() * wrist);
+    for (std::size_t k = 0; k < 6; ++k) {
+      palm_.position[k] = root_.linear() * (position[k] - wrist) * 1e-3;
+      palm_.rotation[k] = root_.linear() * rotation[k];
+      palm_.orientation[k] = quaternion(palm_.rotation[k]);
+    }
+  }
+
   // Wrist pivot to the middle fingertip along the bones at rest (mm): the hand's size.
   static double middle_length(const HandModel& model) {
     const auto base = static_cast<std::size_t>(Phalanx::Middle1);
@@ -243,6 +282,12 @@ class XrJointMapper {
 
   Kinematics kinematics_;
   std::array<float, kXrJointCount> radius_{};
+  Eigen::Affine3d root_;
+  struct {
+    std::array<Eigen::Vector3d, kPalmJoints.size()> position;
+    std::array<Eigen::Matrix3d, kPalmJoints.size()> rotation;
+    std::array<XrQuaternion, kPalmJoints.size()> orientation;
+  } palm_;
 };
 
 }  // namespace glovepose::hand
