@@ -9,7 +9,10 @@ and replayed by `glovepose view --port 0 --replay FILE` in real time. The test
 (c) reads the page's own state twice, a second apart (Chromium's --dump-dom: the page writes the
     frames it received, the pose sequence and the index fingertip into #status): WebGL is on, the
     page keeps receiving, the sequence grows and the fingertip moves: the drawing follows the stream;
-(d) checks the server listens on the loopback address only.
+(d) checks the server listens on the loopback address only;
+(e) streams the same recording's rows as text lines on stdin to `glovepose view --stdin
+    --calibration-seconds 2` (a real glove's path), paced at twice real time: the hand is first
+    calibrating, then posed, and its pose sequence grows while rows arrive.
 
 Run: /usr/bin/python3 tests/python/test_view.py   (GLOVEPOSE_CLI: the tool, default
 build/tools/glovepose). Exit code 0 when every check passes; the last line reads 'N passed, N failed'.
@@ -87,6 +90,61 @@ def png_pixels(path: Path):
         rows.append(bytes(row))
         previous = row
     return width, height, channels, rows
+
+
+def read_rows(path: Path):
+    """The raw rows (frames x 180, float32) and frame timestamps (float64) of a dataset file."""
+    data = path.read_bytes()
+    (header_length,) = struct.unpack("<Q", data[:8])
+    header = json.loads(data[8:8 + header_length])
+    body = data[8 + header_length:]
+
+    def tensor(name: str, code: str):
+        entry = header[name]
+        begin, end = entry["data_offsets"]
+        count = (end - begin) // struct.calcsize(code)
+        return entry["shape"], struct.unpack(f"<{count}{code}", body[begin:end])
+
+    (frames, rows), raw = tensor("raw_rows", "f")
+    _, timestamps = tensor("timestamps", "d")
+    return frames, rows, raw, timestamps
+
+
+def get_state(url: str) -> dict:
+    return json.loads(urllib.request.urlopen(url + "state", timeout=5).read())
+
+
+def check_stdin(recording: Path) -> None:
+    frames, rows, raw, timestamps = read_rows(recording)
+    server = subprocess.Popen([str(CLI), "view", "--port", "0", "--seconds", "30", "--stdin", "--calibration-seconds", "2"],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        match = re.search(r"http://127\.0\.0\.1:(\d+)/", server.stdout.readline())
+        check(match is not None, "--stdin: the tool prints its address")
+        if match is None:
+            return
+        url = f"http://127.0.0.1:{match.group(1)}/"
+        period = 1.0 / (rows * 60.0)  # a row's slot in the 60 Hz readout cycle
+        seen_calibrating = False
+        sequences = []
+        for f in range(frames):
+            lines = [f"{r},{raw[f * rows + r]!r},{timestamps[f] - (rows - 1 - r) * period!r}\n" for r in range(rows)]
+            server.stdin.write("".join(lines))
+            server.stdin.flush()
+            time.sleep(1.0 / 120.0)
+            if f % 30 == 29:
+                state = get_state(url)
+                seen_calibrating |= state.get("calibrating") is True
+                if state.get("active") and not state.get("calibrating"):
+                    sequences.append(state.get("seq", 0))
+        state = get_state(url)
+        check(seen_calibrating, "--stdin: the first 2 s of stream time calibrate")
+        check(state.get("active") is True and not state.get("calibrating"), "--stdin: a calibrated pose after the calibration")
+        check(len(state.get("joints", [])) == 26, "--stdin: 26 OpenXR joints")
+        check(len(sequences) >= 5 and sequences[-1] > sequences[0], f"--stdin: the pose sequence grows as rows arrive ({sequences[:3]}...)")
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
 
 
 def page_status(url: str) -> str:
@@ -173,6 +231,9 @@ def main() -> int:
     finally:
         server.terminate()
         server.wait(timeout=10)
+    try:
+        check_stdin(recording)  # (e)
+    finally:
         shutil.rmtree(work, ignore_errors=True)
     print(f"{passed} passed, {failed} failed")
     return 0 if failed == 0 else 1

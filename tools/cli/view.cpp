@@ -1,10 +1,10 @@
-// glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]
+// glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin [--calibration-seconds S]] [--seconds N]
 //   A live view of the hand in the browser: a local web server (loopback only) whose page draws the
 //   estimator's OpenXR joints in 3D with WebGL, the 25 angles, the trust flags, the calibration step
 //   with its target pose, and the latency. The glove is a simulated new user streamed in real time
 //   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove's
-//   rows on stdin, one "row,value,timestamp" line each (--stdin; the first 30 s of stream time are
-//   the calibration). The page asks for the newest hand (GET /state) about 30 times a second.
+//   rows on stdin, one "row,value,timestamp" line each (--stdin; the first 30 s of stream time, or
+//   --calibration-seconds, are the calibration). The page asks for the newest hand (GET /state) about 30 times a second.
 #include <glovepose/estimator.hpp>
 
 #include <nlohmann/json.hpp>
@@ -35,26 +35,26 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-constexpr double kStdinCalibrationSeconds = 30.0;
-
 struct ViewOptions {
   int port = 8765;
   std::string model;  // empty: the shipped one
   std::uint64_t seed = 2026;
   std::string replay;
   bool from_stdin = false;
+  double calibration_seconds = 30.0;  // --stdin: stream time the user moves through extreme poses
   double seconds = 0.0;  // 0: until the glove's stream ends (or Ctrl-C)
 };
 
 [[noreturn]] void usage(const std::string& problem) {
   exit_with_usage("view", problem,
-                  "usage: glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]\n"
+                  "usage: glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin [--calibration-seconds S]]\n"
+                  "                      [--seconds N]\n"
                   "  --port P       port on 127.0.0.1 (default 8765; 0: any free one); the address is printed\n"
                   "  --model FILE   weights (default: the shipped model)\n"
                   "  --seed S       simulation seed of the simulated user (default 2026)\n"
                   "  --replay FILE  a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time\n"
                   "  --stdin        a real glove's rows on stdin, one 'row,value,timestamp' line each;\n"
-                  "                 the first 30 s of stream time calibrate\n"
+                  "                 the first --calibration-seconds of stream time calibrate (default 30)\n"
                   "  --seconds N    stop serving after N seconds (default: when the stream ends)\n");
 }
 
@@ -71,12 +71,15 @@ ViewOptions parse_options(int argc, char** argv) {
     else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
     else if (a == "--replay") o.replay = value();
     else if (a == "--stdin") o.from_stdin = true;
+    else if (a == "--calibration-seconds") o.calibration_seconds = parse_number<double>(a, value());
     else if (a == "--seconds") o.seconds = parse_number<double>(a, value());
     else if (asks_for_help(a)) usage("");
     else usage("unknown option " + a);
   }
   if (o.port < 0 || o.port > 65535) throw Error("--port " + std::to_string(o.port) + ", expected 0..65535");
   if (!o.replay.empty() && o.from_stdin) usage("--replay and --stdin both given, expected one source");
+  if (!(o.calibration_seconds > 0.0) || !std::isfinite(o.calibration_seconds))
+    throw Error("--calibration-seconds " + std::to_string(o.calibration_seconds) + ", expected a positive time");
   if (o.seconds < 0.0) throw Error("--seconds " + std::to_string(o.seconds) + ", expected a time of at least 0");
   return o;
 }
@@ -103,7 +106,7 @@ class GloveStream {
     }
   }
 
-  void from_stdin() {
+  void from_stdin(double calibration_seconds) {
     std::string line;
     double first = std::nan("");
     estimator_.start_calibration();
@@ -114,7 +117,7 @@ class GloveStream {
       char comma1 = 0, comma2 = 0;
       if (!(fields >> row >> comma1 >> value >> comma2 >> t) || comma1 != ',' || comma2 != ',') continue;  // not a row: skipped
       if (std::isnan(first)) first = t;
-      if (estimator_.calibration_progress().collecting && t - first >= kStdinCalibrationSeconds) estimator_.finish_calibration();
+      if (estimator_.calibration_progress().collecting && t - first >= calibration_seconds) estimator_.finish_calibration();
       push(row, value, t);
       latest_.publish(estimator_.state());
     }
@@ -232,7 +235,7 @@ int view(int argc, char** argv) {
   std::thread glove([&] {
     try {
       GloveStream stream(estimator, latest, stop);
-      if (o.from_stdin) stream.from_stdin();
+      if (o.from_stdin) stream.from_stdin(o.calibration_seconds);
       else stream.recorded(user);
     } catch (const Error& e) {
       std::cerr << "glovepose view: the glove's stream stopped: " << e.what() << "\n";
