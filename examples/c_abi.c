@@ -1,4 +1,6 @@
-/* The C ABI from C: load a model, create an estimator, calibrate on the fly, print a few poses.
+/* The C ABI from C: load a model, create an estimator, calibrate on the fly while showing the
+ * model's guided calibration steps (instruction and target pose of the step under way), print a
+ * few poses.
  *
  * The glove here is synthetic: a glove whose firmware solves its cells on board and sends 44 cell
  * capacitances (pF) 60 times a second, each cell breathing between its own limits. With a real
@@ -28,11 +30,14 @@ int main(int argc, char** argv) {
   glovepose_estimator* estimator = NULL;
   glovepose_estimator_config config;
   glovepose_calibration_progress progress;
+  glovepose_calibration_step step;
+  int32_t step_count, step_now = -1, step_shown = -1, calibration_frames = 120;
+  double sequence_seconds = 0.0;
   glovepose_pose pose;
   glovepose_joint joints[GLOVEPOSE_JOINT_COUNT];
   double cells[CELLS];
   glovepose_result result;
-  int frame, printed = 0;
+  int frame, first_frame, printed = 0;
 
   if (argc != 2) {
     fprintf(stderr, "usage: %s MODEL.safetensors\n", argv[0]);
@@ -54,14 +59,27 @@ int main(int argc, char** argv) {
   config.smoothing_beta = 0.5;
   config.joint_transforms = 1; /* also the 21-joint list an engine drives a skeleton with */
   result = glovepose_estimator_create(model, &config, &estimator);
-  glovepose_model_free(model); /* the estimator keeps the model alive */
   if (result != GLOVEPOSE_OK) return fail("create the estimator", result);
 
-  /* Calibrate on the fly: the user moves through extreme poses for 2 s. */
+  /* The model's guided calibration sequence, if it carries one: the calibration lasts as long. */
+  glovepose_calibration_step_init(&step);
+  step_count = glovepose_model_calibration_step_count(model);
+  if (step_count > 0 && glovepose_model_get_calibration_step(model, step_count - 1, &step) == GLOVEPOSE_OK)
+    calibration_frames = (int)((step.start_seconds + step.seconds) * 60.0) + 1;
+  printf("calibration: %d guided steps, %d frames\n", (int)step_count, calibration_frames);
+
+  /* Calibrate on the fly. An app shows the step under way: its instruction and the pose to copy
+   * (this synthetic glove does not follow them, so the estimator will apply min-max). */
   glovepose_calibration_start(estimator);
-  for (frame = 0; frame < 120; ++frame) {
+  for (frame = 0; frame < calibration_frames; ++frame) {
     read_glove(frame / 60.0, cells);
     (void)glovepose_estimator_push_cells(estimator, cells, CELLS, frame / 60.0, 0.0); /* no range yet: no pose */
+    glovepose_calibration_get_step(estimator, &step_now, &sequence_seconds);
+    if (step_now < 0 || step_now == step_shown) continue;
+    step_shown = step_now;
+    if (glovepose_model_get_calibration_step(model, step_now, &step) != GLOVEPOSE_OK) continue;
+    printf("  %5.2f s  step %d/%d %s (%.1f s): \"%s\"  target %s %.2f rad\n", sequence_seconds, (int)step.step + 1,
+           (int)step.step_count, step.name, step.seconds, step.instruction, glovepose_dof_name(5), step.pose[5]);
   }
   glovepose_calibration_progress_init(&progress);
   glovepose_calibration_get_progress(estimator, &progress);
@@ -71,11 +89,12 @@ int main(int argc, char** argv) {
 
   /* Track for 2 s; print a pose every half second. */
   glovepose_pose_init(&pose);
-  for (frame = 120; frame < 240; ++frame) {
+  first_frame = calibration_frames;
+  for (frame = first_frame; frame < first_frame + 120; ++frame) {
     read_glove(frame / 60.0, cells);
     result = glovepose_estimator_push_cells(estimator, cells, CELLS, frame / 60.0, 0.0);
     if (result != GLOVEPOSE_SOLVED) return fail("push a frame", result);
-    if (frame % 30 != 0) continue;
+    if ((frame - first_frame) % 30 != 0) continue;
     glovepose_estimator_get_pose(estimator, &pose);
     glovepose_estimator_get_joints(estimator, joints, GLOVEPOSE_JOINT_COUNT);
     /* flags: e.g. GLOVEPOSE_POSE_INPUT_CLAMPED (0x2) when the hand goes beyond the calibrated range. */
@@ -86,5 +105,6 @@ int main(int argc, char** argv) {
     ++printed;
   }
   glovepose_estimator_free(estimator);
-  return printed == 4 ? 0 : 1;
+  glovepose_model_free(model); /* (the estimator kept it alive while it lived) */
+  return printed == 4 && (step_count == 0 || step_shown == step_count - 1) ? 0 : 1;
 }
