@@ -1,4 +1,5 @@
 // Google Benchmark cases for the U-Net forward (run: build/bench/glovepose_bench --benchmark_filter=UNet).
+// BM_UNetForwardTeam/<width>/members:<n>: batch 1 by a Team of n threads (UNet::forward with a Team).
 // Names: BM_UNetForward[F32|Fixed16|F16|BF16]/<width>/<batch>[/threads:N]: BM_UNetForward is the
 // real-time path, realtime_storage() (the fastest 16-bit storage within 0.1 degree of F32 with this
 // instruction set: Fixed16 with AVX-512 VBMI2, F16 with AVX2 and F16C; its label names it); F32 the
@@ -73,7 +74,29 @@ void run(benchmark::State& state, WeightStorage storage) {
   if (batch == 1) state.counters["read_MB"] = static_cast<double>(net.weight_bytes_read(ws)) / 1e6;
   state.SetLabel(storage_name(storage));
 }
+
+// One frame by a Team of `team` members (the caller and team - 1 workers) sharing each large
+// layer's products (UNet::forward with a Team); compare with BM_UNetForward/<width>/1 in the same run.
+void run_team(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const int members = static_cast<int>(state.range(1));
+  const UNet<>& net = network(width, realtime_storage());
+  Team team(members);
+  auto ws = net.make_workspace(1, members);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> in(kUNetInputs), out(kUNetOutputs);
+  for (float& v : in) v = u(rng);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(net.forward(in.data(), out.data(), 1, ws, team));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(storage_name(realtime_storage()));
+}
 }  // namespace
+
+static void BM_UNetForwardTeam(benchmark::State& state) { run_team(state); }
 
 static void BM_UNetForward(benchmark::State& state) { run(state, realtime_storage()); }
 static void BM_UNetForwardF32(benchmark::State& state) { run(state, WeightStorage::F32); }
@@ -83,6 +106,7 @@ static void BM_UNetForwardBF16(benchmark::State& state) { run(state, WeightStora
 
 BENCHMARK(BM_UNetForward)->Args({48, 1})->Args({64, 1})->Args({100, 1})->Args({196, 1})->Args({64, 1024})->UseRealTime();
 BENCHMARK(BM_UNetForward)->Args({64, 1024})->Threads(2)->UseRealTime();
+BENCHMARK(BM_UNetForwardTeam)->ArgNames({"", "members"})->Args({64, 2})->Args({100, 2})->Args({64, 1})->UseRealTime();
 BENCHMARK(BM_UNetForwardF32)->Args({48, 1})->Args({64, 1})->Args({100, 1})->Args({196, 1})->Args({64, 1024})->UseRealTime();
 BENCHMARK(BM_UNetForwardF32)->Args({64, 1024})->Threads(2)->UseRealTime();
 BENCHMARK(BM_UNetForwardFixed16)->Args({48, 1})->Args({64, 1})->Args({100, 1})->Args({64, 1024})->UseRealTime();

@@ -36,6 +36,7 @@
 #include "kernels/simd.hpp"
 #include "kernels/sparse_row.hpp"
 #include "packed_weights.hpp"
+#include "team.hpp"
 #include "tensor.hpp"
 #include "unet_topology.hpp"
 #include "weight_storage.hpp"
@@ -151,12 +152,21 @@ class UNet {
     AlignedVector<float> tap_sums;     // TapColumns: per (source, position, frame of a chunk) one sum per tap
     std::vector<float> input_sums;     // Fixed16: sum of each source row (per source, position, frame)
     std::vector<float> output_sums;    // Fixed16: sum of the inputs each output row met
+    // Team members 1.. (forward with a Team): each its own row lists for its share of a product.
+    struct MemberRows {
+      std::vector<const float*> x_rows;
+      std::vector<float*> y_rows;
+      std::vector<kernels::SparseRow> tap_rows;
+    };
+    std::vector<MemberRows> members;
   };
 
-  /// @brief A workspace for batches of up to `capacity` frames (set-up: allocates).
-  Workspace make_workspace(int capacity = 1) const {
+  /// @brief A workspace for batches of up to `capacity` frames, for a forward by a Team of up to
+  /// `team_size` members (set-up: allocates).
+  Workspace make_workspace(int capacity = 1, int team_size = 1) const {
     if (capacity < 1 || capacity > kMaxBatch)
       throw Error("UNet::make_workspace: capacity " + std::to_string(capacity) + ", expected 1.." + std::to_string(kMaxBatch));
+    if (team_size < 1 || team_size > 64) throw Error("UNet::make_workspace: team size " + std::to_string(team_size) + ", expected 1..64");
     Workspace ws;
     ws.capacity_ = capacity;
     ws.width_ = width_;
@@ -217,6 +227,12 @@ class UNet {
     ws.y_rows.resize(rows);
     ws.columns.resize(columns);
     ws.tap_sums.resize(tap_sums);
+    ws.members.resize(static_cast<std::size_t>(team_size - 1));
+    for (auto& m : ws.members) {
+      m.x_rows.resize(rows);
+      m.y_rows.resize(rows);
+      m.tap_rows.resize(rows);
+    }
     return ws;
   }
 
@@ -230,6 +246,21 @@ class UNet {
 
   /// @brief `frames` frames (each 2x5x5 in, 1x5x5 out, PyTorch's NCHW order), frames <= capacity.
   GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws) const noexcept {
+    return forward(input, output, frames, ws, nullptr);
+  }
+
+  /// @brief forward() with every large layer's products shared by the members of `team`: output
+  /// channels split at column-panel boundaries (each member streams its own part of the weights),
+  /// or, for a layer of one panel, the rows. Each output is computed by the same kernel calls as
+  /// without a team: the results are identical. Status::SizeMismatch for a workspace made for a
+  /// smaller team.
+  GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws, Team& team) const noexcept {
+    if (static_cast<std::size_t>(team.size()) > ws.members.size() + 1) return Status::SizeMismatch;
+    return forward(input, output, frames, ws, &team);
+  }
+
+ private:
+  Status forward(const float* input, float* output, int frames, Workspace& ws, Team* team) const noexcept {
     if (frames < 1 || frames > ws.capacity_ || ws.width_ != width_ || ws.buffers.size() != buffers_.size()) return Status::SizeMismatch;
     for (long i = 0; i < static_cast<long>(frames) * kUNetInputs; ++i)
       if (!std::isfinite(input[i])) return Status::NonFinite;
@@ -238,7 +269,7 @@ class UNet {
     for (int f = 0; f < frames; ++f)
       for (int c = 0; c < 2; ++c)
         for (int p = 0; p < 25; ++p) in[(p * frames + f) * 2 + c] = input[f * kUNetInputs + c * 25 + p];
-    for (const PackedLayer& layer : layers_) run(layer, frames, ws);
+    for (const PackedLayer& layer : layers_) run(layer, frames, ws, team);
     const float* out = ws.buffers.back().data();
     for (long i = 0; i < static_cast<long>(frames) * kUNetOutputs; ++i)
       if (!std::isfinite(out[i])) return Status::NonFinite;  // an overflow inside the network: output untouched
@@ -246,6 +277,8 @@ class UNet {
       for (int p = 0; p < 25; ++p) output[f * kUNetOutputs + p] = out[p * frames + f];
     return Status::Ok;
   }
+
+ public:
 
   /// @brief Many frames for evaluation: splits them over `threads` threads, each with its own
   /// workspace, in chunks of `chunk` frames. Set-up code: allocates; throws glovepose::Error naming
@@ -526,14 +559,38 @@ class UNet {
     return layer;
   }
 
+  // One team member's part of a layer's products: its share of the output column panels of every
+  // row or, when the layer has fewer panels than members, its share of the output positions (all
+  // the taps' rows that add into them: no two members write one row). Either way each output
+  // element gets the same kernel calls, in the same order, as without a team.
+  struct Share {
+    int member = 0, members = 1;
+  };
+
+  // Every (tap, source) product of a Taps layer, or `share` of each; the sources are compacted
+  // first (compact_sources) for small batches.
   template <typename W>
-  void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+  void run_tap_share(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, const std::size_t (&first_row)[2],
+                     Share share = {}) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const std::size_t sources = layer.sources.size();
     const bool sparse = frames <= kSparseMaxFrames;
-    std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
-    if (sparse) compact_sources(layer, frames, ws, first_row);
+    const int panels = (out_spec.stride + Backend::panel - 1) / Backend::panel;
+    const bool split_columns = panels >= share.members;
+    // Dense products block their rows by count (gemm_rows): splitting rows would change the blocks.
+    if (!split_columns && !sparse && share.member > 0) return;
+    const bool split_rows = !split_columns && sparse;
+    const int column_begin = split_columns ? std::min(out_spec.stride, panels * share.member / share.members * Backend::panel) : 0;
+    const int column_end = split_columns ? std::min(out_spec.stride, panels * (share.member + 1) / share.members * Backend::panel)
+                                         : out_spec.stride;
+    const int position_begin = split_rows ? out_spec.positions * share.member / share.members : 0;
+    const int position_end = split_rows ? out_spec.positions * (share.member + 1) / share.members : out_spec.positions;
+    if (column_end <= column_begin || position_end <= position_begin) return;
+    const bool own_rows = share.member > 0;
+    const float** x_rows = own_rows ? ws.members[static_cast<std::size_t>(share.member - 1)].x_rows.data() : ws.x_rows.data();
+    float** y_rows = own_rows ? ws.members[static_cast<std::size_t>(share.member - 1)].y_rows.data() : ws.y_rows.data();
+    kernels::SparseRow* tap_rows = own_rows ? ws.members[static_cast<std::size_t>(share.member - 1)].tap_rows.data() : ws.tap_rows.data();
     for (std::size_t t = 0; t < layer.taps.size(); ++t) {
       const PackedTap& tap = layer.taps[t];
       for (std::size_t s = 0; s < sources; ++s) {
@@ -541,21 +598,35 @@ class UNet {
         const BufferSpec& in_spec = buffers_[static_cast<std::size_t>(id)];
         const float* in = ws.buffers[static_cast<std::size_t>(id)].data();
         int rows = 0;
-        for (std::size_t j = 0; j < tap.out_positions.size(); ++j)
+        for (std::size_t j = 0; j < tap.out_positions.size(); ++j) {
+          if (tap.out_positions[j] < position_begin || tap.out_positions[j] >= position_end) continue;
           for (int f = 0; f < frames; ++f, ++rows) {
             const long in_row = static_cast<long>(tap.in_positions[j]) * frames + f;
-            if (sparse) ws.tap_rows[static_cast<std::size_t>(rows)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
-            else ws.x_rows[static_cast<std::size_t>(rows)] = in + in_row * in_spec.stride;
-            ws.y_rows[static_cast<std::size_t>(rows)] = out + (static_cast<long>(tap.out_positions[j]) * frames + f) * out_spec.stride;
+            if (sparse) tap_rows[rows] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
+            else x_rows[rows] = in + in_row * in_spec.stride;
+            y_rows[rows] = out + (static_cast<long>(tap.out_positions[j]) * frames + f) * out_spec.stride + column_begin;
           }
-        const W* block = weights + layer.block[t * sources + s];
-        if (!sparse) {
-          Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
-          continue;
         }
-        Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, out_spec.stride);
+        // The block's column panels from column_begin on: a panel boundary, so the kernel splits
+        // its columns into the same blocks as for the whole width.
+        const W* block = weights + layer.block[t * sources + s] + static_cast<long>(in_spec.channels) * column_begin;
+        if (!sparse) Backend::gemm_rows(x_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
+        else Backend::gemm_sparse_rows(tap_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
       }
     }
+  }
+
+  // A Taps layer's products, shared by the team's members when there is one.
+  template <typename W>
+  void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, Team* team) const noexcept {
+    std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
+    if (frames <= kSparseMaxFrames) compact_sources(layer, frames, ws, first_row);
+    if (team == nullptr || team->size() == 1) {
+      run_tap_share(layer, weights, frames, ws, first_row);
+      return;
+    }
+    auto share = [&](int member) noexcept { run_tap_share(layer, weights, frames, ws, first_row, Share{member, team->size()}); };
+    team->run(share);
   }
 
   // Fixed16: out = scale * (sum of level * x - kFixed16Offset * sum of x) + bias, per output row,
@@ -688,26 +759,26 @@ class UNet {
   }
 
   template <typename W>
-  void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws) const noexcept {
+  void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, Team* team) const noexcept {
     if (layer.mode == Mode::Im2col) run_im2col(layer, weights, frames, ws);
     else if (layer.mode == Mode::TapColumns) run_tap_columns(layer, weights, frames, ws);
-    else run_taps(layer, weights, frames, ws);
+    else run_taps(layer, weights, frames, ws, team);
   }
 
-  void run(const PackedLayer& layer, int frames, Workspace& ws) const noexcept {
+  void run(const PackedLayer& layer, int frames, Workspace& ws, Team* team) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
     if (layer.weights.fixed16()) {  // Fixed16: products of levels first, then scale, offset and bias
       std::fill(out, out + static_cast<long>(rows) * out_spec.stride, 0.0f);
-      run_taps(layer, layer.weights.wfx16.data(), frames, ws);
+      run_taps(layer, layer.weights.wfx16.data(), frames, ws, team);
       finish_fixed16(layer, frames, ws);
     } else {
       for (int r = 0; r < rows; ++r)
         std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
       layer.weights.visit([&](const auto* w) {
         if constexpr (!std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(w)>>, kernels::Fixed16>)
-          run_products(layer, w, frames, ws);
+          run_products(layer, w, frames, ws, team);
       });
     }
     if (layer.activation == Activation::Relu)

@@ -1,0 +1,128 @@
+// nn::Team (nn/team.hpp) and the U-Net forward shared by a team (UNet::forward with a Team): every
+// member runs its share, the outputs equal the one-thread forward's bit for bit, nothing is
+// allocated per frame, and an idle team costs no CPU. tests/CMakeLists.txt also runs the
+// team tests under ThreadSanitizer (latest_under_tsan's executable).
+#include <glovepose/nn/team.hpp>
+#include <glovepose/nn/unet.hpp>
+
+#include <doctest/doctest.h>
+
+#include <time.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "unet_reference.hpp"
+
+using namespace glovepose;
+using namespace glovepose::nn;
+
+namespace {
+#if defined(__SANITIZE_THREAD__)
+constexpr bool kUnderTsan = true;  // GCC
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+constexpr bool kUnderTsan = true;  // clang
+#else
+constexpr bool kUnderTsan = false;
+#endif
+#else
+constexpr bool kUnderTsan = false;
+#endif
+
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+}  // namespace
+
+TEST_CASE("team: every member runs its share of every job, the caller as member 0, on distinct threads") {
+  for (int size : {1, 2, 3}) {
+    Team team(size);
+    REQUIRE(team.size() == size);
+    std::vector<long> counts(static_cast<std::size_t>(size), 0);
+    std::vector<std::thread::id> ids(static_cast<std::size_t>(size));
+    for (int job = 0; job < 2000; ++job) {
+      auto share = [&](int member) noexcept {
+        ++counts[static_cast<std::size_t>(member)];  // one writer per slot; run() returns after all
+        ids[static_cast<std::size_t>(member)] = std::this_thread::get_id();
+      };
+      team.run(share);
+      if (job == 1000) std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the workers park, then wake
+    }
+    for (long c : counts) CHECK(c == 2000);
+    CHECK(ids[0] == std::this_thread::get_id());
+    for (int a = 0; a < size; ++a)
+      for (int b = a + 1; b < size; ++b) CHECK(ids[static_cast<std::size_t>(a)] != ids[static_cast<std::size_t>(b)]);
+  }
+  CHECK_THROWS_AS(Team(0), Error);
+}
+
+TEST_CASE("unet: a team's forward equals the one-thread forward bit for bit, every storage, and allocates nothing") {
+  // Width 8: no layer wider than a column panel (the rows are shared); 32 and 64: column panels
+  // too. Under ThreadSanitizer (-O1, instrumented) width 32 only.
+  const std::vector<int> widths = kUnderTsan ? std::vector<int>{32} : std::vector<int>{8, 32, 64};
+  for (int width : widths) {
+    const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 700 + static_cast<unsigned>(width));
+    for (WeightStorage storage : {WeightStorage::F32, WeightStorage::F16, WeightStorage::BF16, WeightStorage::Fixed16}) {
+      const auto net = UNet<>::from_tensors(tensors, width, 1e-5, storage);
+      for (int members : {2, 3}) {
+        Team team(members);
+        for (int frames : {1, 4, 40}) {  // sparse single frames and small batches; dense large ones
+          INFO("width " << width << ", " << std::string(storage_name(storage)) << ", " << members << " members, " << frames << " frames");
+          auto alone_ws = net.make_workspace(frames);
+          auto team_ws = net.make_workspace(frames, members);
+          std::mt19937 rng(static_cast<unsigned>(frames + members));
+          std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+          std::vector<float> in(static_cast<std::size_t>(frames) * kUNetInputs), alone(static_cast<std::size_t>(frames) * kUNetOutputs),
+              shared(alone.size());
+          int differing = 0;
+          for (int trial = 0; trial < 5; ++trial) {
+            for (float& v : in) v = u(rng);
+            REQUIRE(net.forward(in.data(), alone.data(), frames, alone_ws) == Status::Ok);
+            std::size_t allocations = 0;
+            Status status = Status::Ok;
+            allocations = test::allocations_during([&] { status = net.forward(in.data(), shared.data(), frames, team_ws, team); });
+            REQUIRE(status == Status::Ok);
+            CHECK(allocations == 0);
+            differing += std::memcmp(alone.data(), shared.data(), alone.size() * sizeof(float)) != 0;
+          }
+          CHECK(differing == 0);
+        }
+        // A workspace made for a smaller team is refused.
+        auto small_ws = net.make_workspace(1, members - 1);
+        std::array<float, kUNetInputs> in{};
+        std::array<float, kUNetOutputs> out{};
+        CHECK(net.forward(in.data(), out.data(), 1, small_ws, team) == Status::SizeMismatch);
+      }
+    }
+  }
+}
+
+TEST_CASE("team: an idle team of two uses under 1% of a core") {
+  const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(64), 5);
+  const auto net = UNet<>::from_tensors(tensors, 64);
+  Team team(2);
+  auto ws = net.make_workspace(1, 2);
+  std::array<float, kUNetInputs> in{};
+  std::array<float, kUNetOutputs> out{};
+  for (int f = 0; f < 100; ++f) REQUIRE(net.forward(in.data(), out.data(), 1, ws, team) == Status::Ok);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // past the spin: the worker parks
+  const double cpu_before = process_cpu_seconds();
+  const auto wall_before = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const double cpu = process_cpu_seconds() - cpu_before;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_before).count();
+  MESSAGE("idle team: " << 1e3 * cpu << " ms of CPU in " << wall << " s");
+  if (!kUnderTsan) CHECK(cpu < 0.01 * wall);  // ThreadSanitizer's own background thread wakes now and then
+  // And it still works after parking.
+  CHECK(net.forward(in.data(), out.data(), 1, ws, team) == Status::Ok);
+}
