@@ -2,8 +2,10 @@
 // member runs its share, the outputs equal the one-thread forward's bit for bit, nothing is
 // allocated per frame, and an idle team costs no CPU. tests/CMakeLists.txt also runs the
 // team tests under ThreadSanitizer (latest_under_tsan's executable).
+#include <glovepose/estimator.hpp>
 #include <glovepose/nn/team.hpp>
 #include <glovepose/nn/unet.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
 
 #include <doctest/doctest.h>
 
@@ -125,4 +127,47 @@ TEST_CASE("team: an idle team of two uses under 1% of a core") {
   if (!kUnderTsan) CHECK(cpu < 0.01 * wall);  // ThreadSanitizer's own background thread wakes now and then
   // And it still works after parking.
   CHECK(net.forward(in.data(), out.data(), 1, ws, team) == Status::Ok);
+}
+
+TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shipped U-Net, without allocating per row") {
+  sim::CorpusConfig config;
+  config.seed = 41;
+  config.subjects = config.sessions = config.gloves = 1;
+  config.minutes = 2.0 / 60.0;
+  config.calibration_seconds = 2.0;
+  config.threads = 1;
+  config.recording.raw_rows = true;
+  const train::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
+  const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");
+  EstimatorConfig one, two;
+  two.network_threads = 2;
+  GlovePoseEstimator alone(model, one), shared(model, two);
+  alone.start_calibration();
+  shared.start_calibration();
+  const std::size_t rows = data.row_count;
+  long poses = 0, differing = 0;
+  std::size_t allocations = 0;
+  for (std::size_t f = 0; f < data.frames(); ++f) {
+    if (data.kind[f] == train::kKindRecording && alone.calibration_progress().collecting) {
+      alone.finish_calibration();
+      shared.finish_calibration();
+    }
+    for (std::size_t r = 0; r < rows; ++r) {
+      const double t = data.timestamps[f] - static_cast<double>(rows - 1 - r) / (static_cast<double>(rows) * 60.0);
+      const double value = data.raw_rows[f * rows + r];
+      const Status a = alone.push_row(static_cast<int>(r), value, t);
+      Status b = Status::Ok;
+      allocations += test::allocations_during([&] { b = shared.push_row(static_cast<int>(r), value, t); });
+      REQUIRE(a == b);
+      if (a != Status::Solved) continue;
+      ++poses;
+      differing += alone.pose().angles != shared.pose().angles;
+    }
+  }
+  CHECK(poses > 500);
+  CHECK(differing == 0);
+  CHECK(allocations == 0);
+  EstimatorConfig bad;
+  bad.network_threads = 0;
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(model, bad), doctest::Contains("network_threads 0"), Error);
 }

@@ -251,6 +251,11 @@ struct EstimatorConfig {
   /// How far (s) past the newest pose pose_at()/joints_at() extrapolate; later times are located at
   /// this bound and flagged clamped.
   double max_prediction = 0.05;
+  /// Threads a U-Net's forward runs on: the calling thread plus network_threads - 1 workers of the
+  /// estimator's own (nn/team.hpp), each computing part of every large layer; the same poses as
+  /// with 1. Worth it for wide U-Nets on an otherwise idle second core (docs/performance.md); the
+  /// workers park when no frame comes, so an idle estimator costs no CPU. An FCN runs on one.
+  int network_threads = 1;
 };
 
 /// @brief Where the estimator's calibration range comes from.
@@ -389,7 +394,7 @@ class BasicGlovePoseEstimator {
       : model_(checked(std::move(model))),
         config_(std::move(config)),
         calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
-        workspace_(model_->network().make_workspace()),
+        workspace_(model_->network().make_workspace(checked_threads(config_.network_threads))),
         kinematics_(config_.hand, config_.handedness),
         trend_(config_.prediction_window),
         locator_(config_.hand, config_.handedness, model_->joint_limits()) {
@@ -403,6 +408,7 @@ class BasicGlovePoseEstimator {
     if (config_.clock_restart_frames < 1)
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
+    if (config_.network_threads > 1 && model_->network().unet() != nullptr) team_ = std::make_unique<nn::Team>(config_.network_threads);
     if (model_->solver()) {
       readout_.emplace(model_->solver(), config_.readout);
       measurements_ = Eigen::VectorXd::Zero(model_->solver()->layout().row_count());
@@ -621,6 +627,10 @@ class BasicGlovePoseEstimator {
     if (!model) throw Error("GlovePoseEstimator: no model given, expected a loaded PoseModel");
     return model;
   }
+  static int checked_threads(int threads) {
+    if (threads < 1 || threads > 64) throw Error("GlovePoseEstimator: network_threads " + std::to_string(threads) + ", expected 1..64");
+    return threads;
+  }
 
   void set_range(sensor::CalibrationRange range, CalibrationSource source, const std::optional<hand::Angles>& offsets = std::nullopt) {
     range_.emplace(std::move(range));
@@ -633,7 +643,7 @@ class BasicGlovePoseEstimator {
   // angles as the pose and the pose-guided calibration both see them. `angles` is untouched on failure.
   Status network_angles(const Eigen::VectorXd& normalized, hand::Angles& angles) noexcept {
     hand::Angles normalized_angles{};
-    const Status net = model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_);
+    const Status net = model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_, team_.get());
     if (net != Status::Ok) return net;
     angles = model_->joint_limits().denormalize(normalized_angles);
     return Status::Ok;
@@ -754,6 +764,7 @@ class BasicGlovePoseEstimator {
   double sequence_now_ = 0.0;
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   typename Model::Network::Workspace workspace_;
+  std::unique_ptr<nn::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;
   XrHandLocator locator_;

@@ -17,6 +17,7 @@
 #include "hand/dofs.hpp"
 #include "nn/fcn.hpp"
 #include "nn/model.hpp"
+#include "nn/team.hpp"
 #include "nn/unet.hpp"
 #include "status.hpp"
 
@@ -77,10 +78,11 @@ class BasicPoseNetwork {
     std::array<float, nn::kFcnOutputs> dofs{};
   };
 
-  /// @brief A workspace for single frames (set-up: allocates).
-  Workspace make_workspace() const {
+  /// @brief A workspace for single frames, for a U-Net forward by a team of up to `team_size`
+  /// members (set-up: allocates).
+  Workspace make_workspace(int team_size = 1) const {
     Workspace ws;
-    if (const UNet* u = unet()) ws.net = u->make_workspace(1);
+    if (const UNet* u = unet()) ws.net = u->make_workspace(1, team_size);
     else {
       ws.net = fcn()->make_workspace(1);
       ws.cells.resize(static_cast<std::size_t>(fcn()->inputs()));
@@ -91,13 +93,16 @@ class BasicPoseNetwork {
   /// @brief One frame: `cells` calibrated cell values (`map`'s glove) -> `normalized` DoF values.
   /// Returns Status::NonFinite (normalized untouched) for a NaN or infinite cell or result,
   /// Status::SizeMismatch for a workspace of another network; never allocates.
+  /// A U-Net's layers are shared by `team`'s members when one is given (UNet::forward with a
+  /// Team: the same results); an FCN runs on the calling thread.
   GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized,
-                                            Workspace& ws) const noexcept {
+                                            Workspace& ws, nn::Team* team = nullptr) const noexcept {
     if (const UNet* u = unet()) {
       auto* w = std::get_if<typename UNet::Workspace>(&ws.net);
       if (!w) return Status::SizeMismatch;
       if (map.to_stretch_maps(cells, ws.maps) != Status::Ok) return Status::NonFinite;
-      const Status status = u->forward(ws.maps, ws.pose_map, *w);
+      const Status status = team != nullptr ? u->forward(ws.maps.data(), ws.pose_map.data(), 1, *w, *team)
+                                            : u->forward(ws.maps, ws.pose_map, *w);
       if (status != Status::Ok) return status;
       map.from_pose_map(ws.pose_map, normalized);
       return Status::Ok;
