@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -46,7 +47,7 @@ std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TM
 }  // namespace
 
 TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the usage on stderr") {
-  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view"}) {
+  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
@@ -335,6 +336,130 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   r = run("predict --model " + model_file + " --in " + temp("main14.csv") + " --no-header");
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
+}
+
+namespace {
+std::string number17(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
+  return std::string(buf, r.ptr);
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the dataset they came from, which trains and evaluates alike") {
+  // The reference: a simulated corpus (outlier flags cleared, as an import has none) written as one
+  // CSV take per subject, session and kind, columns renamed by a glove description and shuffled.
+  train::Dataset reference = train::Dataset::read(small_corpus("import"));
+  std::fill(reference.outlier.begin(), reference.outlier.end(), std::uint8_t{0});
+  const std::string reference_file = temp("import_reference.safetensors");
+  reference.write(reference_file);
+  const grid::GridMap paper = grid::GridMap::glauser2019();
+  std::vector<std::string> names;
+  for (int c = 0; c < paper.cell_count(); ++c) names.push_back("stretch_" + std::string(1, static_cast<char>('A' + c / 10)) + std::to_string(c % 10));
+  const std::string glove_file = temp("import_glove.json");
+  grid::GloveDescription("maker-44", names, paper).write(glove_file);
+
+  std::vector<std::string> columns = names;
+  for (const hand::Dof& d : hand::kDofs) columns.push_back(d.name);
+  columns.push_back("timestamp");
+  columns.push_back("frame");  // ignored
+  std::shuffle(columns.begin(), columns.end(), std::mt19937(11));
+  std::ofstream list(temp("import_takes.csv"));
+  list << "file,subject,session,kind\n";
+  std::size_t takes = 0;
+  for (std::size_t begin = 0; begin < reference.frames();) {
+    std::size_t end = begin + 1;
+    while (end < reference.frames() && reference.subject[end] == reference.subject[begin] && reference.session[end] == reference.session[begin] &&
+           reference.kind[end] == reference.kind[begin])
+      ++end;
+    const bool calibration = reference.kind[begin] == train::kKindCalibration;
+    const std::string name = "import_take_" + std::to_string(takes++) + ".csv";
+    list << name << "," << reference.subject[begin] << "," << reference.session[begin] << "," << (calibration ? "calibration" : "recording") << "\n";
+    std::ofstream take(temp(name));
+    for (std::size_t k = 0; k < columns.size(); ++k) take << (k ? "," : "") << columns[k];
+    take << "\n";
+    for (std::size_t i = begin; i < end; ++i) {
+      for (std::size_t k = 0; k < columns.size(); ++k) {
+        const auto cell = std::find(names.begin(), names.end(), columns[k]);
+        std::size_t d = 0;
+        while (d < hand::kDofCount && columns[k] != hand::kDofs[d].name) ++d;
+        take << (k ? "," : "");
+        if (cell != names.end()) take << number17(reference.cells[i * 44 + static_cast<std::size_t>(cell - names.begin())]);
+        else if (d < hand::kDofCount) take << number17(reference.angles[i * hand::kDofCount + d]);
+        else if (columns[k] == "timestamp") take << number17(reference.timestamps[i]);
+        else take << i;
+      }
+      take << "\n";
+    }
+    begin = end;
+  }
+  list.close();
+  REQUIRE(takes == 3 * 2 * 2);  // 3 subjects x 2 sessions x (calibration, recording)
+
+  const std::string imported_file = temp("imported.safetensors");
+  Run r = run("import --glove " + glove_file + " --rate 60 --ignore frame --takes " + temp("import_takes.csv") + " --out " + imported_file);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("imported 12 takes: " + std::to_string(reference.frames()) + " frames") == 0);
+  CHECK(r.out.find("of 3 subjects, 6 sessions, glove 'maker-44', 44 cells, with the 25 DoF angles") != std::string::npos);
+  const train::Dataset imported = train::Dataset::read(imported_file);
+  CHECK(imported.glove_layout() == "maker-44");
+  CHECK(imported.cells == reference.cells);
+  CHECK(imported.angles == reference.angles);
+  CHECK(imported.timestamps == reference.timestamps);
+  CHECK(imported.subject == reference.subject);
+  CHECK(imported.session == reference.session);
+  CHECK(imported.kind == reference.kind);
+
+  // Same frames, same maps: a linear map fitted on either, evaluated on the held-out subject, agrees.
+  const std::string from_import = temp("t_import_lin.safetensors"), from_reference = temp("t_reference_lin.safetensors");
+  r = run("train --data " + imported_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + from_import);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("train --data " + reference_file + " --model linear --exclude-subjects 2 --out " + from_reference);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const Run eval_import = run("eval --model " + from_import + " --data " + imported_file + " --subjects 2 --json");
+  const Run eval_reference = run("eval --model " + from_reference + " --data " + reference_file + " --subjects 2 --json");
+  REQUIRE_MESSAGE(eval_import.status == 0, eval_import.out);
+  REQUIRE_MESSAGE(eval_reference.status == 0, eval_reference.out);
+  CHECK(json_number(eval_import.out, "mean_deg") == json_number(eval_reference.out, "mean_deg"));
+  CHECK(json_number(eval_import.out, "mean_deg") > 1.0);
+
+  // A CSV given where a dataset file belongs, or to predict, says how to import it.
+  r = run("train --data " + temp("import_take_1.csv") + " --model linear --out " + temp("t_never.safetensors"));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("the file is CSV text, not a dataset file: import it first with glovepose import") != std::string::npos);
+  r = run("eval --model " + from_import + " --data " + temp("import_take_1.csv"));
+  CHECK(r.out.find("import it first with glovepose import") != std::string::npos);
+  r = run("predict --model " + kModel + " --in " + temp("import_take_1.csv"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("line 1: '") != std::string::npos);
+  CHECK(r.out.find("looks like a header, expected rows of calibrated cell values without one; a recording with named columns is "
+                   "imported with glovepose import") != std::string::npos);
+
+  // A calibration take where a sensor does not move: refused, or kept and reported with --allow-flat.
+  {
+    std::ofstream flat(temp("import_flat.csv"));
+    flat << "# calibration of subject 9\nsubject";
+    for (const std::string& n : names) flat << "," << n;
+    for (int i = 0; i < 30; ++i) {
+      flat << "\n9";
+      for (int c = 0; c < 44; ++c) flat << "," << (c == 17 ? 1.5 : 1.0 + 0.01 * ((7 * i + c) % 17));
+    }
+    flat << "\n";
+  }
+  r = run("import --glove " + glove_file + " --rate 60 --out " + temp("never.safetensors") + " --calibration " + temp("import_flat.csv"));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("glovepose import: CSV file '" + temp("import_flat.csv") + "', lines 3-32 (calibration of subject 9, session 0), column "
+                   "'stretch_B7': flat (1.5 to 1.5") != std::string::npos);
+  r = run("import --glove " + glove_file + " --rate 60 --out " + temp("flat.safetensors") + " --allow-flat --calibration " + temp("import_flat.csv"));
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("flat sensor kept: 'stretch_B7' in calibration lines 3-32") != std::string::npos);
+  CHECK(r.out.find("(30 calibration) of 1 subjects, 1 sessions, glove 'maker-44', 44 cells, without angles") != std::string::npos);
+  r = run("import --rate 60 --out " + temp("never.safetensors") + " " + temp("import_flat.csv"));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("line 2, column 2 'stretch_A0': unknown column, expected a cell of glove 'glauser2019-44'") != std::string::npos);
+  r = run("import --rate 60 --out " + temp("never.safetensors"));
+  CHECK(r.status == 2);
+  CHECK(r.out.find("no takes, expected CSV files or --takes LIST") != std::string::npos);
 }
 
 namespace {

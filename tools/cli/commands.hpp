@@ -2,10 +2,13 @@
 #pragma once
 
 #include <glovepose/config.hpp>
+#include <glovepose/train/dataset.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <system_error>
@@ -18,6 +21,9 @@ int simulate(int argc, char** argv);
 
 /// `glovepose train | finetune | eval ...` (train.cpp); argv[1] is the command. Returns the exit code.
 int train_tools(int argc, char** argv);
+
+/// `glovepose import ...` (import.cpp); argv[1] is "import". Returns the exit code.
+int import_recordings(int argc, char** argv);
 
 /// `glovepose demo ...` (demo.cpp); argv[1] is "demo". Returns the exit code.
 int demo(int argc, char** argv);
@@ -47,6 +53,25 @@ inline std::string shipped_model_path(const std::string& name) {
     tried += (tried.empty() ? "'" : ", '") + candidate.lexically_normal().string() + "'";
   }
   throw Error("the shipped model is in none of " + tried + ", expected --model FILE");
+}
+
+/// A dataset file (train::Dataset::read); a CSV file given instead is refused with the command
+/// that imports it.
+inline train::Dataset read_dataset(const std::string& path) {
+  try {
+    return train::Dataset::read(path);
+  } catch (const Error& e) {
+    std::ifstream file(path, std::ios::binary);
+    std::string start(256, '\0');
+    file.read(start.data(), static_cast<std::streamsize>(start.size()));
+    start.resize(static_cast<std::size_t>(file.gcount()));
+    const bool text = !start.empty() && std::all_of(start.begin(), start.end(), [](char c) {
+      return c == '\n' || c == '\r' || c == '\t' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f);
+    });
+    if (!text || start.find(',') == std::string::npos) throw;
+    throw Error(std::string(e.what()) + "; the file is CSV text, not a dataset file: import it first with "
+                "glovepose import --rate HZ [--glove FILE] --out DATA.safetensors " + path + " (see glovepose import --help)");
+  }
 }
 
 /// Whether a command-line argument asks for the usage.

@@ -6,6 +6,8 @@
 //       what a model file holds.
 //   glovepose simulate ...
 //       the simulated glove corpus (simulate.cpp).
+//   glovepose import ...
+//       CSV recordings of any glove with named columns into one dataset file (import.cpp).
 //   glovepose train | finetune | eval | fit-guided ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
 //   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
@@ -21,7 +23,9 @@
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/estimator.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -52,6 +56,7 @@ struct Options {
                   "usage: glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]\n"
                   "       glovepose info --model FILE\n"
                   "       glovepose simulate --help\n"
+                  "       glovepose import --rate HZ --out FILE [--glove FILE] [options] CSV...   (see import --help)\n"
                   "       glovepose train | finetune | eval | fit-guided --help\n"
                   "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
                   "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
@@ -105,6 +110,21 @@ std::vector<double> parse_row(const std::string& line, std::size_t line_no, std:
   return values;
 }
 
+// Whether a line names columns: every field is a word (starts with a letter or '_', not nan or inf).
+bool looks_like_header(const std::string& line) {
+  std::stringstream fields(line);
+  std::string field;
+  while (std::getline(fields, field, ',')) {
+    const std::size_t first = field.find_first_not_of(" \t");
+    if (first == std::string::npos || !(std::isalpha(static_cast<unsigned char>(field[first])) || field[first] == '_')) return false;
+    std::string word;
+    for (std::size_t i = first; i < field.size() && !std::isspace(static_cast<unsigned char>(field[i])); ++i)
+      word += static_cast<char>(std::tolower(static_cast<unsigned char>(field[i])));
+    if (word == "nan" || word == "inf" || word == "infinity") return false;
+  }
+  return true;
+}
+
 int predict(const Options& o) {
   PoseModelOptions options;
   options.storage = o.storage;
@@ -124,10 +144,16 @@ int predict(const Options& o) {
   }
   std::string line;
   std::size_t line_no = 0;
+  bool first_row = true;
   const auto cells = static_cast<std::size_t>(model->cell_count());
   while (std::getline(in, line)) {
     ++line_no;
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    if (first_row && looks_like_header(line))
+      throw Error("line " + std::to_string(line_no) + ": '" + line.substr(0, 60) + (line.size() > 60 ? "...'" : "'") +
+                  " looks like a header, expected rows of calibrated cell values without one; a recording with named "
+                  "columns is imported with glovepose import and evaluated with glovepose eval");
+    first_row = false;
     const std::vector<double> values = parse_row(line, line_no, cells);
     hand::Angles normalized{};
     if (model->network().normalized_dofs(map, values.data(), normalized, ws) != Status::Ok)
@@ -165,6 +191,7 @@ int main(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval" ||
                     std::string(argv[1]) == "fit-guided"))
     return cli::train_tools(argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "import") return cli::import_recordings(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);
   for (const auto& [name, command] : {std::pair{"bench", &cli::bench}, std::pair{"view", &cli::view}})

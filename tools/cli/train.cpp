@@ -245,7 +245,7 @@ int fit_network(const Options& o, train::TrainableNetwork& net, const nn::ModelI
 }
 
 int train_command(Options o, int argc, char** argv) {
-  const train::Dataset data = train::Dataset::read(o.data);
+  const train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const grid::GloveDescription glove = glove_for(o, data);
   const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
@@ -310,7 +310,7 @@ int finetune_command(Options o, int argc, char** argv) {
   if (!o.epochs_set) o.training.epochs = 5;
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
   if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
-  train::Dataset data = train::Dataset::read(o.data);
+  train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const train::Samples all = samples_for(o, model, data).first;
   std::map<std::string, std::string> provenance = model.metadata;
@@ -349,7 +349,7 @@ void write_predictions(const std::string& path, const train::Dataset& data, cons
 
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  train::Dataset data = train::Dataset::read(o.data);
+  train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   if (o.mean_window != 0 && !o.replay) usage(o.command, "--mean-window is for --replay-rows");
   sensor::ReadoutConfig readout = EstimatorConfig{}.readout;
@@ -400,7 +400,7 @@ int eval_command(Options o) {
 // (tensors and every other metadata entry unchanged, bit for bit).
 int fit_guided_command(Options o, int argc, char** argv) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  train::Dataset data = train::Dataset::read(o.data);
+  train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const std::string sequence_file = o.sequence_file.empty() ? std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json" : o.sequence_file;
   const calibration::Sequence sequence = calibration::Sequence::read(sequence_file);

@@ -214,7 +214,7 @@ int view(int argc, char** argv) {
   if (!model->solver()) throw Error("the model's glove has no wiring to solve rows with, expected a model of a glove with a trace layout");
   NewUser user;
   if (!o.replay.empty()) {
-    user.data = train::Dataset::read(o.replay);
+    user.data = read_dataset(o.replay);
     if (!user.data.has_raw_rows()) throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
     user.cycle_rate = user.data.frame_rate();
     while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)

@@ -40,6 +40,14 @@ struct CalibrationConfig {
   double clamp_limit = 1.5;
 };
 
+/// @brief Whether a sensor whose readings spanned [min, max] is "flat" under `config`: its range is
+/// not above config.min_relative_range x max(|min|, |max|), or is not positive. A calibration maps a
+/// flat sensor to 0; an import refuses a calibration take where one is flat.
+inline bool is_flat_range(double min, double max, const CalibrationConfig& config) noexcept {
+  const double scale = std::max(std::abs(min), std::abs(max));
+  return max - min <= config.min_relative_range * scale || max - min <= 0.0;
+}
+
 /// @brief Per-sensor range [min, max] and the normalisation it defines.
 ///
 /// Set-up (building, saving, loading) allocates and throws; normalize() is per-frame.
@@ -69,8 +77,7 @@ class CalibrationRange {
       if (!std::isfinite(max_(i) - min_(i)))
         throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " and max " + std::to_string(max_(i)) +
                     ", whose difference overflows, expected a range max - min that is a finite number");
-      const double scale = std::max(std::abs(min_(i)), std::abs(max_(i)));
-      if (max_(i) - min_(i) <= config_.min_relative_range * scale || max_(i) - min_(i) <= 0.0) {
+      if (is_flat_range(min_(i), max_(i), config_)) {
         flat_[static_cast<std::size_t>(i)] = true;
         flat_names_.push_back(name);
       }

@@ -22,6 +22,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
+#include "../io/csv_fields.hpp"
 #include "../io/tensor_file.hpp"
 
 namespace glovepose::train {
@@ -307,7 +308,7 @@ struct Dataset {
     std::size_t line_no = 1;
     if (!std::getline(in, line))
       throw Error("line 1: no header, expected subject,session,timestamp,cell_0,...,cell_{C-1} and optionally the 25 DoF names");
-    const std::vector<std::string> header = split(line);
+    const std::vector<std::string> header = io::split_csv_line(line);
     const auto expected_header = [&](std::size_t column, const std::string& expected) {
       return Error("line 1, column " + std::to_string(column + 1) + ": unknown column '" + header[column] + "', expected " +
                    expected + " (the header is subject,session,timestamp,cell_0,...,cell_{C-1} and optionally the 25 DoF names of hand::kDofs)");
@@ -340,22 +341,22 @@ struct Dataset {
       ++line_no;
       if (!line.empty() && line.back() == '\r') line.pop_back();
       if (line.find_first_not_of(" \t") == std::string::npos) continue;
-      const std::vector<std::string> fields = split(line);
+      const std::vector<std::string> fields = io::split_csv_line(line);
       if (fields.size() != header.size())
         throw Error("line " + std::to_string(line_no) + ": " + std::to_string(fields.size()) + " columns, expected " +
                     std::to_string(header.size()));
       const auto where = [&](std::size_t k) { return "line " + std::to_string(line_no) + ", column '" + header[k] + "': '" + fields[k] + "'"; };
-      const std::int32_t subject = parse_id(fields[0], where(0));
-      const std::int32_t session = parse_id(fields[1], where(1));
-      const double time = parse_number<double>(fields[2], where(2));
+      const std::int32_t subject = io::parse_csv_id(fields[0], where(0));
+      const std::int32_t session = io::parse_csv_id(fields[1], where(1));
+      const double time = io::parse_csv_number<double>(fields[2], where(2));
       // The run rule of validate() as far as CSV can tell: rows of one (subject, session) in a row.
       const std::size_t n = out.frames();
       if (n > 0 && out.subject[n - 1] == subject && out.session[n - 1] == session && !(time > out.timestamps[n - 1]))
         throw Error("line " + std::to_string(line_no) + ": timestamp " + io::detail::number_text(time) + " is not after the previous " +
                     io::detail::number_text(out.timestamps[n - 1]) + " of subject " + std::to_string(subject) + " session " +
                     std::to_string(session));
-      for (std::size_t c = 0; c < cells; ++c) out.cells.push_back(parse_number<float>(fields[3 + c], where(3 + c)));
-      for (std::size_t d = 0; d < dofs; ++d) out.angles.push_back(parse_number<float>(fields[3 + cells + d], where(3 + cells + d)));
+      for (std::size_t c = 0; c < cells; ++c) out.cells.push_back(io::parse_csv_number<float>(fields[3 + c], where(3 + c)));
+      for (std::size_t d = 0; d < dofs; ++d) out.angles.push_back(io::parse_csv_number<float>(fields[3 + cells + d], where(3 + cells + d)));
       out.timestamps.push_back(time);
       out.subject.push_back(subject);
       out.session.push_back(session);
@@ -458,39 +459,6 @@ struct Dataset {
     std::vector<T> values = t.to<T>();
     file.tensors.erase(name);
     return values;
-  }
-
-  static std::vector<std::string> split(const std::string& line) {
-    std::vector<std::string> out;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', start);
-      std::string field = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-      const std::size_t a = field.find_first_not_of(" \t\r"), b = field.find_last_not_of(" \t\r");
-      out.push_back(a == std::string::npos ? std::string() : field.substr(a, b - a + 1));
-      if (comma == std::string::npos) return out;
-      start = comma + 1;
-    }
-  }
-
-  template <typename T>
-  static T parse_number(const std::string& text, const std::string& where) {
-    const char* begin = text.data();
-    if (text.size() > 1 && text[0] == '+' && text[1] != '-') ++begin;
-    T v{};
-    const auto r = std::from_chars(begin, text.data() + text.size(), v);
-    if (r.ptr != text.data() + text.size() || text.empty() || (r.ec != std::errc() && r.ec != std::errc::result_out_of_range))
-      throw Error(where + " is not a number");
-    if (r.ec != std::errc() || !std::isfinite(v)) throw Error(where + " is not a finite number");
-    return v;
-  }
-
-  static std::int32_t parse_id(const std::string& text, const std::string& where) {
-    std::int32_t v = 0;
-    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size() || v < 0)
-      throw Error(where + " is not a non-negative integer");
-    return v;
   }
 };
 

@@ -1,0 +1,279 @@
+// train::RecordingImporter: CSV takes with named columns read back to the frames they were written
+// from (the reference: the arrays the test wrote, exact at 9 significant digits), and every kind of
+// bad take refused with its file, line and column named.
+#include <glovepose/train/recording_import.hpp>
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace glovepose;
+
+namespace {
+
+// A 5-cell glove with cells named as a glove maker would, on the first slots of the built-in map.
+grid::GloveDescription small_glove() {
+  const grid::GridMap paper = grid::GridMap::glauser2019();
+  std::vector<grid::Slot> slots(paper.cell_slots().begin(), paper.cell_slots().begin() + 5);
+  return grid::GloveDescription("five-cell", {"thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"},
+                                grid::GridMap(slots, paper.dof_slots()));
+}
+
+std::string text(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
+  return std::string(buf, r.ptr);
+}
+
+// Frames the test writes: per frame 5 cell readings and 25 angles, random but moving.
+struct Frames {
+  std::vector<float> cells, angles;
+  std::size_t count() const { return cells.size() / 5; }
+};
+Frames random_frames(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> reading(1.0f, 3.0f), angle(-1.0f, 1.0f);
+  Frames f;
+  for (std::size_t i = 0; i < n * 5; ++i) f.cells.push_back(reading(rng));
+  for (std::size_t i = 0; i < n * hand::kDofCount; ++i) f.angles.push_back(angle(rng));
+  return f;
+}
+
+// The frames as CSV: the columns in the order given; a cell is named by its glove name, a DoF by
+// hand::kDofs; "subject", "timestamp", "frame" etc. filled from `extra(column, frame)`.
+template <typename Extra>
+std::string csv(const Frames& f, const std::vector<std::string>& columns, Extra extra, double angle_scale = 1.0) {
+  const grid::GloveDescription glove = small_glove();
+  std::string out;
+  for (std::size_t k = 0; k < columns.size(); ++k) out += (k ? "," : "") + columns[k];
+  out += "\n";
+  for (std::size_t i = 0; i < f.count(); ++i) {
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      const auto& names = glove.cell_names();
+      const auto cell = std::find(names.begin(), names.end(), columns[k]);
+      std::string value;
+      if (cell != names.end()) value = text(f.cells[i * 5 + static_cast<std::size_t>(cell - names.begin())]);
+      else {
+        std::size_t d = 0;
+        while (d < hand::kDofCount && columns[k] != hand::kDofs[d].name) ++d;
+        value = d < hand::kDofCount ? text(f.angles[i * hand::kDofCount + d] * angle_scale) : extra(columns[k], i);
+      }
+      out += (k ? "," : "") + value;
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+std::vector<std::string> all_columns(std::vector<std::string> extra) {
+  const grid::GloveDescription glove = small_glove();
+  for (const std::string& name : glove.cell_names()) extra.push_back(name);
+  for (const hand::Dof& d : hand::kDofs) extra.push_back(d.name);
+  return extra;
+}
+
+train::CsvImportOptions options(double rate = 20.0) {
+  train::CsvImportOptions o;
+  o.frame_rate = rate;
+  return o;
+}
+
+std::string import_error(const std::string& take_text, train::CsvTake take, train::CsvImportOptions o = options()) {
+  train::RecordingImporter importer(small_glove(), o);
+  std::istringstream in(take_text);
+  try {
+    importer.add(in, take);
+  } catch (const Error& e) {
+    CHECK(importer.dataset().frames() == 0);  // nothing half-read is kept
+    return e.what();
+  }
+  FAIL("the take was accepted: " << take_text.substr(0, 200));
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("import: named columns in any order read back to the frames written, with ids, kinds and times") {
+  const Frames f = random_frames(40, 1);
+  std::vector<std::string> columns = all_columns({"subject", "session", "timestamp_ms", "frame", "kind"});
+  std::shuffle(columns.begin(), columns.end(), std::mt19937(2));
+  const std::string take = csv(f, columns, [](const std::string& column, std::size_t i) -> std::string {
+    if (column == "subject") return i < 20 ? "4" : "6";
+    if (column == "session") return "2";
+    if (column == "timestamp_ms") return text(1000.0 + 12.5 * static_cast<double>(i % 20));
+    if (column == "kind") return i % 20 < 5 ? "calibration" : "recording";
+    return std::to_string(i);  // "frame": ignored
+  });
+  train::CsvImportOptions o = options();
+  o.ignored_columns = {"frame"};
+  train::RecordingImporter importer(small_glove(), o);
+  std::istringstream in(take);
+  importer.add(in, {"take.csv", {}, {}, {}});
+  const train::Dataset& data = importer.dataset();
+  data.validate();
+  REQUIRE(data.frames() == 40);
+  CHECK(data.cell_count == 5);
+  CHECK(data.glove_layout() == "five-cell");
+  CHECK(data.frame_rate() == 20.0);
+  CHECK(data.cells == f.cells);
+  CHECK(data.angles == f.angles);
+  for (std::size_t i = 0; i < 40; ++i) {
+    CAPTURE(i);
+    CHECK(data.subject[i] == (i < 20 ? 4 : 6));
+    CHECK(data.session[i] == 2);
+    CHECK(data.donning[i] == 2);
+    CHECK(data.glove[i] == 0);
+    CHECK(data.outlier[i] == 0);
+    CHECK(data.kind[i] == (i % 20 < 5 ? train::kKindCalibration : train::kKindRecording));
+    CHECK(data.timestamps[i] == doctest::Approx(1.0 + 0.0125 * static_cast<double>(i % 20)).epsilon(1e-15));
+  }
+  CHECK(importer.flat_sensors().empty());
+}
+
+TEST_CASE("import: without a time column frames are 1/rate apart per run, degrees, ids and kind from the take") {
+  const Frames f = random_frames(30, 3);
+  const std::string take = csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); }, 180.0 / 3.14159265358979323846);
+  train::CsvImportOptions o = options(50.0);
+  o.degrees = true;
+  train::RecordingImporter importer(small_glove(), o);
+  std::istringstream calibration(take), recording(take), again(take);
+  importer.add(calibration, {"cal.csv", 3, 1, train::kKindCalibration});
+  importer.add(recording, {"rec.csv", 3, 1, train::kKindRecording});
+  importer.add(again, {"rec2.csv", 3, 1, train::kKindRecording});  // same run: its times go on
+  const train::Dataset& data = importer.dataset();
+  data.validate();
+  REQUIRE(data.frames() == 90);
+  for (std::size_t i = 0; i < 90; ++i) {
+    CAPTURE(i);
+    CHECK(data.subject[i] == 3);
+    CHECK(data.session[i] == 1);
+    CHECK(data.kind[i] == (i < 30 ? train::kKindCalibration : train::kKindRecording));
+    const double expected = static_cast<double>(i < 30 ? i : i - 30) / 50.0;  // 1/50 s steps, each run from 0
+    CHECK(data.timestamps[i] == doctest::Approx(expected).epsilon(1e-12));
+  }
+  for (std::size_t i = 0; i < f.angles.size(); ++i) {
+    // Written as degrees with 17 digits, read back as radians: within float rounding.
+    CHECK(data.angles[i] == doctest::Approx(f.angles[i]).epsilon(1e-6));
+    CHECK(data.angles[60 * hand::kDofCount + i] == data.angles[i]);
+  }
+}
+
+TEST_CASE("import: a sensor flat over a calibration take is refused with file, lines and column, or kept and listed") {
+  Frames f = random_frames(12, 4);
+  for (std::size_t i = 0; i < 12; ++i) f.cells[i * 5 + 2] = 2.0f + 0.001f * static_cast<float>(i % 3);  // 0.1% of its value
+  const std::string take = "# a glove maker's calibration\n" + csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); });
+  const std::string error = import_error(take, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  CHECK(error.find("CSV file 'cal_s1.csv', lines 3-14") == 0);
+  CHECK(error.find("column 'middle_bend': flat (2 to 2.002") != std::string::npos);
+  CHECK(error.find("within 1% of its value") != std::string::npos);
+  // The same rows as a recording are not a calibration: accepted.
+  {
+    train::RecordingImporter importer(small_glove(), options());
+    std::istringstream in(take);
+    importer.add(in, {"rec_s1.csv", 1, {}, train::kKindRecording});
+    CHECK(importer.dataset().frames() == 12);
+  }
+  train::CsvImportOptions o = options();
+  o.allow_flat = true;
+  train::RecordingImporter importer(small_glove(), o);
+  std::istringstream in(take);
+  importer.add(in, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  REQUIRE(importer.flat_sensors().size() == 1);
+  const train::FlatSensor& flat = importer.flat_sensors()[0];
+  CHECK(flat.cell == "middle_bend");
+  CHECK(flat.first_line == 3);
+  CHECK(flat.last_line == 14);
+  CHECK(flat.min == 2.0);
+  CHECK(flat.max == doctest::Approx(2.002).epsilon(1e-6));
+  // A looser rule (0.05%) does not call a 0.1% range flat.
+  o = options();
+  o.flat_rule.min_relative_range = 0.0005;
+  train::RecordingImporter loose(small_glove(), o);
+  std::istringstream in2(take);
+  loose.add(in2, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  CHECK(loose.flat_sensors().empty());
+}
+
+TEST_CASE("import: bad takes are refused naming the file, line and column and what was expected") {
+  const Frames f = random_frames(3, 5);
+  const auto none = [](const std::string& column, std::size_t i) -> std::string {
+    return column == "timestamp" ? text(0.1 * static_cast<double>(i)) : "0";
+  };
+  const std::string good = csv(f, all_columns({"subject", "timestamp"}), none);
+  const train::CsvTake take{"t.csv", {}, {}, {}};
+  const auto replace = [&](std::string text, const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    REQUIRE(at != std::string::npos);
+    return text.replace(at, from.size(), to);
+  };
+  const std::string header = good.substr(0, good.find('\n'));
+
+  CHECK(import_error("", take) == "CSV file 't.csv', line 1: no header, expected the column names (the glove's cells, optionally the 25 DoFs, "
+                                  "subject, session, glove, kind, timestamp)");
+  CHECK(import_error(header + "\n", take) == "CSV file 't.csv': no frames after the header, expected at least one row of readings");
+  CHECK(import_error(replace(good, "ring_bend,", ""), take).find("CSV file 't.csv', line 1: no column 'ring_bend', expected one column per cell") == 0);
+  CHECK(import_error(replace(good, "ring_bend", "ring_bent"), take)
+            .find("CSV file 't.csv', line 1, column 6 'ring_bent': unknown column, expected a cell of glove 'five-cell'") == 0);
+  CHECK(import_error(replace(good, "ring_bend", "thumb_bend"), take)
+            .find("CSV file 't.csv', line 1, column 6 'thumb_bend': named like column 3, expected each column once") == 0);
+  CHECK(import_error(replace(good, ",thumb_base_abduction", ""), take)
+            .find("CSV file 't.csv', line 1: 24 of the 25 DoF columns (missing 'thumb_base_abduction'), expected all 25 or none") == 0);
+  CHECK(import_error(replace(good, "subject,", "session,"), take) ==
+        "CSV file 't.csv', line 1: no 'subject' column and no subject given for the file, expected one of them");
+
+  // Line 3 (the second frame): its third field is the thumb cell.
+  const std::size_t line3 = good.find('\n', good.find('\n') + 1) + 1;
+  std::string bad = good;
+  const std::size_t third = bad.find(',', bad.find(',', line3) + 1) + 1;
+  bad.replace(third, bad.find(',', third) - third, "1.5pF");
+  CHECK(import_error(bad, take) == "CSV file 't.csv', line 3, column 'thumb_bend': '1.5pF' is not a number");
+  bad = good;
+  bad.replace(third, bad.find(',', third) - third, "nan");
+  CHECK(import_error(bad, take) == "CSV file 't.csv', line 3, column 'thumb_bend': 'nan' is not a finite number");
+  bad = good;
+  bad.replace(line3, bad.find(',', line3) - line3, "-1");
+  CHECK(import_error(bad, take) == "CSV file 't.csv', line 3, column 'subject': '-1' is not a non-negative integer");
+  bad = good;
+  bad.insert(good.find('\n', line3), ",7");
+  CHECK(import_error(bad, take) == "CSV file 't.csv', line 3: 33 fields, expected 32 (one per column of line 1)");
+  bad = good;
+  const std::size_t time3 = bad.find(',', line3) + 1;
+  bad.replace(time3, bad.find(',', time3) - time3, "0");
+  CHECK(import_error(bad, take).find("CSV file 't.csv', line 3: time 0 s is not after the frame before (0 s) of subject 0, session 0") == 0);
+  CHECK(import_error(replace(replace(good, "subject", "kind"), "\n0,", "\nwarmup,"), {"t.csv", 1, {}, {}}) ==
+        "CSV file 't.csv', line 2, column 'kind': 'warmup' is not a kind, expected recording, calibration, 0 or 1");
+  CHECK(import_error(replace(good, "subject,timestamp", "subject,timestamp,timestamp_ms"), take)
+            .find("line 1: both timestamp and timestamp_ms") != std::string::npos);
+
+  // Takes must agree on angles; a failed take leaves the frames of the ones before.
+  train::RecordingImporter importer(small_glove(), options());
+  std::istringstream first(good);
+  importer.add(first, take);
+  const std::string no_angles = csv(f, {"subject", "timestamp", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
+  std::istringstream second(no_angles);
+  CHECK_THROWS_WITH_AS(importer.add(second, {"u.csv", {}, {}, {}}),
+                       "CSV file 'u.csv', line 1: has no DoF columns, expected the 25 DoFs as the takes before it", Error);
+  CHECK(importer.dataset().frames() == 3);
+  std::istringstream third_take(good);  // same subject and session, times from 0 again: not after the last frame
+  CHECK_THROWS_WITH_AS(importer.add(third_take, take),
+                       "CSV file 't.csv', line 2: time 0 s is not after the frame before (0.2 s) of subject 0, session 0, "
+                       "expected increasing times within a run (give each take its own session id)",
+                       Error);
+  CHECK(importer.dataset().frames() == 3);
+  importer.dataset().validate();
+
+  CHECK_THROWS_WITH_AS(train::RecordingImporter(small_glove(), options(0.0)),
+                       "frame rate 0, expected a positive number of frames per second", Error);
+  train::CsvImportOptions ignoring = options();
+  ignoring.ignored_columns = {"index_bend"};
+  CHECK_THROWS_AS(train::RecordingImporter(small_glove(), ignoring), Error);
+  CHECK_THROWS_WITH_AS(train::RecordingImporter(small_glove(), options()).add({"/no/such/file.csv", 0, {}, {}}),
+                       "CSV file '/no/such/file.csv': cannot open, expected a readable file", Error);
+}

@@ -1,0 +1,165 @@
+// glovepose import --rate HZ --out FILE [--glove FILE] [--subject N] [--session N] [--calibration FILE]...
+//                  [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]
+//   Recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
+//   dataset file for train, eval and finetune.
+#include <glovepose/train/recording_import.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+
+namespace glovepose::cli {
+namespace {
+
+// `problem` empty: the usage was asked for (--help).
+[[noreturn]] void usage(const std::string& problem) {
+  exit_with_usage("import", problem,
+                  "usage: glovepose import --rate HZ --out FILE [--glove FILE] [--subject N] [--session N]\n"
+                  "                        [--calibration FILE]... [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]\n"
+                  "  FILE...             recording takes: CSV files whose first line names the columns: every cell of the\n"
+                  "                      glove, optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp\n"
+                  "                      (seconds) or timestamp_ms\n"
+                  "  --calibration FILE  a calibration take (its rows are calibration frames); repeatable\n"
+                  "  --takes LIST        a CSV list of takes with the header file,subject,session,kind (kind: recording or\n"
+                  "                      calibration; session and kind may be left out); files relative to the list\n"
+                  "  --subject N, --session N   ids of FILE and --calibration takes whose columns do not have them\n"
+                  "  --rate HZ           the glove's frames per second (frames are 1/HZ apart in takes without timestamps)\n"
+                  "  --glove FILE        the glove description (JSON); default: the built-in 44-cell glove\n"
+                  "  --degrees           angle columns are in degrees\n"
+                  "  --ignore COLUMN     a column to skip; repeatable\n"
+                  "  --allow-flat        keep calibration takes where a sensor does not move (it then reads 0); listed\n"
+                  "  --out FILE          the dataset file written\n");
+}
+
+struct Options {
+  std::vector<train::CsvTake> takes;
+  std::string out, glove, takes_list;
+  std::optional<std::int32_t> subject, session;
+  train::CsvImportOptions import;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  std::vector<std::pair<std::string, std::uint8_t>> files;  // in the order given
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(a + " needs a value");
+      return argv[++i];
+    };
+    const auto id = [&]() {
+      const std::string text = value();
+      try {
+        return io::parse_csv_id(text, a + " '" + text + "'");
+      } catch (const Error& e) {
+        usage(e.what());
+      }
+    };
+    if (a == "--out") o.out = value();
+    else if (a == "--glove") o.glove = value();
+    else if (a == "--takes") o.takes_list = value();
+    else if (a == "--calibration") files.emplace_back(value(), train::kKindCalibration);
+    else if (a == "--subject") o.subject = id();
+    else if (a == "--session") o.session = id();
+    else if (a == "--rate") {
+      const std::string text = value();
+      o.import.frame_rate = parse_number<double>(a, text);
+      if (!(o.import.frame_rate > 0.0)) usage("--rate '" + text + "', expected a positive number of frames per second");
+    } else if (a == "--degrees") o.import.degrees = true;
+    else if (a == "--ignore") o.import.ignored_columns.push_back(value());
+    else if (a == "--allow-flat") o.import.allow_flat = true;
+    else if (asks_for_help(a)) usage("");
+    else if (a.rfind("-", 0) == 0) usage("unknown option " + a);
+    else files.emplace_back(a, train::kKindRecording);
+  }
+  if (o.out.empty()) usage("--out FILE is required");
+  if (o.import.frame_rate == 0.0) usage("--rate HZ is required (the glove's frames per second)");
+  if (files.empty() && o.takes_list.empty()) usage("no takes, expected CSV files or --takes LIST");
+  for (const auto& [path, kind] : files) o.takes.push_back({path, o.subject, o.session, kind});
+  return o;
+}
+
+// The takes of a list file: header file,subject[,session][,kind], one take per line.
+std::vector<train::CsvTake> read_takes_list(const std::string& path) {
+  const std::string at = "takes list '" + path + "'";
+  std::ifstream in(path);
+  if (!in) throw Error(at + ": cannot open, expected a readable file");
+  std::string line;
+  if (!std::getline(in, line) || io::blank_csv_line(line)) throw Error(at + ", line 1: no header, expected file,subject,session,kind");
+  const std::vector<std::string> header = io::split_csv_line(line);
+  const std::vector<std::string> known{"file", "subject", "session", "kind"};
+  std::vector<int> column(known.size(), -1);
+  for (std::size_t k = 0; k < header.size(); ++k) {
+    const auto it = std::find(known.begin(), known.end(), header[k]);
+    if (it == known.end() || column[static_cast<std::size_t>(it - known.begin())] >= 0)
+      throw Error(at + ", line 1, column " + std::to_string(k + 1) + " '" + header[k] + "': " +
+                  (it == known.end() ? "unknown column" : "a second time") + ", expected file, subject, session and kind once each");
+    column[static_cast<std::size_t>(it - known.begin())] = static_cast<int>(k);
+  }
+  if (column[0] < 0 || column[1] < 0) throw Error(at + ", line 1: expected at least the columns file and subject");
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  std::vector<train::CsvTake> takes;
+  for (std::size_t line_no = 2; std::getline(in, line); ++line_no) {
+    if (io::blank_csv_line(line)) continue;
+    const std::vector<std::string> fields = io::split_csv_line(line);
+    const std::string at_line = at + ", line " + std::to_string(line_no);
+    if (fields.size() != header.size())
+      throw Error(at_line + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(header.size()));
+    const auto field = [&](std::size_t which) { return fields[static_cast<std::size_t>(column[which])]; };
+    const auto where = [&](std::size_t which) { return at_line + ", column '" + known[which] + "': '" + field(which) + "'"; };
+    train::CsvTake take;
+    const std::filesystem::path file = field(0);
+    if (field(0).empty()) throw Error(at_line + ", column 'file': empty, expected a CSV file");
+    take.path = (file.is_absolute() ? file : folder / file).string();
+    take.subject = io::parse_csv_id(field(1), where(1));
+    if (column[2] >= 0) take.session = io::parse_csv_id(field(2), where(2));
+    take.kind = train::kKindRecording;
+    if (column[3] >= 0 && field(3) == "calibration") take.kind = train::kKindCalibration;
+    else if (column[3] >= 0 && field(3) != "recording") throw Error(where(3) + " is not a kind, expected recording or calibration");
+    takes.push_back(take);
+  }
+  if (takes.empty()) throw Error(at + ": no takes after the header, expected one line per CSV file");
+  return takes;
+}
+
+}  // namespace
+
+int import_recordings(int argc, char** argv) {
+  Options o = parse(argc, argv);
+  try {
+    if (!o.takes_list.empty())
+      for (train::CsvTake& take : read_takes_list(o.takes_list)) o.takes.push_back(std::move(take));
+    grid::GloveDescription glove = o.glove.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove);
+    train::RecordingImporter importer(std::move(glove), o.import);
+    for (const train::CsvTake& take : o.takes) importer.add(take);
+    const train::Dataset& data = importer.dataset();
+    data.write(o.out);
+
+    std::set<std::int32_t> subjects(data.subject.begin(), data.subject.end());
+    std::set<std::pair<std::int32_t, std::int32_t>> sessions;
+    std::size_t calibration = 0;
+    for (std::size_t i = 0; i < data.frames(); ++i) {
+      sessions.insert({data.subject[i], data.session[i]});
+      calibration += data.kind[i] == train::kKindCalibration;
+    }
+    std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n",
+                o.takes.size(), data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(),
+                data.cell_count, data.has_angles() ? "with the 25 DoF angles" : "without angles");
+    for (const train::FlatSensor& flat : importer.flat_sensors())
+      std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
+                  flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
+    std::printf("wrote %s\n", o.out.c_str());
+    return 0;
+  } catch (const Error& e) {
+    std::cerr << "glovepose import: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace glovepose::cli
