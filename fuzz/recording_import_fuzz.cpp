@@ -5,8 +5,8 @@
 /// kind, subject and session.
 ///
 /// Invariants: bad input is refused with glovepose::Error only, and a refused take leaves the
-/// dataset as it was; an accepted one validates, adds at least one frame, keeps every value finite,
-/// and reports flat sensors only when they are allowed.
+/// dataset as it was; an accepted one validates, adds at least one frame, keeps every value finite
+/// (NaN exactly for the DoFs not labelled), and reports flat sensors only when they are allowed.
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -59,7 +59,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const train::Dataset& after = importer.dataset();
   after.validate();  // throws (and so fails the run) if the importer let through what validate() refuses
   GLOVEPOSE_FUZZ_REQUIRE(after.frames() > before.frames());
-  GLOVEPOSE_FUZZ_REQUIRE(fuzz::all_finite(after.cells) && fuzz::all_finite(after.angles) && fuzz::all_finite(after.timestamps));
+  GLOVEPOSE_FUZZ_REQUIRE(fuzz::all_finite(after.cells) && fuzz::all_finite(after.timestamps));
+  const hand::DofSet labelled = after.labelled_dofs();
+  for (std::size_t i = 0; i < after.angles.size(); ++i)
+    GLOVEPOSE_FUZZ_REQUIRE(labelled[i % hand::kDofCount] ? std::isfinite(after.angles[i]) : std::isnan(after.angles[i]));
   GLOVEPOSE_FUZZ_REQUIRE(options.allow_flat || importer.flat_sensors().empty());
   return 0;
 }

@@ -423,6 +423,52 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   CHECK(json_number(eval_import.out, "mean_deg") == json_number(eval_reference.out, "mean_deg"));
   CHECK(json_number(eval_import.out, "mean_deg") > 1.0);
 
+  // Two DoFs not labelled: not trained (the model reads the rest pose for them), not scored; eval's
+  // mean equals the mean over the 23 labelled DoFs of its own --predictions file.
+  {
+    train::Dataset part = imported;
+    hand::DofSet labelled = hand::all_dofs();
+    labelled[hand::dof_from_name("ring_base_twist")] = labelled[hand::dof_from_name("thumb_tip_flexion")] = false;
+    part.set_labelled_dofs(labelled);
+    for (std::size_t i = 0; i < part.angles.size(); ++i)
+      if (!labelled[i % hand::kDofCount]) part.angles[i] = NAN;
+    const std::string part_file = temp("imported_part.safetensors"), part_model = temp("t_part_lin.safetensors");
+    part.write(part_file);
+    r = run("train --data " + part_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + part_model);
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(r.out.find("the data labels 23 of the 25 DoFs") != std::string::npos);
+    CHECK(nn::WeightFile::read(part_model).metadata.at("labelled_dofs") == hand::dof_set_text(labelled));
+    const std::string predictions = temp("part_predictions.csv");
+    r = run("eval --model " + part_model + " --data " + part_file + " --subjects 2 --json --predictions " + predictions);
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(r.out.find("\"scored_dofs\": 23") != std::string::npos);
+    CHECK(r.out.find("{\"dof\": \"ring_base_twist\", \"theta\": ") != std::string::npos);
+    CHECK(r.out.find("\"scored\": false, \"mean_deg\": null") != std::string::npos);
+    std::ifstream rows(predictions);
+    std::string line;
+    std::getline(rows, line);
+    double sum = 0.0;
+    long count = 0;
+    const hand::JointLimits limits;
+    while (std::getline(rows, line)) {
+      std::vector<double> v;
+      std::stringstream fields(line);
+      std::string field;
+      while (std::getline(fields, field, ',')) v.push_back(std::strtod(field.c_str(), nullptr));
+      REQUIRE(v.size() == 4 + 50);
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+        if (!labelled[d]) {
+          CHECK(std::isnan(v[4 + d]));
+          CHECK(v[4 + 25 + d] == doctest::Approx(limits.rest()[d]).epsilon(1e-6));  // the rest pose, whatever the glove did
+          continue;
+        }
+        sum += std::abs(v[4 + 25 + d] - v[4 + d]);
+        ++count;
+      }
+    }
+    CHECK(json_number(r.out, "mean_deg") == doctest::Approx(sum / static_cast<double>(count) * 180.0 / M_PI).epsilon(1e-6));
+  }
+
   // A CSV given where a dataset file belongs, or to predict, says how to import it.
   r = run("train --data " + temp("import_take_1.csv") + " --model linear --out " + temp("t_never.safetensors"));
   CHECK(r.status == 1);

@@ -282,7 +282,7 @@ TEST_CASE("metrics: JSON carries the figures with stable keys and round-trip dig
   const std::string text = to_json(r);
   CHECK(text.find("\"mean_deg\": 21.5,") != std::string::npos);
   CHECK(text.find("\"share_under_15deg\": 0.3,") != std::string::npos);
-  CHECK(text.find("{\"dof\": \"index_base_flexion\", \"theta\": 14, \"mean_deg\": 18,") != std::string::npos);
+  CHECK(text.find("{\"dof\": \"index_base_flexion\", \"theta\": 14, \"scored\": true, \"mean_deg\": 18,") != std::string::npos);
   CHECK(text.find("{\"finger\": \"thumb\", \"mean_deg\": 18.1,") != std::string::npos);
 
   const nn::json::Value json = nn::json::Parser::parse(text);

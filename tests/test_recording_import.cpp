@@ -223,8 +223,6 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
             .find("CSV file 't.csv', line 1, column 6 'ring_bent': unknown column, expected a cell of glove 'five-cell'") == 0);
   CHECK(import_error(replace(good, "ring_bend", "thumb_bend"), take)
             .find("CSV file 't.csv', line 1, column 6 'thumb_bend': named like column 3, expected each column once") == 0);
-  CHECK(import_error(replace(good, ",thumb_base_abduction", ""), take)
-            .find("CSV file 't.csv', line 1: 24 of the 25 DoF columns (missing 'thumb_base_abduction'), expected all 25 or none") == 0);
   CHECK(import_error(replace(good, "subject,", "session,"), take) ==
         "CSV file 't.csv', line 1: no 'subject' column and no subject given for the file, expected one of them");
 
@@ -259,7 +257,7 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   const std::string no_angles = csv(f, {"subject", "timestamp", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
   std::istringstream second(no_angles);
   CHECK_THROWS_WITH_AS(importer.add(second, {"u.csv", {}, {}, {}}),
-                       "CSV file 'u.csv', line 1: has no DoF columns, expected the 25 DoFs as the takes before it", Error);
+                       "CSV file 'u.csv', line 1: has no DoF columns, expected the DoFs as the takes before it", Error);
   CHECK(importer.dataset().frames() == 3);
   std::istringstream third_take(good);  // same subject and session, times from 0 again: not after the last frame
   CHECK_THROWS_WITH_AS(importer.add(third_take, take),
@@ -276,4 +274,30 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   CHECK_THROWS_AS(train::RecordingImporter(small_glove(), ignoring), Error);
   CHECK_THROWS_WITH_AS(train::RecordingImporter(small_glove(), options()).add({"/no/such/file.csv", 0, {}, {}}),
                        "CSV file '/no/such/file.csv': cannot open, expected a readable file", Error);
+}
+
+TEST_CASE("import: a take labelling some DoFs: the others are NaN and not labelled, and every take must label the same") {
+  const Frames f = random_frames(4, 6);
+  std::vector<std::string> columns = all_columns({"subject"});
+  const auto dropped = [](const std::string& name) { return name == "thumb_base_abduction" || name == "pinky_base_twist"; };
+  columns.erase(std::remove_if(columns.begin(), columns.end(), dropped), columns.end());
+  const std::string take = csv(f, columns, [](const std::string&, std::size_t) { return std::string("1"); });
+  train::RecordingImporter importer(small_glove(), options());
+  std::istringstream in(take);
+  importer.add(in, {"part.csv", {}, {}, {}});
+  const train::Dataset& data = importer.dataset();
+  data.validate();
+  hand::DofSet expected = hand::all_dofs();
+  expected[hand::dof_from_name("thumb_base_abduction")] = expected[hand::dof_from_name("pinky_base_twist")] = false;
+  CHECK(data.labelled_dofs() == expected);
+  for (std::size_t i = 0; i < f.angles.size(); ++i) {
+    CAPTURE(i);
+    if (expected[i % hand::kDofCount]) CHECK(data.angles[i] == f.angles[i]);
+    else CHECK(std::isnan(data.angles[i]));
+  }
+  const std::string other = csv(f, all_columns({"subject"}), [](const std::string&, std::size_t) { return std::string("2"); });
+  std::istringstream second(other);
+  CHECK_THROWS_WITH_AS(importer.add(second, {"all.csv", {}, {}, {}}),
+                       doctest::Contains("CSV file 'all.csv', line 1: DoF columns thumb_base_abduction,"), Error);
+  CHECK(importer.dataset().frames() == 4);
 }

@@ -115,6 +115,8 @@ class BasicPoseModel {
       hi[d] = info_.joint_limits_max[d];
     }
     limits_ = hand::JointLimits(lo, hi);
+    labelled_ = info_.labelled();
+    all_labelled_ = labelled_ == hand::all_dofs();
     if (!info_.pose_offset.empty()) {
       pose_offset_.emplace(calibration::PoseOffsetModel::parse(info_.pose_offset, "metadata 'pose_offset'"));
       if (pose_offset_->cells() != glove_.cell_count())
@@ -143,6 +145,14 @@ class BasicPoseModel {
   const std::shared_ptr<const Solver>& solver() const noexcept { return solver_; }
   /// @brief What the network's outputs -1 and +1 mean, per DoF.
   const hand::JointLimits& joint_limits() const noexcept { return limits_; }
+  /// @brief The DoFs the model was trained on reference angles for; the others read the rest pose
+  /// (hand::JointLimits::rest()) whatever the glove does.
+  const hand::DofSet& labelled_dofs() const noexcept { return labelled_; }
+  /// @brief The network's normalised outputs as the model reads them: DoFs outside labelled_dofs()
+  /// at the rest pose.
+  GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept {
+    return all_labelled_ ? normalized : limits_.rest_unlabelled(normalized, labelled_);
+  }
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
   /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.
@@ -170,7 +180,7 @@ class BasicPoseModel {
     } catch (const Error& e) {
       throw Error(std::string("PoseModel::predict: ") + e.what());
     }
-    for (hand::Angles& a : angles) a = limits_.denormalize(a);
+    for (hand::Angles& a : angles) a = limits_.denormalize(model_outputs(a));
     return angles;
   }
 
@@ -189,6 +199,8 @@ class BasicPoseModel {
   grid::GloveDescription glove_;
   std::shared_ptr<const Solver> solver_;
   hand::JointLimits limits_;
+  hand::DofSet labelled_ = hand::all_dofs();
+  bool all_labelled_ = true;
   std::optional<sensor::CalibrationRange> training_range_;
   std::optional<calibration::PoseOffsetModel> pose_offset_;
 };
@@ -645,7 +657,7 @@ class BasicGlovePoseEstimator {
     hand::Angles normalized_angles{};
     const Status net = model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_, team_.get());
     if (net != Status::Ok) return net;
-    angles = model_->joint_limits().denormalize(normalized_angles);
+    angles = model_->joint_limits().denormalize(model_->model_outputs(normalized_angles));
     return Status::Ok;
   }
 

@@ -158,7 +158,7 @@ int predict(const Options& o) {
     hand::Angles normalized{};
     if (model->network().normalized_dofs(map, values.data(), normalized, ws) != Status::Ok)
       throw Error("line " + std::to_string(line_no) + ": the network refused the input (a result beyond float's range)");
-    const hand::Angles angles = model->joint_limits().denormalize(normalized);
+    const hand::Angles angles = model->joint_limits().denormalize(model->model_outputs(normalized));
     for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%.9g", d ? "," : "", angles[d]);
     std::printf("\n");
   }
@@ -172,6 +172,8 @@ int info(const Options& o) {
   std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture.c_str(), model.info().width,
               model.info().glove.c_str(), net.parameter_count());
   if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
+  if (!model.info().labelled_dofs.empty())
+    std::printf("trained DoFs: %s (the others read the rest pose)\n", model.info().labelled_dofs.c_str());
   std::printf("packed weight bytes (F32): %zu\nmultiply-adds per frame: %zu\ntraining-set calibration: %s\n", net.weight_bytes(),
               net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count(), model.info().calibration_min ? "yes" : "no");
   if (!model.pose_offset()) {

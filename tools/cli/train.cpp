@@ -264,7 +264,13 @@ int train_command(Options o, int argc, char** argv) {
   if (architecture == "fcn" && width == 0) width = 2048;
   if (architecture != "unet" && architecture != "fcn" && architecture != "linear")
     usage(o.command, "--model '" + o.model + "', expected unet:W, fcn[:H] or linear");
-  const nn::ModelInfo info = train::make_model_info(architecture, width, glove, mode, range ? &*range : nullptr);
+  nn::ModelInfo info = train::make_model_info(architecture, width, glove, mode, range ? &*range : nullptr);
+  if (all.labelled != hand::all_dofs()) {
+    info.labelled_dofs = hand::dof_set_text(all.labelled);
+    if (!o.quiet)
+      std::fprintf(stderr, "%s: the data labels %zu of the 25 DoFs; the others are not trained and read the rest pose\n", o.command.c_str(),
+                   static_cast<std::size_t>(std::count(all.labelled.begin(), all.labelled.end(), true)));
+  }
   std::map<std::string, std::string> provenance{{"training_command", command_line(argc, argv)},
                                                 {"training_seed", std::to_string(o.training.seed)},
                                                 {"training_data", o.data}};
@@ -275,7 +281,7 @@ int train_command(Options o, int argc, char** argv) {
     const nn::LinearMap map = train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
     std::vector<float> predicted(static_cast<std::size_t>(validation.frames()) * train::kTargets);
     map.predict(validation.inputs.data(), predicted.data(), validation.frames());
-    const double error = train::mean_error_degrees(predicted, validation.angles, limits);
+    const double error = train::mean_error_degrees(predicted, validation.angles, limits, validation.labelled);
     provenance["training_frames"] = std::to_string(training.frames());
     provenance["validation_frames"] = std::to_string(validation.frames());
     provenance["validation_error_deg"] = std::to_string(error);
@@ -361,7 +367,13 @@ int eval_command(Options o) {
   const bool guided = eval_guided(o, model, data);
   const std::map<std::int64_t, hand::Angles> offsets = guided ? train::guided_offsets(model, data, o.filter, pool) : std::map<std::int64_t, hand::Angles>{};
   const std::vector<float> normalized = model.predict(samples, pool);
-  train::AngleErrorAccumulator errors;
+  hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
+  const hand::DofSet trained = model.info.labelled();
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) scored[d] = scored[d] && trained[d];
+  if (std::find(scored.begin(), scored.end(), true) == scored.end())
+    throw Error("the model was trained on " + hand::dof_set_text(trained) + " and the data labels " + hand::dof_set_text(samples.labelled) +
+                ": no DoF to score, expected data labelling a DoF the model was trained on");
+  train::AngleErrorAccumulator errors(scored);
   std::vector<float> predicted(normalized.size());
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};

@@ -8,6 +8,7 @@
 /// 34 pose parameters; theta[0..8] (global pose, wrist) cannot be sensed by stretch sensors.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -108,6 +109,46 @@ inline std::size_t dof_from_name(const std::string& name) {
   throw Error("dof_from_name: unknown DoF '" + name + "', expected a name such as 'index_base_flexion'");
 }
 
+/// @brief A set of DoFs, one flag per entry of kDofs: e.g. those a dataset labels (the others have
+/// no reference angle, are not trained and not scored).
+using DofSet = std::array<bool, kDofCount>;
+
+/// @brief Every DoF.
+inline DofSet all_dofs() noexcept {
+  DofSet all{};
+  all.fill(true);
+  return all;
+}
+
+/// @brief The set as text: its DoF names in kDofs order, comma-separated.
+inline std::string dof_set_text(const DofSet& set) {
+  std::string text;
+  for (std::size_t d = 0; d < kDofCount; ++d)
+    if (set[d]) text += (text.empty() ? "" : ",") + std::string(kDofs[d].name);
+  return text;
+}
+
+/// @brief The set named by comma-separated DoF names (dof_set_text()). Throws glovepose::Error,
+/// starting with `what`, for an unknown or repeated name or an empty list.
+inline DofSet parse_dof_set(const std::string& text, const std::string& what) {
+  DofSet set{};
+  bool any = false;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    std::size_t d = 0;
+    while (d < kDofCount && name != kDofs[d].name) ++d;
+    if (d == kDofCount)
+      throw Error(what + ": '" + name + "' is not a DoF, expected comma-separated names such as 'index_base_flexion'");
+    if (set[d]) throw Error(what + ": '" + name + "' is listed twice, expected each DoF once");
+    set[d] = any = true;
+    start = comma + 1;
+  }
+  if (!any) throw Error(what + ": no DoF, expected at least one name");
+  return set;
+}
+
 /// @brief Lower and upper limit of each DoF, used to map angles to [-1, 1] and back.
 ///
 /// The default is the reference model's limits. A model file records the limits it was trained with
@@ -152,6 +193,20 @@ class JointLimits {
     Angles out{};
     for (std::size_t i = 0; i < kDofCount; ++i)
       out[i] = min_[i] + 0.5 * (normalized[i] + 1.0) * (max_[i] - min_[i]);
+    return out;
+  }
+
+  /// @brief The rest pose within the limits: every angle 0 rad, clamped into [min, max]. What a DoF
+  /// without reference angles is trained to, and reads, in a model (DofSet).
+  Angles rest() const noexcept { return clamp(Angles{}); }
+
+  /// @brief `normalized` outputs with every DoF outside `labelled` replaced by the rest pose (in
+  /// normalised units): what a model reads for a DoF it had no reference angles for.
+  GLOVEPOSE_REALTIME Angles rest_unlabelled(const Angles& normalized, const DofSet& labelled) const noexcept {
+    Angles out = normalized;
+    const Angles rest_normalized = normalize(rest());
+    for (std::size_t i = 0; i < kDofCount; ++i)
+      if (!labelled[i]) out[i] = rest_normalized[i];
     return out;
   }
 

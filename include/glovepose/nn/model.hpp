@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../config.hpp"
+#include "../hand/dofs.hpp"
 #include "unet.hpp"
 #include "weights.hpp"
 
@@ -31,6 +32,12 @@ struct ModelInfo {
   /// The pose-guided calibration fitted for this model (calibration/pose_offset.hpp JSON, with its
   /// calibration sequence); empty: min-max calibration only.
   std::string pose_offset;
+  /// The DoFs the model was trained on reference angles for (hand::dof_set_text()); empty: all 25.
+  /// The others were trained toward the rest pose and read it (BasicPoseModel).
+  std::string labelled_dofs;
+
+  /// @brief labelled_dofs as a set (every DoF when empty).
+  hand::DofSet labelled() const { return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'"); }
 
   /// @brief Reads and checks the metadata; throws glovepose::Error naming the key that is missing or wrong.
   static ModelInfo from(const WeightFile& file) {
@@ -62,6 +69,10 @@ struct ModelInfo {
         throw Error("metadata 'calibration_min' and 'calibration_max' differ in length");
     }
     if (file.metadata.count("pose_offset")) info.pose_offset = file.meta("pose_offset");
+    if (file.metadata.count("labelled_dofs")) {
+      info.labelled_dofs = file.meta("labelled_dofs");
+      info.labelled();  // throws unless it names a set of DoFs
+    }
     return info;
   }
 
@@ -83,6 +94,7 @@ struct ModelInfo {
     if (calibration_min) file.metadata["calibration_min"] = WeightFile::format_numbers(*calibration_min);
     if (calibration_max) file.metadata["calibration_max"] = WeightFile::format_numbers(*calibration_max);
     if (!pose_offset.empty()) file.metadata["pose_offset"] = pose_offset;
+    if (!labelled_dofs.empty()) file.metadata["labelled_dofs"] = labelled_dofs;
   }
 
  private:

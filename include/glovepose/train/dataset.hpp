@@ -45,7 +45,7 @@ struct Dataset {
   std::size_t row_count = 0;   ///< R, raw readout rows per frame (180 for the paper's glove); 0: no raw rows.
   std::vector<float> cells;     ///< N x C solved cell capacitances C_c, pF; finite.
   std::vector<float> raw_rows;  ///< N x R compound capacitances C_m of the cycle that ended at the frame, pF; NaN = dropped row. Empty when row_count is 0.
-  std::vector<float> angles;    ///< N x 25 ground-truth joint angles, radians, order hand::kDofs (theta 9..33); empty: no ground truth.
+  std::vector<float> angles;    ///< N x 25 ground-truth joint angles, radians, order hand::kDofs (theta 9..33); NaN for a DoF not labelled (labelled_dofs()); empty: no ground truth.
   std::vector<double> timestamps;      ///< N times, seconds since the session start; strictly increasing within a run (see validate()).
   std::vector<std::int32_t> subject;   ///< N subject ids (>= 0).
   std::vector<std::int32_t> session;   ///< N session ids of the subject (>= 0).
@@ -54,8 +54,9 @@ struct Dataset {
   std::vector<std::uint8_t> kind;      ///< N kinds: kKindRecording (0) or kKindCalibration (1).
   std::vector<std::uint8_t> outlier;   ///< N flags: 1 when the reference pose's collision energy exceeds hand::kCollisionOutlierThreshold (80), else 0.
   /// @brief String metadata: "format" (kDatasetFormat), "version" (kDatasetVersion), "glove_layout"
-  /// (the sensor layout id, e.g. "glauser2019-44"), "frame_rate" (nominal frames per second); other
-  /// keys are kept.
+  /// (the sensor layout id, e.g. "glauser2019-44"), "frame_rate" (nominal frames per second),
+  /// optionally "labelled_dofs" (the DoFs with reference angles, hand::dof_set_text(); absent: all);
+  /// other keys are kept.
   std::map<std::string, std::string> metadata{{"format", kDatasetFormat}, {"version", kDatasetVersion}};
 
   /// @brief An empty dataset: no frames, no cells; set the counts and metadata before use.
@@ -87,6 +88,19 @@ struct Dataset {
     return v;
   }
 
+  /// @brief The DoFs with reference angles: metadata "labelled_dofs", every DoF when it is absent.
+  /// Throws glovepose::Error when the metadata does not name a set of DoFs.
+  hand::DofSet labelled_dofs() const {
+    const auto it = metadata.find("labelled_dofs");
+    return it == metadata.end() ? hand::all_dofs() : hand::parse_dof_set(it->second, "Dataset: metadata 'labelled_dofs'");
+  }
+
+  /// @brief Records which DoFs have reference angles (all of them: the metadata key is removed).
+  void set_labelled_dofs(const hand::DofSet& labelled) {
+    if (labelled == hand::all_dofs()) metadata.erase("labelled_dofs");
+    else metadata["labelled_dofs"] = hand::dof_set_text(labelled);
+  }
+
   /// @brief Checks every size, value range and the metadata; throws glovepose::Error naming the
   /// tensor (and frame) that is wrong and what was expected. Timestamps must increase strictly
   /// within each run of consecutive frames sharing (subject, glove, session, kind).
@@ -116,11 +130,14 @@ struct Dataset {
       if (std::isinf(raw_rows[i]))
         throw Error("Dataset: tensor 'raw_rows': frame " + std::to_string(i / row_count) + ", row " + std::to_string(i % row_count) +
                     " is infinite, expected a finite capacitance (pF) or NaN (a dropped row)");
-    for (std::size_t i = 0; i < angles.size(); ++i)
-      if (!std::isfinite(angles[i]))
+    const hand::DofSet labelled = labelled_dofs();
+    for (std::size_t i = 0; i < angles.size(); ++i) {
+      const bool has = labelled[i % hand::kDofCount];
+      if (has ? !std::isfinite(angles[i]) : !std::isnan(angles[i]))
         throw Error("Dataset: tensor 'angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
                     hand::kDofs[i % hand::kDofCount].name + "' is " + io::detail::number_text(angles[i]) +
-                    ", expected a finite angle (radians)");
+                    (has ? ", expected a finite angle (radians)" : ", expected NaN (the DoF is not labelled: metadata 'labelled_dofs')"));
+    }
     const std::pair<const char*, const std::vector<std::int32_t>*> ids[] = {
         {"subject", &subject}, {"session", &session}, {"glove", &glove}, {"donning", &donning}};
     for (const auto& [name, values] : ids)
@@ -159,7 +176,7 @@ struct Dataset {
     };
     if (other.cell_count != cell_count) throw disagree("cell_count", std::to_string(cell_count), std::to_string(other.cell_count));
     if (other.row_count != row_count) throw disagree("row_count", std::to_string(row_count), std::to_string(other.row_count));
-    for (const char* key : {"glove_layout", "frame_rate"}) {
+    for (const char* key : {"glove_layout", "frame_rate", "labelled_dofs"}) {
       const auto quoted = [key](const Dataset& d) {
         const auto it = d.metadata.find(key);
         return it == d.metadata.end() ? std::string("(none)") : "'" + it->second + "'";
@@ -260,16 +277,18 @@ struct Dataset {
   static Dataset read(const std::string& path) { return io::TensorFile::read_as(path, "dataset file", from_tensor_file); }
 
   /// @brief Writes the frames as CSV (validated first): the header
-  /// `subject,session,timestamp,cell_0,...,cell_{C-1}` followed by the 25 DoF names of hand::kDofs
-  /// when the dataset has angles, then one line per frame; cells and angles with 9 significant
+  /// `subject,session,timestamp,cell_0,...,cell_{C-1}` followed by the labelled DoFs' names (all 25
+  /// unless labelled_dofs() says otherwise), in hand::kDofs order, when the dataset has angles, then one line per frame; cells and angles with 9 significant
   /// digits, timestamps with 17 (exact round trip), independent of the locale. glove, donning, kind,
   /// outlier, raw_rows and the metadata are not part of the CSV.
   void write_csv(std::ostream& out) const {
     validate();
+    const hand::DofSet labelled = labelled_dofs();
     std::string line = "subject,session,timestamp";
     for (std::size_t c = 0; c < cell_count; ++c) line += ",cell_" + std::to_string(c);
     if (has_angles())
-      for (const hand::Dof& d : hand::kDofs) line += std::string(",") + d.name;
+      for (std::size_t d = 0; d < hand::kDofCount; ++d)
+        if (labelled[d]) line += std::string(",") + hand::kDofs[d].name;
     out << line << '\n';
     char buf[64];
     const auto put = [&](auto v, int digits) {
@@ -282,7 +301,8 @@ struct Dataset {
       put(timestamps[i], 17);
       for (std::size_t c = 0; c < cell_count; ++c) put(cells[i * cell_count + c], 9);
       if (has_angles())
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) put(angles[i * hand::kDofCount + d], 9);
+        for (std::size_t d = 0; d < hand::kDofCount; ++d)
+          if (labelled[d]) put(angles[i * hand::kDofCount + d], 9);
       out << line << '\n';
     }
     if (!out) throw Error("Dataset::write_csv: cannot write");
@@ -297,7 +317,7 @@ struct Dataset {
   }
 
   /// @brief Reads CSV in the layout of write_csv(): the cell count comes from the header, angles
-  /// when the header lists the 25 DoF names; glove = 0, donning = session, kind = 0, outlier = 0;
+  /// when the header lists DoF names (in hand::kDofs order; those missing are not labelled); glove = 0, donning = session, kind = 0, outlier = 0;
   /// `glove_layout` and `frame_rate` become the metadata (CSV does not carry them). Throws
   /// glovepose::Error naming the line (and column): unknown header, wrong column count, a value
   /// that is not a number (or not a finite one, or a non-negative integer for subject and session),
@@ -307,11 +327,11 @@ struct Dataset {
     std::string line;
     std::size_t line_no = 1;
     if (!std::getline(in, line))
-      throw Error("line 1: no header, expected subject,session,timestamp,cell_0,...,cell_{C-1} and optionally the 25 DoF names");
+      throw Error("line 1: no header, expected subject,session,timestamp,cell_0,...,cell_{C-1} and optionally DoF names");
     const std::vector<std::string> header = io::split_csv_line(line);
     const auto expected_header = [&](std::size_t column, const std::string& expected) {
       return Error("line 1, column " + std::to_string(column + 1) + ": unknown column '" + header[column] + "', expected " +
-                   expected + " (the header is subject,session,timestamp,cell_0,...,cell_{C-1} and optionally the 25 DoF names of hand::kDofs)");
+                   expected + " (the header is subject,session,timestamp,cell_0,...,cell_{C-1} and optionally DoF names in the order of hand::kDofs)");
     };
     const char* fixed[] = {"subject", "session", "timestamp"};
     for (std::size_t k = 0; k < 3; ++k) {
@@ -326,17 +346,23 @@ struct Dataset {
       throw expected_header(3, "'cell_0'");
     }
     const std::size_t dofs = header.size() - 3 - cells;
-    for (std::size_t d = 0; d < dofs; ++d) {
-      const std::size_t column = 3 + cells + d;
-      if (d >= hand::kDofCount) throw expected_header(column, "no more columns after the 25 DoF names");
-      if (header[column] != hand::kDofs[d].name)
-        throw expected_header(column, d == 0 ? "'cell_" + std::to_string(cells) + "' or '" + hand::kDofs[0].name + "' (the first DoF)"
-                                             : std::string("'") + hand::kDofs[d].name + "' (the DoFs in the order of hand::kDofs)");
+    std::vector<std::size_t> dof_of_column;  // the DoF of each angle column: a subsequence of hand::kDofs
+    hand::DofSet labelled{};
+    for (std::size_t k = 0; k < dofs; ++k) {
+      const std::size_t column = 3 + cells + k;
+      std::size_t d = dof_of_column.empty() ? 0 : dof_of_column.back() + 1;
+      while (d < hand::kDofCount && header[column] != hand::kDofs[d].name) ++d;
+      if (d == hand::kDofCount)
+        throw expected_header(column, k == 0 ? "'cell_" + std::to_string(cells) + "' or a DoF name"
+                                             : std::string("a DoF after '") + hand::kDofs[dof_of_column.back()].name +
+                                                   "' (the DoFs in the order of hand::kDofs)");
+      dof_of_column.push_back(d);
+      labelled[d] = true;
     }
-    if (dofs != 0 && dofs != hand::kDofCount)
-      throw Error("line 1: " + std::to_string(dofs) + " DoF columns, expected all 25 of hand::kDofs or none");
 
     Dataset out(cells, 0, glove_layout, frame_rate);
+    if (dofs > 0) out.set_labelled_dofs(labelled);
+    std::vector<float> pose(dofs > 0 ? hand::kDofCount : 0);
     while (std::getline(in, line)) {
       ++line_no;
       if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -356,7 +382,9 @@ struct Dataset {
                     io::detail::number_text(out.timestamps[n - 1]) + " of subject " + std::to_string(subject) + " session " +
                     std::to_string(session));
       for (std::size_t c = 0; c < cells; ++c) out.cells.push_back(io::parse_csv_number<float>(fields[3 + c], where(3 + c)));
-      for (std::size_t d = 0; d < dofs; ++d) out.angles.push_back(io::parse_csv_number<float>(fields[3 + cells + d], where(3 + cells + d)));
+      std::fill(pose.begin(), pose.end(), NAN);
+      for (std::size_t k = 0; k < dofs; ++k) pose[dof_of_column[k]] = io::parse_csv_number<float>(fields[3 + cells + k], where(3 + cells + k));
+      out.angles.insert(out.angles.end(), pose.begin(), pose.end());
       out.timestamps.push_back(time);
       out.subject.push_back(subject);
       out.session.push_back(session);
@@ -366,6 +394,7 @@ struct Dataset {
       out.outlier.push_back(0);
     }
     if (in.bad()) throw Error("line " + std::to_string(line_no + 1) + ": read error");
+    if (!out.has_angles()) out.set_labelled_dofs(hand::all_dofs());  // no frames, no angles: nothing is labelled or not
     out.validate();
     return out;
   }

@@ -23,7 +23,7 @@
 namespace glovepose::train {
 
 /// @brief The lag in frames (fraction included) of `predicted` behind `truth` (frames x 25 each,
-/// radians). `source[f]` is frame f's index in its recording and `run[f]` its run: two frames are
+/// radians; NaN truth for a DoF not labelled, which is left out). `source[f]` is frame f's index in its recording and `run[f]` its run: two frames are
 /// neighbours when they share a run and their sources differ by one. Throws glovepose::Error for
 /// mismatched sizes or when no shift has any pair of neighbouring changes.
 inline double lag_frames(const std::vector<float>& predicted, const std::vector<float>& truth, const std::vector<std::int64_t>& source,
@@ -54,6 +54,7 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
       double sum = 0.0;
       for (std::size_t d = 0; d < dofs; ++d) {
         const double true_change = truth[static_cast<std::size_t>(next) * dofs + d] - truth[i * dofs + d];
+        if (std::isnan(true_change)) continue;  // a DoF without reference angles (not labelled)
         const double predicted_change = predicted[static_cast<std::size_t>(b) * dofs + d] - predicted[static_cast<std::size_t>(a) * dofs + d];
         sum += true_change * predicted_change;
       }

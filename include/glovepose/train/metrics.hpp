@@ -70,13 +70,14 @@ struct ErrorSummary {
 struct DofError {
   const char* name = "";  ///< hand::kDofs name, e.g. "index_base_flexion".
   int theta = 0;          ///< Index in the reference model's 34 parameters (9..33).
+  bool scored = true;     ///< False for a DoF without reference angles (not labelled): error is then NaN.
   ErrorSummary error;     ///< Over all valid frames.
 };
 
 /// @brief One finger's errors, over the frames and the finger's 5 DoFs.
 struct FingerError {
   const char* name = "";  ///< finger_name(), e.g. "thumb".
-  ErrorSummary error;     ///< Over all valid frames and the finger's DoFs.
+  ErrorSummary error;     ///< Over all valid frames and the finger's scored DoFs (NaN when it has none).
 };
 
 /// @brief One point of the cumulative error curve (paper Fig. 14).
@@ -89,7 +90,8 @@ struct CurvePoint {
 struct AngleErrorReport {
   std::size_t frames = 0;          ///< Valid frames evaluated.
   std::size_t skipped_frames = 0;  ///< Frames left out because an angle (predicted or true) was not finite.
-  std::size_t angles = 0;          ///< Angle errors evaluated: frames x 25.
+  std::size_t angles = 0;          ///< Angle errors evaluated: frames x scored DoFs.
+  std::size_t scored_dofs = hand::kDofCount;  ///< DoFs scored (those with reference angles).
   ErrorSummary overall;            ///< Over all angles; overall.mean_deg is the paper's "mean angle error".
   double median_deg = 0;           ///< Nearest-rank median of all angle errors (see percentile_resolution_deg).
   double p95_deg = 0;              ///< Nearest-rank 95th percentile of all angle errors.
@@ -148,9 +150,10 @@ inline std::string json_number(double value) {
 /// @brief Accumulates predicted-against-true joint-angle errors frame by frame or in blocks, and
 /// reports them the way the paper does (see the file comment for how each figure is resolved).
 ///
-/// A frame is 25 angles in radians in hand::kDofs order. A frame with any non-finite angle, predicted
-/// or true (or whose error overflows a double), is not evaluated but counted in skipped_frames(), so
-/// missing ground truth never poisons the mean. For threads, give each its own accumulator and
+/// A frame is 25 angles in radians in hand::kDofs order. Only the scored DoFs (all by default; a
+/// dataset labelling a subset scores that subset) count: the others are neither read nor reported.
+/// A frame with any non-finite scored angle, predicted or true (or whose error overflows a double),
+/// is not evaluated but counted in skipped_frames(), so missing ground truth never poisons the mean. For threads, give each its own accumulator and
 /// merge() them: the result equals sequential accumulation exactly, whatever the split.
 ///
 /// Memory: a histogram of 23040 counters (about 180 KB), plus 16 bytes per angle error of 180
@@ -158,8 +161,17 @@ inline std::string json_number(double value) {
 /// them).
 class AngleErrorAccumulator {
  public:
-  /// @brief An accumulator with no frames.
-  AngleErrorAccumulator() : histogram_(kHistogramBins, 0) {}
+  /// @brief An accumulator with no frames that scores every DoF.
+  AngleErrorAccumulator() : histogram_(kHistogramBins, 0) { scored_.fill(true); }
+
+  /// @brief An accumulator with no frames that scores the DoFs of `scored`. Throws glovepose::Error
+  /// when the set is empty.
+  explicit AngleErrorAccumulator(const hand::DofSet& scored) : scored_(scored), histogram_(kHistogramBins, 0) {
+    if (scored_count() == 0) throw Error("AngleErrorAccumulator: no DoF to score, expected at least one");
+  }
+
+  /// @brief The DoFs scored.
+  const hand::DofSet& scored() const noexcept { return scored_; }
 
   /// @brief Adds one frame: `predicted` and `truth` each point to 25 angles (radians, hand::kDofs
   /// order). Returns false, and counts the frame as skipped, when an angle is not finite. Throws
@@ -192,6 +204,9 @@ class AngleErrorAccumulator {
       merge(copy);
       return;
     }
+    if (other.scored_ != scored_)
+      throw Error("AngleErrorAccumulator::merge: the other accumulator scores other DoFs (" + hand::dof_set_text(other.scored_) +
+                  "), expected the same as this one");
     frames_ += other.frames_;
     skipped_ += other.skipped_;
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
@@ -206,7 +221,11 @@ class AngleErrorAccumulator {
   }
 
   /// @brief Forgets every frame.
-  void clear() { *this = AngleErrorAccumulator(); }
+  void clear() {
+    const hand::DofSet scored = scored_;
+    *this = AngleErrorAccumulator();
+    scored_ = scored;
+  }
 
   /// @brief Valid frames added so far.
   std::size_t frames() const noexcept { return frames_; }
@@ -275,6 +294,7 @@ class AngleErrorAccumulator {
     r.frames = frames_;
     r.skipped_frames = skipped_;
     r.angles = static_cast<std::size_t>(angles());
+    r.scored_dofs = scored_count();
 
     // Errors of 180 degrees or more, by DoF, summed in ascending order for a deterministic total.
     std::array<std::vector<double>, hand::kDofCount> large_by_dof;
@@ -289,7 +309,8 @@ class AngleErrorAccumulator {
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       r.dofs[d].name = hand::kDofs[d].name;
       r.dofs[d].theta = hand::kDofs[d].theta;
-      r.dofs[d].error = summary(sum[d], sum_squares[d], dofs_[d].max, per_dof);
+      r.dofs[d].scored = scored_[d];
+      r.dofs[d].error = scored_[d] ? summary(sum[d], sum_squares[d], dofs_[d].max, per_dof) : ErrorSummary{NAN, NAN, NAN};
     }
 
     // Fingers and the whole hand: fixed-point sums added exactly, large errors over the group sorted.
@@ -299,13 +320,14 @@ class AngleErrorAccumulator {
       double max = 0.0;
       std::size_t count = 0;
       for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-        if (!member(d)) continue;
+        if (!member(d) || !scored_[d]) continue;
         fixed.add(dofs_[d].sum);
         fixed_squares.add(dofs_[d].sum_squares);
         large.insert(large.end(), large_by_dof[d].begin(), large_by_dof[d].end());
         max = std::max(max, dofs_[d].max);
         ++count;
       }
+      if (count == 0) return ErrorSummary{NAN, NAN, NAN};
       return summary(fixed.value() + detail::sorted_sum(large, false), fixed_squares.value() + detail::sorted_sum(large, true), max,
                      per_dof * static_cast<double>(count));
     };
@@ -331,7 +353,8 @@ class AngleErrorAccumulator {
     double max = 0.0;              // largest error, any size
   };
 
-  std::uint64_t angles() const noexcept { return static_cast<std::uint64_t>(frames_) * hand::kDofCount; }
+  std::uint64_t angles() const noexcept { return static_cast<std::uint64_t>(frames_) * scored_count(); }
+  std::size_t scored_count() const noexcept { return static_cast<std::size_t>(std::count(scored_.begin(), scored_.end(), true)); }
 
   double max_error() const noexcept {
     double max = 0.0;
@@ -370,6 +393,7 @@ class AngleErrorAccumulator {
     // Check the whole frame before touching any sum, so a skipped frame leaves no trace.
     std::array<double, hand::kDofCount> error{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      if (!scored_[d]) continue;
       const auto p = static_cast<double>(predicted[d]);
       const auto t = static_cast<double>(truth[d]);
       error[d] = std::abs(p - t) * kDegreesPerRadian;
@@ -379,6 +403,7 @@ class AngleErrorAccumulator {
       }
     }
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      if (!scored_[d]) continue;
       const double e = error[d];
       DofSums& dof = dofs_[d];
       dof.max = std::max(dof.max, e);
@@ -399,6 +424,7 @@ class AngleErrorAccumulator {
 
   std::size_t frames_ = 0;
   std::size_t skipped_ = 0;
+  hand::DofSet scored_{};
   std::array<DofSums, hand::kDofCount> dofs_{};
   std::vector<std::uint64_t> histogram_;  // counts of errors in [b/128, (b+1)/128) degrees
   std::uint64_t in_histogram_ = 0;        // errors below kHistogramLimitDeg
@@ -410,7 +436,7 @@ class AngleErrorAccumulator {
 /// "format" ("glovepose-angle-errors"), "version" (1), "frames", "skipped_frames", "angles",
 /// "mean_deg", "rms_deg", "max_deg", "median_deg", "p95_deg", "percentile_resolution_deg",
 /// "share_under_15deg", "fingers" (array of {"finger", "mean_deg", "rms_deg", "max_deg"}),
-/// "dofs" (array of {"dof", "theta", "mean_deg", "rms_deg", "max_deg"}) and "cumulative"
+/// "scored_dofs", "dofs" (array of {"dof", "theta", "scored", "mean_deg", "rms_deg", "max_deg"}) and "cumulative"
 /// ({"threshold_deg": [0..45], "share": [...]}). Non-finite numbers are written as null.
 /// `extra` members (key, JSON value text) follow "version", e.g. how the frames were calibrated.
 inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pair<std::string, std::string>>& extra = {}) {
@@ -424,6 +450,7 @@ inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pai
   out += "  \"frames\": " + std::to_string(r.frames) + ",\n";
   out += "  \"skipped_frames\": " + std::to_string(r.skipped_frames) + ",\n";
   out += "  \"angles\": " + std::to_string(r.angles) + ",\n";
+  out += "  \"scored_dofs\": " + std::to_string(r.scored_dofs) + ",\n";
   out += "  " + summary(r.overall) + ",\n";
   out += "  \"median_deg\": " + number(r.median_deg) + ",\n";
   out += "  \"p95_deg\": " + number(r.p95_deg) + ",\n";
@@ -435,8 +462,9 @@ inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pai
            (f + 1 < r.fingers.size() ? ",\n" : "\n");
   out += "  ],\n  \"dofs\": [\n";
   for (std::size_t d = 0; d < r.dofs.size(); ++d)
-    out += std::string("    {\"dof\": \"") + r.dofs[d].name + "\", \"theta\": " + std::to_string(r.dofs[d].theta) + ", " +
-           summary(r.dofs[d].error) + "}" + (d + 1 < r.dofs.size() ? ",\n" : "\n");
+    out += std::string("    {\"dof\": \"") + r.dofs[d].name + "\", \"theta\": " + std::to_string(r.dofs[d].theta) +
+           ", \"scored\": " + (r.dofs[d].scored ? "true" : "false") + ", " + summary(r.dofs[d].error) + "}" +
+           (d + 1 < r.dofs.size() ? ",\n" : "\n");
   out += "  ],\n  \"cumulative\": {\n    \"threshold_deg\": [";
   for (std::size_t i = 0; i < r.curve.size(); ++i) out += (i ? ", " : "") + std::to_string(r.curve[i].threshold_deg);
   out += "],\n    \"share\": [";
@@ -454,7 +482,8 @@ inline std::string format_table(const AngleErrorReport& r) {
     std::snprintf(line, sizeof line, format, args...);
     out += line;
   };
-  add("Angle errors (degrees): %zu frames x 25 angles", r.frames);
+  add("Angle errors (degrees): %zu frames x %zu angles", r.frames, r.scored_dofs);
+  if (r.scored_dofs < hand::kDofCount) add(" (%zu DoFs not labelled, not scored)", hand::kDofCount - r.scored_dofs);
   if (r.skipped_frames > 0) add(", %zu frame%s skipped (non-finite angles)", r.skipped_frames, r.skipped_frames == 1 ? "" : "s");
   out += "\n";
   add("%-24s %8s %8s %8s %8s %8s %9s\n", "", "mean", "rms", "max", "median", "p95", "<15 deg");
@@ -464,7 +493,10 @@ inline std::string format_table(const AngleErrorReport& r) {
   add("%-24s %8s %8s %8s\n", "finger", "mean", "rms", "max");
   for (const FingerError& f : r.fingers) add("%-24s %8.3f %8.3f %8.3f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
   add("\n%-24s %8s %8s %8s\n", "DoF", "mean", "rms", "max");
-  for (const DofError& d : r.dofs) add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
+  for (const DofError& d : r.dofs) {
+    if (d.scored) add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
+    else add("%-24s %26s\n", d.name, "not labelled");
+  }
   out += "\nShare of angles with error below:";
   for (int t : {5, 10, 15, 20, 30}) {
     const std::size_t i = static_cast<std::size_t>(t);

@@ -86,11 +86,24 @@ struct TrainedModel {
   std::vector<float> predict(const Samples& samples, ThreadPool& pool) {
     if (samples.cells != info.inputs)
       throw Error("the samples have " + std::to_string(samples.cells) + " cells per frame, the model takes " + std::to_string(info.inputs));
-    if (network) return train::predict(*network, samples, pool);
     std::vector<float> out(static_cast<std::size_t>(samples.frames()) * kTargets);
-    long rejected = -1;
-    if (linear->predict(samples.inputs.data(), out.data(), samples.frames(), &rejected) != Status::Ok)
-      throw Error("linear model: frame " + std::to_string(rejected) + " has a non-finite input");
+    if (network) {
+      out = train::predict(*network, samples, pool);
+    } else {
+      long rejected = -1;
+      if (linear->predict(samples.inputs.data(), out.data(), samples.frames(), &rejected) != Status::Ok)
+        throw Error("linear model: frame " + std::to_string(rejected) + " has a non-finite input");
+    }
+    const hand::DofSet labelled = info.labelled();
+    if (labelled != hand::all_dofs()) {  // DoFs the model had no reference angles for read the rest pose
+      const hand::JointLimits limits = joint_limits(info);
+      for (long f = 0; f < samples.frames(); ++f) {
+        hand::Angles a{};
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) a[d] = out[static_cast<std::size_t>(f) * kTargets + d];
+        a = limits.rest_unlabelled(a, labelled);
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) out[static_cast<std::size_t>(f) * kTargets + d] = static_cast<float>(a[d]);
+      }
+    }
     return out;
   }
 };

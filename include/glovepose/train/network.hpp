@@ -54,4 +54,28 @@ inline double mse_loss(const float* y, const float* target, long n, float* grad)
   return sum / static_cast<double>(n);
 }
 
+/// @brief mse_loss over the labelled DoFs only, for `frames` rows of kTargets values: the mean of
+/// (y - t)^2 over frames x (labelled DoFs) (PyTorch: mse_loss(y[:, mask], t[:, mask])); the
+/// gradient is 2 (y - t) / that count for labelled DoFs and 0 for the others, so a DoF without
+/// reference angles is never trained. At least one DoF must be labelled.
+inline double masked_mse_loss(const float* y, const float* target, long frames, const hand::DofSet& labelled, float* grad) noexcept {
+  long per_frame = 0;
+  for (bool l : labelled) per_frame += l ? 1 : 0;
+  const long n = frames * per_frame;
+  double sum = 0.0;
+  const float scale = 2.0f / static_cast<float>(n);
+  for (long f = 0; f < frames; ++f)
+    for (long d = 0; d < kTargets; ++d) {
+      const long i = f * kTargets + d;
+      if (!labelled[static_cast<std::size_t>(d)]) {
+        grad[i] = 0.0f;
+        continue;
+      }
+      const double diff = static_cast<double>(y[i]) - static_cast<double>(target[i]);
+      sum += diff * diff;
+      grad[i] = scale * (y[i] - target[i]);
+    }
+  return sum / static_cast<double>(n);
+}
+
 }  // namespace glovepose::train

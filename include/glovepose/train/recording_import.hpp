@@ -4,8 +4,9 @@
 ///
 /// A take is one CSV file. Its first line names the columns, in any order:
 /// - every cell of the glove description, by its name (required, each once): the sensor readings;
-/// - the 25 DoF names of hand::kDofs (all or none): the reference angles, radians (or degrees when
-///   CsvImportOptions::degrees);
+/// - DoF names of hand::kDofs: the reference angles, radians (or degrees when
+///   CsvImportOptions::degrees); DoFs without a column are not labelled (Dataset::labelled_dofs():
+///   NaN, not trained, not scored), and every take must label the same DoFs;
 /// - optionally `subject`, `session`, `glove` (ids >= 0), `kind` (`recording`, `calibration`, 0 or
 ///   1) and `timestamp` (seconds) or `timestamp_ms` (milliseconds);
 /// - columns listed in CsvImportOptions::ignored_columns, skipped.
@@ -95,10 +96,12 @@ class RecordingImporter {
   void add(std::istream& in, const CsvTake& take) {
     const std::size_t before = data_.frames();
     const std::size_t flats_before = flat_.size();
+    const auto metadata_before = data_.metadata;
     try {
       read(in, take);
     } catch (...) {
       truncate(before);
+      data_.metadata = metadata_before;
       flat_.resize(flats_before);
       throw;
     }
@@ -140,7 +143,7 @@ class RecordingImporter {
                                                   {"timestamp", Role::Seconds}, {"timestamp_ms", Role::Milliseconds}};
     std::vector<Column> columns;
     std::vector<int> cell_column(static_cast<std::size_t>(glove_.cell_count()), -1);
-    int dofs = 0, times = 0;
+    int times = 0;
     for (std::size_t k = 0; k < header.size(); ++k) {
       const std::string& name = header[k];
       const std::string where = at + ", column " + std::to_string(k + 1) + " '" + name + "'";
@@ -159,7 +162,6 @@ class RecordingImporter {
       }
       if (const int d = dof_of(name); !column && d >= 0) {
         column = Column{Role::Dof, d};
-        ++dofs;
       }
       if (!column)
         throw Error(where + ": unknown column, expected a cell of glove '" + glove_.id() + "' (e.g. '" + glove_.cell_names().front() +
@@ -172,13 +174,6 @@ class RecordingImporter {
       if (cell_column[c] < 0)
         throw Error(at + ": no column '" + glove_.cell_names()[c] + "', expected one column per cell of glove '" + glove_.id() +
                     "' (" + std::to_string(glove_.cell_count()) + " cells)");
-    if (dofs != 0 && dofs != static_cast<int>(hand::kDofCount)) {
-      std::string missing;
-      for (const hand::Dof& d : hand::kDofs)
-        if (std::find(header.begin(), header.end(), d.name) == header.end()) missing += (missing.empty() ? "'" : ", '") + std::string(d.name) + "'";
-      throw Error(at + ": " + std::to_string(dofs) + " of the 25 DoF columns (missing " + missing +
-                  "), expected all 25 or none (a take without angles)");
-    }
     if (times > 1) throw Error(at + ": both timestamp and timestamp_ms, expected at most one time column");
     return columns;
   }
@@ -204,9 +199,16 @@ class RecordingImporter {
     if (!has(Role::Subject) && !take.subject)
       throw Error(at + ", line " + std::to_string(header_line) + ": no 'subject' column and no subject given for the file, expected one of them");
     const bool angles = has(Role::Dof);
+    hand::DofSet labelled{};
+    for (const Column& column : columns)
+      if (column.role == Role::Dof) labelled[static_cast<std::size_t>(column.index)] = true;
     if (data_.frames() > 0 && angles != data_.has_angles())
       throw Error(at + ", line " + std::to_string(header_line) + ": " + std::string(angles ? "has" : "has no") + " DoF columns, expected " +
-                  (data_.has_angles() ? "the 25 DoFs" : "none") + " as the takes before it");
+                  (data_.has_angles() ? "the DoFs" : "none") + " as the takes before it");
+    if (angles && data_.frames() > 0 && labelled != data_.labelled_dofs())
+      throw Error(at + ", line " + std::to_string(header_line) + ": DoF columns " + hand::dof_set_text(labelled) + ", expected the DoFs of the takes before it (" +
+                  hand::dof_set_text(data_.labelled_dofs()) + ")");
+    if (angles && data_.frames() == 0) data_.set_labelled_dofs(labelled);
     const double deg = options_.degrees ? 3.14159265358979323846 / 180.0 : 1.0;
     const std::size_t first_frame = data_.frames();
     std::vector<std::size_t> line_of;  // file line of each frame of this take
@@ -222,6 +224,7 @@ class RecordingImporter {
       std::int32_t subject = take.subject.value_or(0), session = take.session.value_or(0), glove = 0;
       std::uint8_t kind = take.kind.value_or(kKindRecording);
       std::optional<double> time;
+      std::fill(pose.begin(), pose.end(), NAN);
       for (std::size_t k = 0; k < fields.size(); ++k) {
         const std::string where = at_line + ", column '" + header[k] + "': '" + fields[k] + "'";
         const Column& column = columns[k];

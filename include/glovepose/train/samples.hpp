@@ -74,8 +74,9 @@ struct FrameFilter {
 struct Samples {
   int cells = 0;                      ///< Values per input row.
   std::vector<float> inputs;          ///< frames x cells, calibrated.
-  std::vector<float> targets;         ///< frames x 25 in [-1, 1] within the joint limits.
-  std::vector<float> angles;          ///< frames x 25 true angles, radians.
+  std::vector<float> targets;         ///< frames x 25 in [-1, 1] within the joint limits; a DoF not labelled: its rest pose (JointLimits::rest()).
+  std::vector<float> angles;          ///< frames x 25 true angles, radians; NaN for a DoF not labelled.
+  hand::DofSet labelled = hand::all_dofs();  ///< The DoFs with reference angles: the only ones trained and scored.
   std::vector<std::int64_t> run;      ///< Per frame: (subject, glove, session) packed, for splits.
   std::vector<std::int64_t> source;   ///< Per frame: its index in the dataset.
 
@@ -86,6 +87,7 @@ struct Samples {
   Samples subset(const std::vector<long>& keep) const {
     Samples s;
     s.cells = cells;
+    s.labelled = labelled;
     for (long i : keep) {
       s.inputs.insert(s.inputs.end(), inputs.begin() + i * cells, inputs.begin() + (i + 1) * cells);
       s.targets.insert(s.targets.end(), targets.begin() + i * 25, targets.begin() + (i + 1) * 25);
@@ -156,6 +158,8 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
       mode == CalibrationMode::OnTheFly ? onthefly_ranges(data) : std::map<std::int64_t, sensor::CalibrationRange>{};
   Samples s;
   s.cells = static_cast<int>(data.cell_count);
+  s.labelled = data.labelled_dofs();
+  const hand::Angles rest = limits.rest();
   const Eigen::Index cells = static_cast<Eigen::Index>(data.cell_count);
   Eigen::VectorXd raw(cells), normalized(cells);
   std::map<std::int64_t, long> seen;  // per run, kept frames so far (the stride counts within a run)
@@ -179,8 +183,12 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
     }
     for (Eigen::Index c = 0; c < cells; ++c) s.inputs.push_back(static_cast<float>(normalized(c)));
     hand::Angles truth{};
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) truth[d] = data.angles[i * hand::kDofCount + d];
-    const hand::Angles target = limits.normalize(truth);
+    hand::Angles toward{};  // what the network learns: the truth, or the rest pose where there is none
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      truth[d] = data.angles[i * hand::kDofCount + d];
+      toward[d] = s.labelled[d] ? truth[d] : rest[d];
+    }
+    const hand::Angles target = limits.normalize(toward);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       s.targets.push_back(static_cast<float>(target[d]));
       s.angles.push_back(static_cast<float>(truth[d]));

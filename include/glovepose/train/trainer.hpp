@@ -83,16 +83,21 @@ inline std::vector<float> predict(TrainableNetwork& net, const Samples& samples,
   return out;
 }
 
-/// @brief Mean absolute angle error in degrees of normalised predictions against true angles.
-inline double mean_error_degrees(const std::vector<float>& predicted, const std::vector<float>& angles, const hand::JointLimits& limits) {
+/// @brief Mean absolute angle error in degrees of normalised predictions against true angles, over
+/// the DoFs of `scored` (the labelled ones).
+inline double mean_error_degrees(const std::vector<float>& predicted, const std::vector<float>& angles, const hand::JointLimits& limits,
+                                 const hand::DofSet& scored = hand::all_dofs()) {
   double sum = 0.0;
+  std::size_t count = 0;
   const std::size_t frames = angles.size() / hand::kDofCount;
   for (std::size_t f = 0; f < frames; ++f)
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      if (!scored[d]) continue;
       const double radians = limits.min()[d] + 0.5 * (predicted[f * hand::kDofCount + d] + 1.0) * (limits.max()[d] - limits.min()[d]);
       sum += std::abs(radians - angles[f * hand::kDofCount + d]);
+      ++count;
     }
-  return frames ? sum / static_cast<double>(frames * hand::kDofCount) * 180.0 / M_PI : NAN;
+  return count ? sum / static_cast<double>(count) * 180.0 / M_PI : NAN;
 }
 
 /// @brief Trains `net` on `train` (targets normalised by `limits`), keeps the tensors with the
@@ -144,7 +149,9 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
         augment(x.data(), batch, train.cells, config.augmentation, draw);
       }
       net.forward(x.data(), batch, true, pool);
-      const double loss = mse_loss(net.output(), t.data(), static_cast<long>(batch) * kTargets, grad.data());
+      const double loss = train.labelled == hand::all_dofs()
+                              ? mse_loss(net.output(), t.data(), static_cast<long>(batch) * kTargets, grad.data())
+                              : masked_mse_loss(net.output(), t.data(), batch, train.labelled, grad.data());
       if (!std::isfinite(loss))
         throw Error("train: the loss became " + std::to_string(loss) + " at epoch " + std::to_string(epoch) + ", step " + std::to_string(step) +
                     "; expected a finite loss (lower the learning rate?)");
@@ -170,7 +177,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
     }
     if (step == 0) break;  // stopped before this epoch trained anything
     EpochRecord record{epoch, loss_sum / static_cast<double>(step), NAN, 0.0};
-    if (validation.frames() > 0) record.validation_error_deg = mean_error_degrees(predict(net, validation, pool), validation.angles, limits);
+    if (validation.frames() > 0) record.validation_error_deg = mean_error_degrees(predict(net, validation, pool), validation.angles, limits, validation.labelled);
     record.seconds = elapsed();
     result.epochs.push_back(record);
     const bool better = validation.frames() == 0 || !(record.validation_error_deg >= result.best_validation_error_deg);
