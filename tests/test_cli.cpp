@@ -469,6 +469,22 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
     CHECK(json_number(r.out, "mean_deg") == doctest::Approx(sum / static_cast<double>(count) * 180.0 / M_PI).epsilon(1e-6));
   }
 
+  // A sensor flat in one session's calibration is zeroed there, and train and eval say so.
+  {
+    train::Dataset flat = imported;
+    for (std::size_t i = 0; i < flat.frames(); ++i)
+      if (flat.kind[i] == train::kKindCalibration && flat.subject[i] == 1 && flat.session[i] == 0) flat.cells[i * 44 + 17] = 3.0f;
+    const std::string flat_file = temp("imported_flat.safetensors"), flat_model = temp("t_flat_lin.safetensors");
+    flat.write(flat_file);
+    r = run("train --data " + flat_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + flat_model);
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(r.out.find("train: calibration of subject 1, glove 0, session 0: 1 flat sensor read 0: stretch_B7\n") != std::string::npos);
+    CHECK(r.out.find("flat sensor") == r.out.rfind("flat sensor"));  // only that run
+    r = run("eval --model " + flat_model + " --data " + flat_file + " --subjects 1");
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(r.out.find("eval: calibration of subject 1, glove 0, session 0: 1 flat sensor read 0: stretch_B7") != std::string::npos);
+  }
+
   // A CSV given where a dataset file belongs, or to predict, says how to import it.
   r = run("train --data " + temp("import_take_1.csv") + " --model linear --out " + temp("t_never.safetensors"));
   CHECK(r.status == 1);

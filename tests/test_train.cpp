@@ -6,6 +6,7 @@
 #include <glovepose/train/augmentation.hpp>
 #include <glovepose/train/optimizer.hpp>
 #include <glovepose/train/trainable_fcn.hpp>
+#include <glovepose/train/trainer.hpp>
 #include <glovepose/train/trainable_unet.hpp>
 
 #include <doctest/doctest.h>
@@ -319,4 +320,22 @@ TEST_CASE("train: augmentation perturbs each value as (1 + g) x + o + n with the
   CHECK(sq0 / n == doctest::Approx(0.0029).epsilon(0.05));
   a.noise = -0.1;
   CHECK_THROWS_WITH_AS(a.validate(), doctest::Contains("augmentation noise deviation"), Error);
+}
+
+TEST_CASE("train: default batch and epochs follow the data's size: the paper's 1024 x 10 on a large corpus, at least 2000 steps on a small one") {
+  CHECK(train::default_batch(1'300'000) == 1024);
+  CHECK(train::default_epochs(1'300'000, 1024) == 10);
+  CHECK(train::default_batch(102'400) == 1024);
+  CHECK(train::default_batch(20'000) == 256);  // the power of two nearest 200
+  CHECK(train::default_epochs(20'000, 256) == 26);  // 78 steps an epoch: 26 x 78 = 2028 >= 2000
+  CHECK(train::default_batch(5'000) == 64);
+  CHECK(train::default_batch(500) == 32);
+  CHECK(train::default_epochs(500, 32) == 134);  // 15 steps an epoch
+  CHECK(train::default_epochs(10, 32) == 1000);  // capped
+  for (long frames : {700L, 3'000L, 20'000L, 90'000L}) {
+    const int batch = train::default_batch(frames), epochs = train::default_epochs(frames, batch);
+    CAPTURE(frames);
+    CHECK(epochs * (frames / batch) >= train::kMinDefaultSteps);
+    CHECK(frames / batch >= 15);
+  }
 }

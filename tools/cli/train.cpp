@@ -45,6 +45,8 @@ extern "C" void on_interrupt(int) { interrupted.store(true); }
                   "       glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]\n"
                   "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
                   "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
+                  "           (default batch: 1024 from 102,400 training frames, else about frames/100; default epochs: 10,\n"
+                  "           or enough for 2000 steps)\n"
                   "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
                   "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n"
                   "           --augment GAIN,OFFSET,NOISE (deviations of each training frame's cell perturbation,\n"
@@ -198,6 +200,25 @@ std::function<void(const train::Progress&)> progress_bar(bool quiet) {
   };
 }
 
+// Tells which sensors the calibration zeroed (a flat range), per run: a glove maker's lost channel.
+// (The samples name cells by id, "cell_<i>"; the glove's names are shown.)
+void report_zeroed(const std::string& command, const train::Samples& samples, const grid::GloveDescription& glove) {
+  for (const auto& [key, names] : samples.zeroed) {
+    std::string list;
+    for (const std::string& n : names) {
+      std::size_t id = 0;
+      const auto r = std::from_chars(n.data() + std::min<std::size_t>(5, n.size()), n.data() + n.size(), id);
+      const bool by_id = n.rfind("cell_", 0) == 0 && r.ec == std::errc() && r.ptr == n.data() + n.size() && id < glove.cell_names().size();
+      list += (list.empty() ? "" : ", ") + (by_id ? glove.cell_names()[id] : n);
+    }
+    const std::string run = key < 0 ? "the training range"
+                                     : "subject " + std::to_string(key >> 40) + ", glove " + std::to_string((key >> 20) & 0xfffff) +
+                                           ", session " + std::to_string(key & 0xfffff);
+    std::fprintf(stderr, "%s: calibration of %s: %zu flat sensor%s read 0: %s\n", command.c_str(), run.c_str(), names.size(),
+                 names.size() == 1 ? "" : "s", list.c_str());
+  }
+}
+
 grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
   const grid::GloveDescription glove = o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file);
   if (data.glove_layout() != glove.id())
@@ -215,9 +236,16 @@ std::string command_line(int argc, char** argv) {
 }
 
 // Trains (or fine-tunes) a network, saving the best model so far at every improvement.
-int fit_network(const Options& o, train::TrainableNetwork& net, const nn::ModelInfo& info, const train::Samples& all,
+int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& info, const train::Samples& all,
                 std::map<std::string, std::string> provenance) {
   const auto [training, validation] = train::split_validation(all, o.validation);
+  if (o.command == "train" && (!o.batch_set || !o.epochs_set)) {  // defaults from the data's size
+    if (!o.batch_set) o.training.batch = train::default_batch(training.frames());
+    if (!o.epochs_set) o.training.epochs = train::default_epochs(training.frames(), o.training.batch);
+    if (!o.quiet)
+      std::fprintf(stderr, "train: %ld training frames: batch %d, %d epochs (defaults for this data size: at least %ld steps; "
+                   "--batch and --epochs override)\n", training.frames(), o.training.batch, o.training.epochs, train::kMinDefaultSteps);
+  }
   const hand::JointLimits limits = train::joint_limits(info);
   train::ThreadPool pool(o.threads);
   train::TrainConfig config = o.training;
@@ -253,6 +281,7 @@ int train_command(Options o, int argc, char** argv) {
   if (mode == train::CalibrationMode::Training) range = train::training_range(data, o.filter);
   const hand::JointLimits limits;
   const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride);
+  report_zeroed(o.command, all, glove);
   std::string architecture = o.model;
   int width = 0;
   const std::size_t colon = o.model.find(':');
@@ -319,6 +348,7 @@ int finetune_command(Options o, int argc, char** argv) {
   train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const train::Samples all = samples_for(o, model, data).first;
+  report_zeroed(o.command, all, model.glove);
   std::map<std::string, std::string> provenance = model.metadata;
   provenance["finetune_command"] = command_line(argc, argv);
   provenance["finetune_data"] = o.data;
@@ -362,6 +392,7 @@ int eval_command(Options o) {
   if (o.mean_window != 0) readout.mean_window = o.mean_window;
   if (o.replay) train::replay_rows(data, readout);
   const auto [samples, mode] = samples_for(o, model, data);
+  report_zeroed(o.command, samples, model.glove);
   const hand::JointLimits limits = train::joint_limits(model.info);
   train::ThreadPool pool(o.threads);
   const bool guided = eval_guided(o, model, data);

@@ -77,6 +77,9 @@ struct Samples {
   std::vector<float> targets;         ///< frames x 25 in [-1, 1] within the joint limits; a DoF not labelled: its rest pose (JointLimits::rest()).
   std::vector<float> angles;          ///< frames x 25 true angles, radians; NaN for a DoF not labelled.
   hand::DofSet labelled = hand::all_dofs();  ///< The DoFs with reference angles: the only ones trained and scored.
+  /// Sensors the calibration maps to 0 because their range was flat (CalibrationRange::flat_sensors()),
+  /// per calibrated run (its run key; -1 for the training range), for the runs that have any.
+  std::map<std::int64_t, std::vector<std::string>> zeroed;
   std::vector<std::int64_t> run;      ///< Per frame: (subject, glove, session) packed, for splits.
   std::vector<std::int64_t> source;   ///< Per frame: its index in the dataset.
 
@@ -197,6 +200,9 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
     s.source.push_back(static_cast<std::int64_t>(i));
   }
   if (s.frames() == 0) throw Error("samples: no recording frame of the dataset passes the selection, expected at least one");
+  if (mode == CalibrationMode::Training && !range->flat_sensors().empty()) s.zeroed[-1] = range->flat_sensors();
+  for (const auto& [key, count] : seen)
+    if (const auto it = runs.find(key); it != runs.end() && !it->second.flat_sensors().empty()) s.zeroed[key] = it->second.flat_sensors();
   return s;
 }
 

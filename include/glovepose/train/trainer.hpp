@@ -59,6 +59,26 @@ struct TrainConfig {
   std::function<void(const TrainableNetwork&, const EpochRecord&)> on_best;  ///< Called when validation improves.
 };
 
+/// @brief Optimiser steps that the default number of epochs reaches at least (default_epochs()).
+inline constexpr long kMinDefaultSteps = 2000;
+
+/// @brief The default batch for `frames` training frames: the paper's 1024 from 102,400 frames on
+/// (an epoch of at least 100 steps); below, the power of two nearest frames / 100, at least 32, so a
+/// small data set still gets about 100 steps an epoch instead of a handful of large ones.
+inline int default_batch(long frames) noexcept {
+  int batch = 1024;
+  while (batch > 32 && static_cast<double>(frames) / 100.0 < 0.75 * batch) batch /= 2;
+  return batch;
+}
+
+/// @brief The default number of epochs: the paper's 10, or more when 10 epochs of `batch` would
+/// take fewer than kMinDefaultSteps optimiser steps (at most 1000 epochs).
+inline int default_epochs(long frames, int batch) noexcept {
+  const long steps_per_epoch = std::max(1L, frames / std::max(1, batch));
+  const long epochs = (kMinDefaultSteps + steps_per_epoch - 1) / steps_per_epoch;
+  return static_cast<int>(std::clamp(epochs, 10L, 1000L));
+}
+
 /// @brief What training did.
 struct TrainResult {
   std::vector<EpochRecord> epochs;           ///< Per finished epoch.
