@@ -4,6 +4,7 @@
 //   dataset file for train, eval and finetune.
 #include <glovepose/train/recording_import.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +129,13 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
   return takes;
 }
 
+std::string angles_text(const train::Dataset& data) {
+  if (!data.has_angles()) return "without angles";
+  const hand::DofSet labelled = data.labelled_dofs();
+  const auto count = std::count(labelled.begin(), labelled.end(), true);
+  return count == static_cast<long>(hand::kDofCount) ? "with the 25 DoF angles" : "with angles for " + std::to_string(count) + " of the 25 DoFs";
+}
+
 }  // namespace
 
 int import_recordings(int argc, char** argv) {
@@ -150,7 +158,7 @@ int import_recordings(int argc, char** argv) {
     }
     std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n",
                 o.takes.size(), data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(),
-                data.cell_count, data.has_angles() ? "with the 25 DoF angles" : "without angles");
+                data.cell_count, angles_text(data).c_str());
     for (const train::FlatSensor& flat : importer.flat_sensors())
       std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
                   flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);

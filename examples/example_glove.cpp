@@ -1,0 +1,124 @@
+// A made-up glove for the "Your own glove" walk-through: 20 resistive-like stretch sensors, read at
+// 20 Hz, with reference angles for 21 of the 25 DoFs (no finger twists), written as a glove maker's
+// files: a glove description, one calibration take and one recording take (CSV) per person, and the
+// list of takes for `glovepose import --takes`.
+//
+// The people are a simulated corpus (`glovepose simulate`): each sensor reads a strip over two cells
+// of the built-in 44-cell glove, as ohms with a DC offset (offset + gain x (main cell + 0.3 x a
+// neighbour) + noise), every third 60 Hz frame. Nothing is copied from anywhere; a fixed seed makes
+// the files the same on every run.
+//
+// usage: example_glove CORPUS.safetensors OUTDIR
+#include <glovepose/grid/glove_description.hpp>
+#include <glovepose/hand/dofs.hpp>
+#include <glovepose/train/dataset.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace glovepose;
+
+namespace {
+
+struct Sensor {
+  std::string name;
+  int main_cell, neighbour;
+  double offset, gain;
+};
+
+// 20 sensors at 20 distinct slots of the built-in glove: its first 15 cells along the fingers and
+// its first 5 across, each named after where it sits.
+std::vector<Sensor> make_sensors(const grid::GridMap& paper, std::mt19937& rng) {
+  std::uniform_real_distribution<double> offset(80.0, 160.0), gain(1.5, 4.0);
+  std::uniform_int_distribution<int> any_cell(0, paper.cell_count() - 1);
+  std::vector<Sensor> sensors;
+  for (int channel : {0, 1})
+    for (int c = 0; c < paper.cell_count() && sensors.size() < (channel == 0 ? 15u : 20u); ++c) {
+      const grid::Slot& s = paper.cell_slots()[static_cast<std::size_t>(c)];
+      if (s.channel != channel) continue;
+      int neighbour = any_cell(rng);
+      while (neighbour == c) neighbour = any_cell(rng);
+      sensors.push_back({std::string(channel == 0 ? "along" : "across") + "_r" + std::to_string(s.row) + "c" + std::to_string(s.col), c,
+                         neighbour, offset(rng), gain(rng)});
+    }
+  return sensors;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::cerr << "usage: example_glove CORPUS.safetensors OUTDIR   (CORPUS: glovepose simulate --out CORPUS ...)\n";
+    return 2;
+  }
+  try {
+    const train::Dataset corpus = train::Dataset::read(argv[1]);
+    if (!corpus.has_angles() || corpus.cell_count != 44) throw Error("the corpus needs angles and the 44 cells of the built-in glove");
+    const std::filesystem::path out = argv[2];
+    std::filesystem::create_directories(out);
+    std::mt19937 rng(2026);
+    const grid::GridMap paper = grid::GridMap::glauser2019();
+    const std::vector<Sensor> sensors = make_sensors(paper, rng);
+
+    std::vector<std::string> names;
+    std::vector<grid::Slot> slots;
+    for (const Sensor& s : sensors) {
+      names.push_back(s.name);
+      slots.push_back(paper.cell_slots()[static_cast<std::size_t>(s.main_cell)]);
+    }
+    grid::GloveDescription("example-20", names, grid::GridMap(slots, paper.dof_slots())).write((out / "example-20.json").string());
+
+    std::vector<std::size_t> labelled;  // no finger twists: the reference measures 21 DoFs
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (std::string(hand::kDofs[d].name).find("twist") == std::string::npos || d == hand::dof_from_name("thumb_base_twist"))
+        labelled.push_back(d);
+
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::ofstream takes(out / "takes.csv");
+    takes << "file,subject,session,kind\n";
+    std::size_t written = 0;
+    for (std::size_t begin = 0; begin < corpus.frames();) {
+      std::size_t end = begin + 1;
+      while (end < corpus.frames() && corpus.subject[end] == corpus.subject[begin] && corpus.session[end] == corpus.session[begin] &&
+             corpus.glove[end] == corpus.glove[begin] && corpus.kind[end] == corpus.kind[begin])
+        ++end;
+      const bool calibration = corpus.kind[begin] == train::kKindCalibration;
+      const std::string file = "person" + std::to_string(corpus.subject[begin]) + "_session" + std::to_string(corpus.session[begin]) +
+                               (calibration ? "_calibration.csv" : "_recording.csv");
+      takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording") << "\n";
+      std::ofstream take(out / file);
+      take << "timestamp_ms";
+      for (const Sensor& s : sensors) take << "," << s.name;
+      for (std::size_t d : labelled) take << "," << hand::kDofs[d].name;
+      take << "\n";
+      char number[32];
+      for (std::size_t i = begin; i < end; i += 3) {  // 60 Hz -> 20 Hz
+        std::snprintf(number, sizeof number, "%.1f", 1000.0 * (corpus.timestamps[i] - corpus.timestamps[begin]));
+        take << number;
+        for (const Sensor& s : sensors) {
+          const double stretch = corpus.cells[i * 44 + static_cast<std::size_t>(s.main_cell)] + 0.3 * corpus.cells[i * 44 + static_cast<std::size_t>(s.neighbour)];
+          std::snprintf(number, sizeof number, "%.3f", s.offset + s.gain * stretch + noise(rng));
+          take << "," << number;
+        }
+        for (std::size_t d : labelled) {
+          std::snprintf(number, sizeof number, "%.6f", static_cast<double>(corpus.angles[i * hand::kDofCount + d]));
+          take << "," << number;
+        }
+        take << "\n";
+      }
+      ++written;
+      begin = end;
+    }
+    std::printf("wrote %s: glove example-20 (20 sensors), %zu takes of %zu frames at 60 Hz read at 20 Hz, 21 labelled DoFs, takes.csv\n",
+                out.string().c_str(), written, corpus.frames());
+    return 0;
+  } catch (const Error& e) {
+    std::cerr << "example_glove: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,132 @@
+"""The README's "Your own glove" walk-through, run as written (its sh block, with build/ pointing at
+this build), then checked against a linear least-squares fit computed here with numpy from the
+imported dataset: the same on-the-fly calibration (20-frame median min-max per session, flat
+sensors to 0, clamp +-1.5), the same training frames (subjects 0-2, the first 90% of each run),
+the error on subject 3 over the 21 labelled DoFs. glovepose's linear map must agree within 1%
+(it adds a ridge of 1e-6 relative and works in float), and the U-Net must not be worse than
+1.1x the least-squares fit.
+
+Environment: GLOVEPOSE_BUILD_DIR (the build tree: tools/glovepose, examples/example_glove).
+"""
+import json
+import math
+import os
+import re
+import shlex
+import struct
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+BUILD = os.environ["GLOVEPOSE_BUILD_DIR"]
+
+DTYPES = {"F64": np.float64, "F32": np.float32, "I32": np.int32, "U8": np.uint8, "I64": np.int64}
+
+
+def read_safetensors(path):
+    with open(path, "rb") as f:
+        size = struct.unpack("<Q", f.read(8))[0]
+        header = json.loads(f.read(size))
+        data = f.read()
+    meta = header.pop("__metadata__", {})
+    tensors = {}
+    for name, t in header.items():
+        begin, end = t["data_offsets"]
+        tensors[name] = np.frombuffer(data[begin:end], dtype=DTYPES[t["dtype"]]).reshape(t["shape"])
+    return tensors, meta
+
+
+def readme_commands():
+    text = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
+    section = text[text.index("## Your own glove"):]
+    section = section[: section.index("\n## ", 3)]
+    block = re.search(r"```sh\n(.*?)```", section, re.S).group(1)
+    commands = []
+    for line in block.splitlines():
+        line = line.split("    #")[0].strip()
+        if line:
+            commands.append(line)
+    return commands
+
+
+def run(command, cwd):
+    args = shlex.split(command)
+    if args[0].startswith("build/"):
+        args[0] = os.path.join(BUILD, args[0][len("build/"):])
+    result = subprocess.run(args, cwd=cwd, capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.exit(f"FAIL: {command}\n{result.stdout}\n{result.stderr}")
+    return result.stdout
+
+
+def calibrated(cells, calibration, window=20, flat=0.01, clamp=1.5):
+    medians = np.median(np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), window, axis=0), axis=-1)
+    lo, hi = medians.min(axis=0), medians.max(axis=0)
+    span = hi - lo
+    is_flat = (span <= flat * np.maximum(np.abs(lo), np.abs(hi))) | (span <= 0)
+    out = np.clip(2.0 * (cells - lo) / np.where(is_flat, 1.0, span) - 1.0, -clamp, clamp)
+    out[:, is_flat] = 0.0
+    return out
+
+
+def main():
+    commands = readme_commands()
+    assert len(commands) == 7, commands
+    outputs = {}
+    with tempfile.TemporaryDirectory() as work:
+        for command in commands:
+            outputs[command] = run(command, work)
+            print("ran:", command)
+        data, meta = read_safetensors(os.path.join(work, "mydata.safetensors"))
+
+        labelled = meta["labelled_dofs"].split(",")
+        assert len(labelled) == 21, labelled
+        dof_names = [n for n in re.findall(r'\{"([a-z_]+)"', open(os.path.join(ROOT, "include/glovepose/hand/dofs.hpp")).read())
+                     if "_" in n][:25]
+        columns = [dof_names.index(n) for n in labelled]
+        cells, angles = data["cells"].astype(np.float64), data["angles"].astype(np.float64)
+        assert np.isnan(angles[:, [d for d in range(25) if d not in columns]]).all()
+        subject, session, glove, kind = data["subject"], data["session"], data["glove"], data["kind"]
+
+        xs, ys, test_x, test_y = [], [], [], []
+        for key in sorted(set(zip(subject, glove, session))):
+            run_frames = (subject == key[0]) & (glove == key[1]) & (session == key[2])
+            x = calibrated(cells[run_frames & (kind == 0)], cells[run_frames & (kind == 1)])
+            y = angles[run_frames & (kind == 0)][:, columns]
+            if key[0] == 3:
+                test_x.append(x), test_y.append(y)
+            else:
+                keep = len(x) - math.floor(0.1 * len(x))
+                xs.append(x[:keep]), ys.append(y[:keep])
+        x, y = np.vstack(xs), np.vstack(ys)
+        design = np.hstack([x, np.ones((len(x), 1))])
+        w, *_ = np.linalg.lstsq(design, y, rcond=None)
+        tx, ty = np.vstack(test_x), np.vstack(test_y)
+        predicted = np.hstack([tx, np.ones((len(tx), 1))]) @ w
+        reference = float(np.mean(np.abs(predicted - ty)) * 180.0 / math.pi)
+
+        def mean_of(model):
+            out = run(f"build/tools/glovepose eval --model {model} --data mydata.safetensors --subjects 3 --json", work)
+            return json.loads(out)["mean_deg"], json.loads(out)["scored_dofs"]
+
+        linear, scored = mean_of("linear.safetensors")
+        unet, _ = mean_of("unet.safetensors")
+    print(f"least squares here: {reference:.4f} deg; glovepose linear {linear:.4f} deg; U-Net {unet:.4f} deg; {scored} DoFs scored")
+    failures = []
+    if scored != 21:
+        failures.append(f"eval scored {scored} DoFs, expected the 21 labelled")
+    if abs(linear - reference) > 0.01 * reference:
+        failures.append(f"glovepose's linear map {linear:.4f} deg differs from the fit here {reference:.4f} by more than 1%")
+    if not unet <= 1.1 * reference:
+        failures.append(f"the U-Net's {unet:.4f} deg is worse than 1.1x the least-squares fit ({reference:.4f})")
+    if failures:
+        sys.exit("FAIL: " + "; ".join(failures))
+    print("PASS")
+
+
+if __name__ == "__main__":
+    main()
