@@ -7,9 +7,10 @@ set -euo pipefail
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
 # nlohmann-json3-dev: JSON in the tools (glovepose bench --json, glovepose view) and their tests.
+# python3-pip, python3-setuptools: `pip install ./python` (the Python package) without any registry.
 # chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
-          libopenxr-dev nlohmann-json3-dev chromium "$@")
+          libopenxr-dev nlohmann-json3-dev python3-pip python3-setuptools chromium "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -24,6 +24,7 @@ Run by CTest (`python_capi`) with GLOVEPOSE_C_LIBRARY, GLOVEPOSE_CPP_REFERENCE, 
 from __future__ import annotations
 
 import ctypes
+import importlib.util
 import math
 import os
 import subprocess
@@ -45,53 +46,16 @@ OK, SOLVED = 0, 1
 ERROR_FILE_NOT_FOUND = -4
 
 
-class EstimatorConfig(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("readout_mean_window", ctypes.c_int32),
-        ("readout_solve_every", ctypes.c_int32),
-        ("calibration_median_window", ctypes.c_int32),
-        ("calibration_sample_period", ctypes.c_double),
-        ("calibration_min_relative_range", ctypes.c_double),
-        ("calibration_clamp_limit", ctypes.c_double),
-        ("smoothing", ctypes.c_int32),
-        ("joint_transforms", ctypes.c_int32),
-        ("smoothing_frequency", ctypes.c_double),
-        ("smoothing_min_cutoff", ctypes.c_double),
-        ("smoothing_beta", ctypes.c_double),
-        ("smoothing_d_cutoff", ctypes.c_double),
-    ]
+def _structs():
+    """The ctypes structs of glovepose_c.h, as the Python package declares them (python/glovepose/
+    _library.py, loaded by path: the package's __init__ would look for the library itself)."""
+    spec = importlib.util.spec_from_file_location("glovepose_library", ROOT / "python" / "glovepose" / "_library.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.EstimatorConfig, module.Pose, module.Joint, module.CalibrationProgress
 
 
-class Pose(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("flags", ctypes.c_uint32),
-        ("angles", ctypes.c_double * DOFS),
-        ("raw_angles", ctypes.c_double * DOFS),
-        ("timestamp", ctypes.c_double),
-        ("oldest_age", ctypes.c_double),
-        ("compute_seconds", ctypes.c_double),
-        ("sequence", ctypes.c_uint64),
-        ("rejected", ctypes.c_uint32),
-        ("valid", ctypes.c_int32),
-    ]
-
-
-class Joint(ctypes.Structure):
-    _fields_ = [("position", ctypes.c_float * 3), ("rotation", ctypes.c_float * 4)]
-
-
-class CalibrationProgress(ctypes.Structure):
-    _fields_ = [
-        ("struct_size", ctypes.c_uint32),
-        ("collecting", ctypes.c_int32),
-        ("frames", ctypes.c_int64),
-        ("frames_needed", ctypes.c_int32),
-        ("ready", ctypes.c_int32),
-        ("source", ctypes.c_int32),
-        ("flat_cells", ctypes.c_int32),
-    ]
+EstimatorConfig, Pose, Joint, CalibrationProgress = _structs()
 
 
 def load_library(path: str) -> ctypes.CDLL:

@@ -1,0 +1,189 @@
+"""glovepose for Python: hand poses from a stretch-sensing glove through the C library
+(libglovepose_c, loaded with ctypes; no compiled extension), numpy arrays in and out.
+
+    import glovepose
+    model = glovepose.PoseModel("models/glovepose_fcn512.safetensors")
+    estimator = glovepose.Estimator(model, joint_transforms=True)
+    estimator.start_calibration()
+    ...  # estimator.push_row(row, value, timestamp) for every reading; SOLVED means a new pose
+    estimator.finish_calibration()
+    angles = estimator.angles()    # (25,) radians, DOF_NAMES order
+    joints = estimator.joints()    # (21, 7): position x, y, z (m), rotation quaternion x, y, z, w
+
+The library is found through $GLOVEPOSE_LIBRARY, the system's library path (an installed
+glovepose), or a build tree of the clone this package sits in (build/capi/).
+"""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from . import _library
+from .dataset import load_dataset
+
+__all__ = ["PoseModel", "Estimator", "Pose", "GloveposeError", "load_dataset", "DOF_NAMES", "JOINT_NAMES",
+           "OK", "SOLVED", "NOT_READY", "UNCALIBRATED"]
+
+_lib = _library.load()
+
+#: Per-frame statuses (glovepose_c.h).
+OK, SOLVED, NOT_READY, UNCALIBRATED = 0, 1, 2, 8
+_WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
+
+#: The 25 DoFs of the hand model, in the order of every angle array.
+DOF_NAMES = tuple(_lib.glovepose_dof_name(d).decode() for d in range(_library.DOF_COUNT))
+#: The 21 joints of joints(), in order.
+JOINT_NAMES = tuple(_lib.glovepose_joint_name(j).decode() for j in range(_library.JOINT_COUNT))
+
+version = _lib.glovepose_version().decode()
+
+
+class GloveposeError(RuntimeError):
+    """A call the library refused; `code` is its glovepose_result, the message the library's."""
+
+    def __init__(self, code: int, message: str):
+        super().__init__(message)
+        self.code = code
+
+
+def _check(code: int) -> int:
+    if code < 0:
+        name = _lib.glovepose_result_name(code).decode()
+        raise GloveposeError(code, f"{_lib.glovepose_last_error().decode()} ({name})")
+    return code
+
+
+class _Closing:
+    """close() on leaving a with-block and when collected."""
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_):
+        self.close()
+
+    def __del__(self):
+        self.close()
+
+
+class PoseModel(_Closing):
+    """A model file (weights_format.md) with its glove; shared by any number of estimators."""
+
+    def __init__(self, path: str, weights: str = "f32", glove: str | None = None):
+        if weights not in _WEIGHTS:
+            raise ValueError(f"weights {weights!r}, expected one of {sorted(_WEIGHTS)}")
+        self._handle = ctypes.c_void_p()
+        _check(_lib.glovepose_model_load(str(path).encode(), _WEIGHTS[weights], str(glove).encode() if glove else None,
+                                         ctypes.byref(self._handle)))
+        self.cell_count = _lib.glovepose_model_cell_count(self._handle)
+        self.row_count = _lib.glovepose_model_row_count(self._handle)
+        self.glove_id = _lib.glovepose_model_glove_id(self._handle).decode()
+        self.cell_names = tuple(_lib.glovepose_model_cell_name(self._handle, c).decode() for c in range(self.cell_count))
+
+    def close(self) -> None:
+        """Releases the model (estimators made from it keep it alive until they are closed)."""
+        if getattr(self, "_handle", None):
+            _lib.glovepose_model_free(self._handle)
+            self._handle = ctypes.c_void_p()
+
+
+class Pose:
+    """One pose: angles and raw_angles (25,) radians, timestamp and oldest_age (s), flags, sequence,
+    rejected (readings since the pose before), valid (False before the first pose)."""
+
+    def __init__(self, raw: _library.Pose):
+        self.angles = np.array(raw.angles[:], dtype=np.float64)
+        self.raw_angles = np.array(raw.raw_angles[:], dtype=np.float64)
+        self.timestamp, self.oldest_age, self.compute_seconds = raw.timestamp, raw.oldest_age, raw.compute_seconds
+        self.flags, self.sequence, self.rejected, self.valid = raw.flags, raw.sequence, raw.rejected, bool(raw.valid)
+
+
+class Estimator(_Closing):
+    """One glove stream through a model. Settings not given keep the library's defaults
+    (glovepose_estimator_config_default): readout_mean_window, readout_solve_every,
+    calibration_median_window, calibration_sample_period, calibration_min_relative_range,
+    calibration_clamp_limit, smoothing (bool), joint_transforms (bool), smoothing_frequency,
+    smoothing_min_cutoff, smoothing_beta, smoothing_d_cutoff."""
+
+    def __init__(self, model: PoseModel, **settings):
+        config = _library.EstimatorConfig()
+        _check(_lib.glovepose_estimator_config_default(ctypes.byref(config)))
+        fields = {name for name, _ in _library.EstimatorConfig._fields_} - {"struct_size"}
+        for name, value in settings.items():
+            if name not in fields:
+                raise TypeError(f"unknown setting {name!r}, expected one of {sorted(fields)}")
+            setattr(config, name, int(value) if isinstance(value, bool) else value)
+        self._model = model  # kept alive with the estimator
+        self._handle = ctypes.c_void_p()
+        _check(_lib.glovepose_estimator_create(model._handle, ctypes.byref(config), ctypes.byref(self._handle)))
+        self._pose = _library.Pose()
+        self._pose.struct_size = ctypes.sizeof(_library.Pose)
+        self._joints = (_library.Joint * _library.JOINT_COUNT)()
+        self._cells = np.zeros(model.cell_count, dtype=np.float64)
+
+    # Streaming: each returns the per-frame status (SOLVED: a new pose); refusals of the call itself raise.
+    def push_row(self, row: int, value: float, timestamp: float) -> int:
+        """One reading of measurement row `row` at `timestamp` (s, increasing)."""
+        return _check(_lib.glovepose_estimator_push_row(self._handle, row, value, timestamp))
+
+    def push_measurements(self, values, timestamp: float) -> int:
+        """A whole frame of row_count compound measurements."""
+        v = np.ascontiguousarray(values, dtype=np.float64)
+        return _check(_lib.glovepose_estimator_push_measurements(self._handle, v.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                                 v.size, timestamp))
+
+    def push_cells(self, cells, timestamp: float, oldest_age: float = 0.0) -> int:
+        """A frame of cell_count solved cell values."""
+        c = np.ascontiguousarray(cells, dtype=np.float64)
+        return _check(_lib.glovepose_estimator_push_cells(self._handle, c.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), c.size,
+                                                          timestamp, oldest_age))
+
+    def pose(self) -> Pose:
+        """The latest pose."""
+        _check(_lib.glovepose_estimator_get_pose(self._handle, ctypes.byref(self._pose)))
+        return Pose(self._pose)
+
+    def angles(self) -> np.ndarray:
+        """The latest pose's (25,) angles, radians, DOF_NAMES order."""
+        return self.pose().angles
+
+    def joints(self) -> np.ndarray:
+        """The latest (21, 7) joints: position x, y, z (metres), rotation quaternion x, y, z, w
+        (needs joint_transforms=True)."""
+        _check(_lib.glovepose_estimator_get_joints(self._handle, self._joints, _library.JOINT_COUNT))
+        return np.array([list(j.position) + list(j.rotation) for j in self._joints], dtype=np.float64)
+
+    def reset(self) -> None:
+        _check(_lib.glovepose_estimator_reset(self._handle))
+
+    # Calibration.
+    def start_calibration(self) -> None:
+        _check(_lib.glovepose_calibration_start(self._handle))
+
+    def finish_calibration(self) -> None:
+        _check(_lib.glovepose_calibration_finish(self._handle))
+
+    def cancel_calibration(self) -> None:
+        _check(_lib.glovepose_calibration_cancel(self._handle))
+
+    def calibration_progress(self) -> dict:
+        """collecting, frames, frames_needed, ready, source, flat_cells."""
+        p = _library.CalibrationProgress()
+        p.struct_size = ctypes.sizeof(p)
+        _check(_lib.glovepose_calibration_get_progress(self._handle, ctypes.byref(p)))
+        return {name: getattr(p, name) for name, _ in p._fields_ if name != "struct_size"}
+
+    def save_calibration(self, path: str) -> None:
+        _check(_lib.glovepose_calibration_save(self._handle, str(path).encode()))
+
+    def load_calibration(self, path: str) -> None:
+        _check(_lib.glovepose_calibration_load(self._handle, str(path).encode()))
+
+    def close(self) -> None:
+        if getattr(self, "_handle", None):  # also when __init__ stopped before creating it
+            _lib.glovepose_estimator_free(self._handle)
+            self._handle = ctypes.c_void_p()
