@@ -38,7 +38,8 @@ from torch import nn  # noqa: E402
 torch.set_num_threads(1)
 
 from glovepose_ref import FCN, UNet, export_model, import_model, randomize, randomize_fcn  # noqa: E402
-from glovepose_ref import safetensors_io  # noqa: E402
+from glovepose_ref import glove, safetensors_io  # noqa: E402
+from glovepose_ref.glove import BUILTIN_DOF_SLOTS, DOF_NAMES, builtin_cell_slots  # noqa: E402
 from glovepose_ref.export import (  # noqa: E402
     JOINT_LIMITS_MAX,
     JOINT_LIMITS_MIN,
@@ -274,43 +275,9 @@ def test_import_rejects() -> None:
 # The glove tables of the C++ side, for the U-Net's input and output maps
 # ---------------------------------------------------------------------------------------------
 
-#: hand::kDofs names, in DoF order (theta 9..33).
-DOF_NAMES: Tuple[str, ...] = tuple(
-    [f"{f}_{m}" for f in ("thumb", "index", "middle", "ring", "pinky")
-     for m in ("base_abduction", "base_flexion", "middle_flexion", "tip_flexion")]
-    + [f"{f}_base_twist" for f in ("thumb", "index", "middle", "ring", "pinky")]
-)
-#: GridMap::paper_pose_slots(): DoF d -> (row = finger, column = motion) of the 5x5 pose map.
-BUILTIN_DOF_SLOTS: Tuple[Tuple[int, int], ...] = tuple(
-    [(d // 4, d % 4) for d in range(20)] + [(f, 4) for f in range(5)]
-)
-# GridMap::glauser2019(): rows thumb..pinky; the cell id at each slot, -1 empty.
-_ALONG = ((-1, 11, 0, 20, -1), (3, 12, 21, 33, 40), (5, 13, 22, 34, 41), (6, 14, 23, 35, 42), (-1, 15, 24, 36, 32))
-_ACROSS = ((16, 2, 1, 28, -1), (25, 4, 29, 37, 43), (26, 7, 30, 38, 17), (27, 19, 31, 39, -1), (18, 10, 8, 9, -1))
-
-
-def builtin_cell_slots() -> List[Tuple[int, int, int]]:
-    """Cell id -> (channel, row, col) in the 2x5x5 stretch maps of the built-in 44-cell glove."""
-    slots: List[Optional[Tuple[int, int, int]]] = [None] * 44
-    for channel, table in ((0, _ALONG), (1, _ACROSS)):
-        for r, row in enumerate(table):
-            for c, cell in enumerate(row):
-                if cell >= 0:
-                    assert slots[cell] is None, f"cell {cell} placed twice"
-                    slots[cell] = (channel, r, c)
-    assert all(s is not None for s in slots), "a cell of the built-in glove has no slot"
-    return [s for s in slots if s is not None]
-
-
 def glove_tables(info: ModelInfo) -> Tuple[List[Tuple[int, int, int]], List[Tuple[int, int]]]:
     """(cell slots, DoF slots in hand::kDofs order) of the glove a model was trained for."""
-    if info.glove_description is None:
-        assert info.glove == "glauser2019-44", info.glove
-        return builtin_cell_slots(), list(BUILTIN_DOF_SLOTS)
-    desc = json.loads(info.glove_description)
-    cells = [(int(c["channel"]), int(c["row"]), int(c["col"])) for c in desc["cells"]]
-    by_name = {d["name"]: (int(d["row"]), int(d["col"])) for d in desc["dofs"]}
-    return cells, [by_name[n] for n in DOF_NAMES]
+    return glove.glove_tables(info.glove, info.glove_description)
 
 
 def unet_predict_radians(model: UNet, info: ModelInfo, cells: torch.Tensor) -> torch.Tensor:

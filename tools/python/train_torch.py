@@ -1,0 +1,253 @@
+#!/usr/bin/env python3
+"""Trains glovepose's networks with PyTorch, on one process or many: the path for users who outgrow
+one machine. The C++ trainer (`glovepose train`) stays the default on one machine; this script reads
+the same dataset files, prepares the same samples and writes a model file glovepose loads.
+
+    /usr/bin/python3 tools/python/train_torch.py --data corpus.safetensors --model unet:64 --out m.safetensors
+    torchrun --nproc_per_node=2 tools/python/train_torch.py --data corpus.safetensors --model unet:64 --out m.safetensors
+    torchrun --nnodes=4 --nproc_per_node=8 --rdzv_backend=c10d --rdzv_endpoint=HOST:29400 tools/python/train_torch.py ...
+
+Under torchrun every process takes an equal share of each global batch (--batch is the global batch)
+through DistributedDataParallel: gloo on CPUs, NCCL on GPUs (--device cuda: one GPU per local rank).
+Debian 12's torchrun (torch 1.13 under Python 3.11) fails on its own default --redirects/--tee
+values ("'NoneType' object has no attribute 'get'"); give them: --redirects 1 --tee 1 --log_dir DIR.
+
+Samples as the C++ trainer prepares them (train/samples.hpp): recording frames that are not collision
+outliers, of the selected subjects; inputs calibrated per run (subject, glove, session) on the fly
+from its calibration frames (min and max of the 20-frame running median, a flat sensor read as 0,
+values clamped to +-1.5), or not at all (--calibration none); targets the angles normalised by the
+reference joint limits, the rest pose (0 rad clamped into the limits) for DoFs the data does not
+label (metadata labelled_dofs), whose loss is masked out. The last --validation fraction of every
+run validates; the model with the lowest validation error (mean absolute angle error over the
+labelled DoFs) is kept. Same architectures and initialisation (Xavier uniform, zero biases), the
+same L2 loss and the paper's Adam (lr 2e-4, betas 0.5 / 0.999).
+
+Needs Debian's python3-torch and python3-numpy (/usr/bin/python3); downloads nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.distributed as dist
+from torch import nn
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from glovepose_ref import FCN, UNet, export_model, safetensors_io  # noqa: E402
+from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
+from glovepose_ref.glove import DOF_NAMES, glove_tables  # noqa: E402
+
+MEDIAN_WINDOW, FLAT_RANGE, CLAMP = 20, 0.01, 1.5
+
+
+def id_list(text: str) -> list:
+    ids = []
+    for part in text.split(","):
+        lo, _, hi = part.partition("-")
+        ids += list(range(int(lo), int(hi or lo) + 1))
+    return ids
+
+
+def onthefly_range(calibration: np.ndarray):
+    """min, max of the running median of MEDIAN_WINDOW frames (sensor/calibration.hpp)."""
+    windows = np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), MEDIAN_WINDOW, axis=0)
+    medians = np.median(windows, axis=-1)
+    return medians.min(axis=0), medians.max(axis=0)
+
+
+def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    span = hi - lo
+    flat = (span <= FLAT_RANGE * np.maximum(np.abs(lo), np.abs(hi))) | (span <= 0)
+    out = np.clip(2.0 * (x - lo) / np.where(flat, 1.0, span) - 1.0, -CLAMP, CLAMP)
+    out[:, flat] = 0.0
+    return out
+
+
+def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float):
+    """(train, validation) dicts of inputs, targets (normalised), angles (radians), with the labelled mask."""
+    cells = data["cells"].numpy().astype(np.float64)
+    angles = data["angles"].numpy().astype(np.float64)
+    subject, glove, session = data["subject"].numpy(), data["glove"].numpy(), data["session"].numpy()
+    kind, outlier = data["kind"].numpy(), data["outlier"].numpy()
+    labelled = np.ones(25, dtype=bool)
+    if "labelled_dofs" in meta:
+        names = meta["labelled_dofs"].split(",")
+        labelled = np.array([n in names for n in DOF_NAMES])
+    lo_lim, hi_lim = np.array(JOINT_LIMITS_MIN), np.array(JOINT_LIMITS_MAX)
+    rest = np.clip(0.0, lo_lim, hi_lim)
+    parts = {"train": [], "validation": []}
+    for key in sorted(set(zip(subject.tolist(), glove.tolist(), session.tolist()))):
+        if subjects is not None and key[0] not in subjects:
+            continue
+        run = (subject == key[0]) & (glove == key[1]) & (session == key[2])
+        keep = run & (kind == 0) & (outlier == 0)
+        if not keep.any():
+            continue
+        x = cells[keep]
+        if calibration == "onthefly":
+            calibration_frames = cells[run & (kind == 1)]
+            if len(calibration_frames) < MEDIAN_WINDOW:
+                sys.exit(f"train_torch: subject {key[0]}, glove {key[1]}, session {key[2]} has {len(calibration_frames)} calibration frames, "
+                         f"expected at least {MEDIAN_WINDOW} for on-the-fly calibration")
+            x = normalize(x, *onthefly_range(calibration_frames))
+        a = angles[keep]
+        toward = np.where(labelled, a, rest)
+        t = 2.0 * (toward - lo_lim) / (hi_lim - lo_lim) - 1.0
+        cut = len(x) - math.floor(validation * len(x))
+        parts["train"].append((x[:cut], t[:cut], a[:cut]))
+        parts["validation"].append((x[cut:], t[cut:], a[cut:]))
+    if not parts["train"]:
+        sys.exit("train_torch: no recording frame passes the selection")
+
+    def stack(items):
+        return {name: torch.tensor(np.vstack([i[k] for i in items]), dtype=torch.float32)
+                for k, name in enumerate(("inputs", "targets", "angles"))}
+    return stack(parts["train"]), stack(parts["validation"]), torch.tensor(labelled)
+
+
+class Pipeline(nn.Module):
+    """Calibrated cells -> the 25 normalised DoFs: the U-Net between the glove's stretch maps and
+    pose map, or the FCN."""
+
+    def __init__(self, network: nn.Module, cell_slots, dof_slots):
+        super().__init__()
+        self.network = network
+        self.unet = isinstance(network, UNet)
+        self.register_buffer("cell_index", torch.tensor([ch * 25 + r * 5 + c for ch, r, c in cell_slots]), persistent=False)
+        self.register_buffer("dof_index", torch.tensor([r * 5 + c for r, c in dof_slots]), persistent=False)
+
+    def forward(self, cells: torch.Tensor) -> torch.Tensor:
+        if not self.unet:
+            return self.network(cells)
+        maps = torch.zeros(cells.shape[0], 50, dtype=cells.dtype, device=cells.device)
+        maps[:, self.cell_index] = cells
+        pose = self.network(maps.view(-1, 2, 5, 5)).view(-1, 25)
+        return pose[:, self.dof_index]
+
+
+def initialize(module: nn.Module, seed: int) -> None:
+    """Xavier uniform weights, zero biases, BN scale 1 (the C++ trainers' initialisation)."""
+    torch.manual_seed(seed)
+    for m in module.modules():
+        if isinstance(m, (nn.Conv2d, nn.ConvTranspose2d, nn.Linear)):
+            nn.init.xavier_uniform_(m.weight)
+            nn.init.zeros_(m.bias)
+        elif isinstance(m, nn.BatchNorm2d):
+            nn.init.ones_(m.weight)
+            nn.init.zeros_(m.bias)
+
+
+def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device) -> float:
+    lo, hi = torch.tensor(JOINT_LIMITS_MIN, dtype=torch.float64), torch.tensor(JOINT_LIMITS_MAX, dtype=torch.float64)
+    model.eval()
+    with torch.no_grad():
+        out = torch.cat([model(x.to(device)).cpu() for x in samples["inputs"].split(4096)]).double()
+    model.train()
+    radians = lo + 0.5 * (out + 1.0) * (hi - lo)
+    errors = (radians - samples["angles"].double()).abs()[:, labelled]
+    return float(errors.mean() * 180.0 / math.pi)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", required=True, help="dataset file (weights_format.md)")
+    parser.add_argument("--model", required=True, help="unet:W or fcn:H")
+    parser.add_argument("--out", required=True, help="model file to write (rank 0)")
+    parser.add_argument("--glove", help="glove description JSON (default: the built-in 44-cell glove)")
+    parser.add_argument("--subjects", type=id_list, help="subjects to train on, e.g. 0-3,7 (default: all)")
+    parser.add_argument("--exclude-subjects", type=id_list, default=[], help="subjects left out, e.g. 9")
+    parser.add_argument("--calibration", choices=("onthefly", "none"), default="onthefly")
+    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("--batch", type=int, default=1024, help="global batch (split between the processes)")
+    parser.add_argument("--lr", type=float, default=2e-4)
+    parser.add_argument("--validation", type=float, default=0.1)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--device", default="cpu", help="cpu or cuda")
+    args = parser.parse_args()
+
+    distributed = "WORLD_SIZE" in os.environ and int(os.environ["WORLD_SIZE"]) > 1
+    rank, world = 0, 1
+    device = torch.device(args.device)
+    if distributed:
+        dist.init_process_group(backend="nccl" if args.device == "cuda" else "gloo")
+        rank, world = dist.get_rank(), dist.get_world_size()
+        if args.device == "cuda":
+            device = torch.device("cuda", int(os.environ.get("LOCAL_RANK", 0)))
+            torch.cuda.set_device(device)
+        torch.set_num_threads(max(1, (os.cpu_count() or 1) // int(os.environ.get("LOCAL_WORLD_SIZE", world))))
+    if args.batch % world:
+        sys.exit(f"train_torch: --batch {args.batch} is not a multiple of the {world} processes")
+
+    tensors, meta = safetensors_io.load(args.data)
+    description = Path(args.glove).read_text() if args.glove else None
+    glove_id = meta.get("glove_layout", "")
+    cell_slots, dof_slots = glove_tables(glove_id, description)
+    if len(cell_slots) != tensors["cells"].shape[1]:
+        sys.exit(f"train_torch: the glove has {len(cell_slots)} cells, the dataset {tensors['cells'].shape[1]}")
+    subjects = sorted(set(args.subjects if args.subjects else tensors["subject"].unique().tolist()) - set(args.exclude_subjects))
+    train, validation, labelled = make_samples(tensors, meta, subjects, args.calibration, args.validation)
+
+    kind, _, size = args.model.partition(":")
+    if kind == "unet":
+        network = UNet(int(size or 64))
+    elif kind == "fcn":
+        network = FCN(len(cell_slots), int(size or 2048), 25)
+    else:
+        sys.exit(f"train_torch: --model {args.model!r}, expected unet:W or fcn:H")
+    model = Pipeline(network, cell_slots, dof_slots)
+    initialize(model, args.seed)
+    model.to(device)
+    trained = nn.parallel.DistributedDataParallel(model) if distributed else model
+    optimizer = torch.optim.Adam(trained.parameters(), lr=args.lr, betas=(0.5, 0.999))
+
+    frames = train["inputs"].shape[0]
+    local = args.batch // world
+    steps = frames // args.batch
+    if steps < 1:
+        sys.exit(f"train_torch: {frames} training frames, fewer than one batch of {args.batch}")
+    mask = labelled.to(device)
+    best, best_error, best_epoch = None, math.inf, -1
+    start = time.time()
+    for epoch in range(args.epochs):
+        order = torch.randperm(frames, generator=torch.Generator().manual_seed(args.seed * 1000003 + epoch))  # the same on every rank
+        loss_sum = 0.0
+        for step in range(steps):
+            batch = order[step * args.batch + rank * local: step * args.batch + (rank + 1) * local]
+            x, t = train["inputs"][batch].to(device), train["targets"][batch].to(device)
+            loss = ((trained(x) - t)[:, mask] ** 2).mean()
+            optimizer.zero_grad()
+            loss.backward()  # DDP averages the gradients over the processes
+            optimizer.step()
+            loss_sum += float(loss)
+        if rank == 0:
+            error = mean_error_deg(model, validation, labelled, device) if validation["inputs"].shape[0] else math.nan
+            print(f"epoch {epoch + 1}/{args.epochs}: loss {loss_sum / steps:.5f}, validation error {error:.3f} deg, "
+                  f"{(epoch + 1) * steps * args.batch / (time.time() - start):.0f} samples/s on {world} process(es)", flush=True)
+            if not error >= best_error:
+                best_error, best_epoch = error, epoch
+                best = {k: v.detach().cpu().clone() for k, v in model.network.state_dict().items()}
+    if rank == 0:
+        network.load_state_dict(best)
+        network.to("cpu")
+        extra = {"training_command": "train_torch.py " + " ".join(sys.argv[1:]), "training_seed": str(args.seed),
+                 "training_processes": str(world), "best_epoch": str(best_epoch + 1), "validation_error_deg": f"{best_error:.6f}"}
+        if not bool(labelled.all()):
+            extra["labelled_dofs"] = ",".join(n for n, l in zip(DOF_NAMES, labelled.tolist()) if l)
+        export_model(network, args.out, glove=glove_id, calibration=args.calibration, glove_description=description,
+                     inputs=len(cell_slots), extra_metadata=extra)
+        print(f"done: {args.epochs} epochs x {steps} steps of {args.batch} on {world} process(es); kept epoch {best_epoch + 1}, "
+              f"validation error {best_error:.3f} deg; wrote {args.out}", flush=True)
+    if distributed:
+        dist.destroy_process_group()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
