@@ -117,6 +117,7 @@ class BasicPoseModel {
     limits_ = hand::JointLimits(lo, hi);
     labelled_ = info_.labelled();
     all_labelled_ = labelled_ == hand::all_dofs();
+    rest_normalized_ = limits_.normalize(limits_.rest());
     if (!info_.pose_offset.empty()) {
       pose_offset_.emplace(calibration::PoseOffsetModel::parse(info_.pose_offset, "metadata 'pose_offset'"));
       if (pose_offset_->cells() != glove_.cell_count())
@@ -151,7 +152,11 @@ class BasicPoseModel {
   /// @brief The network's normalised outputs as the model reads them: DoFs outside labelled_dofs()
   /// at the rest pose.
   GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept {
-    return all_labelled_ ? normalized : limits_.rest_unlabelled(normalized, labelled_);
+    if (all_labelled_) return normalized;
+    hand::Angles out = normalized;  // the rest pose computed once at load, not per frame
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (!labelled_[d]) out[d] = rest_normalized_[d];
+    return out;
   }
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
@@ -201,6 +206,7 @@ class BasicPoseModel {
   hand::JointLimits limits_;
   hand::DofSet labelled_ = hand::all_dofs();
   bool all_labelled_ = true;
+  hand::Angles rest_normalized_{};
   std::optional<sensor::CalibrationRange> training_range_;
   std::optional<calibration::PoseOffsetModel> pose_offset_;
 };

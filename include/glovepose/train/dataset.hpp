@@ -410,6 +410,11 @@ struct Dataset {
     }
   }
 
+  /// @brief Whether frames a and b share (subject, glove, session, kind): the same run (validate()).
+  bool same_run(std::size_t a, std::size_t b) const noexcept {
+    return subject[a] == subject[b] && glove[a] == glove[b] && session[a] == session[b] && kind[a] == kind[b];
+  }
+
  private:
   static constexpr const char* kTensorNames[] = {"cells",   "raw_rows", "angles", "timestamps", "subject",
                                                  "session", "glove",    "donning", "kind",      "outlier"};
@@ -426,10 +431,6 @@ struct Dataset {
                 (per_frame == 1 ? "one per frame: " + std::to_string(n)
                                 : std::to_string(n) + " frames x " + std::to_string(per_frame) + " (" + per_frame_name +
                                       ") = " + std::to_string(n * per_frame)));
-  }
-
-  bool same_run(std::size_t a, std::size_t b) const noexcept {
-    return subject[a] == subject[b] && glove[a] == glove[b] && session[a] == session[b] && kind[a] == kind[b];
   }
 
   Dataset empty_like() const {

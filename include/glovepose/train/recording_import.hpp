@@ -279,13 +279,9 @@ class RecordingImporter {
   // Every calibration run of the frames from `first` on: a flat cell is an error, or kept and listed.
   void check_calibration_runs(std::size_t first, const std::vector<std::size_t>& line_of, const std::string& path) {
     const std::size_t cells = data_.cell_count;
-    const auto same_run = [&](std::size_t a, std::size_t b) {
-      return data_.subject[a] == data_.subject[b] && data_.session[a] == data_.session[b] && data_.glove[a] == data_.glove[b] &&
-             data_.kind[a] == data_.kind[b];
-    };
     for (std::size_t begin = first; begin < data_.frames();) {
       std::size_t end = begin + 1;
-      while (end < data_.frames() && same_run(begin, end)) ++end;
+      while (end < data_.frames() && data_.same_run(begin, end)) ++end;
       if (data_.kind[begin] == kKindCalibration) {
         for (std::size_t c = 0; c < cells; ++c) {
           double lo = std::numeric_limits<double>::infinity(), hi = -lo;
