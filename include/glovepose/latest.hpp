@@ -6,8 +6,9 @@
 /// publishes. The writer never waits and never looks at the readers: it fills the slot the newest
 /// value is not in (sequence odd while it writes), then counts the publish. A reader copies the
 /// slot of the newest publish between two reads of that slot's sequence and starts over when they
-/// differ (the writer came round to that slot again during the copy: two publishes in the time of
-/// one copy), so it never returns a torn value, and a writer stopped half-way through a publish
+/// differ or the slot holds a later publish than the one counted (the writer came round to that
+/// slot again: two publishes in the time of one copy), so it never returns a torn value and the
+/// numbers one reader sees never go back, and a writer stopped half-way through a publish
 /// (preempted) never holds readers up: they read the other slot. Every access is atomic, so there
 /// is no data race for the memory model or ThreadSanitizer.
 #pragma once
@@ -53,7 +54,7 @@ class Latest {
 
   /// @brief Reader (any thread, any number): copies the newest value into `out` and returns its
   /// number (1 for the first publish; 0: none yet, `out` untouched). Never blocks the writer, never
-  /// returns a torn value; starts over only if two publishes complete during its copy.
+  /// returns a torn value; starts over only if a second publish reaches its slot during its copy.
   GLOVEPOSE_REALTIME std::uint64_t read(T& out) const noexcept {
     std::array<std::uint64_t, kWords> buffer{};
     for (;;) {
@@ -66,6 +67,10 @@ class Latest {
       const std::uint64_t number = slot.number.load(std::memory_order_relaxed);
       std::atomic_thread_fence(std::memory_order_acquire);
       if (slot.sequence.load(std::memory_order_relaxed) != before) continue;  // overwritten during the copy
+      // The writer came round to this slot between our count and our copy and finished a newer
+      // publish whose count it has not stored yet: returning it could be followed by an older
+      // number on the next read. Returning only the number counted keeps numbers from going back.
+      if (number != count) continue;
       std::memcpy(static_cast<void*>(&out), buffer.data(), sizeof(T));  // T is trivially copyable
       return number;
     }
