@@ -178,9 +178,12 @@ typedef struct glovepose_estimator_config {
   uint32_t struct_size;               /**< sizeof(glovepose_estimator_config) (80 in ABI 1). */
   int32_t readout_mean_window;        /**< Readings per row averaged before a solve (default 1; the paper: 5). */
   int32_t readout_solve_every;        /**< Solve after this many accepted row readings (default 16; 180 = once per cycle). */
-  int32_t calibration_median_window;  /**< Frames of the on-the-fly calibration's median (default 20). */
-  double calibration_sample_period;   /**< Stream time between two frames the calibration takes, s (default 1/60). */
-  double calibration_min_relative_range; /**< A cell whose range is below this fraction of its value is flat (default 0.01). */
+  int32_t calibration_median_window;  /**< Frames of the on-the-fly calibration's median; 0 (default): the glove's
+                                           median_seconds over the period frames are taken (20 for the built-in glove). */
+  double calibration_sample_period;   /**< Stream time between two frames the calibration takes, s (default 1/60;
+                                           longer when the glove description gives a slower rate_hz). */
+  double calibration_min_relative_range; /**< A cell whose range is below this fraction of its value is flat;
+                                              negative (default -1): the glove's (0.01 unless its description says otherwise). */
   double calibration_clamp_limit;     /**< Normalised cells are clamped to +-this (default 1.5). */
   int32_t smoothing;                  /**< 1: 1-euro smoothing of the angles; 0: the network's output (default 0). */
   int32_t joint_transforms;           /**< 1: compute the 21-joint list with every pose (default 0). */

@@ -71,7 +71,12 @@ int main(int argc, char** argv) {
       names.push_back(s.name);
       slots.push_back(paper.cell_slots()[static_cast<std::size_t>(s.main_cell)]);
     }
-    grid::GloveDescription("example-20", names, grid::GridMap(slots, paper.dof_slots())).write((out / "example-20.json").string());
+    // Read at 20 Hz; resistive sensors on a DC offset (80-160 ohm) stretch by a few percent of it, so
+    // the description calls a sensor flat only below 0.1% (the default 1% suits capacitance).
+    grid::GloveSettings settings;
+    settings.rate_hz = 20.0;
+    settings.calibration.flat_relative_range = 0.001;
+    grid::GloveDescription("example-20", names, grid::GridMap(slots, paper.dof_slots()), settings).write((out / "example-20.json").string());
 
     std::vector<std::size_t> labelled;  // no finger twists: the reference measures 21 DoFs
     for (std::size_t d = 0; d < hand::kDofCount; ++d)

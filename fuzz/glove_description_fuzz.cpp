@@ -4,8 +4,9 @@
 /// GloveDescription::read uses after reading the file.
 ///
 /// Invariants: bad input is refused with glovepose::Error only; an accepted description writes
-/// (to_json) text that parses to an equal description, and maps plausible cells to finite stretch
-/// maps.
+/// (to_json) text that parses to an equal description, maps plausible cells to finite stretch
+/// maps, and has usable settings: joint limits that JointLimits accepts (finite, min < max), a
+/// median window of at least one frame, a flat rule in [0, 1).
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -28,6 +29,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   GLOVEPOSE_FUZZ_REQUIRE(again == *glove);
   GLOVEPOSE_FUZZ_REQUIRE(glove->cell_count() >= 1 && glove->cell_count() <= glovepose::grid::kStretchValues);
   GLOVEPOSE_FUZZ_REQUIRE(static_cast<int>(glove->cell_names().size()) == glove->cell_count());
+
+  const glovepose::hand::JointLimits limits = glove->joint_limits();  // throws (a finding) unless finite with min < max
+  for (std::size_t d = 0; d < glovepose::hand::kDofCount; ++d) GLOVEPOSE_FUZZ_REQUIRE(limits.min()[d] < limits.max()[d]);
+  GLOVEPOSE_FUZZ_REQUIRE(glove->calibration().median_frames(glove->rate_hz().value_or(60.0)) >= 1);
+  GLOVEPOSE_FUZZ_REQUIRE(glove->calibration().flat_relative_range >= 0.0 && glove->calibration().flat_relative_range < 1.0);
 
   std::vector<double> cells(static_cast<std::size_t>(glove->cell_count()));
   for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = -1.0 + 2.0 * static_cast<double>(c) / static_cast<double>(cells.size());

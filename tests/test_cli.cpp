@@ -519,6 +519,9 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   r = run("import --rate 60 --out " + temp("never.safetensors") + " " + temp("import_flat.csv"));
   CHECK(r.status == 1);
   CHECK(r.out.find("line 2, column 2 'stretch_A0': unknown column, expected a cell of glove 'glauser2019-44'") != std::string::npos);
+  r = run("import --glove " + glove_file + " --out " + temp("never.safetensors") + " " + temp("import_flat.csv"));
+  CHECK(r.status == 1);  // no --rate and a description without rate_hz
+  CHECK(r.out.find("expected a positive number of frames per second (or a glove description with 'rate_hz')") != std::string::npos);
   r = run("import --rate 60 --out " + temp("never.safetensors"));
   CHECK(r.status == 2);
   CHECK(r.out.find("no takes, expected CSV files or --takes LIST") != std::string::npos);

@@ -1,8 +1,10 @@
 #include <glovepose/grid/glove_description.hpp>
+#include <glovepose/sensor/calibration.hpp>
 
 #include <doctest/doctest.h>
 
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <set>
 #include <string>
@@ -242,4 +244,109 @@ TEST_CASE("glove description: the constructor checks names against the map") {
   names[0] = "quote \" backslash \\ newline \n";
   const GloveDescription odd("glove \"7\"", names, map);
   CHECK(GloveDescription::from_json(odd.to_json()) == odd);
+}
+
+TEST_CASE("glove description: joint limits, rate and calibration: defaults, round trip, what they mean") {
+  // Defaults: the built-in glove's, and the calibration's own default flat rule.
+  const GloveDescription plain = GloveDescription::from_json(glove_text(kTwoCells));
+  CHECK(!plain.rate_hz());
+  CHECK(plain.calibration().flat_relative_range == sensor::CalibrationConfig{}.min_relative_range);
+  CHECK(plain.calibration().median_frames(60.0) == 20);  // the paper's 20 frames at 60 Hz
+  CHECK(plain.calibration().median_frames(20.0) == 7);   // a third of a second at 20 Hz
+  CHECK(plain.calibration().median_frames(1.0) == 1);    // at least one frame
+  const hand::JointLimits reference;
+  CHECK(plain.joint_limits().min() == reference.min());
+  CHECK(plain.joint_limits().max() == reference.max());
+  CHECK(plain.to_json().find("rate_hz") == std::string::npos);  // defaults are not written
+  CHECK(plain.to_json().find("calibration") == std::string::npos);
+
+  // Own settings: two DoFs' limits in degrees, a rate, a median and a flat rule.
+  std::string dofs = paper_dofs();
+  const auto add_limits = [&](const std::string& name, const std::string& limits) {
+    const std::string key = "{\"name\": \"" + name + "\"";
+    const std::size_t at = dofs.find(key);
+    REQUIRE(at != std::string::npos);
+    dofs.insert(dofs.find('}', at), limits);
+  };
+  add_limits("index_base_flexion", ", \"min_degrees\": -25, \"max_degrees\": 100.5");
+  add_limits("thumb_base_abduction", ", \"max_degrees\": 40, \"min_degrees\": -12");
+  const std::string text = "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"own\", \"cells\": " + kTwoCells +
+                           ", \"dofs\": " + dofs + ", \"rate_hz\": 20, \"calibration\": {\"median_seconds\": 0.5, \"flat_relative_range\": 0.001}}";
+  const GloveDescription own = GloveDescription::from_json(text);
+  REQUIRE(own.rate_hz());
+  CHECK(*own.rate_hz() == 20.0);
+  CHECK(own.calibration().median_seconds == 0.5);
+  CHECK(own.calibration().flat_relative_range == 0.001);
+  CHECK(own.calibration().median_frames(*own.rate_hz()) == 10);
+  const hand::JointLimits limits = own.joint_limits();
+  const double pi = 3.14159265358979323846;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    INFO(hand::kDofs[d].name);
+    const std::string name = hand::kDofs[d].name;
+    if (name == "index_base_flexion") {
+      CHECK(limits.min()[d] == doctest::Approx(-25.0 * pi / 180.0).epsilon(1e-15));
+      CHECK(limits.max()[d] == doctest::Approx(100.5 * pi / 180.0).epsilon(1e-15));
+    } else if (name == "thumb_base_abduction") {
+      CHECK(limits.min()[d] == doctest::Approx(-12.0 * pi / 180.0).epsilon(1e-15));
+      CHECK(limits.max()[d] == doctest::Approx(40.0 * pi / 180.0).epsilon(1e-15));
+    } else {
+      CHECK(limits.min()[d] == reference.min()[d]);  // the others keep the reference's, exactly
+      CHECK(limits.max()[d] == reference.max()[d]);
+    }
+  }
+  // Round trip: the same description, and the same text again.
+  const GloveDescription back = GloveDescription::from_json(own.to_json());
+  CHECK(back == own);
+  CHECK(back.to_json() == own.to_json());
+  CHECK(!(own == plain));
+  // Each setting takes part in equality.
+  GloveSettings other = own.settings();
+  other.rate_hz = 21.0;
+  CHECK(GloveDescription("own", own.cell_names(), own.map(), other) != own);
+  other = own.settings();
+  other.calibration.median_seconds = 0.4;
+  CHECK(GloveDescription("own", own.cell_names(), own.map(), other) != own);
+  other = own.settings();
+  other.limits_degrees[0] = std::nullopt;
+  CHECK(GloveDescription("own", own.cell_names(), own.map(), other) != own);
+  CHECK(GloveDescription("own", own.cell_names(), own.map(), own.settings()) == own);
+}
+
+TEST_CASE("glove description: malformed joint limits, rate and calibration are refused naming the field") {
+  const auto refused = [](const std::string& dofs, const std::string& tail, const std::string& expected) {
+    const std::string text = "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"cells\": " + kTwoCells +
+                             ", \"dofs\": " + dofs + tail + "}";
+    INFO(text);
+    CHECK_THROWS_WITH_AS(GloveDescription::from_json(text), doctest::Contains(expected.c_str()), Error);
+  };
+  const auto with = [](const std::string& limits) {
+    std::string dofs = paper_dofs();
+    const std::size_t at = dofs.find("{\"name\": \"index_base_flexion\"");
+    dofs.insert(dofs.find('}', at), limits);
+    return dofs;
+  };
+  const std::string dofs = paper_dofs();
+  refused(with(", \"min_degrees\": -25"), "", "('index_base_flexion') has 'min_degrees' without 'max_degrees', expected both limits or neither");
+  refused(with(", \"max_degrees\": 90"), "", "has 'max_degrees' without 'min_degrees'");
+  refused(with(", \"min_degrees\": 90, \"max_degrees\": 90"), "", "has limits [90, 90] degrees, expected min_degrees < max_degrees");
+  refused(with(", \"min_degrees\": -400, \"max_degrees\": 90"), "", "within [-360, 360]");
+  refused(with(", \"min_degrees\": \"-25\", \"max_degrees\": 90"), "", "'min_degrees' is \"-25\", expected a number");
+  refused(with(", \"min_deg\": -25"), "", "has the unknown key 'min_deg'");
+  refused(dofs, ", \"rate_hz\": 0", "'rate_hz' is 0, expected frames per second > 0");
+  refused(dofs, ", \"rate_hz\": -60", "'rate_hz' is -60");
+  refused(dofs, ", \"rate_hz\": \"60\"", "'rate_hz' is \"60\", expected a number");
+  refused(dofs, ", \"calibration\": 3", "'calibration' is 3, expected an object");
+  refused(dofs, ", \"calibration\": {\"median_seconds\": 0}", "'calibration.median_seconds' is 0, expected a time > 0 s");
+  refused(dofs, ", \"calibration\": {\"flat_relative_range\": 1}", "'calibration.flat_relative_range' is 1, expected a fraction >= 0 and < 1");
+  refused(dofs, ", \"calibration\": {\"flat_relative_range\": -0.1}", "'calibration.flat_relative_range' is -0.1");
+  refused(dofs, ", \"calibration\": {\"median_window\": 20}", "'calibration' has the unknown key 'median_window'");
+  // The constructor checks the same.
+  GloveSettings bad;
+  bad.limits_degrees[3] = DofLimitsDegrees{10.0, -10.0};
+  const GloveDescription two = GloveDescription::from_json(glove_text(kTwoCells));
+  const std::string expected = std::string("DoF '") + hand::kDofs[3].name + "' has limits [10, -10] degrees";
+  CHECK_THROWS_WITH_AS(GloveDescription("x", two.cell_names(), two.map(), bad), doctest::Contains(expected.c_str()), Error);
+  bad = GloveSettings{};
+  bad.calibration.median_seconds = std::nan("");
+  CHECK_THROWS_WITH_AS(GloveDescription("x", two.cell_names(), two.map(), bad), doctest::Contains("median_seconds"), Error);
 }

@@ -192,13 +192,37 @@ TEST_CASE("import: a sensor flat over a calibration take is refused with file, l
   CHECK(flat.last_line == 14);
   CHECK(flat.min == 2.0);
   CHECK(flat.max == doctest::Approx(2.002).epsilon(1e-6));
-  // A looser rule (0.05%) does not call a 0.1% range flat.
-  o = options();
-  o.flat_rule.min_relative_range = 0.0005;
-  train::RecordingImporter loose(small_glove(), o);
+  // A glove described with a looser rule (0.05%) does not call a 0.1% range flat.
+  grid::GloveSettings settings;
+  settings.calibration.flat_relative_range = 0.0005;
+  const grid::GloveDescription five = small_glove();
+  train::RecordingImporter loose(grid::GloveDescription(five.id(), five.cell_names(), five.map(), settings), options());
   std::istringstream in2(take);
   loose.add(in2, {"cal_s1.csv", 1, {}, train::kKindCalibration});
   CHECK(loose.flat_sensors().empty());
+  // Its message names the rule in use.
+  settings.calibration.flat_relative_range = 0.002;
+  train::RecordingImporter strict(grid::GloveDescription(five.id(), five.cell_names(), five.map(), settings), options());
+  std::istringstream in3(take);
+  CHECK_THROWS_WITH_AS(strict.add(in3, {"cal_s1.csv", 1, {}, train::kKindCalibration}), doctest::Contains("a range within 0.2% of its value"), Error);
+}
+
+TEST_CASE("import: the frame rate comes from --rate or the glove description, and the two must agree") {
+  const Frames f = random_frames(4, 2);
+  const std::string take = csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); });
+  grid::GloveSettings settings;
+  settings.rate_hz = 25.0;
+  const grid::GloveDescription five = small_glove();
+  const grid::GloveDescription described(five.id(), five.cell_names(), five.map(), settings);
+  train::RecordingImporter importer(described, options(0.0));  // no rate given: the description's
+  std::istringstream in(take);
+  importer.add(in, {"t.csv", 1, {}, train::kKindRecording});
+  CHECK(importer.dataset().frame_rate() == 25.0);
+  CHECK(importer.dataset().timestamps[1] == doctest::Approx(1.0 / 25.0).epsilon(1e-12));
+  CHECK(train::RecordingImporter(described, options(25.0)).dataset().frame_rate() == 25.0);
+  CHECK_THROWS_WITH_AS(train::RecordingImporter(described, options(20.0)),
+                       doctest::Contains("frame rate 20, but glove 'five-cell' is described at 25 frames per second"), Error);
+  CHECK_THROWS_WITH_AS(train::RecordingImporter(five, options(0.0)), doctest::Contains("(or a glove description with 'rate_hz')"), Error);
 }
 
 TEST_CASE("import: bad takes are refused naming the file, line and column and what was expected") {
@@ -268,7 +292,7 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   importer.dataset().validate();
 
   CHECK_THROWS_WITH_AS(train::RecordingImporter(small_glove(), options(0.0)),
-                       "frame rate 0, expected a positive number of frames per second", Error);
+                       doctest::Contains("frame rate 0, expected a positive number of frames per second"), Error);
   train::CsvImportOptions ignoring = options();
   ignoring.ignored_columns = {"index_bend"};
   CHECK_THROWS_AS(train::RecordingImporter(small_glove(), ignoring), Error);

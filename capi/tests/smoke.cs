@@ -168,7 +168,7 @@ static class Smoke
 
         GlovePose.EstimatorConfig config;
         Check(GlovePose.glovepose_estimator_config_default(out config) == GlovePose.Ok, "default config");
-        Check(config.StructSize == 80 && config.ReadoutSolveEvery == 16 && config.CalibrationMedianWindow == 20, "default values");
+        Check(config.StructSize == 80 && config.ReadoutSolveEvery == 16 && config.CalibrationMedianWindow == 0 && config.CalibrationMinRelativeRange == -1.0, "default values (0, -1: the glove's)");
         config.JointTransforms = 1;
         config.Smoothing = 1;
         IntPtr estimator;

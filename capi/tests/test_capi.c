@@ -245,7 +245,8 @@ static void test_create(glovepose_model* model) {
   CHECK(config.struct_size == sizeof config);
   CHECK(config.readout_mean_window == 1); /* glovepose::realtime_readout(); the paper's is 5 */
   CHECK(config.readout_solve_every == 16);
-  CHECK(config.calibration_median_window == 20);
+  CHECK(config.calibration_median_window == 0);       /* the glove's: 20 frames for the built-in glove */
+  CHECK(config.calibration_min_relative_range == -1.0); /* the glove's: 0.01 */
   CHECK(fabs(config.calibration_sample_period - 1.0 / 60.0) < 1e-15);
   CHECK(config.smoothing == 0);
   CHECK(config.joint_transforms == 0);
@@ -271,10 +272,10 @@ static void test_create(glovepose_model* model) {
   config.smoothing_min_cutoff = 0.0;
   CHECK_RESULT(glovepose_estimator_create(model, &config, &e), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
   config.smoothing_min_cutoff = 1.0;
-  config.calibration_median_window = 0;
+  config.calibration_median_window = -1;
   CHECK_RESULT(glovepose_estimator_create(model, &config, &e), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
   CHECK(contains(glovepose_last_error(), "median window"));
-  config.calibration_median_window = 20;
+  config.calibration_median_window = 0;
   CHECK_RESULT(glovepose_estimator_create(model, &config, &e), GLOVEPOSE_OK);
   CHECK(e != NULL);
   /* A model handle is not an estimator handle (both are plain pointers in C# and Python). */

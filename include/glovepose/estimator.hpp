@@ -128,9 +128,11 @@ class BasicPoseModel {
       if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
         throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
                     " numbers, expected " + std::to_string(glove_.cell_count()) + " (one per cell)");
+      sensor::CalibrationConfig flat_rule;
+      flat_rule.min_relative_range = glove_.calibration().flat_relative_range;
       training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
                               Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()),
-                              glove_.cell_names());
+                              glove_.cell_names(), flat_rule);
     }
   }
 
@@ -237,14 +239,23 @@ inline sensor::ReadoutConfig realtime_readout() noexcept {
   return config;
 }
 
+/// @brief EstimatorConfig::calibration.min_relative_range that means "the glove's flat rule".
+inline constexpr double kGlovesFlatRule = -1.0;
+
 /// @brief Settings of one estimator (one glove stream).
 struct EstimatorConfig {
   sensor::ReadoutConfig readout = realtime_readout();  ///< Mean window and solve cadence of the row stream (default 1, 16; paper: 5, 16).
-  sensor::CalibrationConfig calibration{};  ///< Flat-sensor threshold and the clamp of normalised values.
-  int calibration_median_window = 20;       ///< Frames of the on-the-fly calibration's median (paper: 20).
-  /// Stream time between two frames the on-the-fly calibration takes (s). The median's window then
-  /// spans the same time however often the readout solves: 20 frames at 60 Hz, a third of a second,
-  /// as in the paper and in the training data's calibration.
+  /// Flat-sensor threshold and the clamp of normalised values. A negative min_relative_range (the
+  /// default) takes the glove's: its description's calibration.flat_relative_range (0.01 unless the
+  /// description says otherwise).
+  sensor::CalibrationConfig calibration{kGlovesFlatRule, sensor::CalibrationConfig{}.clamp_limit};
+  /// Frames of the on-the-fly calibration's median. 0 (the default): the glove's
+  /// calibration.median_seconds over the time between two frames taken (20 frames for the built-in
+  /// glove: a third of a second, as in the paper and in the training data's calibration).
+  int calibration_median_window = 0;
+  /// Stream time between two frames the on-the-fly calibration takes (s), or more when the glove's
+  /// description gives a slower rate_hz (then every frame). The median's window then spans the same
+  /// time however often the readout solves.
   double calibration_sample_period = 1.0 / 60.0;
   /// Min-max, or min-max plus the pose-guided offsets: then the user follows the model's calibration
   /// sequence (PoseModel::pose_offset()->sequence()) from start_calibration() on.
@@ -410,7 +421,7 @@ class BasicGlovePoseEstimator {
   /// @brief An estimator over a shared model. Throws glovepose::Error for a null model or bad settings.
   explicit BasicGlovePoseEstimator(std::shared_ptr<const Model> model, EstimatorConfig config = {})
       : model_(checked(std::move(model))),
-        config_(std::move(config)),
+        config_(with_glove_calibration(std::move(config), model_->glove())),
         calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
         workspace_(model_->network().make_workspace(checked_threads(config_.network_threads))),
         kinematics_(config_.hand, config_.handedness),
@@ -637,10 +648,26 @@ class BasicGlovePoseEstimator {
   }
   /// @brief The shared model.
   const Model& model() const noexcept { return *model_; }
-  /// @brief The settings in use.
+  /// @brief The settings in use, the glove's filled in where the given ones said "the glove's"
+  /// (calibration_median_window 0, a negative calibration.min_relative_range).
   const EstimatorConfig& config() const noexcept { return config_; }
 
  private:
+  // The settings that say "the glove's" made the glove's: its flat rule, and a median window
+  // spanning its median_seconds at the period frames are taken (the sample period, or the glove's
+  // frame period when that is longer; 60 Hz when neither is known).
+  static EstimatorConfig with_glove_calibration(EstimatorConfig config, const grid::GloveDescription& glove) {
+    const grid::GloveCalibration& own = glove.calibration();
+    if (config.calibration.min_relative_range < 0.0) config.calibration.min_relative_range = own.flat_relative_range;
+    if (config.calibration_median_window == 0) {
+      double period = config.calibration_sample_period;
+      if (glove.rate_hz()) period = std::max(period, 1.0 / *glove.rate_hz());
+      if (!(period > 0.0) || !std::isfinite(period)) period = 1.0 / 60.0;  // a bad sample period is refused below
+      config.calibration_median_window = own.median_frames(1.0 / period);
+    }
+    return config;
+  }
+
   static std::shared_ptr<const Model> checked(std::shared_ptr<const Model> model) {
     if (!model) throw Error("GlovePoseEstimator: no model given, expected a loaded PoseModel");
     return model;

@@ -1,7 +1,8 @@
 """The README's "Your own glove" walk-through, run as written (its sh block, with build/ pointing at
 this build), then checked against a linear least-squares fit computed here with numpy from the
-imported dataset: the same on-the-fly calibration (20-frame median min-max per session, flat
-sensors to 0, clamp +-1.5), the same training frames (subjects 0-2, the first 90% of each run),
+imported dataset: the same on-the-fly calibration as the glove description asks for (min-max of
+the running median over its calibration.median_seconds at its rate_hz, a third of a second by
+default; sensors flat by its calibration.flat_relative_range to 0; clamp +-1.5), the same training frames (subjects 0-2, the first 90% of each run),
 the error on subject 3 over the 21 labelled DoFs. glovepose's linear map must agree within 1%
 (it adds a ridge of 1e-6 relative and works in float), and the U-Net must not be worse than
 1.1x the least-squares fit.
@@ -63,7 +64,7 @@ def run(command, cwd):
     return result.stdout
 
 
-def calibrated(cells, calibration, window=20, flat=0.01, clamp=1.5):
+def calibrated(cells, calibration, window, flat, clamp=1.5):
     medians = np.median(np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), window, axis=0), axis=-1)
     lo, hi = medians.min(axis=0), medians.max(axis=0)
     span = hi - lo
@@ -82,6 +83,12 @@ def main():
             outputs[command] = run(command, work)
             print("ran:", command)
         data, meta = read_safetensors(os.path.join(work, "mydata.safetensors"))
+        description = json.load(open(os.path.join(work, "myglove", "example-20.json")))
+        settings = description.get("calibration", {})
+        rate = float(description["rate_hz"])
+        assert float(meta["frame_rate"]) == rate, (meta["frame_rate"], rate)  # import took the description's rate
+        window = max(1, math.floor(settings.get("median_seconds", 1.0 / 3.0) * rate + 0.5))
+        flat = settings.get("flat_relative_range", 0.01)
 
         labelled = meta["labelled_dofs"].split(",")
         assert len(labelled) == 21, labelled
@@ -95,7 +102,7 @@ def main():
         xs, ys, test_x, test_y = [], [], [], []
         for key in sorted(set(zip(subject, glove, session))):
             run_frames = (subject == key[0]) & (glove == key[1]) & (session == key[2])
-            x = calibrated(cells[run_frames & (kind == 0)], cells[run_frames & (kind == 1)])
+            x = calibrated(cells[run_frames & (kind == 0)], cells[run_frames & (kind == 1)], window, flat)
             y = angles[run_frames & (kind == 0)][:, columns]
             if key[0] == 3:
                 test_x.append(x), test_y.append(y)
@@ -115,6 +122,7 @@ def main():
 
         linear, scored = mean_of("linear.safetensors")
         unet, _ = mean_of("unet.safetensors")
+    print(f"calibration: {window}-frame median, flat below {flat}")
     print(f"least squares here: {reference:.4f} deg; glovepose linear {linear:.4f} deg; U-Net {unet:.4f} deg; {scored} DoFs scored")
     failures = []
     if scored != 21:

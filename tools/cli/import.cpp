@@ -1,4 +1,4 @@
-// glovepose import --rate HZ --out FILE [--glove FILE] [--subject N] [--session N] [--calibration FILE]...
+// glovepose import [--rate HZ] --out FILE [--glove FILE] [--subject N] [--session N] [--calibration FILE]...
 //                  [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]
 //   Recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
 //   dataset file for train, eval and finetune.
@@ -21,7 +21,7 @@ namespace {
 // `problem` empty: the usage was asked for (--help).
 [[noreturn]] void usage(const std::string& problem) {
   exit_with_usage("import", problem,
-                  "usage: glovepose import --rate HZ --out FILE [--glove FILE] [--subject N] [--session N]\n"
+                  "usage: glovepose import [--rate HZ] --out FILE [--glove FILE] [--subject N] [--session N]\n"
                   "                        [--calibration FILE]... [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]\n"
                   "  FILE...             recording takes: CSV files whose first line names the columns: every cell of the\n"
                   "                      glove, optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp\n"
@@ -30,7 +30,8 @@ namespace {
                   "  --takes LIST        a CSV list of takes with the header file,subject,session,kind (kind: recording or\n"
                   "                      calibration; session and kind may be left out); files relative to the list\n"
                   "  --subject N, --session N   ids of FILE and --calibration takes whose columns do not have them\n"
-                  "  --rate HZ           the glove's frames per second (frames are 1/HZ apart in takes without timestamps)\n"
+                  "  --rate HZ           the glove's frames per second (frames are 1/HZ apart in takes without timestamps);\n"
+                  "                      required unless the glove description gives rate_hz\n"
                   "  --glove FILE        the glove description (JSON); default: the built-in 44-cell glove\n"
                   "  --degrees           angle columns are in degrees\n"
                   "  --ignore COLUMN     a column to skip; repeatable\n"
@@ -80,7 +81,6 @@ Options parse(int argc, char** argv) {
     else files.emplace_back(a, train::kKindRecording);
   }
   if (o.out.empty()) usage("--out FILE is required");
-  if (o.import.frame_rate == 0.0) usage("--rate HZ is required (the glove's frames per second)");
   if (files.empty() && o.takes_list.empty()) usage("no takes, expected CSV files or --takes LIST");
   for (const auto& [path, kind] : files) o.takes.push_back({path, o.subject, o.session, kind});
   return o;

@@ -278,9 +278,9 @@ int train_command(Options o, int argc, char** argv) {
   const grid::GloveDescription glove = glove_for(o, data);
   const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
   std::optional<sensor::CalibrationRange> range;
-  if (mode == train::CalibrationMode::Training) range = train::training_range(data, o.filter);
-  const hand::JointLimits limits;
-  const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride);
+  if (mode == train::CalibrationMode::Training) range = train::training_range(data, o.filter, glove.calibration());
+  const hand::JointLimits limits = glove.joint_limits();
+  const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride, glove.calibration());
   report_zeroed(o.command, all, glove);
   std::string architecture = o.model;
   int width = 0;
@@ -335,7 +335,9 @@ std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const t
   const train::CalibrationMode mode = train::calibration_mode(requested.empty() ? model.info.calibration : requested);
   std::optional<sensor::CalibrationRange> range;
   if (mode == train::CalibrationMode::Training) range = model.training_range();
-  return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride), mode};
+  return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride,
+                              model.glove.calibration()),
+          mode};
 }
 
 int finetune_command(Options o, int argc, char** argv) {

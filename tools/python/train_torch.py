@@ -14,9 +14,10 @@ values ("'NoneType' object has no attribute 'get'"); give them: --redirects 1 --
 
 Samples as the C++ trainer prepares them (train/samples.hpp): recording frames that are not collision
 outliers, of the selected subjects; inputs calibrated per run (subject, glove, session) on the fly
-from its calibration frames (min and max of the 20-frame running median, a flat sensor read as 0,
+from its calibration frames (min and max of the running median over the glove's median_seconds at
+the dataset's frame rate, 20 frames at 60 Hz by default; a sensor flat by the glove's rule read as 0;
 values clamped to +-1.5), or not at all (--calibration none); targets the angles normalised by the
-reference joint limits, the rest pose (0 rad clamped into the limits) for DoFs the data does not
+glove's joint limits (its description's, else the reference's), the rest pose (0 rad clamped into the limits) for DoFs the data does not
 label (metadata labelled_dofs), whose loss is masked out. The last --validation fraction of every
 run validates; the model with the lowest validation error (mean absolute angle error over the
 labelled DoFs) is kept. Same architectures and initialisation (Xavier uniform, zero biases), the
@@ -42,9 +43,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from glovepose_ref import FCN, UNet, export_model, safetensors_io  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
-from glovepose_ref.glove import DOF_NAMES, glove_tables  # noqa: E402
+from glovepose_ref.glove import DOF_NAMES, glove_settings, glove_tables, median_frames  # noqa: E402
 
-MEDIAN_WINDOW, FLAT_RANGE, CLAMP = 20, 0.01, 1.5
+CLAMP = 1.5
 
 
 def id_list(text: str) -> list:
@@ -55,22 +56,22 @@ def id_list(text: str) -> list:
     return ids
 
 
-def onthefly_range(calibration: np.ndarray):
-    """min, max of the running median of MEDIAN_WINDOW frames (sensor/calibration.hpp)."""
-    windows = np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), MEDIAN_WINDOW, axis=0)
+def onthefly_range(calibration: np.ndarray, window: int):
+    """min, max of the running median of `window` frames (sensor/calibration.hpp)."""
+    windows = np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), window, axis=0)
     medians = np.median(windows, axis=-1)
     return medians.min(axis=0), medians.max(axis=0)
 
 
-def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, flat_range: float) -> np.ndarray:
     span = hi - lo
-    flat = (span <= FLAT_RANGE * np.maximum(np.abs(lo), np.abs(hi))) | (span <= 0)
+    flat = (span <= flat_range * np.maximum(np.abs(lo), np.abs(hi))) | (span <= 0)
     out = np.clip(2.0 * (x - lo) / np.where(flat, 1.0, span) - 1.0, -CLAMP, CLAMP)
     out[:, flat] = 0.0
     return out
 
 
-def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float):
+def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float, settings: dict):
     """(train, validation) dicts of inputs, targets (normalised), angles (radians), with the labelled mask."""
     cells = data["cells"].numpy().astype(np.float64)
     angles = data["angles"].numpy().astype(np.float64)
@@ -80,7 +81,8 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
     if "labelled_dofs" in meta:
         names = meta["labelled_dofs"].split(",")
         labelled = np.array([n in names for n in DOF_NAMES])
-    lo_lim, hi_lim = np.array(JOINT_LIMITS_MIN), np.array(JOINT_LIMITS_MAX)
+    lo_lim, hi_lim = np.array(settings["joint_limits_min"]), np.array(settings["joint_limits_max"])
+    window = median_frames(settings["median_seconds"], float(meta["frame_rate"]))
     rest = np.clip(0.0, lo_lim, hi_lim)
     parts = {"train": [], "validation": []}
     for key in sorted(set(zip(subject.tolist(), glove.tolist(), session.tolist()))):
@@ -93,10 +95,10 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
         x = cells[keep]
         if calibration == "onthefly":
             calibration_frames = cells[run & (kind == 1)]
-            if len(calibration_frames) < MEDIAN_WINDOW:
+            if len(calibration_frames) < window:
                 sys.exit(f"train_torch: subject {key[0]}, glove {key[1]}, session {key[2]} has {len(calibration_frames)} calibration frames, "
-                         f"expected at least {MEDIAN_WINDOW} for on-the-fly calibration")
-            x = normalize(x, *onthefly_range(calibration_frames))
+                         f"expected at least {window} for on-the-fly calibration")
+            x = normalize(x, *onthefly_range(calibration_frames, window), settings["flat_relative_range"])
         a = angles[keep]
         toward = np.where(labelled, a, rest)
         t = 2.0 * (toward - lo_lim) / (hi_lim - lo_lim) - 1.0
@@ -144,8 +146,9 @@ def initialize(module: nn.Module, seed: int) -> None:
             nn.init.zeros_(m.bias)
 
 
-def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device) -> float:
-    lo, hi = torch.tensor(JOINT_LIMITS_MIN, dtype=torch.float64), torch.tensor(JOINT_LIMITS_MAX, dtype=torch.float64)
+def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device, settings: dict) -> float:
+    lo = torch.tensor(settings["joint_limits_min"], dtype=torch.float64)
+    hi = torch.tensor(settings["joint_limits_max"], dtype=torch.float64)
     model.eval()
     with torch.no_grad():
         out = torch.cat([model(x.to(device)).cpu() for x in samples["inputs"].split(4096)]).double()
@@ -192,7 +195,8 @@ def main() -> int:
     if len(cell_slots) != tensors["cells"].shape[1]:
         sys.exit(f"train_torch: the glove has {len(cell_slots)} cells, the dataset {tensors['cells'].shape[1]}")
     subjects = sorted(set(args.subjects if args.subjects else tensors["subject"].unique().tolist()) - set(args.exclude_subjects))
-    train, validation, labelled = make_samples(tensors, meta, subjects, args.calibration, args.validation)
+    settings = glove_settings(description, JOINT_LIMITS_MIN, JOINT_LIMITS_MAX)
+    train, validation, labelled = make_samples(tensors, meta, subjects, args.calibration, args.validation, settings)
 
     kind, _, size = args.model.partition(":")
     if kind == "unet":
@@ -227,7 +231,7 @@ def main() -> int:
             optimizer.step()
             loss_sum += float(loss)
         if rank == 0:
-            error = mean_error_deg(model, validation, labelled, device) if validation["inputs"].shape[0] else math.nan
+            error = mean_error_deg(model, validation, labelled, device, settings) if validation["inputs"].shape[0] else math.nan
             print(f"epoch {epoch + 1}/{args.epochs}: loss {loss_sum / steps:.5f}, validation error {error:.3f} deg, "
                   f"{(epoch + 1) * steps * args.batch / (time.time() - start):.0f} samples/s on {world} process(es)", flush=True)
             if not error >= best_error:
@@ -241,7 +245,8 @@ def main() -> int:
         if not bool(labelled.all()):
             extra["labelled_dofs"] = ",".join(n for n, l in zip(DOF_NAMES, labelled.tolist()) if l)
         export_model(network, args.out, glove=glove_id, calibration=args.calibration, glove_description=description,
-                     inputs=len(cell_slots), extra_metadata=extra)
+                     inputs=len(cell_slots), joint_limits_min=settings["joint_limits_min"],
+                     joint_limits_max=settings["joint_limits_max"], extra_metadata=extra)
         print(f"done: {args.epochs} epochs x {steps} steps of {args.batch} on {world} process(es); kept epoch {best_epoch + 1}, "
               f"validation error {best_error:.3f} deg; wrote {args.out}", flush=True)
     if distributed:

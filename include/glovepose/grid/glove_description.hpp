@@ -16,8 +16,11 @@
 ///   ],
 ///   "dofs": [
 ///     {"name": "thumb_base_abduction", "row": 0, "col": 0},
+///     {"name": "index_base_flexion", "row": 1, "col": 1, "min_degrees": -20, "max_degrees": 100},
 ///     ...
-///   ]
+///   ],
+///   "rate_hz": 20,
+///   "calibration": {"median_seconds": 0.333, "flat_relative_range": 0.0005}
 /// }
 /// ```
 ///
@@ -26,7 +29,15 @@
 ///   the two maps), unique non-empty names, one cell per slot.
 /// - `dofs`: the 25 DoFs, each named by its hand::kDofs name, in any order, each exactly once, one DoF
 ///   per slot of the single pose map (`row`, `col` 0..4).
-/// - Every listed key is required and no other key is accepted (a misspelt key is an error, not a
+/// - Optional (absent: the defaults, which are the built-in glove's): a DoF's `min_degrees` and
+///   `max_degrees` (both or neither; min < max): the glove's own joint limits for that DoF, which a
+///   model trained for the glove records and normalises its outputs by (default: hand::kDofs');
+///   `rate_hz`: the glove's frame rate (positive); `calibration.median_seconds`: the time the
+///   on-the-fly calibration's running median spans (positive; default 1/3 s, the paper's 20 frames
+///   at 60 Hz); `calibration.flat_relative_range`: a sensor whose calibrated range is within this
+///   fraction of its absolute value is flat and zeroed (>= 0; default 0.01, tuned for capacitance: a
+///   resistive sensor with a large DC offset needs a smaller one).
+/// - Every other listed key is required and no other key is accepted (a misspelt key is an error, not a
 ///   silently ignored field); numbers are non-negative integers written without fraction or exponent.
 ///
 /// Set-up code: every malformed input is a glovepose::Error naming the field, cell or DoF and what
@@ -36,9 +47,11 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <fstream>
 #include <initializer_list>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,15 +70,48 @@ inline constexpr int kGloveFormatVersion = 1;
 /// @brief Largest glove description file read() accepts, bytes (a 50-cell glove takes about 4 KiB).
 inline constexpr std::size_t kMaxGloveFileBytes = 1 << 20;
 
-/// @brief A glove: id, cell names (one per sensor cell, in cell-id order) and its GridMap.
-/// Immutable and validated on construction.
+/// @brief How a glove is calibrated (description key "calibration"). The defaults are the paper's.
+struct GloveCalibration {
+  /// Time the on-the-fly calibration's running median spans, s: 20 frames at 60 Hz.
+  double median_seconds = 1.0 / 3.0;
+  /// A sensor whose calibrated range is within this fraction of max(|min|, |max|) is flat (zeroed).
+  double flat_relative_range = 0.01;  // sensor::CalibrationConfig's default (test_glove_description checks)
+
+  /// @brief The median window in frames at `frames_per_second` (at least 1).
+  int median_frames(double frames_per_second) const noexcept {
+    const double frames = std::round(median_seconds * frames_per_second);
+    return frames < 1.0 ? 1 : (frames > 1e6 ? 1000000 : static_cast<int>(frames));
+  }
+  /// @brief Same settings.
+  friend bool operator==(const GloveCalibration& a, const GloveCalibration& b) noexcept {
+    return a.median_seconds == b.median_seconds && a.flat_relative_range == b.flat_relative_range;
+  }
+};
+
+/// @brief A DoF's own limits in a glove description, degrees (min < max).
+struct DofLimitsDegrees {
+  double min;  ///< Lower limit, degrees.
+  double max;  ///< Upper limit, degrees.
+};
+
+/// @brief What a glove description may add to its cells and slots: its joint limits, frame rate
+/// and calibration. Every field's default is the built-in glove's.
+struct GloveSettings {
+  std::array<std::optional<DofLimitsDegrees>, hand::kDofCount> limits_degrees{};  ///< Per DoF; none: hand::kDofs'.
+  std::optional<double> rate_hz;                                                  ///< Frames per second, if known.
+  GloveCalibration calibration{};                                                 ///< Median window and flat rule.
+};
+
+/// @brief A glove: id, cell names (one per sensor cell, in cell-id order), its GridMap and its
+/// settings (joint limits, rate, calibration). Immutable and validated on construction.
 class GloveDescription {
  public:
   /// @brief Describes a glove. Throws glovepose::Error when the id is empty, the number of names is
-  /// not the map's cell count, or a name is empty or used twice.
-  GloveDescription(std::string id, std::vector<std::string> cell_names, GridMap map)
-      : id_(std::move(id)), cell_names_(std::move(cell_names)), map_(std::move(map)) {
+  /// not the map's cell count, a name is empty or used twice, or a setting is out of its range.
+  GloveDescription(std::string id, std::vector<std::string> cell_names, GridMap map, GloveSettings settings = {})
+      : id_(std::move(id)), cell_names_(std::move(cell_names)), map_(std::move(map)), settings_(settings) {
     if (id_.empty()) throw Error("GloveDescription: empty id, expected a glove id such as 'glauser2019-44'");
+    check_settings(settings_, "GloveDescription '" + id_ + "': ");
     if (static_cast<int>(cell_names_.size()) != map_.cell_count())
       throw Error("GloveDescription '" + id_ + "': " + std::to_string(cell_names_.size()) + " cell names, expected " +
                   std::to_string(map_.cell_count()) + " (one per cell of the grid map)");
@@ -96,6 +142,23 @@ class GloveDescription {
   const GridMap& map() const noexcept { return map_; }
   /// @brief Number of sensor cells.
   int cell_count() const noexcept { return map_.cell_count(); }
+  /// @brief Joint limits, rate and calibration as described.
+  const GloveSettings& settings() const noexcept { return settings_; }
+  /// @brief The calibration's median window and flat-sensor rule.
+  const GloveCalibration& calibration() const noexcept { return settings_.calibration; }
+  /// @brief The glove's frame rate, when the description gives one.
+  std::optional<double> rate_hz() const noexcept { return settings_.rate_hz; }
+  /// @brief The joint limits a model for this glove normalises its outputs by: the description's
+  /// where it gives them, hand::kDofs' elsewhere.
+  hand::JointLimits joint_limits() const {
+    hand::Angles lo{}, hi{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const auto& own = settings_.limits_degrees[d];
+      lo[d] = own ? own->min * kRadiansPerDegree : hand::kDofs[d].min;
+      hi[d] = own ? own->max * kRadiansPerDegree : hand::kDofs[d].max;
+    }
+    return hand::JointLimits(lo, hi);
+  }
 
   /// @brief Cell id of the cell called `name`; throws glovepose::Error if no cell has that name.
   /// (Selects the columns of a bigger glove's data for a glove made of some of its cells.)
@@ -107,9 +170,14 @@ class GloveDescription {
     return static_cast<int>(it - cell_names_.begin());
   }
 
-  /// @brief Same id, cell names and slots.
+  /// @brief Same id, cell names, slots and settings.
   friend bool operator==(const GloveDescription& a, const GloveDescription& b) noexcept {
     if (a.id_ != b.id_ || a.cell_names_ != b.cell_names_) return false;
+    if (a.settings_.rate_hz != b.settings_.rate_hz || !(a.settings_.calibration == b.settings_.calibration)) return false;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const auto &p = a.settings_.limits_degrees[d], &q = b.settings_.limits_degrees[d];
+      if (p.has_value() != q.has_value() || (p && (p->min != q->min || p->max != q->max))) return false;
+    }
     const auto same = [](const Slot& s, const Slot& t) { return s.channel == t.channel && s.row == t.row && s.col == t.col; };
     for (std::size_t c = 0; c < a.cell_names_.size(); ++c)
       if (!same(a.map_.cell_slots()[c], b.map_.cell_slots()[c])) return false;
@@ -136,10 +204,17 @@ class GloveDescription {
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const Slot& s = map_.dof_slots()[d];
       out += "    {\"name\": " + nn::json::quote(hand::kDofs[d].name) + ", \"row\": " + std::to_string(s.row) +
-             ", \"col\": " + std::to_string(s.col) + "}";
-      out += d + 1 < hand::kDofCount ? ",\n" : "\n";
+             ", \"col\": " + std::to_string(s.col);
+      if (const auto& own = settings_.limits_degrees[d])
+        out += ", \"min_degrees\": " + shortest(own->min) + ", \"max_degrees\": " + shortest(own->max);
+      out += d + 1 < hand::kDofCount ? "},\n" : "}\n";
     }
-    return out + "  ]\n}\n";
+    out += "  ]";
+    if (settings_.rate_hz) out += ",\n  \"rate_hz\": " + shortest(*settings_.rate_hz);
+    if (!(settings_.calibration == GloveCalibration{}))
+      out += ",\n  \"calibration\": {\"median_seconds\": " + shortest(settings_.calibration.median_seconds) +
+             ", \"flat_relative_range\": " + shortest(settings_.calibration.flat_relative_range) + "}";
+    return out + "\n}\n";
   }
 
   /// @brief Parses JSON text in the file format above. Throws glovepose::Error naming the field,
@@ -160,7 +235,7 @@ class GloveDescription {
       throw fail("'version' is " + describe(version) + ", expected " + std::to_string(kGloveFormatVersion) +
                  " (the version this build of glovepose reads)");
     // After format and version: another file or version is named as such, not by its first unknown key.
-    check_keys(root, {"format", "version", "id", "cells", "dofs"}, "the top-level object");
+    check_keys(root, {"format", "version", "id", "cells", "dofs", "rate_hz", "calibration"}, "the top-level object");
     const std::string id = string_field(root, "id", "the top-level object");
     if (id.empty()) throw fail("'id' is empty, expected a glove id such as 'glauser2019-44'");
 
@@ -173,6 +248,22 @@ class GloveDescription {
                  std::to_string(kStretchChannels) + " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) +
                  ") have only " + std::to_string(kStretchValues) + " slots, expected at most " +
                  std::to_string(kStretchValues) + " cells");
+    GloveSettings settings;
+    if (root.find("rate_hz")) settings.rate_hz = number_field(root, "rate_hz", "the top-level object");
+    if (const nn::json::Value* calibration = root.find("calibration")) {
+      const std::string where = "'calibration'";
+      if (calibration->kind != nn::json::Value::Kind::Object)
+        throw fail(where + " is " + describe(*calibration) + ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
+      check_keys(*calibration, {"median_seconds", "flat_relative_range"}, where);
+      if (calibration->find("median_seconds")) settings.calibration.median_seconds = number_field(*calibration, "median_seconds", where);
+      if (calibration->find("flat_relative_range"))
+        settings.calibration.flat_relative_range = number_field(*calibration, "flat_relative_range", where);
+    }
+    try {
+      check_settings(settings, "");
+    } catch (const Error& e) {
+      throw fail(e.what());
+    }
     std::vector<std::string> names;
     std::vector<Slot> cell_slots;
     std::array<int, kStretchValues> cell_owner{};
@@ -214,7 +305,7 @@ class GloveDescription {
       std::string where = "dofs[" + std::to_string(e) + "]";
       if (entry.kind != nn::json::Value::Kind::Object)
         throw fail(where + " is " + describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
-      check_keys(entry, {"name", "row", "col"}, where);
+      check_keys(entry, {"name", "row", "col", "min_degrees", "max_degrees"}, where);
       const std::string name = string_field(entry, "name", where);
       const std::size_t d = dof_named(name, where);
       where += " ('" + name + "')";
@@ -229,6 +320,17 @@ class GloveDescription {
       owner = static_cast<int>(d);
       dof_entry[d] = static_cast<int>(e);
       dof_slots[d] = slot;
+      const bool has_min = entry.find("min_degrees") != nullptr, has_max = entry.find("max_degrees") != nullptr;
+      if (has_min != has_max)
+        throw fail(where + " has '" + (has_min ? "min_degrees" : "max_degrees") + "' without '" +
+                   (has_min ? "max_degrees" : "min_degrees") + "', expected both limits or neither");
+      if (has_min) {
+        const double lo = number_field(entry, "min_degrees", where), hi = number_field(entry, "max_degrees", where);
+        if (!(lo < hi) || lo < -360.0 || hi > 360.0)
+          throw fail(where + " has limits [" + shortest(lo) + ", " + shortest(hi) +
+                     "] degrees, expected min_degrees < max_degrees within [-360, 360]");
+        settings.limits_degrees[d] = DofLimitsDegrees{lo, hi};
+      }
     }
     std::string missing;
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
@@ -238,7 +340,7 @@ class GloveDescription {
                  " DoFs exactly once");
 
     try {
-      return GloveDescription(id, std::move(names), GridMap(std::move(cell_slots), dof_slots));
+      return GloveDescription(id, std::move(names), GridMap(std::move(cell_slots), dof_slots), settings);
     } catch (const Error& e) {
       throw fail(e.what());  // not reached for a file that passed the checks above; kept for safety
     }
@@ -278,7 +380,38 @@ class GloveDescription {
   static GloveDescription from_metadata(const std::string& text) { return from_json(text); }
 
  private:
+  static constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
+
   static Error fail(const std::string& what) { return Error("glove description: " + what); }
+
+  // The settings' ranges (the limits' order is checked where they are read, naming the DoF entry).
+  static void check_settings(const GloveSettings& s, const std::string& prefix) {
+    if (s.rate_hz && !(*s.rate_hz > 0.0 && *s.rate_hz <= 1e6))
+      throw Error(prefix + "'rate_hz' is " + shortest(*s.rate_hz) + ", expected frames per second > 0 (at most 1e6)");
+    if (!(s.calibration.median_seconds > 0.0 && s.calibration.median_seconds <= 3600.0))
+      throw Error(prefix + "'calibration.median_seconds' is " + shortest(s.calibration.median_seconds) +
+                  ", expected a time > 0 s (at most 3600)");
+    if (!(s.calibration.flat_relative_range >= 0.0 && s.calibration.flat_relative_range < 1.0))
+      throw Error(prefix + "'calibration.flat_relative_range' is " + shortest(s.calibration.flat_relative_range) +
+                  ", expected a fraction >= 0 and < 1 (0.01: a range within 1% of the value is flat)");
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
+        throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + shortest(own->min) + ", " + shortest(own->max) +
+                    "] degrees, expected finite min < max");
+  }
+
+  // Shortest text that reads back as the same double.
+  static std::string shortest(double v) {
+    char buffer[32];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+    return std::string(buffer, result.ptr);
+  }
+
+  static double number_field(const nn::json::Value& object, const char* key, const std::string& where) {
+    const nn::json::Value& v = field(object, key, where);
+    if (v.kind != nn::json::Value::Kind::Number) throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a number");
+    return v.number;
+  }
 
   static std::string describe(const nn::json::Value& v) {
     switch (v.kind) {
@@ -344,6 +477,7 @@ class GloveDescription {
   std::string id_;
   std::vector<std::string> cell_names_;
   GridMap map_;
+  GloveSettings settings_;
 };
 
 }  // namespace glovepose::grid

@@ -39,8 +39,9 @@ struct CalibrationRun {
 
 /// @brief The calibration frames of every selected run (by subject, session and glove of `filter`)
 /// that has a complete on-the-fly range.
-inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& data, const FrameFilter& filter, int median_window = 20) {
-  const std::map<std::int64_t, sensor::CalibrationRange> ranges = onthefly_ranges(data, median_window);
+inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& data, const FrameFilter& filter,
+                                                               const grid::GloveCalibration& calibration = {}) {
+  const std::map<std::int64_t, sensor::CalibrationRange> ranges = onthefly_ranges(data, calibration);
   FrameFilter all_kinds = filter;
   all_kinds.keep_outliers = true;
   std::map<std::int64_t, CalibrationRun> runs;
@@ -110,7 +111,7 @@ inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, 
     throw Error("the pose-guided calibration reads " + std::to_string(offsets.cells()) + " cells, the model " + std::to_string(model.info.inputs));
   check_guided(data, offsets.sequence());
   std::vector<std::int64_t> incomplete;
-  const auto features = guided_features(model, offsets.sequence(), calibration_runs(data, filter), pool, &incomplete);
+  const auto features = guided_features(model, offsets.sequence(), calibration_runs(data, filter, model.glove.calibration()), pool, &incomplete);
   if (!incomplete.empty())
     throw Error("subject " + std::to_string(incomplete.front() >> 40) + ", session " + std::to_string(incomplete.front() & 0xfffff) +
                 ": the calibration sequence was not performed to the end, expected every step of '" + offsets.sequence().id() + "'");
@@ -162,8 +163,9 @@ inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Seq
                                      int folds = 5) {
   check_guided(data, sequence);
   const hand::JointLimits limits = joint_limits(model.info);
-  const std::map<std::int64_t, Eigen::VectorXd> features = guided_features(model, sequence, calibration_runs(data, filter), pool);
-  const Samples session = make_samples(data, filter, CalibrationMode::OnTheFly, nullptr, limits);
+  const std::map<std::int64_t, Eigen::VectorXd> features =
+      guided_features(model, sequence, calibration_runs(data, filter, model.glove.calibration()), pool);
+  const Samples session = make_samples(data, filter, CalibrationMode::OnTheFly, nullptr, limits, 1, model.glove.calibration());
   const std::vector<float> predicted = model.predict(session, pool);
   std::map<std::int64_t, Eigen::VectorXd> residual_sum;
   std::map<std::int64_t, long> residual_count;

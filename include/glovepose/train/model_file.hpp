@@ -38,7 +38,8 @@ inline hand::JointLimits joint_limits(const nn::ModelInfo& info) {
 }
 
 /// @brief Metadata for a new model of `architecture` and `width` for `glove`, normalised by the
-/// reference joint limits, with inputs calibrated by `mode` (`range`: the training range).
+/// glove's joint limits (its description's, else the reference's), with inputs calibrated by `mode`
+/// (`range`: the training range).
 inline nn::ModelInfo make_model_info(const std::string& architecture, int width, const grid::GloveDescription& glove, CalibrationMode mode,
                                      const sensor::CalibrationRange* range) {
   nn::ModelInfo info;
@@ -48,7 +49,7 @@ inline nn::ModelInfo make_model_info(const std::string& architecture, int width,
   info.glove = glove.id();
   if (glove != grid::GloveDescription::glauser2019()) info.glove_description = glove.to_metadata();
   info.calibration = to_string(mode);
-  const hand::JointLimits limits;
+  const hand::JointLimits limits = glove.joint_limits();
   info.joint_limits_min.assign(limits.min().begin(), limits.min().end());
   info.joint_limits_max.assign(limits.max().begin(), limits.max().end());
   if (mode == CalibrationMode::Training && range) {
@@ -79,7 +80,7 @@ struct TrainedModel {
       throw Error("the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
     const Eigen::Map<const Eigen::VectorXd> lo(info.calibration_min->data(), static_cast<Eigen::Index>(info.calibration_min->size()));
     const Eigen::Map<const Eigen::VectorXd> hi(info.calibration_max->data(), static_cast<Eigen::Index>(info.calibration_max->size()));
-    return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()));
+    return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()), calibration_config(glove.calibration()));
   }
 
   /// @brief Normalised predictions (frames x 25) for prepared samples.

@@ -56,10 +56,9 @@ struct CsvTake {
 
 /// @brief How the takes are read.
 struct CsvImportOptions {
-  double frame_rate = 0.0;                   ///< Frames per second of the glove (> 0): the dataset's rate, and the spacing without timestamps.
+  double frame_rate = 0.0;                   ///< Frames per second (> 0; 0: the glove description's rate_hz): the dataset's rate, and the spacing without timestamps.
   bool degrees = false;                      ///< Angle columns are in degrees (stored as radians).
   std::vector<std::string> ignored_columns;  ///< Columns to skip (e.g. a frame counter).
-  sensor::CalibrationConfig flat_rule{};     ///< The rule that calls a sensor flat (its min_relative_range).
   bool allow_flat = false;                   ///< Keep a calibration take where a sensor is flat (listed in flat_sensors()).
 };
 
@@ -74,11 +73,13 @@ struct FlatSensor {
 /// @brief Reads takes into one dataset for one glove.
 class RecordingImporter {
  public:
-  /// @brief An importer for `glove`. Throws glovepose::Error unless options.frame_rate is a positive
-  /// finite number and no ignored column is also a cell or DoF name.
+  /// @brief An importer for `glove`; a sensor is flat by the glove's calibration rule
+  /// (calibration.flat_relative_range). Throws glovepose::Error unless the rate (options.frame_rate,
+  /// else the description's rate_hz) is a positive finite number that the description does not
+  /// contradict, and no ignored column is also a cell or DoF name.
   RecordingImporter(grid::GloveDescription glove, CsvImportOptions options)
       : glove_(std::move(glove)), options_(std::move(options)),
-        data_(static_cast<std::size_t>(glove_.cell_count()), 0, glove_.id(), checked_rate(options_.frame_rate)) {
+        data_(static_cast<std::size_t>(glove_.cell_count()), 0, glove_.id(), checked_rate(options_.frame_rate, glove_)) {
     for (const std::string& name : options_.ignored_columns)
       if (cell_of(name) >= 0 || dof_of(name) >= 0)
         throw Error("ignored column '" + name + "' is a cell or DoF of glove '" + glove_.id() + "', expected another column");
@@ -120,9 +121,15 @@ class RecordingImporter {
     int index = 0;  // cell or DoF index
   };
 
-  static double checked_rate(double rate) {
+  static double checked_rate(double rate, const grid::GloveDescription& glove) {
+    const std::optional<double> described = glove.rate_hz();
+    if (rate == 0.0 && described) return *described;
     if (!(rate > 0.0) || !std::isfinite(rate))
-      throw Error("frame rate " + io::detail::number_text(rate) + ", expected a positive number of frames per second");
+      throw Error("frame rate " + io::detail::number_text(rate) +
+                  ", expected a positive number of frames per second (or a glove description with 'rate_hz')");
+    if (described && *described != rate)
+      throw Error("frame rate " + io::detail::number_text(rate) + ", but glove '" + glove.id() + "' is described at " +
+                  io::detail::number_text(*described) + " frames per second, expected the description's rate (or none)");
     return rate;
   }
   int cell_of(const std::string& name) const {
@@ -279,6 +286,8 @@ class RecordingImporter {
   // Every calibration run of the frames from `first` on: a flat cell is an error, or kept and listed.
   void check_calibration_runs(std::size_t first, const std::vector<std::size_t>& line_of, const std::string& path) {
     const std::size_t cells = data_.cell_count;
+    sensor::CalibrationConfig flat_rule;
+    flat_rule.min_relative_range = glove_.calibration().flat_relative_range;
     for (std::size_t begin = first; begin < data_.frames();) {
       std::size_t end = begin + 1;
       while (end < data_.frames() && data_.same_run(begin, end)) ++end;
@@ -289,15 +298,15 @@ class RecordingImporter {
             lo = std::min(lo, static_cast<double>(data_.cells[i * cells + c]));
             hi = std::max(hi, static_cast<double>(data_.cells[i * cells + c]));
           }
-          if (!sensor::is_flat_range(lo, hi, options_.flat_rule)) continue;
+          if (!sensor::is_flat_range(lo, hi, flat_rule)) continue;
           FlatSensor flat{path, line_of[begin - first], line_of[end - 1 - first], glove_.cell_names()[c], lo, hi};
           if (!options_.allow_flat)
             throw Error("CSV file '" + path + "', lines " + std::to_string(flat.first_line) + "-" + std::to_string(flat.last_line) +
                         " (calibration of subject " + std::to_string(data_.subject[begin]) + ", session " +
                         std::to_string(data_.session[begin]) + "), column '" + flat.cell + "': flat (" + io::detail::number_text(lo) +
-                        " to " + io::detail::number_text(hi) + ", a range within " + io::detail::number_text(100.0 * options_.flat_rule.min_relative_range) +
+                        " to " + io::detail::number_text(hi) + ", a range within " + io::detail::number_text(100.0 * flat_rule.min_relative_range) +
                         "% of its value), expected a calibration that moves every sensor (calibrated, it would read 0; "
-                        "allow flat sensors to keep the take)");
+                        "allow flat sensors to keep the take, or give the glove description a smaller calibration.flat_relative_range)");
           flat_.push_back(std::move(flat));
         }
       }

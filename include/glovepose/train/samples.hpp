@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../sensor/calibration.hpp"
 #include "dataset.hpp"
@@ -108,9 +109,16 @@ inline std::int64_t run_key(const Dataset& data, std::size_t i) noexcept {
          static_cast<std::int64_t>(data.session[i]);
 }
 
-/// @brief Per-cell min and max over the kept frames: the "training" calibration. Throws
-/// glovepose::Error when no frame is kept.
-inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter) {
+/// @brief The calibration settings of a glove's description: its flat-sensor rule, the default clamp.
+inline sensor::CalibrationConfig calibration_config(const grid::GloveCalibration& calibration) noexcept {
+  sensor::CalibrationConfig config;
+  config.min_relative_range = calibration.flat_relative_range;
+  return config;
+}
+
+/// @brief Per-cell min and max over the kept frames: the "training" calibration, flat sensors by
+/// the glove's rule. Throws glovepose::Error when no frame is kept.
+inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter, const grid::GloveCalibration& calibration = {}) {
   const std::size_t cells = data.cell_count;
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cells), HUGE_VAL);
   Eigen::VectorXd hi = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cells), -HUGE_VAL);
@@ -125,19 +133,22 @@ inline sensor::CalibrationRange training_range(const Dataset& data, const FrameF
     }
   }
   if (kept == 0) throw Error("training calibration: no frame of the dataset passes the selection, expected at least one");
-  return sensor::CalibrationRange(lo, hi, cell_names(cells));
+  return sensor::CalibrationRange(lo, hi, cell_names(cells), calibration_config(calibration));
 }
 
 /// @brief The on-the-fly range of every run (subject, glove, session) that has calibration frames:
-/// the paper's 20-frame median min-max over the session's calibration sequence.
-inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Dataset& data, int median_window = 20) {
+/// the running-median min-max over the session's calibration sequence, the median spanning the
+/// glove's median_seconds at the dataset's frame rate (the paper's 20 frames at 60 Hz by default),
+/// flat sensors by the glove's rule.
+inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Dataset& data, const grid::GloveCalibration& calibration = {}) {
+  const int median_window = calibration.median_frames(data.frame_rate());
   std::map<std::int64_t, sensor::OnTheFlyCalibrator> calibrators;
   const std::vector<std::string> names = cell_names(data.cell_count);
   Eigen::VectorXd frame(static_cast<Eigen::Index>(data.cell_count));
   for (std::size_t i = 0; i < data.frames(); ++i) {
     if (data.kind[i] != kKindCalibration) continue;
     auto it = calibrators.find(run_key(data, i));
-    if (it == calibrators.end()) it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window)).first;
+    if (it == calibrators.end()) it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration_config(calibration))).first;
     for (std::size_t c = 0; c < data.cell_count; ++c) frame(static_cast<Eigen::Index>(c)) = data.cells[i * data.cell_count + c];
     it->second.add(frame);
   }
@@ -150,15 +161,16 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Da
 /// @brief The kept frames of `data`, every `stride`-th, calibrated by `mode` (`range` is the
 /// training range for CalibrationMode::Training) with targets normalised by `limits`. Throws
 /// glovepose::Error when the dataset has no angles, a run lacks its calibration sequence in
-/// on-the-fly mode, or no frame is kept.
+/// on-the-fly mode, or no frame is kept. On the fly, the glove's `calibration` settings apply.
 inline Samples make_samples(const Dataset& data, const FrameFilter& filter, CalibrationMode mode,
-                            const sensor::CalibrationRange* range, const hand::JointLimits& limits, int stride = 1) {
+                            const sensor::CalibrationRange* range, const hand::JointLimits& limits, int stride = 1,
+                            const grid::GloveCalibration& calibration = {}) {
   if (!data.has_angles()) throw Error("samples: the dataset has no ground-truth angles, expected a recording with angles");
   if (stride < 1) throw Error("samples: stride " + std::to_string(stride) + ", expected >= 1");
   if (mode == CalibrationMode::Training && (range == nullptr || static_cast<std::size_t>(range->size()) != data.cell_count))
     throw Error("samples: training calibration needs a range of " + std::to_string(data.cell_count) + " cells");
   const std::map<std::int64_t, sensor::CalibrationRange> runs =
-      mode == CalibrationMode::OnTheFly ? onthefly_ranges(data) : std::map<std::int64_t, sensor::CalibrationRange>{};
+      mode == CalibrationMode::OnTheFly ? onthefly_ranges(data, calibration) : std::map<std::int64_t, sensor::CalibrationRange>{};
   Samples s;
   s.cells = static_cast<int>(data.cell_count);
   s.labelled = data.labelled_dofs();

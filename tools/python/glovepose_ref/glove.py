@@ -4,6 +4,7 @@ reads, for the built-in 44-cell glove or a glove description."""
 from __future__ import annotations
 
 import json
+import math
 from typing import List, Optional, Tuple
 
 #: hand::kDofs names, in DoF order (theta 9..33).
@@ -45,3 +46,25 @@ def glove_tables(glove: str, description: Optional[str]) -> Tuple[List[Tuple[int
     cells = [(int(c["channel"]), int(c["row"]), int(c["col"])) for c in desc["cells"]]
     by_name = {d["name"]: (int(d["row"]), int(d["col"])) for d in desc["dofs"]}
     return cells, [by_name[n] for n in DOF_NAMES]
+
+
+def glove_settings(description: Optional[str], joint_limits_min, joint_limits_max) -> dict:
+    """The description's settings (grid/glove_description.hpp), defaults where it has none:
+    median_seconds, flat_relative_range, rate_hz (None when not given), and the joint limits in
+    radians (the description's degrees where a DoF has them, else the given reference limits)."""
+    desc = json.loads(description) if description is not None else {}
+    calibration = desc.get("calibration", {})
+    lo, hi = list(joint_limits_min), list(joint_limits_max)
+    for entry in desc.get("dofs", []):
+        if "min_degrees" in entry:
+            d = DOF_NAMES.index(entry["name"])
+            lo[d] = float(entry["min_degrees"]) * (math.pi / 180.0)
+            hi[d] = float(entry["max_degrees"]) * (math.pi / 180.0)
+    return {"median_seconds": float(calibration.get("median_seconds", 1.0 / 3.0)),
+            "flat_relative_range": float(calibration.get("flat_relative_range", 0.01)),
+            "rate_hz": desc.get("rate_hz"), "joint_limits_min": lo, "joint_limits_max": hi}
+
+
+def median_frames(median_seconds: float, frames_per_second: float) -> int:
+    """GloveCalibration::median_frames: the window in frames (rounded half away from zero, >= 1)."""
+    return max(1, int(math.floor(median_seconds * frames_per_second + 0.5)))
