@@ -27,7 +27,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const glovepose::grid::GloveDescription again = glovepose::grid::GloveDescription::from_json(glove->to_json());
   GLOVEPOSE_FUZZ_REQUIRE(again == *glove);
-  GLOVEPOSE_FUZZ_REQUIRE(glove->cell_count() >= 1 && glove->cell_count() <= glovepose::grid::kStretchValues);
+  GLOVEPOSE_FUZZ_REQUIRE(glove->cell_count() >= 1 && glove->cell_count() <= glovepose::grid::kMaxGloveInputs);
+  const int on_maps = glove->cell_count() - glove->map().extra_input_count();
+  GLOVEPOSE_FUZZ_REQUIRE(on_maps >= 0 && on_maps <= glovepose::grid::kStretchValues);
   GLOVEPOSE_FUZZ_REQUIRE(static_cast<int>(glove->cell_names().size()) == glove->cell_count());
 
   const glovepose::hand::JointLimits limits = glove->joint_limits();  // throws (a finding) unless finite with min < max
@@ -40,5 +42,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::array<float, glovepose::grid::kStretchValues> maps{};
   GLOVEPOSE_FUZZ_REQUIRE(glove->map().to_stretch_maps(cells.data(), maps) == glovepose::Status::Ok);
   GLOVEPOSE_FUZZ_REQUIRE(glovepose::fuzz::all_finite(maps));
+  for (std::size_t c = 0; c < cells.size(); ++c) {  // a cell on its slot; an extra input on none
+    const glovepose::grid::Slot& slot = glove->map().cell_slots()[c];
+    if (slot.on_maps()) GLOVEPOSE_FUZZ_REQUIRE(maps[static_cast<std::size_t>(slot.flat())] == static_cast<float>(cells[c]));
+  }
   return 0;
 }

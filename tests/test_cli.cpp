@@ -133,6 +133,7 @@ TEST_CASE("cli: bad input and bad models are refused with the line, column or fi
   r = run("info --model " + kModel);
   CHECK(r.status == 0);
   CHECK(r.out.find("width: 4") != std::string::npos);
+  CHECK(r.out.find("inputs: 44 (44 stretch cells)\n") != std::string::npos);
 }
 
 namespace {
@@ -336,6 +337,56 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   r = run("predict --model " + model_file + " --in " + temp("main14.csv") + " --no-header");
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
+}
+
+TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a linear map and an FCN; the U-Net refuses it") {
+  // The 14 main-joint cells on their slots and cell 2 (a back-of-thumb cell) as an extra input.
+  const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42, 2};
+  const train::Dataset full = train::Dataset::read(small_corpus("extra"));
+  train::Dataset part(keep.size(), 0, "main14-extra", full.frame_rate());
+  part.timestamps = full.timestamps;
+  part.angles = full.angles;
+  part.subject = full.subject;
+  part.session = full.session;
+  part.glove = full.glove;
+  part.donning = full.donning;
+  part.kind = full.kind;
+  part.outlier = full.outlier;
+  for (std::size_t i = 0; i < full.frames(); ++i)
+    for (int c : keep) part.cells.push_back(full.cells[i * full.cell_count + static_cast<std::size_t>(c)]);
+  const std::string data = temp("extra15.safetensors"), glove_file = temp("extra15.json");
+  part.write(data);
+  const grid::GridMap paper = grid::GridMap::glauser2019();
+  std::vector<grid::Slot> slots;
+  std::vector<std::string> names;
+  for (int c : keep) {
+    slots.push_back(c == 2 ? grid::kOffMaps : paper.cell_slots()[static_cast<std::size_t>(c)]);
+    names.push_back(c == 2 ? "thumb_back" : "cell_" + std::to_string(c));
+  }
+  grid::GloveDescription("main14-extra", names, grid::GridMap(slots, paper.dof_slots())).write(glove_file);
+
+  Run r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --epochs 1 --batch 256 --out " + temp("extra_unet.safetensors"));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("the glove has 1 extra input (not on the stretch maps) and the U-Net reads only the maps") != std::string::npos);
+  for (const std::string model : {"linear", "fcn:16"}) {
+    CAPTURE(model);
+    const std::string out = temp("extra_" + model.substr(0, 3) + ".safetensors");
+    r = run("train --data " + data + " --glove " + glove_file + " --model " + model + " --exclude-subjects 2 --epochs 1 --batch 256 --out " + out);
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    r = run("eval --model " + out + " --data " + data + " --subjects 2 --json");
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(std::isfinite(json_number(r.out, "mean_deg")));
+    if (model == "linear") continue;  // predict and info run the real-time networks
+    r = run("info --model " + out);
+    CHECK_MESSAGE(r.out.find("1 extra input (thumb_back)") != std::string::npos, r.out);
+    {
+      std::ofstream rows(temp("extra15.csv"));
+      rows << "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,-0.1,-0.2,-0.3,-0.4,-0.5,0.25\n";
+    }
+    r = run("predict --model " + out + " --in " + temp("extra15.csv") + " --no-header");
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
+  }
 }
 
 namespace {

@@ -126,7 +126,7 @@ TEST_CASE("glove description: more cells than the 50 slots of the stretch maps i
   for (int c = 0; c < 60; ++c)
     cells += std::string(cells.empty() ? "" : ", ") + cell_entry("c" + std::to_string(c), {c / 25 % 2, c / 5 % 5, c % 5});
   CHECK_THROWS_WITH_AS(GloveDescription::from_json(glove_text("[" + cells + "]")),
-                       doctest::Contains("'cells' lists 60 cells, but the stretch maps (2 x 5 x 5) have only 50 slots"), Error);
+                       doctest::Contains("cells[50] ('c50') is stretch cell 51, but the stretch maps (2 x 5 x 5) have only 50 slots"), Error);
   // 50 cells fill every slot and are fine.
   cells.clear();
   for (int c = 0; c < 50; ++c)

@@ -101,6 +101,7 @@ class BasicPoseModel {
                   " (metadata 'inputs')");
     if (glove_.id() != info_.glove)
       throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
+    if (network_.unet()) glove_.map().require_maps_only("model '" + info_.architecture + "'");
     std::optional<sensor::TraceLayout> layout = std::move(options.layout);
     if (!layout && glove_.id() == grid::GloveDescription::glauser2019().id()) layout = sensor::TraceLayout::glauser2019();
     if (layout) {

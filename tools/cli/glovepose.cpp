@@ -171,6 +171,14 @@ int info(const Options& o) {
   const auto& net = model.network();
   std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture.c_str(), model.info().width,
               model.info().glove.c_str(), net.parameter_count());
+  const grid::GloveDescription& glove = model.glove();
+  std::string extra;  // the inputs that are not on the stretch maps, by name
+  for (int c = 0; c < glove.cell_count(); ++c)
+    if (!glove.map().cell_slots()[static_cast<std::size_t>(c)].on_maps())
+      extra += (extra.empty() ? "" : ", ") + glove.cell_names()[static_cast<std::size_t>(c)];
+  std::printf("inputs: %d (%d stretch cells", glove.cell_count(), glove.cell_count() - glove.map().extra_input_count());
+  if (!extra.empty()) std::printf(", %d extra input%s (%s)", glove.map().extra_input_count(), glove.map().extra_input_count() > 1 ? "s" : "", extra.c_str());
+  std::printf(")\n");
   if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
   if (!model.info().labelled_dofs.empty())
     std::printf("trained DoFs: %s (the others read the rest pose)\n", model.info().labelled_dofs.c_str());

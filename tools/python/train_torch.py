@@ -122,7 +122,9 @@ class Pipeline(nn.Module):
         super().__init__()
         self.network = network
         self.unet = isinstance(network, UNet)
-        self.register_buffer("cell_index", torch.tensor([ch * 25 + r * 5 + c for ch, r, c in cell_slots]), persistent=False)
+        # An extra input (slot None) is read by the FCN only; main() refuses a U-Net for such a glove.
+        self.register_buffer("cell_index", torch.tensor([ch * 25 + r * 5 + c for ch, r, c in cell_slots] if self.unet else []),
+                             persistent=False)
         self.register_buffer("dof_index", torch.tensor([r * 5 + c for r, c in dof_slots]), persistent=False)
 
     def forward(self, cells: torch.Tensor) -> torch.Tensor:
@@ -200,6 +202,10 @@ def main() -> int:
 
     kind, _, size = args.model.partition(":")
     if kind == "unet":
+        extra = sum(slot is None for slot in cell_slots)
+        if extra:
+            sys.exit(f"train_torch: the glove has {extra} extra input(s) (not on the stretch maps) and the U-Net reads only the maps, "
+                     "expected a glove whose inputs are all stretch cells, or --model fcn:H")
         network = UNet(int(size or 64))
     elif kind == "fcn":
         network = FCN(len(cell_slots), int(size or 2048), 25)

@@ -1,7 +1,8 @@
 /// @file glove_description.hpp
 /// @brief A glove described by data: its id, its sensor cells (how many, their names, where each sits
-/// in the 2x5x5 stretch maps) and where each of the 25 DoFs sits in the 5x5 pose map; read from and
-/// written to a small JSON file, so a glove with another layout needs no code.
+/// in the 2x5x5 stretch maps), its extra inputs (not on the maps), where each of the 25 DoFs sits in
+/// the 5x5 pose map and its settings; read from and written to a small JSON file, so a glove with
+/// another layout needs no code.
 ///
 /// File format ("glovepose-glove", version 1; also in weights_format.md, "Glove description files"):
 ///
@@ -13,6 +14,7 @@
 ///   "cells": [
 ///     {"name": "cell_0", "channel": 0, "row": 0, "col": 2},
 ///     ...
+///     {"name": "wrist_imu_pitch", "extra": true},
 ///   ],
 ///   "dofs": [
 ///     {"name": "thumb_base_abduction", "row": 0, "col": 0},
@@ -24,9 +26,12 @@
 /// }
 /// ```
 ///
-/// - `cells`: one entry per sensor cell, in cell-id order (cell i of a frame is entry i). `channel` 0
-///   is the map of stretch along the fingers, 1 across; `row`, `col` 0..4. 1 to 50 cells (the slots of
-///   the two maps), unique non-empty names, one cell per slot.
+/// - `cells`: one entry per input, in cell-id order (input i of a frame is entry i). A stretch cell
+///   has `channel` (0: the map of stretch along the fingers, 1: across), `row`, `col` 0..4; at most
+///   50 (the slots of the two maps), one per slot. An input that is not a stretch cell (an IMU angle,
+///   a bend sensor over the wrist) has `"extra": true` instead of a slot: the FCN and the linear map
+///   read it beside the cells, the U-Net (which reads only the maps) refuses such a glove. 1 to
+///   kMaxGloveInputs inputs with unique non-empty names.
 /// - `dofs`: the 25 DoFs, each named by its hand::kDofs name, in any order, each exactly once, one DoF
 ///   per slot of the single pose map (`row`, `col` 0..4).
 /// - Optional (absent: the defaults, which are the built-in glove's): a DoF's `min_degrees` and
@@ -69,6 +74,8 @@ inline constexpr const char* kGloveFormat = "glovepose-glove";
 inline constexpr int kGloveFormatVersion = 1;
 /// @brief Largest glove description file read() accepts, bytes (a 50-cell glove takes about 4 KiB).
 inline constexpr std::size_t kMaxGloveFileBytes = 1 << 20;
+/// @brief Most inputs (stretch cells and extra inputs) a glove may have.
+inline constexpr int kMaxGloveInputs = 256;
 
 /// @brief How a glove is calibrated (description key "calibration"). The defaults are the paper's.
 struct GloveCalibration {
@@ -196,8 +203,10 @@ class GloveDescription {
                       ",\n  \"cells\": [\n";
     for (std::size_t c = 0; c < cell_names_.size(); ++c) {
       const Slot& s = map_.cell_slots()[c];
-      out += "    {\"name\": " + nn::json::quote(cell_names_[c]) + ", \"channel\": " + std::to_string(s.channel) +
-             ", \"row\": " + std::to_string(s.row) + ", \"col\": " + std::to_string(s.col) + "}";
+      out += "    {\"name\": " + nn::json::quote(cell_names_[c]);
+      out += s.on_maps() ? ", \"channel\": " + std::to_string(s.channel) + ", \"row\": " + std::to_string(s.row) +
+                               ", \"col\": " + std::to_string(s.col) + "}"
+                         : ", \"extra\": true}";
       out += c + 1 < cell_names_.size() ? ",\n" : "\n";
     }
     out += "  ],\n  \"dofs\": [\n";
@@ -243,11 +252,10 @@ class GloveDescription {
     const nn::json::Value& cells = field(root, "cells", "the top-level object");
     if (cells.kind != nn::json::Value::Kind::Array) throw fail("'cells' is " + describe(cells) + ", expected an array of cells");
     if (cells.items.empty()) throw fail("'cells' is empty, expected at least one cell");
-    if (cells.items.size() > static_cast<std::size_t>(kStretchValues))
-      throw fail("'cells' lists " + std::to_string(cells.items.size()) + " cells, but the stretch maps (" +
-                 std::to_string(kStretchChannels) + " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) +
-                 ") have only " + std::to_string(kStretchValues) + " slots, expected at most " +
-                 std::to_string(kStretchValues) + " cells");
+    if (cells.items.size() > static_cast<std::size_t>(kMaxGloveInputs))
+      throw fail("'cells' lists " + std::to_string(cells.items.size()) + " inputs, expected at most " +
+                 std::to_string(kMaxGloveInputs) + " (at most " + std::to_string(kStretchValues) +
+                 " stretch cells, one per slot of the maps, and extra inputs)");
     GloveSettings settings;
     if (root.find("rate_hz")) settings.rate_hz = number_field(root, "rate_hz", "the top-level object");
     if (const nn::json::Value* calibration = root.find("calibration")) {
@@ -268,18 +276,33 @@ class GloveDescription {
     std::vector<Slot> cell_slots;
     std::array<int, kStretchValues> cell_owner{};
     cell_owner.fill(-1);
+    int stretch_cells = 0;
     for (std::size_t c = 0; c < cells.items.size(); ++c) {
       const nn::json::Value& cell = cells.items[c];
       std::string where = "cells[" + std::to_string(c) + "]";
       if (cell.kind != nn::json::Value::Kind::Object)
         throw fail(where + " is " + describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
-      check_keys(cell, {"name", "channel", "row", "col"}, where);
+      check_keys(cell, {"name", "channel", "row", "col", "extra"}, where);
       const std::string name = string_field(cell, "name", where);
       if (name.empty()) throw fail(where + ": 'name' is empty, expected a cell name");
       where += " ('" + name + "')";
       for (std::size_t earlier = 0; earlier < c; ++earlier)
         if (names[earlier] == name)
           throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
+      if (const nn::json::Value* extra = cell.find("extra")) {
+        if (extra->kind != nn::json::Value::Kind::Bool || !extra->boolean)
+          throw fail(where + ": 'extra' is " + describe(*extra) + ", expected true (an input that is not on the stretch maps) or no 'extra'");
+        for (const char* key : {"channel", "row", "col"})
+          if (cell.find(key))
+            throw fail(where + " has 'extra' and '" + key + "', expected either a slot (channel, row, col) or \"extra\": true");
+        names.push_back(name);
+        cell_slots.push_back(kOffMaps);
+        continue;
+      }
+      if (++stretch_cells > kStretchValues)
+        throw fail(where + " is stretch cell " + std::to_string(stretch_cells) + ", but the stretch maps (" + std::to_string(kStretchChannels) +
+                   " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) + ") have only " + std::to_string(kStretchValues) +
+                   " slots, expected at most " + std::to_string(kStretchValues) + " stretch cells (an input not on the maps is \"extra\": true)");
       const Slot slot{index_field(cell, "channel", kStretchChannels, where), index_field(cell, "row", kGridSize, where),
                       index_field(cell, "col", kGridSize, where)};
       int& owner = cell_owner[static_cast<std::size_t>(slot.flat())];

@@ -2,6 +2,10 @@
 /// @brief The paper's 2D data layout (Sec. 4.2, Fig. 8): sensor cells -> two 5x5 stretch maps, and
 /// the 25 DoFs <-> one 5x5 pose map.
 ///
+/// A glove's inputs that are not stretch cells (an IMU angle, a bend sensor over the wrist) have no
+/// slot (kOffMaps): the networks that take the inputs as a vector (FCN, linear map) read them beside
+/// the cells; the stretch maps do not hold them.
+///
 /// Pose map: rows are the fingers (thumb, index, middle, ring, pinky), columns (abduction, base
 /// flexion, middle flexion, tip flexion, twist), so the thumb's row holds theta 9, 10, 11, 12, 29 as
 /// the paper groups them. Stretch maps: channel 0 holds the cells that sense stretch along the
@@ -37,14 +41,19 @@ struct Slot {
   int col;      ///< 0..4.
   /// @brief Flat index channel * 25 + row * 5 + col (channel-major, row-major: the tensor layout).
   constexpr int flat() const noexcept { return (channel * kGridSize + row) * kGridSize + col; }
+  /// @brief False for an input that is not on the maps (kOffMaps).
+  constexpr bool on_maps() const noexcept { return channel >= 0; }
 };
+
+/// @brief The "slot" of an input that is not on the stretch maps (an extra input).
+inline constexpr Slot kOffMaps{-1, -1, -1};
 
 /// @brief The two tables: where each sensor cell goes in the stretch maps and where each DoF goes in
 /// the pose map. Validated on construction; the per-frame mappings never allocate.
 class GridMap {
  public:
-  /// @brief Custom tables. Throws glovepose::Error naming the cell or DoF when a slot is out of range
-  /// or taken twice.
+  /// @brief Custom tables; a cell at kOffMaps is an extra input. Throws glovepose::Error naming the
+  /// cell or DoF when a slot is out of range or taken twice.
   GridMap(std::vector<Slot> cell_slots, std::array<Slot, hand::kDofCount> dof_slots)
       : cell_slots_(std::move(cell_slots)), dof_slots_(dof_slots) {
     if (cell_slots_.empty()) throw Error("GridMap: no cells, expected at least one");
@@ -52,6 +61,10 @@ class GridMap {
     owner.fill(-1);
     for (std::size_t c = 0; c < cell_slots_.size(); ++c) {
       const Slot& s = cell_slots_[c];
+      if (s.channel == kOffMaps.channel && s.row == kOffMaps.row && s.col == kOffMaps.col) {
+        ++extra_inputs_;
+        continue;
+      }
       check_slot(s, kStretchChannels, "cell " + std::to_string(c));
       if (owner[static_cast<std::size_t>(s.flat())] >= 0)
         throw Error("GridMap: cell " + std::to_string(c) + " is placed on the slot of cell " +
@@ -98,23 +111,33 @@ class GridMap {
     return slots;
   }
 
-  /// @brief Number of sensor cells the map expects.
+  /// @brief Number of inputs a frame holds: the cells on the maps and the extra inputs.
   int cell_count() const noexcept { return static_cast<int>(cell_slots_.size()); }
-  /// @brief Slot of each cell in the stretch maps.
+  /// @brief Number of inputs that are not on the stretch maps (slot kOffMaps).
+  int extra_input_count() const noexcept { return extra_inputs_; }
+  /// @brief Throws glovepose::Error when the glove has extra inputs, for `reader`, a network that
+  /// reads only the stretch maps (the U-Net).
+  void require_maps_only(const std::string& reader) const {
+    if (extra_inputs_ > 0)
+      throw Error(reader + ": the glove has " + std::to_string(extra_inputs_) + " extra input" + (extra_inputs_ > 1 ? "s" : "") +
+                  " (not on the stretch maps) and the U-Net reads only the maps, expected a glove whose inputs are all "
+                  "stretch cells, or the FCN or linear map (train --model fcn:W or linear), which read extra inputs beside the cells");
+  }
+  /// @brief Slot of each cell in the stretch maps (kOffMaps for an extra input).
   const std::vector<Slot>& cell_slots() const noexcept { return cell_slots_; }
   /// @brief Slot of each DoF in the pose map.
   const std::array<Slot, hand::kDofCount>& dof_slots() const noexcept { return dof_slots_; }
 
   /// @brief Scatters `cell_count()` normalised cell values into the 2x5x5 stretch maps (channel,
-  /// row, column order); empty slots become 0. Returns Status::NonFinite (maps untouched) if a value
-  /// is NaN or infinite.
+  /// row, column order); empty slots become 0, extra inputs are not placed. Returns
+  /// Status::NonFinite (maps untouched) if a value is NaN or infinite.
   template <typename Scalar>
   GLOVEPOSE_REALTIME Status to_stretch_maps(const Scalar* cells, std::array<float, kStretchValues>& maps) const noexcept {
     for (std::size_t c = 0; c < cell_slots_.size(); ++c)
       if (!std::isfinite(cells[c])) return Status::NonFinite;
     maps.fill(0.0f);
     for (std::size_t c = 0; c < cell_slots_.size(); ++c)
-      maps[static_cast<std::size_t>(cell_slots_[c].flat())] = static_cast<float>(cells[c]);
+      if (cell_slots_[c].on_maps()) maps[static_cast<std::size_t>(cell_slots_[c].flat())] = static_cast<float>(cells[c]);
     return Status::Ok;
   }
 
@@ -141,6 +164,7 @@ class GridMap {
 
   std::vector<Slot> cell_slots_;
   std::array<Slot, hand::kDofCount> dof_slots_;
+  int extra_inputs_ = 0;
 };
 
 }  // namespace glovepose::grid

@@ -48,6 +48,7 @@ class TrainableUNet final : public TrainableNetwork {
       throw Error("TrainableUNet: max_batch " + std::to_string(max_batch) + ", expected 1..1048576");
     if (!(bn.epsilon > 0.0) || !(bn.momentum >= 0.0 && bn.momentum <= 1.0))
       throw Error("TrainableUNet: expected batch-norm epsilon > 0 and momentum in [0, 1]");
+    map_.require_maps_only("TrainableUNet");
     for (int id = 0; id < nn::kUNetBufferCount; ++id) {
       const int size = nn::unet_buffer_size(id);
       buffers_.push_back({nn::unet_buffer_channels(id, width), size * size});

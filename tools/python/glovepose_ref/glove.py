@@ -35,15 +35,16 @@ def builtin_cell_slots() -> List[Tuple[int, int, int]]:
     return [s for s in slots if s is not None]
 
 
-def glove_tables(glove: str, description: Optional[str]) -> Tuple[List[Tuple[int, int, int]], List[Tuple[int, int]]]:
+def glove_tables(glove: str, description: Optional[str]) -> Tuple[List[Optional[Tuple[int, int, int]]], List[Tuple[int, int]]]:
     """(cell slots, DoF slots in hand::kDofs order) of glove `glove`: its description's JSON text,
-    or the built-in tables when `description` is None (then `glove` must be 'glauser2019-44')."""
+    or the built-in tables when `description` is None (then `glove` must be 'glauser2019-44'). An
+    extra input (`"extra": true`, not on the stretch maps) has the slot None."""
     if description is None:
         if glove != "glauser2019-44":
             raise ValueError(f"glove {glove!r} is not built in, expected its glove description")
         return builtin_cell_slots(), list(BUILTIN_DOF_SLOTS)
     desc = json.loads(description)
-    cells = [(int(c["channel"]), int(c["row"]), int(c["col"])) for c in desc["cells"]]
+    cells = [None if c.get("extra") else (int(c["channel"]), int(c["row"]), int(c["col"])) for c in desc["cells"]]
     by_name = {d["name"]: (int(d["row"]), int(d["col"])) for d in desc["dofs"]}
     return cells, [by_name[n] for n in DOF_NAMES]
 
