@@ -200,6 +200,21 @@ std::string small_corpus(const std::string& tag) {
   REQUIRE_MESSAGE(r.status == 0, r.out);
   return p;
 }
+// The frames of `full` with only the cells `keep`, in that order, as glove `glove`'s dataset.
+train::Dataset cells_of(const train::Dataset& full, const std::vector<int>& keep, const std::string& glove) {
+  train::Dataset part(keep.size(), 0, glove, full.frame_rate());
+  part.timestamps = full.timestamps;
+  part.angles = full.angles;
+  part.subject = full.subject;
+  part.session = full.session;
+  part.glove = full.glove;
+  part.donning = full.donning;
+  part.kind = full.kind;
+  part.outlier = full.outlier;
+  for (std::size_t i = 0; i < full.frames(); ++i)
+    for (int c : keep) part.cells.push_back(full.cells[i * full.cell_count + static_cast<std::size_t>(c)]);
+  return part;
+}
 double json_number(const std::string& json, const std::string& key) {
   const std::size_t at = json.find("\"" + key + "\":");
   REQUIRE_MESSAGE(at != std::string::npos, key << " in " << json);
@@ -296,18 +311,7 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   // the 44-cell corpus and placed where the full glove has them.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42};
   const std::string corpus = small_corpus("main14");
-  const train::Dataset full = train::Dataset::read(corpus);
-  train::Dataset part(keep.size(), 0, "main14", full.frame_rate());
-  part.timestamps = full.timestamps;
-  part.angles = full.angles;
-  part.subject = full.subject;
-  part.session = full.session;
-  part.glove = full.glove;
-  part.donning = full.donning;
-  part.kind = full.kind;
-  part.outlier = full.outlier;
-  for (std::size_t i = 0; i < full.frames(); ++i)
-    for (int c : keep) part.cells.push_back(full.cells[i * full.cell_count + static_cast<std::size_t>(c)]);
+  const train::Dataset part = cells_of(train::Dataset::read(corpus), keep, "main14");
   const std::string data = temp("main14.safetensors"), glove_file = temp("main14.json"), model_file = temp("t_main14.safetensors");
   part.write(data);
   const grid::GridMap paper = grid::GridMap::glauser2019();
@@ -342,18 +346,7 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
 TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a linear map and an FCN; the U-Net refuses it") {
   // The 14 main-joint cells on their slots and cell 2 (a back-of-thumb cell) as an extra input.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42, 2};
-  const train::Dataset full = train::Dataset::read(small_corpus("extra"));
-  train::Dataset part(keep.size(), 0, "main14-extra", full.frame_rate());
-  part.timestamps = full.timestamps;
-  part.angles = full.angles;
-  part.subject = full.subject;
-  part.session = full.session;
-  part.glove = full.glove;
-  part.donning = full.donning;
-  part.kind = full.kind;
-  part.outlier = full.outlier;
-  for (std::size_t i = 0; i < full.frames(); ++i)
-    for (int c : keep) part.cells.push_back(full.cells[i * full.cell_count + static_cast<std::size_t>(c)]);
+  const train::Dataset part = cells_of(train::Dataset::read(small_corpus("extra")), keep, "main14-extra");
   const std::string data = temp("extra15.safetensors"), glove_file = temp("extra15.json");
   part.write(data);
   const grid::GridMap paper = grid::GridMap::glauser2019();
