@@ -343,7 +343,7 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
 }
 
-TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a linear map and an FCN; the U-Net refuses it") {
+TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a linear map and an FCN, the U-Net refuses it") {
   // The 14 main-joint cells on their slots and cell 2 (a back-of-thumb cell) as an extra input.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42, 2};
   const train::Dataset part = cells_of(train::Dataset::read(small_corpus("extra")), keep, "main14-extra");
@@ -357,6 +357,14 @@ TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a l
     names.push_back(c == 2 ? "thumb_back" : "cell_" + std::to_string(c));
   }
   grid::GloveDescription("main14-extra", names, grid::GridMap(slots, paper.dof_slots())).write(glove_file);
+  {  // a description whose rate is not the data's (60 Hz) is refused
+    grid::GloveSettings twenty;
+    twenty.rate_hz = 20.0;
+    grid::GloveDescription("main14-extra", names, grid::GridMap(slots, paper.dof_slots()), twenty).write(temp("extra15_20hz.json"));
+    const Run refused = run("train --data " + data + " --glove " + temp("extra15_20hz.json") + " --model linear --out " + temp("extra_rate.safetensors"));
+    CHECK(refused.status == 1);
+    CHECK_MESSAGE(refused.out.find("rate_hz is 20.000000, expected the same rate") != std::string::npos, refused.out);
+  }
 
   Run r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --epochs 1 --batch 256 --out " + temp("extra_unet.safetensors"));
   CHECK(r.status == 1);
@@ -372,6 +380,9 @@ TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains a l
     if (model == "linear") continue;  // predict and info run the real-time networks
     r = run("info --model " + out);
     CHECK_MESSAGE(r.out.find("1 extra input (thumb_back)") != std::string::npos, r.out);
+    // The model's description carries the data's rate, which the estimator's calibration uses.
+    const nn::WeightFile file = nn::WeightFile::read(out);
+    CHECK(grid::GloveDescription::from_metadata(file.metadata.at("glove_description")).rate_hz() == std::optional<double>(60.0));
     {
       std::ofstream rows(temp("extra15.csv"));
       rows << "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,-0.1,-0.2,-0.3,-0.4,-0.5,0.25\n";

@@ -159,6 +159,7 @@ TEST_CASE("glove settings: the estimator takes the glove's median window and fla
     GlovePoseEstimator estimator(model);  // defaults: the glove's
     CHECK(estimator.config().calibration_median_window == 10);  // 0.5 s at the glove's 20 Hz (slower than the 60 Hz sample period)
     CHECK(estimator.config().calibration.min_relative_range == 0.001);
+    CHECK(estimator.config().calibration_sample_period == 1.0 / 20.0);  // frames taken at the glove's rate
     // A calibration of cells where "b" moves 0.5% of its value: not flat by the glove's rule.
     estimator.start_calibration();
     const train::Dataset data = twenty_hertz_session();

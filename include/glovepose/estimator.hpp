@@ -655,14 +655,15 @@ class BasicGlovePoseEstimator {
 
  private:
   // The settings that say "the glove's" made the glove's: its flat rule, and a median window
-  // spanning its median_seconds at the period frames are taken (the sample period, or the glove's
-  // frame period when that is longer; 60 Hz when neither is known).
+  // spanning its median_seconds at the period frames are taken. Frames are taken no faster than the
+  // glove's rate (its frame period when that is longer than the sample period), as training saw them.
   static EstimatorConfig with_glove_calibration(EstimatorConfig config, const grid::GloveDescription& glove) {
     const grid::GloveCalibration& own = glove.calibration();
     if (config.calibration.min_relative_range < 0.0) config.calibration.min_relative_range = own.flat_relative_range;
+    if (glove.rate_hz() && config.calibration_sample_period > 0.0)
+      config.calibration_sample_period = std::max(config.calibration_sample_period, 1.0 / *glove.rate_hz());
     if (config.calibration_median_window == 0) {
       double period = config.calibration_sample_period;
-      if (glove.rate_hz()) period = std::max(period, 1.0 / *glove.rate_hz());
       if (!(period > 0.0) || !std::isfinite(period)) period = 1.0 / 60.0;  // a bad sample period is refused below
       config.calibration_median_window = own.median_frames(1.0 / period);
     }

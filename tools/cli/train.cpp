@@ -20,6 +20,7 @@
 #include <charconv>
 #include <chrono>
 #include <csignal>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -226,7 +227,17 @@ grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
                 "'; pass its description with --glove FILE");
   if (static_cast<std::size_t>(glove.cell_count()) != data.cell_count)
     throw Error("the glove description has " + std::to_string(glove.cell_count()) + " cells, the dataset " + std::to_string(data.cell_count));
-  return glove;
+  // The calibration's median window is median_seconds at the data's rate, and the estimator takes
+  // frames at the description's rate: the two must agree, and a described glove without a rate
+  // gets the data's in the model it trains.
+  const double rate = data.frame_rate();
+  if (glove.rate_hz() && std::abs(*glove.rate_hz() - rate) > 1e-9 * rate)
+    throw Error("the dataset's frame rate is " + std::to_string(rate) + " Hz but the glove description's rate_hz is " +
+                std::to_string(*glove.rate_hz()) + ", expected the same rate (import the takes with the description's rate)");
+  if (glove.rate_hz() || glove == grid::GloveDescription::glauser2019()) return glove;
+  grid::GloveSettings settings = glove.settings();
+  settings.rate_hz = rate;
+  return grid::GloveDescription(glove.id(), glove.cell_names(), glove.map(), settings);
 }
 
 std::string command_line(int argc, char** argv) {

@@ -28,6 +28,7 @@ Needs Debian's python3-torch and python3-numpy (/usr/bin/python3); downloads not
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
@@ -192,6 +193,14 @@ def main() -> int:
 
     tensors, meta = safetensors_io.load(args.data)
     description = Path(args.glove).read_text() if args.glove else None
+    if description is not None:  # the rate rule of glovepose train (tools/cli/train.cpp, glove_for)
+        desc, rate = json.loads(description), float(meta["frame_rate"])
+        if "rate_hz" in desc and abs(float(desc["rate_hz"]) - rate) > 1e-9 * rate:
+            sys.exit(f"train_torch: the dataset's frame rate is {rate} Hz but the glove description's rate_hz is {desc['rate_hz']}, "
+                     "expected the same rate")
+        if "rate_hz" not in desc:  # the model's description carries the rate its calibration window was trained at
+            desc["rate_hz"] = rate
+            description = json.dumps(desc)
     glove_id = meta.get("glove_layout", "")
     cell_slots, dof_slots = glove_tables(glove_id, description)
     if len(cell_slots) != tensors["cells"].shape[1]:

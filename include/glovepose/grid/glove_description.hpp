@@ -43,7 +43,8 @@
 ///   fraction of its absolute value is flat and zeroed (>= 0; default 0.01, tuned for capacitance: a
 ///   resistive sensor with a large DC offset needs a smaller one).
 /// - Every other listed key is required and no other key is accepted (a misspelt key is an error, not a
-///   silently ignored field); numbers are non-negative integers written without fraction or exponent.
+///   silently ignored field); slot numbers are non-negative integers written without fraction or
+///   exponent.
 ///
 /// Set-up code: every malformed input is a glovepose::Error naming the field, cell or DoF and what
 /// was expected.
@@ -118,6 +119,9 @@ class GloveDescription {
   GloveDescription(std::string id, std::vector<std::string> cell_names, GridMap map, GloveSettings settings = {})
       : id_(std::move(id)), cell_names_(std::move(cell_names)), map_(std::move(map)), settings_(settings) {
     if (id_.empty()) throw Error("GloveDescription: empty id, expected a glove id such as 'glauser2019-44'");
+    if (map_.cell_count() > kMaxGloveInputs)
+      throw Error("GloveDescription '" + id_ + "': " + std::to_string(map_.cell_count()) + " inputs, expected at most " +
+                  std::to_string(kMaxGloveInputs));
     check_settings(settings_, "GloveDescription '" + id_ + "': ");
     if (static_cast<int>(cell_names_.size()) != map_.cell_count())
       throw Error("GloveDescription '" + id_ + "': " + std::to_string(cell_names_.size()) + " cell names, expected " +
@@ -404,6 +408,7 @@ class GloveDescription {
 
  private:
   static constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
+  static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
 
   static Error fail(const std::string& what) { return Error("glove description: " + what); }
 
@@ -411,9 +416,9 @@ class GloveDescription {
   static void check_settings(const GloveSettings& s, const std::string& prefix) {
     if (s.rate_hz && !(*s.rate_hz > 0.0 && *s.rate_hz <= 1e6))
       throw Error(prefix + "'rate_hz' is " + shortest(*s.rate_hz) + ", expected frames per second > 0 (at most 1e6)");
-    if (!(s.calibration.median_seconds > 0.0 && s.calibration.median_seconds <= 3600.0))
+    if (!(s.calibration.median_seconds > 0.0 && s.calibration.median_seconds <= kMaxMedianSeconds))
       throw Error(prefix + "'calibration.median_seconds' is " + shortest(s.calibration.median_seconds) +
-                  ", expected a time > 0 s (at most 3600)");
+                  ", expected a time > 0 s (at most " + shortest(kMaxMedianSeconds) + ": the median runs over the window every frame)");
     if (!(s.calibration.flat_relative_range >= 0.0 && s.calibration.flat_relative_range < 1.0))
       throw Error(prefix + "'calibration.flat_relative_range' is " + shortest(s.calibration.flat_relative_range) +
                   ", expected a fraction >= 0 and < 1 (0.01: a range within 1% of the value is flat)");

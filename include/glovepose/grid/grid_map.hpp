@@ -121,7 +121,7 @@ class GridMap {
     if (extra_inputs_ > 0)
       throw Error(reader + ": the glove has " + std::to_string(extra_inputs_) + " extra input" + (extra_inputs_ > 1 ? "s" : "") +
                   " (not on the stretch maps) and the U-Net reads only the maps, expected a glove whose inputs are all "
-                  "stretch cells, or the FCN or linear map (train --model fcn:W or linear), which read extra inputs beside the cells");
+                  "stretch cells, or the FCN or linear map (train --model fcn[:H] or linear), which read extra inputs beside the cells");
   }
   /// @brief Slot of each cell in the stretch maps (kOffMaps for an extra input).
   const std::vector<Slot>& cell_slots() const noexcept { return cell_slots_; }
