@@ -129,11 +129,9 @@ class BasicPoseModel {
       if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
         throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
                     " numbers, expected " + std::to_string(glove_.cell_count()) + " (one per cell)");
-      sensor::CalibrationConfig flat_rule;
-      flat_rule.min_relative_range = glove_.calibration().flat_relative_range;
       training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
                               Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()),
-                              glove_.cell_names(), flat_rule);
+                              glove_.cell_names(), glove_.calibration().config());
     }
   }
 

@@ -65,6 +65,7 @@
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../nn/json.hpp"
+#include "../sensor/calibration.hpp"
 #include "grid_map.hpp"
 
 namespace glovepose::grid {
@@ -85,6 +86,12 @@ struct GloveCalibration {
   /// A sensor whose calibrated range is within this fraction of max(|min|, |max|) is flat (zeroed).
   double flat_relative_range = 0.01;  // sensor::CalibrationConfig's default (test_glove_description checks)
 
+  /// @brief The calibration settings with this flat rule and the default clamp.
+  sensor::CalibrationConfig config() const noexcept {
+    sensor::CalibrationConfig c;
+    c.min_relative_range = flat_relative_range;
+    return c;
+  }
   /// @brief The median window in frames at `frames_per_second` (at least 1).
   int median_frames(double frames_per_second) const noexcept {
     const double frames = std::round(median_seconds * frames_per_second);

@@ -80,7 +80,7 @@ struct TrainedModel {
       throw Error("the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
     const Eigen::Map<const Eigen::VectorXd> lo(info.calibration_min->data(), static_cast<Eigen::Index>(info.calibration_min->size()));
     const Eigen::Map<const Eigen::VectorXd> hi(info.calibration_max->data(), static_cast<Eigen::Index>(info.calibration_max->size()));
-    return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()), calibration_config(glove.calibration()));
+    return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()), glove.calibration().config());
   }
 
   /// @brief Normalised predictions (frames x 25) for prepared samples.

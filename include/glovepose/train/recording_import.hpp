@@ -286,8 +286,7 @@ class RecordingImporter {
   // Every calibration run of the frames from `first` on: a flat cell is an error, or kept and listed.
   void check_calibration_runs(std::size_t first, const std::vector<std::size_t>& line_of, const std::string& path) {
     const std::size_t cells = data_.cell_count;
-    sensor::CalibrationConfig flat_rule;
-    flat_rule.min_relative_range = glove_.calibration().flat_relative_range;
+    const sensor::CalibrationConfig flat_rule = glove_.calibration().config();
     for (std::size_t begin = first; begin < data_.frames();) {
       std::size_t end = begin + 1;
       while (end < data_.frames() && data_.same_run(begin, end)) ++end;

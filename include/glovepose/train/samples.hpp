@@ -109,13 +109,6 @@ inline std::int64_t run_key(const Dataset& data, std::size_t i) noexcept {
          static_cast<std::int64_t>(data.session[i]);
 }
 
-/// @brief The calibration settings of a glove's description: its flat-sensor rule, the default clamp.
-inline sensor::CalibrationConfig calibration_config(const grid::GloveCalibration& calibration) noexcept {
-  sensor::CalibrationConfig config;
-  config.min_relative_range = calibration.flat_relative_range;
-  return config;
-}
-
 /// @brief Per-cell min and max over the kept frames: the "training" calibration, flat sensors by
 /// the glove's rule. Throws glovepose::Error when no frame is kept.
 inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter, const grid::GloveCalibration& calibration = {}) {
@@ -133,7 +126,7 @@ inline sensor::CalibrationRange training_range(const Dataset& data, const FrameF
     }
   }
   if (kept == 0) throw Error("training calibration: no frame of the dataset passes the selection, expected at least one");
-  return sensor::CalibrationRange(lo, hi, cell_names(cells), calibration_config(calibration));
+  return sensor::CalibrationRange(lo, hi, cell_names(cells), calibration.config());
 }
 
 /// @brief The on-the-fly range of every run (subject, glove, session) that has calibration frames:
@@ -148,7 +141,7 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Da
   for (std::size_t i = 0; i < data.frames(); ++i) {
     if (data.kind[i] != kKindCalibration) continue;
     auto it = calibrators.find(run_key(data, i));
-    if (it == calibrators.end()) it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration_config(calibration))).first;
+    if (it == calibrators.end()) it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration.config())).first;
     for (std::size_t c = 0; c < data.cell_count; ++c) frame(static_cast<Eigen::Index>(c)) = data.cells[i * data.cell_count + c];
     it->second.add(frame);
   }
