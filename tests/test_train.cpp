@@ -146,19 +146,27 @@ double directional_error(train::TrainableNetwork& net, const std::vector<float>&
 
 }  // namespace
 
-TEST_CASE("train: U-Net training step equals PyTorch autograd (committed fixture, width 4)") {
-  const Fixture fx = read_fixture(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_unet_w4.safetensors");
-  const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
-  const int frames = static_cast<int>(fx.file.tensors.at("input").shape[0]);
-  train::TrainableUNet net(4, grid::GridMap::glauser2019(), frames);
-  check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
-    std::vector<float> y(t.size()), g(t.size());
-    net.forward_maps(x.data(), frames, true, pool, y.data());
-    const double loss = train::mse_loss(y.data(), t.data(), static_cast<long>(t.size()), g.data());
-    CHECK(loss == doctest::Approx(fx.get("loss")[0]).epsilon(1e-6));
-    net.backward_maps(g.data(), pool);
-    return y;
-  });
+TEST_CASE("train: U-Net training step equals PyTorch autograd (committed fixtures, width 4, the built-in glove and two extra input planes)") {
+  for (const int extra : {0, 2}) {
+    CAPTURE(extra);
+    const Fixture fx = read_fixture(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_unet_w4" + (extra ? "_e2" : "") + ".safetensors");
+    const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
+    REQUIRE(fx.file.tensors.at("input").shape[1] == 2 + extra);
+    const int frames = static_cast<int>(fx.file.tensors.at("input").shape[0]);
+    // The built-in glove's cells and `extra` inputs off the maps: the U-Net's planes 2, 3.
+    const grid::GridMap paper = grid::GridMap::glauser2019();
+    std::vector<grid::Slot> slots = paper.cell_slots();
+    slots.insert(slots.end(), static_cast<std::size_t>(extra), grid::kOffMaps);
+    train::TrainableUNet net(4, grid::GridMap(slots, paper.dof_slots()), frames);
+    check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
+      std::vector<float> y(t.size()), g(t.size());
+      net.forward_maps(x.data(), frames, true, pool, y.data());
+      const double loss = train::mse_loss(y.data(), t.data(), static_cast<long>(t.size()), g.data());
+      CHECK(loss == doctest::Approx(fx.get("loss")[0]).epsilon(1e-6));
+      net.backward_maps(g.data(), pool);
+      return y;
+    });
+  }
 }
 
 TEST_CASE("train: FCN training step equals PyTorch autograd (committed fixture, hidden 16)") {

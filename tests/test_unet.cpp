@@ -108,6 +108,91 @@ TEST_CASE("unet: the SIMD and scalar backends equal an independent reference for
   }
 }
 
+TEST_CASE("unet: extra input planes (a glove's inputs off the maps) are read as the independent reference reads them, in every storage") {
+  // Widths 4 and 13 (padded channels); 1 and 3 extra planes: enc1 then joins 75 or 125 taps x
+  // channels, past im2col's 64, so it runs as per-tap products (F32 even under Fixed16).
+  for (int width : {4, 13}) {
+    for (int extra : {1, 3}) {
+      CAPTURE(width);
+      CAPTURE(extra);
+      const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width, extra), 500 + static_cast<unsigned>(width + extra));
+      const auto simd = UNet<>::from_tensors(tensors, width);
+      const auto scalar = UNet<kernels::ScalarBackend>::from_tensors(tensors, width);
+      REQUIRE(simd.extra_inputs() == extra);
+      REQUIRE(simd.input_values() == (2 + extra) * 25);
+      std::mt19937 rng(8);
+      std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+      const int frames = kSparseMaxFrames + 2;
+      std::vector<float> x(static_cast<std::size_t>(frames * simd.input_values()));
+      for (float& v : x) v = u(rng);
+      for (int f = 0; f < frames; ++f)  // as GridMap::to_input_planes writes them: each extra plane one value
+        for (int e = 0; e < extra; ++e)
+          std::fill_n(x.begin() + f * simd.input_values() + (2 + e) * 25 + 1, 24, x[static_cast<std::size_t>(f * simd.input_values() + (2 + e) * 25)]);
+      std::vector<float> dense(static_cast<std::size_t>(frames * kUNetOutputs)), single = dense, small = dense, scalar_out = dense;
+      auto dense_ws = simd.make_workspace(frames), one = simd.make_workspace(1), small_ws = simd.make_workspace(6);
+      auto scalar_ws = scalar.make_workspace(frames);
+      REQUIRE(simd.forward(x.data(), dense.data(), frames, dense_ws) == Status::Ok);
+      REQUIRE(scalar.forward(x.data(), scalar_out.data(), frames, scalar_ws) == Status::Ok);
+      REQUIRE(simd.forward(x.data(), small.data(), 6, small_ws) == Status::Ok);
+      for (int f = 0; f < frames; ++f)
+        REQUIRE(simd.forward(x.data() + f * simd.input_values(), single.data() + f * kUNetOutputs, 1, one) == Status::Ok);
+      double worst = 0.0;
+      for (int f = 0; f < frames; ++f) {
+        const std::vector<double> expected = test::unet_reference(tensors, x.data() + f * simd.input_values());
+        for (int i = 0; i < kUNetOutputs; ++i) {
+          const std::size_t at = static_cast<std::size_t>(f * kUNetOutputs + i);
+          worst = std::max({worst, std::abs(expected[static_cast<std::size_t>(i)] - dense[at]), std::abs(expected[static_cast<std::size_t>(i)] - single[at]),
+                            std::abs(expected[static_cast<std::size_t>(i)] - scalar_out[at])});
+          if (f < 6) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - small[at]));
+        }
+      }
+      MESSAGE("w = " << width << ", " << extra << " extra plane(s): max |ours - reference| = " << worst);
+      CHECK(worst <= 1e-5);
+      for (const WeightStorage storage : {WeightStorage::F16, WeightStorage::BF16, WeightStorage::Fixed16}) {
+        const auto narrow = UNet<>::from_tensors(tensors, width, 1e-5, storage);
+        auto ws = narrow.make_workspace(frames);
+        std::vector<float> y(dense.size());
+        REQUIRE(narrow.forward(x.data(), y.data(), frames, ws) == Status::Ok);
+        double gap = 0.0;
+        for (std::size_t i = 0; i < y.size(); ++i) gap = std::max(gap, static_cast<double>(std::abs(y[i] - dense[i])));
+        CAPTURE(static_cast<int>(storage));
+        CHECK(gap < 1e-2);  // the 16-bit storages' rounding (their own tests bound it per storage)
+      }
+      // The array form is the maps-only network's; a workspace of the maps-only network does not fit.
+      std::array<float, kUNetInputs> maps{};
+      std::array<float, kUNetOutputs> out{};
+      CHECK(simd.forward(maps, out, one) == Status::SizeMismatch);
+      const auto plain = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(width), 3), width);
+      auto plain_ws = plain.make_workspace(1);
+      CHECK(simd.forward(x.data(), out.data(), 1, plain_ws) == Status::SizeMismatch);
+      CHECK(test::allocations_during([&] { (void)simd.forward(x.data(), out.data(), 1, one); }) == 0);
+    }
+  }
+}
+
+TEST_CASE("unet: equals PyTorch with two extra input planes (committed fixture, width 4)") {
+  const std::string dir = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/";
+  const WeightFile file = WeightFile::read(dir + "unet_w4_e2.safetensors");
+  const auto net = UNet<>::from_tensors(file.tensors, 4);
+  REQUIRE(net.extra_inputs() == 2);
+  const WeightFile io = WeightFile::read(dir + "unet_w4_e2_io.safetensors");
+  const Tensor& x = io.tensors.at("input");
+  const Tensor& y = io.tensors.at("output");
+  REQUIRE(x.shape == std::vector<std::int64_t>{x.shape[0], 4, 5, 5});
+  const int frames = static_cast<int>(x.shape[0]);
+  auto ws = net.make_workspace(frames);
+  std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
+  REQUIRE(net.forward(x.values.data(), out.data(), frames, ws) == Status::Ok);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < out.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(out[i] - y.values[i])));
+  MESSAGE("fixture: " << frames << " frames, max |C++ - PyTorch| = " << worst);
+  CHECK(worst <= 1e-5);
+  // enc1.weight reading 2 + 300 planes is refused, naming the tensor.
+  TensorMap wide = file.tensors;
+  wide["enc1.weight"] = Tensor{{4, 302, 5, 5}, std::vector<float>(4 * 302 * 25, 0.0f)};
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(wide, 4), doctest::Contains("'enc1.weight' reads 302 input planes, expected 2 stretch maps and at most 256 extra"), Error);
+}
+
 TEST_CASE("unet: a batch gives the same outputs as frames one at a time, forward_batch on threads too") {
   const int width = 16, frames = 37;
   const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(width), 3), width);

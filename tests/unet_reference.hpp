@@ -74,10 +74,11 @@ inline Grid cat(const Grid& a, const Grid& b) {
   return out;
 }
 
-// One frame: 50 inputs (2x5x5) -> the hidden activations e1..e4, d1..d3 (after their ReLU) and the
+// One frame: (2 + E) x 5 x 5 inputs (E extra input planes: enc1.weight's input channels less 2) -> the hidden activations e1..e4, d1..d3 (after their ReLU) and the
 // 25 outputs (1x5x5, last).
 inline std::vector<Grid> unet_reference_activations(const nn::TensorMap& t, const float* input) {
-  Grid x{2, 5, std::vector<double>(input, input + 50)};
+  const int planes = static_cast<int>(t.at("enc1.weight").shape[1]);
+  Grid x{planes, 5, std::vector<double>(input, input + planes * 25)};
   const Grid e1 = relu(conv(x, t, "enc1", 5, 5, 1, 2, false));
   const Grid e2 = relu(batch_norm_relu(conv(e1, t, "enc2", 3, 3, 2, 1, false), t, "bn2"));
   const Grid e3 = relu(batch_norm_relu(conv(e2, t, "enc3", 2, 3, 2, 1, false), t, "bn3"));
@@ -90,7 +91,7 @@ inline std::vector<Grid> unet_reference_activations(const nn::TensorMap& t, cons
   return {e1, e2, e3, e4, d1, d2, d3, y};
 }
 
-// One frame: 50 inputs (2x5x5) -> 25 outputs (1x5x5).
+// One frame: (2 + E) x 5 x 5 inputs -> 25 outputs (1x5x5).
 inline std::vector<double> unet_reference(const nn::TensorMap& t, const float* input) {
   return unet_reference_activations(t, input).back().v;
 }

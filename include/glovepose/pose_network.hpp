@@ -1,9 +1,10 @@
 /// @file pose_network.hpp
 /// @brief The network a PoseModel runs, whichever architecture its file holds: calibrated cell
 /// values -> normalised DoF values (-1 and +1 at the joint limits). The U-Net reads the cells as
-/// the glove's two stretch maps and answers a pose map, which the glove's grid map turns back into
-/// DoFs; the FCN reads the cells and answers the DoFs. Both keep their weights in the storage
-/// chosen at load and are immutable once loaded; each stream owns a Workspace.
+/// the glove's two stretch maps (and one constant plane per extra input) and answers a pose map,
+/// which the glove's grid map turns back into DoFs; the FCN reads the cells and answers the DoFs.
+/// Both keep their weights in the storage chosen at load and are immutable once loaded; each stream
+/// owns a Workspace.
 #pragma once
 
 #include <array>
@@ -72,7 +73,7 @@ class BasicPoseNetwork {
    private:
     friend class BasicPoseNetwork;
     std::variant<typename UNet::Workspace, typename Fcn::Workspace> net;
-    std::array<float, grid::kStretchValues> maps{};
+    std::vector<float> planes;  // U-Net input: the stretch maps and the extra inputs' planes
     std::array<float, grid::kMapSlots> pose_map{};
     std::vector<float> cells;  // FCN input
     std::array<float, nn::kFcnOutputs> dofs{};
@@ -82,8 +83,10 @@ class BasicPoseNetwork {
   /// members (set-up: allocates).
   Workspace make_workspace(int team_size = 1) const {
     Workspace ws;
-    if (const UNet* u = unet()) ws.net = u->make_workspace(1, team_size);
-    else {
+    if (const UNet* u = unet()) {
+      ws.net = u->make_workspace(1, team_size);
+      ws.planes.resize(static_cast<std::size_t>(u->input_values()));
+    } else {
       ws.net = fcn()->make_workspace(1);
       ws.cells.resize(static_cast<std::size_t>(fcn()->inputs()));
     }
@@ -92,17 +95,20 @@ class BasicPoseNetwork {
 
   /// @brief One frame: `cells` calibrated cell values (`map`'s glove) -> `normalized` DoF values.
   /// Returns Status::NonFinite (normalized untouched) for a NaN or infinite cell or result,
-  /// Status::SizeMismatch for a workspace of another network; never allocates.
+  /// Status::SizeMismatch for a workspace of another network or a U-Net whose extra input planes
+  /// are not `map`'s extra inputs; never allocates.
   /// A U-Net's layers are shared by `team`'s members when one is given (UNet::forward with a
   /// Team: the same results); an FCN runs on the calling thread.
   GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized,
                                             Workspace& ws, nn::Team* team = nullptr) const noexcept {
     if (const UNet* u = unet()) {
       auto* w = std::get_if<typename UNet::Workspace>(&ws.net);
-      if (!w) return Status::SizeMismatch;
-      if (map.to_stretch_maps(cells, ws.maps) != Status::Ok) return Status::NonFinite;
-      const Status status = team != nullptr ? u->forward(ws.maps.data(), ws.pose_map.data(), 1, *w, *team)
-                                            : u->forward(ws.maps, ws.pose_map, *w);
+      if (!w || map.input_plane_count() * grid::kMapSlots != u->input_values() ||
+          ws.planes.size() != static_cast<std::size_t>(u->input_values()))
+        return Status::SizeMismatch;
+      if (map.to_input_planes(cells, ws.planes.data()) != Status::Ok) return Status::NonFinite;
+      const Status status = team != nullptr ? u->forward(ws.planes.data(), ws.pose_map.data(), 1, *w, *team)
+                                            : u->forward(ws.planes.data(), ws.pose_map.data(), 1, *w);
       if (status != Status::Ok) return status;
       map.from_pose_map(ws.pose_map, normalized);
       return Status::Ok;
@@ -124,15 +130,16 @@ class BasicPoseNetwork {
     std::vector<hand::Angles> out(static_cast<std::size_t>(frames));
     if (frames <= 0) return out;
     if (const UNet* u = unet()) {
-      std::vector<float> maps(static_cast<std::size_t>(frames) * grid::kStretchValues);
-      std::array<float, grid::kStretchValues> frame_maps{};
-      for (long f = 0; f < frames; ++f) {
-        if (map.to_stretch_maps(cells + f * cell_count, frame_maps) != Status::Ok)
+      const long values = u->input_values();
+      if (cell_count != map.cell_count() || map.input_plane_count() * grid::kMapSlots != values)
+        throw Error("frames of " + std::to_string(cell_count) + " inputs with " + std::to_string(map.extra_input_count()) +
+                    " extra, expected the U-Net's glove: " + std::to_string(u->extra_inputs()) + " extra input planes");
+      std::vector<float> planes(static_cast<std::size_t>(frames * values));
+      for (long f = 0; f < frames; ++f)
+        if (map.to_input_planes(cells + f * cell_count, planes.data() + f * values) != Status::Ok)
           throw Error("frame " + std::to_string(f) + " has a non-finite cell value, expected finite calibrated cells");
-        std::copy(frame_maps.begin(), frame_maps.end(), maps.begin() + f * grid::kStretchValues);
-      }
       std::vector<float> pose_maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
-      u->forward_batch(maps.data(), pose_maps.data(), frames, threads);
+      u->forward_batch(planes.data(), pose_maps.data(), frames, threads);
       std::array<float, grid::kMapSlots> pose_map{};
       for (long f = 0; f < frames; ++f) {
         std::copy_n(pose_maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());

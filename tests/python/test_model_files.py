@@ -9,7 +9,9 @@
     rad. FCN and linear models (which `predict` does not take) are checked for shapes and finite
     outputs, and, like the U-Net, against `glovepose eval --calibration none` (mean and max angle
     error on the corpus's recording frames). The other way round, files of export_model (U-Net
-    F16, FCN BF16, linear F32) give the same predictions in the tool as in PyTorch.
+    F16, FCN BF16, linear F32) give the same predictions in the tool as in PyTorch. So does a U-Net
+    for a glove with 2 extra inputs (input planes 2 + 2, the extras at inputs 3 and 15), its planes
+    built here from the glove description; import refuses an enc1 whose plane count does not fit it.
 
 Run: /usr/bin/python3 tests/python/test_model_files.py    (exit code 0 when every check passes;
 the last line reads 'N passed, N failed, N skipped'). The tool is GLOVEPOSE_CLI, by default
@@ -417,6 +419,131 @@ def test_cli_unet_matches_predict() -> None:
         # A check that checks something: the outputs vary with the input.
         assert float(cpp.std(dim=0).max()) > 1e-3, f"{stem}: predictions hardly depend on the input"
         print(f"     {stem}: max |PyTorch - glovepose predict| = {diff:.2e} rad over {cpp.numel()} angles")
+
+
+#: Input positions of the extra inputs of the glove of extra_inputs_description(): between the
+#: stretch cells and after them, so that they are not simply the last inputs.
+EXTRA_POSITIONS = (3, 15)
+
+
+def extra_inputs_description() -> Dict[str, object]:
+    """A 16-input glove: 14 stretch cells on the built-in glove's slots of cells 0..13, and the extra
+    inputs (not on the stretch maps) 'imu_roll' at input 3 and 'wrist_bend' at input 15."""
+    stretch = iter(builtin_cell_slots()[:14])
+    cells: List[Dict[str, object]] = []
+    for i in range(14 + len(EXTRA_POSITIONS)):
+        if i in EXTRA_POSITIONS:
+            cells.append({"name": "imu_roll" if i == EXTRA_POSITIONS[0] else "wrist_bend", "extra": True})
+        else:
+            ch, r, c = next(stretch)
+            cells.append({"name": f"s{i}", "channel": ch, "row": r, "col": c})
+    dofs = [{"name": n, "row": r, "col": c} for n, (r, c) in zip(DOF_NAMES, BUILTIN_DOF_SLOTS)]
+    return {"format": "glovepose-glove", "version": 1, "id": "extra16", "cells": cells, "dofs": dofs}
+
+
+def unet_extra_predict_radians(model: UNet, desc: Dict[str, object], cells: torch.Tensor) -> torch.Tensor:
+    """`glovepose predict` for a glove with extra inputs, written out here from the description alone:
+    [N, 16] calibrated values -> the [N, 2 + E, 5, 5] planes (stretch cells at their slots, 0
+    elsewhere; then one constant plane per extra input, in input order) -> U-Net -> DoFs read at the
+    description's pose-map slots -> the reference joint limits (float64)."""
+    cell_list = desc["cells"]
+    extra_count = sum(1 for c in cell_list if c.get("extra"))
+    n = cells.shape[0]
+    planes = torch.zeros(n, 2 + extra_count, 5, 5, dtype=torch.float32)
+    plane = 2
+    for i, cell in enumerate(cell_list):
+        value = cells[:, i].to(torch.float32)
+        if cell.get("extra"):
+            planes[:, plane] = value.view(n, 1, 1)
+            plane += 1
+        else:
+            planes[:, cell["channel"], cell["row"], cell["col"]] = value
+    assert plane == 2 + extra_count
+    slot = {d["name"]: (d["row"], d["col"]) for d in desc["dofs"]}
+    with torch.no_grad():
+        pose = model(planes)[:, 0]
+    normalized = torch.stack([pose[:, slot[name][0], slot[name][1]] for name in DOF_NAMES], dim=1).to(torch.float64)
+    lo = torch.tensor(JOINT_LIMITS_MIN, dtype=torch.float64)
+    hi = torch.tensor(JOINT_LIMITS_MAX, dtype=torch.float64)
+    return lo + 0.5 * (normalized + 1.0) * (hi - lo)
+
+
+@test
+def test_unet_extra_inputs_file() -> None:
+    """A U-Net for a glove with 2 extra inputs: export -> import keeps E = 2 (enc1.weight [w, 4, 5, 5]);
+    an enc1 reading 2 + 1 planes under a description with 2 extra inputs is refused both ways."""
+    desc = extra_inputs_description()
+    p = TMP / "unet_extra.safetensors"
+    model = randomize(UNet(4, extra_inputs=2), 31).eval()
+    export_model(model, p, glove="extra16", glove_description=desc)
+    tensors, meta = safetensors_io.load(p)
+    assert list(tensors["enc1.weight"].shape) == [4, 4, 5, 5], list(tensors["enc1.weight"].shape)
+    assert meta["inputs"] == "16"
+    m, info = import_model_with_info(p)
+    assert isinstance(m, UNet) and m.extra_inputs == 2 and info.extra_inputs == 2 and info.inputs == 16
+    for k, v in stored_tensors(model).items():
+        assert torch.equal(m.state_dict()[k], v), k
+    # The extra planes matter: other extra values, other outputs (a forward that ignored them would pass).
+    cells = torch.rand(4, 16, generator=torch.Generator().manual_seed(8)) * 2 - 1
+    shifted = cells.clone()
+    shifted[:, list(EXTRA_POSITIONS)] += 0.5
+    d = (unet_extra_predict_radians(m, desc, cells) - unet_extra_predict_radians(m, desc, shifted)).abs().max()
+    assert float(d) > 1e-3, float(d)
+    # enc1 reading 2 + 1 planes, description with 2 extra inputs.
+    one = stored_tensors(randomize(UNet(4, extra_inputs=1), 32))
+    bad = TMP / "unet_extra_mismatch.safetensors"
+    safetensors_io.save(bad, one, model_metadata(4, glove="extra16", glove_description=desc))
+    expect_error(lambda: import_model(bad), ModelFileError, "extra")
+    expect_error(lambda: import_model(bad), ModelFileError, "enc1.weight [w, 3, 5, 5]")
+    expect_error(lambda: export_model(randomize(UNet(4, extra_inputs=1), 32), TMP / "never_extra.safetensors",
+                                      glove="extra16", glove_description=desc), ValueError, "extra")
+    assert not (TMP / "never_extra.safetensors").exists()
+
+
+@test
+def test_cli_unet_extra_inputs_matches_predict() -> None:
+    """export_model's U-Net (width 4, 2 extra inputs at input positions 3 and 15) in `glovepose
+    predict` equals the forward written out in unet_extra_predict_radians within TOLERANCE_RAD."""
+    d = cli_dir()
+    desc = extra_inputs_description()
+    model = randomize(UNet(4, extra_inputs=2), 33).eval()
+    export_model(model, d / "py_unet_extra.safetensors", glove="extra16", glove_description=desc)
+    g = torch.Generator().manual_seed(9)
+    cells = torch.rand(24, 16, generator=g, dtype=torch.float32) * 2.4 - 1.2
+    cells[0] = 0.0
+    cells[1] = 1.0
+    cells[2] = -1.0
+    # Rows 4 and 5: row 3 with only the extra inputs changed; rows 6 and 7: row 3 with only the stretch cells changed.
+    cells[4] = cells[3]
+    cells[4, EXTRA_POSITIONS[0]] = -cells[3, EXTRA_POSITIONS[0]]
+    cells[5] = cells[3]
+    cells[5, EXTRA_POSITIONS[1]] = -cells[3, EXTRA_POSITIONS[1]]
+    stretch = [i for i in range(16) if i not in EXTRA_POSITIONS]
+    cells[6] = cells[3]
+    cells[6, stretch] = -cells[3, stretch]
+    cells[7] = cells[6]
+    csv = d / "cells_extra.csv"
+    csv.write_text("".join(",".join(repr(float(v)) for v in row.tolist()) + "\n" for row in cells))
+    out = run_cli(["predict", "--model", "py_unet_extra.safetensors", "--in", str(csv), "--no-header"], d)
+    cpp = torch.tensor([[float(v) for v in line.split(",")] for line in out.strip().splitlines()], dtype=torch.float64)
+    assert list(cpp.shape) == [24, 25], list(cpp.shape)
+    ours = unet_extra_predict_radians(model, desc, cells)
+    diff = float((ours - cpp).abs().max())
+    assert diff <= TOLERANCE_RAD, f"PyTorch vs glovepose predict differ by {diff} rad, expected <= {TOLERANCE_RAD}"
+    assert float(cpp.std(dim=0).max()) > 1e-3, "predictions hardly depend on the input"
+    # Each extra input, alone, moves the tool's prediction; identical rows give identical predictions.
+    for row in (4, 5, 6):
+        assert float((cpp[row] - cpp[3]).abs().max()) > 1e-4, (row, float((cpp[row] - cpp[3]).abs().max()))
+    assert torch.equal(cpp[6], cpp[7])
+    # Extras in the wrong planes (swapped) or appended last would not match: the check tells them apart.
+    swapped = desc["cells"][:]
+    swapped[EXTRA_POSITIONS[0]], swapped[EXTRA_POSITIONS[1]] = swapped[EXTRA_POSITIONS[1]], swapped[EXTRA_POSITIONS[0]]
+    perm = list(range(16))
+    perm[EXTRA_POSITIONS[0]], perm[EXTRA_POSITIONS[1]] = perm[EXTRA_POSITIONS[1]], perm[EXTRA_POSITIONS[0]]
+    wrong = float((unet_extra_predict_radians(model, dict(desc, cells=swapped), cells[:, perm]) - cpp).abs().max())
+    assert wrong > 100 * TOLERANCE_RAD, f"swapping the extra planes changes the prediction by only {wrong} rad"
+    print(f"     py_unet_extra: max |PyTorch - glovepose predict| = {diff:.2e} rad over {cpp.numel()} angles "
+          f"(extra planes swapped: {wrong:.2e} rad)")
 
 
 @test

@@ -2,15 +2,17 @@
 """Writes a PyTorch reference of one training step (forward, MSE loss, backward, BN running
 statistics, one Adam step) for the C++ trainer's tests.
 
-Usage: /usr/bin/python3 tools/python/make_grad_fixtures.py --arch unet:W --batch B --seed S --out FILE
+Usage: /usr/bin/python3 tools/python/make_grad_fixtures.py --arch unet:W[:E] --batch B --seed S --out FILE
        /usr/bin/python3 tools/python/make_grad_fixtures.py --arch fcn:H:C --batch B --seed S --out FILE
 
-    --arch unet:W     randomize(UNet(W), S)                      input [B, 2, 5, 5], target [B, 1, 5, 5]
-    --arch fcn:H:C    randomize_fcn(FCN(C, H, 25), S)            input [B, C],       target [B, 25]
+    --arch unet:W[:E] randomize(UNet(W, E), S)                   input [B, 2 + E, 5, 5], target [B, 1, 5, 5]
+                      (E: the glove's extra inputs, one input plane each; default 0)
+    --arch fcn:H:C    randomize_fcn(FCN(C, H, 25), S)            input [B, C],           target [B, 25]
 
 The fixtures in tests/fixtures were made with
     --arch unet:4    --batch 8 --seed 3 --out tests/fixtures/grad_unet_w4.safetensors
     --arch fcn:16:44 --batch 8 --seed 4 --out tests/fixtures/grad_fcn_h16_c44.safetensors
+    --arch unet:4:2  --batch 8 --seed 6 --out tests/fixtures/grad_unet_w4_e2.safetensors
 
 Procedure:
   1. The model is randomized in float32 (glovepose_ref.randomize / randomize_fcn with seed S), then
@@ -34,7 +36,7 @@ Procedure:
 File layout (glovepose safetensors container, tensors sorted by name; <p> runs over the learnable
 parameters, i.e. the state_dict names of model.parameters(); <bn> over the BatchNorm layers, U-Net
 only: bn2 bn3 bn4 dbn1 dbn2 dbn3):
-    input                        F32  [B, 2, 5, 5] | [B, C]
+    input                        F32  [B, 2 + E, 5, 5] | [B, C]   (every value drawn independently)
     target                       F32  [B, 1, 5, 5] | [B, 25]
     output                       F64  [B, 1, 5, 5] | [B, 25]   train-mode forward
     loss                         F64  [1]
@@ -49,7 +51,8 @@ only: bn2 bn3 bn4 dbn1 dbn2 dbn3):
 dec1 dec2 dec3 out, <bn>.weight, <bn>.bias; FCN <p>: fc1..fc6 .weight [out, in] and .bias [out].
 
 Metadata (strings): format "glovepose-grad-fixture", format_version "1", arch "unet" | "fcn",
-width (U-Net) or hidden/inputs/outputs (FCN), batch, seed, input_seed, target_seed, input_range,
+width and extra_inputs (U-Net; extra_inputs only when E > 0, so E = 0 files are as before) or
+hidden/inputs/outputs (FCN), batch, seed, input_seed, target_seed, input_range,
 target_range, mode "train", compute_dtype "float64", loss, optimizer (JSON with lr, beta1, beta2, eps,
 weight_decay, amsgrad, steps), bn_momentum, bn_eps, bn_running_var, torch_version,
 zero_grad_params (JSON list of the <p> whose float64 gradient is below 1e-12 everywhere, i.e. exactly
@@ -97,32 +100,34 @@ ZERO_GRAD = 1e-12
 
 
 def parse_arch(spec: str) -> Tuple[str, Dict[str, int]]:
-    """'unet:W' -> ('unet', {width}); 'fcn:H:C' -> ('fcn', {hidden, inputs, outputs})."""
+    """'unet:W' -> ('unet', {width}); 'unet:W:E' -> ('unet', {width, extra_inputs}) (E = 0 gives
+    {width} alone); 'fcn:H:C' -> ('fcn', {hidden, inputs, outputs})."""
     parts = spec.split(":")
     try:
-        if parts[0] == "unet" and len(parts) == 2:
+        if parts[0] == "unet" and len(parts) in (2, 3):
             w = int(parts[1])
-            if w >= 1:
-                return "unet", {"width": w}
+            e = int(parts[2]) if len(parts) == 3 else 0
+            if w >= 1 and e >= 0:
+                return "unet", {"width": w, **({"extra_inputs": e} if e else {})}
         elif parts[0] == "fcn" and len(parts) == 3:
             h, c = int(parts[1]), int(parts[2])
             if h >= 2 and c >= 1:
                 return "fcn", {"hidden": h, "inputs": c, "outputs": FCN_OUTPUTS}
     except ValueError:
         pass
-    raise ValueError(f"--arch {spec!r}, expected unet:W (W >= 1) or fcn:H:C (hidden H >= 2, C >= 1 inputs)")
+    raise ValueError(f"--arch {spec!r}, expected unet:W[:E] (W >= 1, E >= 0 extra inputs) or fcn:H:C (hidden H >= 2, C >= 1 inputs)")
 
 
 def build_model(arch: str, dims: Dict[str, int], seed: int) -> nn.Module:
     """The randomized float32 model."""
     if arch == "unet":
-        return randomize(UNet(dims["width"]), seed)
+        return randomize(UNet(dims["width"], dims.get("extra_inputs", 0)), seed)
     return randomize_fcn(FCN(dims["inputs"], dims["hidden"], dims["outputs"]), seed)
 
 
 def io_shapes(arch: str, dims: Dict[str, int], batch: int) -> Tuple[List[int], List[int]]:
     if arch == "unet":
-        return [batch, 2, 5, 5], [batch, 1, 5, 5]
+        return [batch, 2 + dims.get("extra_inputs", 0), 5, 5], [batch, 1, 5, 5]
     return [batch, dims["inputs"]], [batch, dims["outputs"]]
 
 
@@ -225,7 +230,7 @@ def make(arch: str, dims: Dict[str, int], batch: int, seed: int) -> Tuple[Dict[s
 
 def main(argv: List[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--arch", required=True, help="unet:W or fcn:H:C")
+    ap.add_argument("--arch", required=True, help="unet:W[:E] or fcn:H:C")
     ap.add_argument("--batch", type=int, required=True)
     ap.add_argument("--seed", type=int, required=True)
     ap.add_argument("--out", type=Path, required=True)

@@ -116,24 +116,39 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
 
 
 class Pipeline(nn.Module):
-    """Calibrated cells -> the 25 normalised DoFs: the U-Net between the glove's stretch maps and
-    pose map, or the FCN."""
+    """Calibrated cells -> the 25 normalised DoFs: the U-Net between the glove's input planes and
+    pose map, or the FCN (which reads every input, extra ones included, as a vector).
+
+    The U-Net's input (grid::GridMap::to_input_planes): the two stretch maps holding the cells on the
+    maps at their slots (0 elsewhere), then one constant 5x5 plane per extra input (slot None), in
+    input order, filled with that input's value: [N, 2 + E, 5, 5]."""
 
     def __init__(self, network: nn.Module, cell_slots, dof_slots):
         super().__init__()
         self.network = network
         self.unet = isinstance(network, UNet)
-        # An extra input (slot None) is read by the FCN only; main() refuses a U-Net for such a glove.
-        self.register_buffer("cell_index", torch.tensor([ch * 25 + r * 5 + c for ch, r, c in cell_slots] if self.unet else []),
-                             persistent=False)
-        self.register_buffer("dof_index", torch.tensor([r * 5 + c for r, c in dof_slots]), persistent=False)
+        on_maps = [i for i, slot in enumerate(cell_slots) if slot is not None] if self.unet else []
+        extra = [i for i, slot in enumerate(cell_slots) if slot is None] if self.unet else []
+        if self.unet and len(extra) != network.extra_inputs:
+            raise ValueError(f"the glove has {len(extra)} extra input(s), the U-Net reads {network.extra_inputs}")
+        index = lambda values: torch.tensor(values, dtype=torch.long)  # noqa: E731
+        self.register_buffer("map_inputs", index(on_maps), persistent=False)  # columns of the cells on the maps
+        self.register_buffer("map_index", index([cell_slots[i][0] * 25 + cell_slots[i][1] * 5 + cell_slots[i][2] for i in on_maps]),
+                             persistent=False)  # their slots in the flattened 2x5x5 maps
+        self.register_buffer("extra_inputs", index(extra), persistent=False)  # columns of the extra inputs, in input order
+        self.register_buffer("dof_index", index([r * 5 + c for r, c in dof_slots]), persistent=False)
 
     def forward(self, cells: torch.Tensor) -> torch.Tensor:
         if not self.unet:
             return self.network(cells)
-        maps = torch.zeros(cells.shape[0], 50, dtype=cells.dtype, device=cells.device)
-        maps[:, self.cell_index] = cells
-        pose = self.network(maps.view(-1, 2, 5, 5)).view(-1, 25)
+        n = cells.shape[0]
+        maps = torch.zeros(n, 50, dtype=cells.dtype, device=cells.device)
+        maps[:, self.map_index] = cells[:, self.map_inputs]
+        planes = maps.view(n, 2, 5, 5)
+        if self.extra_inputs.numel():
+            constant = cells[:, self.extra_inputs].view(n, -1, 1, 1).expand(n, self.extra_inputs.numel(), 5, 5)
+            planes = torch.cat([planes, constant], 1)
+        pose = self.network(planes).view(-1, 25)
         return pose[:, self.dof_index]
 
 
@@ -210,12 +225,8 @@ def main() -> int:
     train, validation, labelled = make_samples(tensors, meta, subjects, args.calibration, args.validation, settings)
 
     kind, _, size = args.model.partition(":")
-    if kind == "unet":
-        extra = sum(slot is None for slot in cell_slots)
-        if extra:
-            sys.exit(f"train_torch: the glove has {extra} extra input(s) (not on the stretch maps) and the U-Net reads only the maps, "
-                     "expected a glove whose inputs are all stretch cells, or --model fcn:H")
-        network = UNet(int(size or 64))
+    if kind == "unet":  # extra inputs (not on the stretch maps) are read as one constant input plane each
+        network = UNet(int(size or 64), extra_inputs=sum(slot is None for slot in cell_slots))
     elif kind == "fcn":
         network = FCN(len(cell_slots), int(size or 2048), 25)
     else:

@@ -4,7 +4,8 @@
 ///
 /// A glove's inputs that are not stretch cells (an IMU angle, a bend sensor over the wrist) have no
 /// slot (kOffMaps): the networks that take the inputs as a vector (FCN, linear map) read them beside
-/// the cells; the stretch maps do not hold them.
+/// the cells; the stretch maps do not hold them, and the U-Net reads each as one more input plane
+/// of constant value (to_input_planes()).
 ///
 /// Pose map: rows are the fingers (thumb, index, middle, ring, pinky), columns (abduction, base
 /// flexion, middle flexion, tip flexion, twist), so the thumb's row holds theta 9, 10, 11, 12, 29 as
@@ -13,6 +14,7 @@
 /// fingertip. Both tables are data: a glove with another layout supplies its own.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -115,14 +117,8 @@ class GridMap {
   int cell_count() const noexcept { return static_cast<int>(cell_slots_.size()); }
   /// @brief Number of inputs that are not on the stretch maps (slot kOffMaps).
   int extra_input_count() const noexcept { return extra_inputs_; }
-  /// @brief Throws glovepose::Error when the glove has extra inputs, for `reader`, a network that
-  /// reads only the stretch maps (the U-Net).
-  void require_maps_only(const std::string& reader) const {
-    if (extra_inputs_ > 0)
-      throw Error(reader + ": the glove has " + std::to_string(extra_inputs_) + " extra input" + (extra_inputs_ > 1 ? "s" : "") +
-                  " (not on the stretch maps) and the U-Net reads only the maps, expected a glove whose inputs are all "
-                  "stretch cells, or the FCN or linear map (train --model fcn[:H] or linear), which read extra inputs beside the cells");
-  }
+  /// @brief Planes of the U-Net's input: the two stretch maps, then one plane per extra input.
+  int input_plane_count() const noexcept { return kStretchChannels + extra_inputs_; }
   /// @brief Slot of each cell in the stretch maps (kOffMaps for an extra input).
   const std::vector<Slot>& cell_slots() const noexcept { return cell_slots_; }
   /// @brief Slot of each DoF in the pose map.
@@ -138,6 +134,23 @@ class GridMap {
     maps.fill(0.0f);
     for (std::size_t c = 0; c < cell_slots_.size(); ++c)
       if (cell_slots_[c].on_maps()) maps[static_cast<std::size_t>(cell_slots_[c].flat())] = static_cast<float>(cells[c]);
+    return Status::Ok;
+  }
+
+  /// @brief The U-Net's input: the two stretch maps (as to_stretch_maps()) followed by one 5x5 plane
+  /// per extra input, in input order, filled with that input's value, input_plane_count() x 25
+  /// floats at `planes`. Returns Status::NonFinite (planes untouched) if a value is NaN or infinite.
+  template <typename Scalar>
+  GLOVEPOSE_REALTIME Status to_input_planes(const Scalar* cells, float* planes) const noexcept {
+    for (std::size_t c = 0; c < cell_slots_.size(); ++c)
+      if (!std::isfinite(cells[c])) return Status::NonFinite;
+    std::fill(planes, planes + kStretchValues, 0.0f);
+    float* extra = planes + kStretchValues;
+    for (std::size_t c = 0; c < cell_slots_.size(); ++c) {
+      const float value = static_cast<float>(cells[c]);
+      if (cell_slots_[c].on_maps()) planes[cell_slots_[c].flat()] = value;
+      else extra = std::fill_n(extra, kMapSlots, value);
+    }
     return Status::Ok;
   }
 

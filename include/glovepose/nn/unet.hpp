@@ -1,6 +1,7 @@
 /// @file unet.hpp
 /// @brief The paper's U-Net (Table 6; our reading in weights_format.md): 2x5x5 stretch maps ->
-/// 1x5x5 pose map, on fixed grids.
+/// 1x5x5 pose map, on fixed grids. A glove's E inputs that are not on the maps come in as E more
+/// input planes of constant value ((2 + E) x 5 x 5; only enc1 reads them).
 ///
 /// Load time: every batch norm is folded into the convolution before it, each layer's weights are
 /// packed per useful tap (conv_plan.hpp; taps that only meet zero padding are dropped), output
@@ -57,8 +58,11 @@ inline constexpr int kMaxWidth = 4096;
 /// frame (6.4 KB), stay in the L2 between the product that writes them and the sums that read them.
 inline constexpr int kTapColumnFrames = 16;
 
-/// @brief Values in one network input (2 x 5 x 5, channel-major).
+/// @brief Values in one network input for a glove without extra inputs (2 x 5 x 5, channel-major);
+/// UNet::input_values() in general.
 inline constexpr int kUNetInputs = 50;
+/// @brief Most extra input planes a network reads (a glove has at most 256 inputs).
+inline constexpr int kMaxExtraInputs = 256;
 /// @brief Values in one network output (1 x 5 x 5).
 inline constexpr int kUNetOutputs = 25;
 
@@ -67,9 +71,9 @@ inline constexpr int kUNetOutputs = 25;
 template <typename Backend = kernels::SimdBackend>
 class UNet {
  public:
-  /// @brief Builds the network of width `width` from PyTorch-named tensors (weights_format.md).
-  /// Throws glovepose::Error naming the tensor when one is missing, extra, of the wrong shape, or
-  /// not finite.
+  /// @brief Builds the network of width `width` from PyTorch-named tensors (weights_format.md); the
+  /// number of extra input planes is enc1.weight's input channels less 2. Throws glovepose::Error
+  /// naming the tensor when one is missing, extra, of the wrong shape, or not finite.
   static UNet from_tensors(const TensorMap& tensors, int width, double bn_eps = 1e-5,
                            WeightStorage storage = WeightStorage::F32) {
     if (width < 1 || width > kMaxWidth)
@@ -78,20 +82,28 @@ class UNet {
     UNet net;
     net.width_ = width;
     net.storage_ = storage;
+    net.extra_inputs_ = extra_planes_of(tensors);
     net.define_buffers();
     const std::vector<LayerSpec> specs = unet_layers(width);
-    check_tensor_names(tensors, width);
+    check_tensor_names(tensors, width, net.extra_inputs_);
     for (const LayerSpec& spec : specs) net.layers_.push_back(net.pack(spec, tensors, bn_eps));
     for (const auto& [name, t] : tensors)
       if (name.find("running_") == std::string::npos) net.parameter_count_ += static_cast<std::size_t>(t.element_count());
     return net;
   }
 
-  /// @brief The tensor names and shapes a network of width `width` is made of.
-  static std::map<std::string, std::vector<std::int64_t>> expected_tensors(int width) { return unet_tensor_shapes(width); }
+  /// @brief The tensor names and shapes a network of width `width` reading `extra_inputs` extra
+  /// input planes is made of.
+  static std::map<std::string, std::vector<std::int64_t>> expected_tensors(int width, int extra_inputs = 0) {
+    return unet_tensor_shapes(width, extra_inputs);
+  }
 
   /// @brief Base width w.
   int width() const noexcept { return width_; }
+  /// @brief Input planes beside the two stretch maps: the glove's extra inputs, one constant plane each.
+  int extra_inputs() const noexcept { return extra_inputs_; }
+  /// @brief Values in one frame's input: (2 + extra_inputs()) x 5 x 5.
+  int input_values() const noexcept { return (2 + extra_inputs_) * 25; }
   /// @brief Weight storage chosen at load.
   WeightStorage storage() const noexcept { return storage_; }
   /// @brief Trainable parameters of the PyTorch model (conv weights and biases, BN scale and shift).
@@ -140,7 +152,8 @@ class UNet {
    private:
     friend class UNet;
     int capacity_ = 0;
-    int width_ = 0;  // the network it was made for: buffer sizes follow from width and capacity
+    int width_ = 0;  // the network it was made for: buffer sizes follow from width, planes and capacity
+    int extra_inputs_ = 0;
     std::vector<AlignedVector<float>> buffers;
     std::vector<const float*> x_rows;
     std::vector<float*> y_rows;
@@ -170,6 +183,7 @@ class UNet {
     Workspace ws;
     ws.capacity_ = capacity;
     ws.width_ = width_;
+    ws.extra_inputs_ = extra_inputs_;
     for (const BufferSpec& b : buffers_)
       ws.buffers.emplace_back(static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(capacity) *
                                   static_cast<std::size_t>(b.stride),
@@ -238,13 +252,16 @@ class UNet {
 
   /// @brief One frame: `input` 2x5x5 (channel, row, column) -> `output` 1x5x5 in (-1, 1).
   /// Returns Status::NonFinite (output untouched) for a NaN or infinite input or result,
-  /// Status::SizeMismatch for a workspace of another network or too small; never allocates.
+  /// Status::SizeMismatch for a workspace of another network or too small, or for a network that
+  /// reads extra input planes (use the pointer form); never allocates.
   GLOVEPOSE_REALTIME Status forward(const std::array<float, kUNetInputs>& input, std::array<float, kUNetOutputs>& output,
                                     Workspace& ws) const noexcept {
+    if (extra_inputs_ != 0) return Status::SizeMismatch;
     return forward(input.data(), output.data(), 1, ws);
   }
 
-  /// @brief `frames` frames (each 2x5x5 in, 1x5x5 out, PyTorch's NCHW order), frames <= capacity.
+  /// @brief `frames` frames (each input_values() in, (2 + extra_inputs()) x 5 x 5, and 1x5x5 out,
+  /// PyTorch's NCHW order), frames <= capacity.
   GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws) const noexcept {
     return forward(input, output, frames, ws, nullptr);
   }
@@ -261,14 +278,17 @@ class UNet {
 
  private:
   Status forward(const float* input, float* output, int frames, Workspace& ws, Team* team) const noexcept {
-    if (frames < 1 || frames > ws.capacity_ || ws.width_ != width_ || ws.buffers.size() != buffers_.size()) return Status::SizeMismatch;
-    for (long i = 0; i < static_cast<long>(frames) * kUNetInputs; ++i)
+    if (frames < 1 || frames > ws.capacity_ || ws.width_ != width_ || ws.extra_inputs_ != extra_inputs_ ||
+        ws.buffers.size() != buffers_.size())
+      return Status::SizeMismatch;
+    const int values = input_values(), planes = 2 + extra_inputs_;
+    for (long i = 0; i < static_cast<long>(frames) * values; ++i)
       if (!std::isfinite(input[i])) return Status::NonFinite;
     // NCHW -> [position][frame][channel]
     float* in = ws.buffers[0].data();
     for (int f = 0; f < frames; ++f)
-      for (int c = 0; c < 2; ++c)
-        for (int p = 0; p < 25; ++p) in[(p * frames + f) * 2 + c] = input[f * kUNetInputs + c * 25 + p];
+      for (int c = 0; c < planes; ++c)
+        for (int p = 0; p < 25; ++p) in[(p * frames + f) * planes + c] = input[f * values + c * 25 + p];
     for (const PackedLayer& layer : layers_) run(layer, frames, ws, team);
     const float* out = ws.buffers.back().data();
     for (long i = 0; i < static_cast<long>(frames) * kUNetOutputs; ++i)
@@ -286,14 +306,15 @@ class UNet {
   void forward_batch(const float* input, float* output, long frames, int threads = 1, int chunk = kSparseMaxFrames) const {
     if (frames <= 0) return;
     if (threads < 1 || chunk < 1) throw Error("UNet::forward_batch: threads and chunk must be >= 1");
-    for (long i = 0; i < frames * kUNetInputs; ++i)
-      if (!std::isfinite(input[i])) throw Error("UNet::forward_batch: frame " + std::to_string(i / kUNetInputs) + " has a non-finite input");
+    const long values = input_values();
+    for (long i = 0; i < frames * values; ++i)
+      if (!std::isfinite(input[i])) throw Error("UNet::forward_batch: frame " + std::to_string(i / values) + " has a non-finite input");
     chunk = std::min(chunk, kMaxBatch);
     run_frame_shares(frames, threads, [&](long begin, long end) {
       Workspace ws = make_workspace(chunk);
       for (long f = begin; f < end; f += chunk) {
         const int n = static_cast<int>(std::min<long>(chunk, end - f));
-        if (forward(input + f * kUNetInputs, output + f * kUNetOutputs, n, ws) != Status::Ok)
+        if (forward(input + f * values, output + f * kUNetOutputs, n, ws) != Status::Ok)
           throw Error("UNet::forward_batch: frames " + std::to_string(f) + ".." + std::to_string(f + n - 1) +
                       " overflowed inside the network (non-finite result)");
       }
@@ -416,7 +437,7 @@ class UNet {
 
   void define_buffers() {
     for (int id = 0; id < kUNetBufferCount; ++id) {
-      const int c = unet_buffer_channels(id, width_);
+      const int c = unet_buffer_channels(id, width_, extra_inputs_);
       // BF16 and Fixed16 weights come in pairs of vectors (kernels/weight_load.hpp): whole pairs of output channels.
       const bool paired = paired_storage(storage_);
       const int multiple = paired ? 2 * Backend::lanes : Backend::lanes;
@@ -425,14 +446,28 @@ class UNet {
     }
   }
 
-  static void check_tensor_names(const TensorMap& tensors, int width) {
-    check_tensors(tensors, expected_tensors(width), "UNet", "a width-" + std::to_string(width) + " U-Net");
+  // Extra input planes from enc1.weight [w, 2 + E, 5, 5]; 0 when it is missing or malformed, which
+  // check_tensor_names() then reports.
+  static int extra_planes_of(const TensorMap& tensors) {
+    const auto it = tensors.find("enc1.weight");
+    if (it == tensors.end() || it->second.shape.size() != 4 || it->second.shape[1] < 2) return 0;
+    const std::int64_t extra = it->second.shape[1] - 2;
+    if (extra > kMaxExtraInputs)
+      throw Error("UNet: tensor 'enc1.weight' reads " + std::to_string(it->second.shape[1]) + " input planes, expected 2 stretch maps and at most " +
+                  std::to_string(kMaxExtraInputs) + " extra inputs");
+    return static_cast<int>(extra);
+  }
+
+  static void check_tensor_names(const TensorMap& tensors, int width, int extra_inputs) {
+    check_tensors(tensors, expected_tensors(width, extra_inputs), "UNet",
+                  "a width-" + std::to_string(width) + " U-Net" +
+                      (extra_inputs > 0 ? " reading " + std::to_string(extra_inputs) + " extra input planes" : std::string()));
   }
 
   PackedLayer pack(const LayerSpec& spec, const TensorMap& tensors, double eps) const {
     spec.geometry.validate(spec.conv);
     const BufferSpec& out = buffers_[static_cast<std::size_t>(spec.out_buffer)];
-    const int cin = spec.in_channels(width_), cout = spec.out_channels, k = spec.geometry.kernel;
+    const int cin = spec.in_channels(width_, extra_inputs_), cout = spec.out_channels, k = spec.geometry.kernel;
     PackedLayer layer;
     layer.sources = spec.sources;
     layer.out_buffer = spec.out_buffer;
@@ -471,8 +506,9 @@ class UNet {
     };
     std::vector<float> packed;
     const std::vector<TapPairs> plan = plan_taps(spec.geometry);
-    // Fixed16 codes the row products only; the first and last layers (few weights) stay F32.
-    const bool fixed = storage_ == WeightStorage::Fixed16 && layer.mode == Mode::Taps;
+    // Fixed16 codes the row products only; the first and last layers (few weights) stay F32 (the
+    // first runs as Taps when it reads extra input planes).
+    const bool fixed = storage_ == WeightStorage::Fixed16 && layer.mode == Mode::Taps && spec.sources[0] != 0;
     const bool paired = storage_ == WeightStorage::BF16 || fixed;
     // TapColumns: the taps are the product's columns, padded to whole pairs of vectors for every
     // storage (the pair layout needs them; the same stride keeps 16-bit layers half an F32 one).
@@ -790,6 +826,7 @@ class UNet {
   UNet() = default;
 
   int width_ = 0;
+  int extra_inputs_ = 0;
   WeightStorage storage_ = WeightStorage::F32;
   std::vector<BufferSpec> buffers_;
   std::vector<PackedLayer> layers_;

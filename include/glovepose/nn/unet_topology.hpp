@@ -20,10 +20,12 @@ enum class Activation : unsigned char { Relu, Tanh };
 /// @brief Activation buffers: 0 input, 1 e1, 2 e2, 3 e3, 4 e4, 5 d1, 6 d2, 7 d3, 8 output.
 inline constexpr int kUNetBufferCount = 9;
 
-/// @brief Channels of buffer `id` in a width-`w` network.
-inline int unet_buffer_channels(int id, int w) noexcept {
+/// @brief Channels of buffer `id` in a width-`w` network for a glove with `extra_inputs` inputs
+/// that are not on the stretch maps: the input holds the two maps and one constant plane per extra
+/// input (grid::GridMap::to_input_planes()).
+inline int unet_buffer_channels(int id, int w, int extra_inputs = 0) noexcept {
   constexpr int factor[] = {0, 1, 2, 4, 8, 4, 2, 1, 0};
-  return id == 0 ? 2 : (id == 8 ? 1 : factor[id] * w);
+  return id == 0 ? 2 + extra_inputs : (id == 8 ? 1 : factor[id] * w);
 }
 
 /// @brief Grid side of buffer `id` (5x5 in, 3x3, 2x2, 1x1 at the bottom, back to 5x5).
@@ -43,9 +45,9 @@ struct UNetLayer {
   Activation activation;     ///< Activation after the batch norm.
 
   /// @brief Input channels (sum over the concatenated sources).
-  int in_channels(int width) const noexcept {
+  int in_channels(int width, int extra_inputs = 0) const noexcept {
     int c = 0;
-    for (int s : sources) c += unet_buffer_channels(s, width);
+    for (int s : sources) c += unet_buffer_channels(s, width, extra_inputs);
     return c;
   }
 };
@@ -65,11 +67,12 @@ inline std::vector<UNetLayer> unet_layers(int w) {
   };
 }
 
-/// @brief The tensor names and shapes (PyTorch state_dict) a width-`w` network is made of.
-inline std::map<std::string, std::vector<std::int64_t>> unet_tensor_shapes(int w) {
+/// @brief The tensor names and shapes (PyTorch state_dict) a width-`w` network reading
+/// `extra_inputs` extra input planes is made of (only enc1.weight depends on them).
+inline std::map<std::string, std::vector<std::int64_t>> unet_tensor_shapes(int w, int extra_inputs = 0) {
   std::map<std::string, std::vector<std::int64_t>> shapes;
   for (const UNetLayer& s : unet_layers(w)) {
-    const std::int64_t in = s.in_channels(w), out = s.out_channels;
+    const std::int64_t in = s.in_channels(w, extra_inputs), out = s.out_channels;
     const std::int64_t k = s.geometry.kernel;
     shapes[s.conv + ".weight"] = s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k}
                                                        : std::vector<std::int64_t>{out, in, k, k};

@@ -48,17 +48,17 @@ class TrainableUNet final : public TrainableNetwork {
       throw Error("TrainableUNet: max_batch " + std::to_string(max_batch) + ", expected 1..1048576");
     if (!(bn.epsilon > 0.0) || !(bn.momentum >= 0.0 && bn.momentum <= 1.0))
       throw Error("TrainableUNet: expected batch-norm epsilon > 0 and momentum in [0, 1]");
-    map_.require_maps_only("TrainableUNet");
+    const int extra = map_.extra_input_count();
     for (int id = 0; id < nn::kUNetBufferCount; ++id) {
       const int size = nn::unet_buffer_size(id);
-      buffers_.push_back({nn::unet_buffer_channels(id, width), size * size});
+      buffers_.push_back({nn::unet_buffer_channels(id, width, extra), size * size});
     }
     std::size_t largest = 0;
     for (const nn::UNetLayer& spec : nn::unet_layers(width)) {
       spec.geometry.validate(spec.conv);
       Layer l;
       l.spec = spec;
-      l.in = spec.in_channels(width);
+      l.in = spec.in_channels(width, extra);
       l.weight = params_.add(spec.conv + ".weight",
                              spec.geometry.transposed ? std::vector<std::int64_t>{l.in, spec.out_channels, spec.geometry.kernel, spec.geometry.kernel}
                                                       : std::vector<std::int64_t>{spec.out_channels, l.in, spec.geometry.kernel, spec.geometry.kernel},
@@ -120,15 +120,25 @@ class TrainableUNet final : public TrainableNetwork {
 
   void forward(const float* cells, int frames, bool training, ThreadPool& pool) override {
     check_frames(frames);
-    // Cells -> the 2x5x5 stretch maps, as [position][frame][channel]; empty slots stay 0.
+    // Cells -> the 2x5x5 stretch maps and one constant plane per extra input, as
+    // [position][frame][plane]; empty slots stay 0.
     float* in = values_[0].data();
-    std::fill(in, in + 50L * frames, 0.0f);
+    const long planes = map_.input_plane_count();
+    std::fill(in, in + 25L * planes * frames, 0.0f);
     const int cells_per_frame = map_.cell_count();
-    for (int f = 0; f < frames; ++f)
+    for (int f = 0; f < frames; ++f) {
+      long extra_plane = grid::kStretchChannels;
       for (int c = 0; c < cells_per_frame; ++c) {
         const grid::Slot& s = map_.cell_slots()[static_cast<std::size_t>(c)];
-        in[(static_cast<long>(s.row * 5 + s.col) * frames + f) * 2 + s.channel] = cells[static_cast<long>(f) * cells_per_frame + c];
+        const float value = cells[static_cast<long>(f) * cells_per_frame + c];
+        if (s.on_maps()) {
+          in[(static_cast<long>(s.row * 5 + s.col) * frames + f) * planes + s.channel] = value;
+        } else {
+          for (long p = 0; p < 25; ++p) in[(p * frames + f) * planes + extra_plane] = value;
+          ++extra_plane;
+        }
       }
+    }
     run_forward(frames, training, pool);
     const float* out = values_.back().data();
     for (int f = 0; f < frames; ++f)
@@ -144,14 +154,15 @@ class TrainableUNet final : public TrainableNetwork {
     run_backward(pool);
   }
 
-  /// @brief Forward pass on stretch maps (frames x 2 x 5 x 5, PyTorch's NCHW order); `pose_maps`
-  /// receives frames x 1 x 5 x 5.
+  /// @brief Forward pass on input planes (frames x (2 + extra inputs) x 5 x 5, PyTorch's NCHW
+  /// order: the stretch maps, then the extra inputs' planes); `pose_maps` receives frames x 1 x 5 x 5.
   void forward_maps(const float* maps, int frames, bool training, ThreadPool& pool, float* pose_maps) {
     check_frames(frames);
     float* in = values_[0].data();
+    const int planes = map_.input_plane_count();
     for (int f = 0; f < frames; ++f)
-      for (int c = 0; c < 2; ++c)
-        for (int p = 0; p < 25; ++p) in[(static_cast<long>(p) * frames + f) * 2 + c] = maps[(f * 2 + c) * 25 + p];
+      for (int c = 0; c < planes; ++c)
+        for (int p = 0; p < 25; ++p) in[(static_cast<long>(p) * frames + f) * planes + c] = maps[(f * planes + c) * 25 + p];
     run_forward(frames, training, pool);
     const float* out = values_.back().data();
     for (int f = 0; f < frames; ++f)

@@ -2,18 +2,22 @@
 
 Three architectures, as `glovepose train` writes them:
 
-    unet    glovepose_ref.UNet(width)              metadata width = w
+    unet    glovepose_ref.UNet(width, E)           metadata width = w; E (the glove's extra inputs,
+                                                   0 for most gloves) only from enc1.weight [w, 2 + E, 5, 5]
     fcn     glovepose_ref.FCN(inputs, h, 25)       metadata width = h, inputs = cells
     linear  torch.nn.Linear(inputs, 25)            tensors `weight` [25, inputs], `bias` [25]; no width
 
 `export_model` stores a module's state_dict (without the `num_batches_tracked` training counters)
 and the metadata; `import_model` rebuilds the module strictly (every tensor present, none extra,
-shapes equal, F32/F16/BF16 widened to float32, all finite) and checks the metadata.
+shapes equal, F32/F16/BF16 widened to float32, all finite) and checks the metadata. A U-Net's
+number of extra inputs E is no metadata key: it is read from enc1.weight's shape, and must equal the
+glove description's count of extra inputs when the file carries one (0 for the built-in glove).
 `import_model_with_info` also returns the parsed metadata (`ModelInfo`, provenance keys included).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -105,6 +109,25 @@ def _glove_description_cells(text: str, glove: str, what: str, err: type) -> int
     return len(cells)
 
 
+def _glove_description_extra_inputs(text: str) -> int:
+    """The number of extra inputs (cells {"name", "extra": true}, not on the stretch maps) of a glove
+    description already checked by _glove_description_cells."""
+    return sum(1 for c in json.loads(text)["cells"] if isinstance(c, dict) and c.get("extra") is True)
+
+
+def _check_unet_extra_inputs(extra_inputs: int, description: Optional[str], glove: str, what: str, err: type) -> None:
+    """Raises `err` unless a U-Net reading `extra_inputs` extra planes fits its glove: the glove
+    description's number of extra inputs, or 0 for the built-in glove (which has none)."""
+    if description is not None:
+        want = _glove_description_extra_inputs(description)
+        if extra_inputs != want:
+            raise err(f"{what}the U-Net reads {extra_inputs} extra input plane(s) (enc1.weight [w, {2 + extra_inputs}, 5, 5]) but the "
+                      f"glove description has {want} extra input(s), expected the same number")
+    elif glove == DEFAULT_GLOVE and extra_inputs != 0:
+        raise err(f"{what}the U-Net reads {extra_inputs} extra input plane(s) (enc1.weight [w, {2 + extra_inputs}, 5, 5]) but the "
+                  f"built-in glove {DEFAULT_GLOVE!r} has 0 extra inputs, expected enc1.weight [w, 2, 5, 5] (or give a glove_description)")
+
+
 def model_tensors(model: nn.Module) -> Dict[str, torch.Tensor]:
     """The tensors a model file stores: the state_dict without `num_batches_tracked`."""
     return {k: v.detach().clone() for k, v in model.state_dict().items() if not k.endswith("num_batches_tracked")}
@@ -113,12 +136,16 @@ def model_tensors(model: nn.Module) -> Dict[str, torch.Tensor]:
 def architecture_of(model: nn.Module) -> Tuple[str, Optional[int], Optional[int]]:
     """(architecture, width, inputs) of a module a model file can hold.
 
-    UNet -> ('unet', width, None: the U-Net does not know its glove's cell count);
+    UNet -> ('unet', width, None: the U-Net does not know its glove's cell count; its number of
+    extra inputs is model.extra_inputs, stored only as enc1.weight's shape [w, 2 + E, 5, 5]);
     FCN -> ('fcn', hidden, inputs); torch.nn.Linear(inputs, 25) -> ('linear', None, inputs).
-    Raises TypeError for other modules, ValueError for an FCN or Linear without 25 outputs or a
-    Linear without bias.
+    Raises TypeError for other modules, ValueError for an FCN or Linear without 25 outputs, a
+    Linear without bias or a UNet whose enc1 does not read 2 + extra_inputs planes.
     """
     if isinstance(model, UNet):
+        if model.enc1.in_channels != 2 + model.extra_inputs:
+            raise ValueError(f"UNet with extra_inputs {model.extra_inputs} has enc1 reading {model.enc1.in_channels} planes, "
+                             f"expected {2 + model.extra_inputs}")
         return "unet", int(model.width), None
     if isinstance(model, FCN):
         if model.fc6.out_features != DOF_COUNT:
@@ -229,8 +256,9 @@ def export_model(
 
     The architecture, width (U-Net, FCN) and inputs (FCN, Linear: from the module; U-Net: the
     `inputs` argument or the glove description's cell count, omitted otherwise) go into the
-    metadata; see model_metadata for the other arguments. dtype: 'F32' (default; models are trained
-    in F32), 'F16' or 'BF16' (values rounded on write). extra_metadata: further string entries
+    metadata; see model_metadata for the other arguments. A U-Net's extra_inputs must equal the glove
+    description's number of extra inputs (0 for the built-in glove); it is stored as enc1.weight's
+    shape. dtype: 'F32' (default; models are trained in F32), 'F16' or 'BF16' (values rounded on write). extra_metadata: further string entries
     (provenance such as `training_command`); the format's own keys are refused.
     Raises ValueError for non-finite weights or bad metadata, TypeError for another module type.
     """
@@ -259,6 +287,8 @@ def export_model(
         width, glove, joint_limits_min, joint_limits_max, calibration_min, calibration_max,
         architecture=architecture, inputs=inputs, calibration=calibration, glove_description=glove_description,
     ))
+    if isinstance(model, UNet):
+        _check_unet_extra_inputs(model.extra_inputs, meta.get("glove_description"), glove, "", ValueError)
     safetensors_io.save(path, tensors, meta)
 
 
@@ -278,6 +308,10 @@ class ModelInfo:
     calibration_min: Optional[Tuple[float, ...]] = None  #: one per input, or None
     calibration_max: Optional[Tuple[float, ...]] = None
     metadata: Dict[str, str] = field(default_factory=dict)  #: every entry of the file, provenance included
+    #: The glove's inputs not on the stretch maps (the description's "extra" cells; 0 for the built-in
+    #: glove). A U-Net reads 2 + extra_inputs planes; import_model_with_info takes a U-Net's from
+    #: enc1.weight's shape (no metadata key), checked against the description when there is one.
+    extra_inputs: int = 0
 
     def denormalize(self, normalized: torch.Tensor) -> torch.Tensor:
         """Normalised DoFs [..., 25] (hand::kDofs order, -1 = min, +1 = max) -> radians, float64.
@@ -336,10 +370,12 @@ def parse_metadata(meta: Mapping[str, str], source: str = "<model>") -> ModelInf
     inputs = integer("inputs", 1) if "inputs" in meta else DEFAULT_GLOVE_CELLS
     glove = need("glove")
     desc = meta.get("glove_description")
+    extra_inputs = 0
     if desc is not None:
         cells = _glove_description_cells(desc, glove, f"{source}: metadata ", ModelFileError)
         if cells != inputs:
             raise ModelFileError(f"{source}: metadata inputs = {inputs} but the glove description has {cells} cells")
+        extra_inputs = _glove_description_extra_inputs(desc)
     elif glove == DEFAULT_GLOVE and inputs != DEFAULT_GLOVE_CELLS:
         raise ModelFileError(f"{source}: metadata inputs = {inputs} for the built-in glove {DEFAULT_GLOVE!r}, expected {DEFAULT_GLOVE_CELLS}")
     calibration = meta.get("calibration", "onthefly")
@@ -367,7 +403,7 @@ def parse_metadata(meta: Mapping[str, str], source: str = "<model>") -> ModelInf
     return ModelInfo(
         architecture=architecture, width=width, inputs=inputs, glove=glove, glove_description=desc,
         calibration=calibration, bn_eps=bn_eps, joint_limits_min=lo, joint_limits_max=hi,
-        calibration_min=cmin, calibration_max=cmax, metadata=dict(meta),
+        calibration_min=cmin, calibration_max=cmax, metadata=dict(meta), extra_inputs=extra_inputs,
     )
 
 
@@ -377,9 +413,10 @@ def check_metadata(meta: Mapping[str, str], source: str = "<model>") -> int:
 
 
 def make_module(info: ModelInfo) -> ModelModule:
-    """A module of the architecture and sizes `info` names, with PyTorch's default initialisation."""
+    """A module of the architecture and sizes `info` names, with PyTorch's default initialisation
+    (a U-Net reads 2 + info.extra_inputs input planes)."""
     if info.architecture == "unet":
-        return UNet(info.width)
+        return UNet(info.width, info.extra_inputs)
     if info.architecture == "fcn":
         return FCN(info.inputs, info.width, DOF_COUNT)
     return nn.Linear(info.inputs, DOF_COUNT)
@@ -390,11 +427,21 @@ def import_model_with_info(path: PathLike) -> Tuple[ModelModule, ModelInfo]:
 
     The module is a UNet, an FCN (outputs: normalised DoFs in hand::kDofs order) or a
     torch.nn.Linear(inputs, 25), loaded strictly (no tensor missing or extra, shapes equal,
-    dtype F32/F16/BF16 widened to float32, all finite). Raises ModelFileError on bad metadata,
-    names, shapes, dtypes or non-finite values.
+    dtype F32/F16/BF16 widened to float32, all finite). A U-Net's extra inputs E come from
+    enc1.weight's shape [w, 2 + E, 5, 5]; with a glove description in the file E must equal its
+    number of extra inputs (without one: 0 for the built-in glove, any E >= 0 for another glove id),
+    and info.extra_inputs is E. Raises ModelFileError on bad metadata, names, shapes, dtypes,
+    non-finite values or such a mismatch.
     """
     tensors, meta = safetensors_io.load(path)
     info = parse_metadata(meta, str(path))
+    if info.architecture == "unet":
+        enc1 = tensors.get("enc1.weight")
+        # A missing or malformed enc1.weight is left to the strict checks below (E as the metadata implies).
+        if enc1 is not None and enc1.dim() == 4 and enc1.shape[1] >= 2:
+            extra_inputs = int(enc1.shape[1]) - 2
+            _check_unet_extra_inputs(extra_inputs, info.glove_description, info.glove, f"{path}: ", ModelFileError)
+            info = dataclasses.replace(info, extra_inputs=extra_inputs)
     model = make_module(info)
     expected = model_tensors(model)
     missing = sorted(set(expected) - set(tensors))

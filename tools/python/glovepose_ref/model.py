@@ -1,7 +1,10 @@
 """The glovepose U-Net (paper Table 6) in PyTorch, with the tensor names of weights_format.md.
 
-Input [N, 2, 5, 5] (channel 0 "along", channel 1 "across" stretch map), output [N, 1, 5, 5] in
-[-1, 1] (the pose map: rows fingers, columns abduction, base, middle, tip flexion, twist).
+Input [N, 2 + E, 5, 5] (channel 0 "along", channel 1 "across" stretch map; for a glove with E extra
+inputs -- cells marked "extra", not on the maps -- channel 2 + k is a constant 5x5 plane filled with
+the calibrated value of the k-th extra input, extra inputs in the glove description's input order),
+output [N, 1, 5, 5] in [-1, 1] (the pose map: rows fingers, columns abduction, base, middle, tip
+flexion, twist). E changes only enc1 (weight [w, 2 + E, 5, 5]); E = 0 is the paper's network.
 
 Spatial sizes: enc1 5 -> 5, enc2 5 -> 3, enc3 3 -> 2, enc4 2 -> 1, dec1 1 -> 2, dec2 2 -> 3,
 dec3 3 -> 5, out 5 -> 5. Skip connections concatenate [decoder, encoder] along channels.
@@ -27,15 +30,23 @@ CONV_NAMES = ("enc1", "enc2", "enc3", "enc4", "dec1", "dec2", "dec3", "out")
 
 
 class UNet(nn.Module):
-    """U-Net of base width `width` (the paper: 64). State-dict keys match weights_format.md."""
+    """U-Net of base width `width` (the paper: 64) reading 2 + `extra_inputs` input planes.
 
-    def __init__(self, width: int = 64) -> None:
+    State-dict keys match weights_format.md. extra_inputs E: the glove's inputs that are not on the
+    stretch maps, each read as a constant 5x5 plane (channels 2..2 + E - 1, in the glove's input
+    order); only enc1's weight changes shape ([width, 2 + E, 5, 5]). E = 0: the paper's U-Net.
+    """
+
+    def __init__(self, width: int = 64, extra_inputs: int = 0) -> None:
         super().__init__()
         if width < 1:
             raise ValueError(f"UNet: width {width}, expected >= 1")
+        if extra_inputs < 0:
+            raise ValueError(f"UNet: extra_inputs {extra_inputs}, expected >= 0")
         w = width
         self.width = width
-        self.enc1 = nn.Conv2d(2, w, 5, stride=1, padding=2)
+        self.extra_inputs = extra_inputs
+        self.enc1 = nn.Conv2d(2 + extra_inputs, w, 5, stride=1, padding=2)
         self.enc2 = nn.Conv2d(w, 2 * w, 3, stride=2, padding=1)
         self.bn2 = nn.BatchNorm2d(2 * w)
         self.enc3 = nn.Conv2d(2 * w, 4 * w, 3, stride=2, padding=1)
@@ -51,7 +62,7 @@ class UNet(nn.Module):
         self.out = nn.Conv2d(2 * w, 1, 5, stride=1, padding=2)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """[N, 2, 5, 5] -> [N, 1, 5, 5]."""
+        """[N, 2 + extra_inputs, 5, 5] -> [N, 1, 5, 5]."""
         relu = torch.relu
         e1 = relu(self.enc1(x))                                      # w  x 5x5
         e2 = relu(self.bn2(self.enc2(e1)))                           # 2w x 3x3
@@ -107,7 +118,9 @@ def randomize(model: UNet, seed: int) -> UNet:
 
     Convolution weights Xavier-uniform, biases U(-0.1, 0.1), BN weight U(0.5, 1.5), BN bias
     U(-0.2, 0.2), running_mean U(-0.2, 0.2), running_var U(0.5, 2.0). The values depend only on
-    `seed` and the width (one torch.Generator, layers visited in forward order).
+    `seed`, the width and extra_inputs (one torch.Generator, layers visited in forward order; with
+    extra inputs enc1's weight takes more draws and its Xavier bound uses fan_in (2 + E) * 25, so
+    every later value differs from the E = 0 network's; E = 0 draws exactly as before E existed).
     """
     uniform_ = seeded_uniform(seed)
 
