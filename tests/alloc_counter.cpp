@@ -24,6 +24,10 @@ void* counted_alloc(std::size_t size, std::size_t alignment) {
 
 std::size_t glovepose::test::allocation_count() noexcept { return g_allocations.load(std::memory_order_relaxed); }
 
+// For a program that finds the counter at run time (dlsym), e.g. `glovepose soak` with this file
+// built as libglovepose_alloc_counter.so and preloaded.
+extern "C" std::size_t glovepose_allocation_count() noexcept { return glovepose::test::allocation_count(); }
+
 void* operator new(std::size_t size) { return counted_alloc(size, alignof(std::max_align_t)); }
 void* operator new[](std::size_t size) { return counted_alloc(size, alignof(std::max_align_t)); }
 void* operator new(std::size_t size, std::align_val_t a) { return counted_alloc(size, static_cast<std::size_t>(a)); }

@@ -1,11 +1,11 @@
 // The soak run, bounded for CI (issue: reliability): three estimators on threads sharing one
 // loaded model, each fed minutes of simulated 60 Hz row stream with random faults of every kind
-// (sim/soak.hpp; `glovepose soak` runs the same for hours). Every cycle must end in a pose or a
+// (tools/soak/soak.hpp; `glovepose soak` runs the same for hours). Every cycle must end in a pose or a
 // status that explains why not, every pose must be finite and in sequence, every fault must be
 // recovered from within the bound, memory must not grow and nothing may allocate after warm-up.
 #include <doctest/doctest.h>
 
-#include <glovepose/sim/soak.hpp>
+#include "soak/soak.hpp"
 
 #include <sstream>
 #include <string>

@@ -37,22 +37,19 @@ int bench(int argc, char** argv);
 /// `glovepose view ...` (view.cpp); argv[1] is "view". Returns the exit code.
 int view(int argc, char** argv);
 
-/// A shipped model file (models/NAME): beside the executable's build folder (build/tools/glovepose
-/// in a clone), else in the source tree this tool was built from. Throws glovepose::Error naming
-/// the places tried.
+/// A file shipped in models/ (a model, the calibration sequence): where `cmake --install` puts them
+/// relative to the executable (GLOVEPOSE_MODELS_FROM_BIN, ../share/glovepose/models by default);
+/// the build tree has the same layout (build/share/glovepose/models links to the source's
+/// models/). Throws glovepose::Error naming the place tried.
 inline std::string shipped_model_path(const std::string& name) {
   namespace fs = std::filesystem;
-  std::vector<fs::path> candidates;
   std::error_code error;
   const fs::path executable = fs::read_symlink("/proc/self/exe", error);
-  if (!error) candidates.push_back(executable.parent_path() / ".." / ".." / "models" / name);
-  candidates.push_back(fs::path(GLOVEPOSE_SOURCE_DIR) / "models" / name);
-  std::string tried;
-  for (const fs::path& candidate : candidates) {
-    if (fs::is_regular_file(candidate, error)) return candidate.lexically_normal().string();
-    tried += (tried.empty() ? "'" : ", '") + candidate.lexically_normal().string() + "'";
-  }
-  throw Error("the shipped model is in none of " + tried + ", expected --model FILE");
+  if (error) throw Error("cannot find this executable (/proc/self/exe: " + error.message() + "), expected --model FILE");
+  const fs::path candidate = (executable.parent_path() / GLOVEPOSE_MODELS_FROM_BIN / name).lexically_normal();
+  if (!fs::is_regular_file(candidate, error))
+    throw Error("the shipped file '" + candidate.string() + "' is missing (install glovepose with cmake --install), expected it or --model FILE");
+  return candidate.string();
 }
 
 /// A dataset file (train::Dataset::read); a CSV file given instead is refused with the command

@@ -56,7 +56,7 @@ struct DemoOptions {
 [[noreturn]] void usage(const std::string& problem) {
   exit_with_usage("demo", problem,
                   std::string("usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n")
-                  + "  --model FILE  weights (default: models/" + kShippedModelName + " of the source tree)\n"
+                  + "  --model FILE  weights (default: models/" + kShippedModelName + ", shipped with glovepose)\n"
                   + "  --out DIR     where the table and pictures go (default: demo-out)\n"
                   + "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)\n"
                   + "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"

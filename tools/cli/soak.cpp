@@ -1,11 +1,12 @@
 // glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
-//   The soak run (include/glovepose/sim/soak.hpp): N estimators on threads sharing one loaded
+//   The soak run (tools/soak/soak.hpp): N estimators on threads sharing one loaded
 //   model, each calibrating on the fly (30 s sequence) and then streaming M minutes of simulated
 //   60 Hz rows (X minutes of simulated motion, looped forward and backward with a clock that keeps
 //   running) with random faults of every kind
 //   (sim/faults.hpp). Prints frames, faults by kind, recoveries, memory and allocations; exits 0
 //   when every check held, 1 when one failed, 2 on bad options.
-#include <glovepose/sim/soak.hpp>
+
+#include <dlfcn.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -14,7 +15,7 @@
 
 // The test suite's allocation counter (global operator new), linked into this tool so the soak
 // can prove the per-frame path allocates nothing here too.
-#include "../../tests/alloc_counter.hpp"
+#include "../soak/soak.hpp"
 #include "commands.hpp"
 
 namespace glovepose::cli {
@@ -26,7 +27,7 @@ constexpr double kCalibrationSeconds = 30.0;
 struct SoakOptions {
   sim::SoakConfig soak;
   double source_minutes = 3.0;
-  std::string model = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+  std::string model;  // empty: the shipped FCN
 };
 
 // `problem` empty: the usage was asked for (--help).
@@ -37,7 +38,7 @@ struct SoakOptions {
                   "  --estimators N      estimators on threads sharing the model (default 3)\n"
                   "  --seed S            seed of the faults (default 1)\n"
                   "  --source-minutes X  simulated motion looped, minutes (default 3; ~6 s of CPU per minute)\n"
-                  "  --model FILE        weights (default: models/glovepose_fcn512.safetensors of the source tree)\n");
+                  "  --model FILE        weights (default: the shipped glovepose_fcn512.safetensors)\n");
 }
 
 SoakOptions parse_soak_options(int argc, char** argv) {
@@ -68,8 +69,11 @@ SoakOptions parse_soak_options(int argc, char** argv) {
 int soak(int argc, char** argv) {
   try {
     SoakOptions o = parse_soak_options(argc, argv);
-    o.soak.allocation_count = test::allocation_count;
-    const auto model = PoseModel::load(o.model);
+    // The installed tool does not replace operator new; the allocation counter of the test suite
+    // can be preloaded (LD_PRELOAD=.../libglovepose_alloc_counter.so), and is then used.
+    if (void* counter = dlsym(RTLD_DEFAULT, "glovepose_allocation_count"))
+      o.soak.allocation_count = reinterpret_cast<std::size_t (*)()>(counter);
+    const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
     std::cout << "simulating " << o.source_minutes << " min of motion to loop ..." << std::endl;
     // The simulated user is the fault seed's, so one seed reproduces the whole run.
     const train::Dataset source = sim::simulate_soak_source(o.soak.seed, o.source_minutes, kCalibrationSeconds);

@@ -458,7 +458,7 @@ int fit_guided_command(Options o, int argc, char** argv) {
   train::TrainedModel model = train::load_model(o.model, 1024);
   train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
-  const std::string sequence_file = o.sequence_file.empty() ? std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json" : o.sequence_file;
+  const std::string sequence_file = o.sequence_file.empty() ? shipped_model_path("calibration_glauser2019.json") : o.sequence_file;
   const calibration::Sequence sequence = calibration::Sequence::read(sequence_file);
   train::ThreadPool pool(o.threads);
   const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);

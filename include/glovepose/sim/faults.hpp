@@ -1,6 +1,6 @@
 /// @file faults.hpp
 /// @brief Faults of a glove's row stream, injected into clean readings: what the tests
-/// (tests/test_faults.cpp) and the soak run (sim/soak.hpp, `glovepose soak`) feed the estimator to
+/// (tests/test_faults.cpp) and the soak run (tools/soak/soak.hpp, `glovepose soak`) feed the estimator to
 /// prove it meets them. sensor/readout.hpp says how the readout detects and survives each one.
 ///
 /// A FaultInjector is one fault of one kind, active for as long as the caller passes readings

@@ -1,5 +1,6 @@
 /// @file soak.hpp
-/// @brief The soak run: several estimators, on threads, sharing one loaded model, each fed a long
+/// @brief A test harness, not part of the installed library (it reads the process's resident
+/// memory and reports in the command's terms). The soak run: several estimators, on threads, sharing one loaded model, each fed a long
 /// simulated row stream at 60 Hz with random faults (sim/faults.hpp), with every readout cycle
 /// accounted for. Used by tests/test_soak.cpp (bounded, in CI) and `glovepose soak` (hours).
 ///
@@ -41,9 +42,9 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "../estimator.hpp"
-#include "corpus_dataset.hpp"
-#include "faults.hpp"
+#include <glovepose/estimator.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
+#include <glovepose/sim/faults.hpp>
 
 namespace glovepose::sim {
 
@@ -282,7 +283,7 @@ struct SoakReport {
     if (allocations_counted)
       put("  heap allocations after the warm-up: %zu\n", allocations);
     else
-      out << "  heap allocations: not counted\n";
+      out << "  heap allocations: not counted (preload the counter: LD_PRELOAD=build/tools/libglovepose_alloc_counter.so)\n";
     const std::vector<std::string> failed = failures();
     for (const std::string& f : failed) out << "FAILED: " << f << "\n";
     out << (failed.empty() ? "soak: passed\n" : "soak: FAILED\n");
