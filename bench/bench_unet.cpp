@@ -7,6 +7,7 @@
 // shipped model. Random weights with BN statistics and random inputs in [-1, 1]: with up to 32
 // frames per forward (batch 1, and the batches' chunks of 32) the time depends on how many
 // activations are zero (about half after each ReLU, as with the trained model; docs/performance.md).
+#include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/nn/unet.hpp>
 
 #include <benchmark/benchmark.h>
@@ -67,11 +68,11 @@ void run(benchmark::State& state, WeightStorage storage) {
   // Share of the hidden activations that are exactly zero (mean over the 7 layers, last chunk):
   // up to 32 frames per forward the products skip them, so the time depends on it.
   const int last_chunk = batch - (batch - 1) / chunk * chunk;
-  const auto zeros = net.zero_fractions(ws, last_chunk);
+  const auto zeros = zero_fractions(net, ws, last_chunk);
   state.counters["zero_share"] = std::accumulate(zeros.begin(), zeros.end(), 0.0) / static_cast<double>(zeros.size());
   // At batch 1: the bytes of weights the frame reads (the rows that meet a nonzero activation),
   // which come from the L3 every frame; with BM_StreamRows' rate, the forward's floor.
-  if (batch == 1) state.counters["read_MB"] = static_cast<double>(net.weight_bytes_read(ws)) / 1e6;
+  if (batch == 1) state.counters["read_MB"] = static_cast<double>(weight_bytes_read(net, ws)) / 1e6;
   state.SetLabel(storage_name(storage));
 }
 

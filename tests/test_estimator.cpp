@@ -3,6 +3,7 @@
 // shared by estimators on threads, and the statuses of bad input.
 #include <doctest/doctest.h>
 
+#include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/samples.hpp>
@@ -216,7 +217,7 @@ TEST_CASE("estimator: the shipped U-Net leaves about half of each hidden layer e
     REQUIRE(estimator.calibration()->normalize(raw, normalized) == Status::Ok);
     REQUIRE(model.glove().map().to_stretch_maps(normalized.data(), maps) == Status::Ok);
     REQUIRE(unet.forward(maps, pose_map, ws) == Status::Ok);
-    const auto fractions = unet.zero_fractions(ws, 1);
+    const auto fractions = nn::zero_fractions(unet, ws, 1);
     for (std::size_t l = 0; l < mean.size(); ++l) mean[l] += fractions[l] / static_cast<double>(frames);
   }
   MESSAGE("shipped model, " << frames << " frames, mean share of exact zeros e1..d3: " << mean[0] << " " << mean[1] << " " << mean[2]

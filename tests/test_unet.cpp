@@ -1,3 +1,4 @@
+#include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/model.hpp>
@@ -266,14 +267,14 @@ TEST_CASE("unet: weight_bytes_read counts the weight rows a single frame meets, 
     auto ws = net.make_workspace(1);
     std::vector<float> y(kUNetOutputs);
     REQUIRE(net.forward(x.data(), y.data(), 1, ws) == Status::Ok);
-    const std::size_t read = net.weight_bytes_read(ws);
+    const std::size_t read = nn::weight_bytes_read(net, ws);
     const std::size_t expected = expected_weight_bytes_read(tensors, x.data(), width, storage == WeightStorage::F32 ? 4 : 2);
     MESSAGE(std::string(storage_name(storage)) << ": " << read << " of " << net.weight_bytes() << " bytes read, expected " << expected);
     // float against double: a pre-activation within rounding of zero may fall either side (one row of the widest layer).
     CHECK(std::abs(static_cast<double>(read) - static_cast<double>(expected)) <= 8.0 * width * 4);
     CHECK(read < net.weight_bytes());
     const auto other = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(4), 9), 4);
-    CHECK_THROWS_WITH_AS((void)other.weight_bytes_read(ws), doctest::Contains("expected width 4"), Error);
+    CHECK_THROWS_WITH_AS((void)nn::weight_bytes_read(other, ws), doctest::Contains("expected width 4"), Error);
   }
   // A first layer that only ever outputs -1 before its ReLU: no row fed by e1 is read.
   std::fill(tensors.at("enc1.weight").values.begin(), tensors.at("enc1.weight").values.end(), 0.0f);
@@ -282,7 +283,7 @@ TEST_CASE("unet: weight_bytes_read counts the weight rows a single frame meets, 
   auto ws = net.make_workspace(1);
   std::vector<float> y(kUNetOutputs);
   REQUIRE(net.forward(x.data(), y.data(), 1, ws) == Status::Ok);
-  CHECK(std::abs(static_cast<double>(net.weight_bytes_read(ws)) - static_cast<double>(expected_weight_bytes_read(tensors, x.data(), width, 4))) <=
+  CHECK(std::abs(static_cast<double>(nn::weight_bytes_read(net, ws)) - static_cast<double>(expected_weight_bytes_read(tensors, x.data(), width, 4))) <=
         8.0 * width * 4);
 }
 
@@ -304,15 +305,15 @@ TEST_CASE("unet: zero_fractions counts the zeros each ReLU leaves as the indepen
         size[l] += static_cast<double>(acts[l].v.size());
       }
     }
-    const auto fractions = net.zero_fractions(ws, frames);
+    const auto fractions = nn::zero_fractions(net, ws, frames);
     for (std::size_t l = 0; l < reference.size(); ++l) {
       CAPTURE(l);
       // float against double: a pre-activation within rounding of zero may fall either side.
       CHECK(std::abs(fractions[l] - reference[l] / size[l]) <= 2.0 / size[l]);
     }
-    CHECK_THROWS_WITH_AS((void)net.zero_fractions(ws, frames + 1), doctest::Contains("4 frames, expected 1..3"), Error);
+    CHECK_THROWS_WITH_AS((void)nn::zero_fractions(net, ws, frames + 1), doctest::Contains("4 frames, expected 1..3"), Error);
     const auto other = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(4), 9), 4);
-    CHECK_THROWS_WITH_AS((void)other.zero_fractions(ws, 1), doctest::Contains("expected width 4"), Error);
+    CHECK_THROWS_WITH_AS((void)nn::zero_fractions(other, ws, 1), doctest::Contains("expected width 4"), Error);
     return fractions;
   };
   const auto random = fractions_of(tensors);

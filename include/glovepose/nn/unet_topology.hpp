@@ -19,13 +19,39 @@ enum class Activation : unsigned char { Relu, Tanh };
 
 /// @brief Activation buffers: 0 input, 1 e1, 2 e2, 3 e3, 4 e4, 5 d1, 6 d2, 7 d3, 8 output.
 inline constexpr int kUNetBufferCount = 9;
+/// @brief Positions of the input and output grids (5 x 5).
+inline constexpr int kUNetGridPositions = 25;
+/// @brief Input planes of a network for a glove without extra inputs: the two stretch maps.
+inline constexpr int kUNetMapPlanes = 2;
+/// @brief Values in one network input for a glove without extra inputs (2 x 5 x 5, channel-major);
+/// UNet::input_values() in general.
+inline constexpr int kUNetInputs = kUNetMapPlanes * kUNetGridPositions;
+/// @brief Values in one network output (1 x 5 x 5).
+inline constexpr int kUNetOutputs = kUNetGridPositions;
+/// @brief Most extra input planes a network reads (a glove has at most 256 inputs).
+inline constexpr int kMaxExtraInputs = 256;
+
+/// @brief PyTorch's NCHW frames (`frames` x `planes` x `positions`) -> the networks' activation
+/// layout [position][frame][plane] (inference and training share it).
+inline void to_position_major(const float* nchw, int frames, int planes, int positions, float* rows) noexcept {
+  for (int f = 0; f < frames; ++f)
+    for (int c = 0; c < planes; ++c)
+      for (int p = 0; p < positions; ++p)
+        rows[(static_cast<long>(p) * frames + f) * planes + c] = nchw[(static_cast<long>(f) * planes + c) * positions + p];
+}
+
+/// @brief One plane back: [position][frame] -> `frames` x `positions` (NCHW with one channel).
+inline void from_position_major(const float* rows, int frames, int positions, float* nchw) noexcept {
+  for (int f = 0; f < frames; ++f)
+    for (int p = 0; p < positions; ++p) nchw[static_cast<long>(f) * positions + p] = rows[static_cast<long>(p) * frames + f];
+}
 
 /// @brief Channels of buffer `id` in a width-`w` network for a glove with `extra_inputs` inputs
 /// that are not on the stretch maps: the input holds the two maps and one constant plane per extra
 /// input (grid::GridMap::to_input_planes()).
 inline int unet_buffer_channels(int id, int w, int extra_inputs = 0) noexcept {
   constexpr int factor[] = {0, 1, 2, 4, 8, 4, 2, 1, 0};
-  return id == 0 ? 2 + extra_inputs : (id == 8 ? 1 : factor[id] * w);
+  return id == 0 ? kUNetMapPlanes + extra_inputs : (id == 8 ? 1 : factor[id] * w);
 }
 
 /// @brief Grid side of buffer `id` (5x5 in, 3x3, 2x2, 1x1 at the bottom, back to 5x5).

@@ -24,6 +24,7 @@
 #include "../config.hpp"
 #include "../grid/grid_map.hpp"
 #include "../nn/conv_plan.hpp"
+#include "../status.hpp"
 #include "../nn/unet_topology.hpp"
 #include "../sim/random.hpp"
 #include "network.hpp"
@@ -87,6 +88,7 @@ class TrainableUNet final : public TrainableNetwork {
       grads_.emplace_back(n, 0.0f);
     }
     delta_.resize(largest);
+    planes_.resize(static_cast<std::size_t>(max_batch) * static_cast<std::size_t>(map_.input_plane_count()) * nn::kUNetGridPositions);
     output_.resize(static_cast<std::size_t>(max_batch) * kTargets);
   }
 
@@ -120,25 +122,14 @@ class TrainableUNet final : public TrainableNetwork {
 
   void forward(const float* cells, int frames, bool training, ThreadPool& pool) override {
     check_frames(frames);
-    // Cells -> the 2x5x5 stretch maps and one constant plane per extra input, as
-    // [position][frame][plane]; empty slots stay 0.
-    float* in = values_[0].data();
-    const long planes = map_.input_plane_count();
-    std::fill(in, in + 25L * planes * frames, 0.0f);
+    // Cells -> the network's input planes (the stretch maps, one constant plane per extra input),
+    // as the estimator makes them (GridMap::to_input_planes), then into the activation layout.
     const int cells_per_frame = map_.cell_count();
-    for (int f = 0; f < frames; ++f) {
-      long extra_plane = grid::kStretchChannels;
-      for (int c = 0; c < cells_per_frame; ++c) {
-        const grid::Slot& s = map_.cell_slots()[static_cast<std::size_t>(c)];
-        const float value = cells[static_cast<long>(f) * cells_per_frame + c];
-        if (s.on_maps()) {
-          in[(static_cast<long>(s.row * 5 + s.col) * frames + f) * planes + s.channel] = value;
-        } else {
-          for (long p = 0; p < 25; ++p) in[(p * frames + f) * planes + extra_plane] = value;
-          ++extra_plane;
-        }
-      }
-    }
+    const long values = static_cast<long>(map_.input_plane_count()) * nn::kUNetGridPositions;
+    for (int f = 0; f < frames; ++f)
+      if (map_.to_input_planes(cells + static_cast<long>(f) * cells_per_frame, planes_.data() + f * values) != Status::Ok)
+        throw Error("TrainableUNet: frame " + std::to_string(f) + " of the batch has a non-finite input");
+    nn::to_position_major(planes_.data(), frames, map_.input_plane_count(), nn::kUNetGridPositions, values_[0].data());
     run_forward(frames, training, pool);
     const float* out = values_.back().data();
     for (int f = 0; f < frames; ++f)
@@ -158,22 +149,14 @@ class TrainableUNet final : public TrainableNetwork {
   /// order: the stretch maps, then the extra inputs' planes); `pose_maps` receives frames x 1 x 5 x 5.
   void forward_maps(const float* maps, int frames, bool training, ThreadPool& pool, float* pose_maps) {
     check_frames(frames);
-    float* in = values_[0].data();
-    const int planes = map_.input_plane_count();
-    for (int f = 0; f < frames; ++f)
-      for (int c = 0; c < planes; ++c)
-        for (int p = 0; p < 25; ++p) in[(static_cast<long>(p) * frames + f) * planes + c] = maps[(f * planes + c) * 25 + p];
+    nn::to_position_major(maps, frames, map_.input_plane_count(), nn::kUNetGridPositions, values_[0].data());
     run_forward(frames, training, pool);
-    const float* out = values_.back().data();
-    for (int f = 0; f < frames; ++f)
-      for (int p = 0; p < 25; ++p) pose_maps[f * 25 + p] = out[static_cast<long>(p) * frames + f];
+    nn::from_position_major(values_.back().data(), frames, nn::kUNetGridPositions, pose_maps);
   }
 
   /// @brief Backward pass given dLoss/dpose_map (frames x 1 x 5 x 5) of the last forward_maps().
   void backward_maps(const float* pose_map_grad, ThreadPool& pool) {
-    float* g = grads_.back().data();
-    for (int f = 0; f < frames_; ++f)
-      for (int p = 0; p < 25; ++p) g[static_cast<long>(p) * frames_ + f] = pose_map_grad[f * 25 + p];
+    nn::to_position_major(pose_map_grad, frames_, 1, nn::kUNetGridPositions, grads_.back().data());
     run_backward(pool);
   }
 
@@ -444,6 +427,7 @@ class TrainableUNet final : public TrainableNetwork {
   int width_;
   int max_batch_;
   grid::GridMap map_;
+  std::vector<float> planes_;  // one batch's input planes, NCHW
   BatchNormConfig bn_;
   ParameterSet params_;
   std::vector<BufferShape> buffers_;
