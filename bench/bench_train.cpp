@@ -30,7 +30,7 @@ void BM_TrainStep(benchmark::State& state) {
   }
   train::ThreadPool pool(threads);
   train::Optimizer adam(net->parameters(), {});
-  sim::Rng rng(2);
+  core::Rng rng(2);
   std::vector<float> x(static_cast<std::size_t>(batch) * 44), t(static_cast<std::size_t>(batch) * train::kTargets), g(t.size());
   for (float& v : x) v = static_cast<float>(rng.uniform(-1.0, 1.0));
   for (float& v : t) v = static_cast<float>(rng.uniform(-0.9, 0.9));

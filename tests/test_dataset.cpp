@@ -120,7 +120,7 @@ TEST_CASE("tensor_file: every dtype round-trips byte-exactly (serialize -> parse
   CHECK(std::isnan(f64[2]));
   CHECK(f64[3] == kInf);
   CHECK(f64[4] == 5e-324);
-  CHECK(g.tensors.at("f16").to<float>() == std::vector<float>{0.5f, -65504.0f, nn::f16_to_float(nn::float_to_f16(6e-8f))});
+  CHECK(g.tensors.at("f16").to<float>() == std::vector<float>{0.5f, -65504.0f, io::f16_to_float(io::float_to_f16(6e-8f))});
   CHECK(std::isnan(g.tensors.at("bf16").to<float>()[2]));
   CHECK(g.tensors.at("scalar").to<double>() == std::vector<double>{42.0});
   CHECK(g.tensors.at("empty").to<float>().empty());

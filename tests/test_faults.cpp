@@ -70,7 +70,7 @@ const sensor::CalibrationRange& faults_range() {
 
 // The fault of a run: one kind, its injector seeded per kind so every run is reproducible.
 sim::FaultInjector inject(sim::FaultKind kind, sim::FaultSettings settings = {}) {
-  return sim::FaultInjector(kind, sensor::TraceLayout::glauser2019(), sim::derive_seed(43, {static_cast<std::uint64_t>(kind)}), settings);
+  return sim::FaultInjector(kind, sensor::TraceLayout::glauser2019(), core::derive_seed(43, {static_cast<std::uint64_t>(kind)}), settings);
 }
 
 struct FrameRecord {

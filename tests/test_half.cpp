@@ -1,11 +1,11 @@
-#include <glovepose/nn/half.hpp>
+#include <glovepose/io/half.hpp>
 
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <limits>
 
-using namespace glovepose::nn;
+using namespace glovepose::io;
 
 TEST_CASE("half: every binary16 value survives f16 -> float -> f16, and known values decode exactly") {
   for (std::uint32_t h = 0; h < 65536; ++h) {

@@ -18,9 +18,9 @@ namespace {
 template <typename W>
 W to_weight(float v) {
   if constexpr (std::is_same_v<W, float>) return v;
-  else if constexpr (std::is_same_v<W, std::uint16_t>) return float_to_f16(v);
+  else if constexpr (std::is_same_v<W, std::uint16_t>) return glovepose::io::float_to_f16(v);
   else if constexpr (std::is_same_v<W, kernels::Fixed16>) return static_cast<W>(std::lround((v - 1.0f) * 65536.0f));  // levels below
-  else return static_cast<W>(float_to_bf16(v));
+  else return static_cast<W>(glovepose::io::float_to_bf16(v));
 }
 
 // A value exact in W. Fixed16: a level 1 + u / 2^16 with u < 512, so that the low code's top 7 bits,
@@ -157,7 +157,7 @@ TEST_CASE("kernels: BF16 pair layout") {
   CHECK(kernels::paired_slot(32 + 17, 16) == 32 + 3);
   for (int c = 0; c < 8; ++c) CHECK(kernels::paired_slot(c, 1) == c);  // the scalar backend: identity
   // The widening itself: bfloat16 is the top half of the float.
-  const std::uint16_t one = float_to_bf16(1.0f);
+  const std::uint16_t one = glovepose::io::float_to_bf16(1.0f);
   CHECK(one == 0x3F80);
   CHECK(kernels::weight_value(static_cast<kernels::BFloat16>(one)) == 1.0f);
 }

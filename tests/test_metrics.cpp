@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include <glovepose/nn/json.hpp>
+#include <glovepose/io/json.hpp>
 
 using namespace glovepose;
 using namespace glovepose::train;
@@ -285,8 +285,8 @@ TEST_CASE("metrics: JSON carries the figures with stable keys and round-trip dig
   CHECK(text.find("{\"dof\": \"index_base_flexion\", \"theta\": 14, \"scored\": true, \"mean_deg\": 18,") != std::string::npos);
   CHECK(text.find("{\"finger\": \"thumb\", \"mean_deg\": 18.1,") != std::string::npos);
 
-  const nn::json::Value json = nn::json::Parser::parse(text);
-  REQUIRE(json.kind == nn::json::Value::Kind::Object);
+  const io::json::Value json = io::json::Parser::parse(text);
+  REQUIRE(json.kind == io::json::Value::Kind::Object);
   CHECK(json.find("format")->text == "glovepose-angle-errors");
   CHECK(json.find("frames")->number == 2);
   CHECK(json.find("angles")->number == 50);
@@ -294,14 +294,14 @@ TEST_CASE("metrics: JSON carries the figures with stable keys and round-trip dig
   CHECK(json.find("median_deg")->number == r.median_deg);
   CHECK(json.find("p95_deg")->number == r.p95_deg);
   CHECK(json.find("percentile_resolution_deg")->number == kPercentileResolutionDeg);
-  const nn::json::Value& dofs = *json.find("dofs");
+  const io::json::Value& dofs = *json.find("dofs");
   REQUIRE(dofs.items.size() == hand::kDofCount);
   CHECK(dofs.items[24].find("dof")->text == "pinky_base_twist");
   CHECK(dofs.items[24].find("rms_deg")->number == r.dofs[24].error.rms_deg);
-  const nn::json::Value& fingers = *json.find("fingers");
+  const io::json::Value& fingers = *json.find("fingers");
   REQUIRE(fingers.items.size() == hand::kFingerCount);
   CHECK(fingers.items[3].find("mean_deg")->number == 23.2);
-  const nn::json::Value& curve = *json.find("cumulative");
+  const io::json::Value& curve = *json.find("cumulative");
   REQUIRE(curve.find("threshold_deg")->items.size() == kCurvePoints);
   REQUIRE(curve.find("share")->items.size() == kCurvePoints);
   CHECK(curve.find("threshold_deg")->items[15].number == 15);

@@ -17,7 +17,7 @@ std::size_t dof(int theta) { return hand::dof_from_theta(theta); }
 
 // Noise-free physics of subject `s` wearing glove 0 in a donning drawn from `fit_seed`.
 GlovePhysics physics_of(const Subject& s, std::uint64_t fit_seed = 3) {
-  Rng rng(fit_seed);
+  core::Rng rng(fit_seed);
   return GlovePhysics(s, make_glove(0, 1), don_glove(s, rng));
 }
 
@@ -30,12 +30,12 @@ CellArray cells_at(const GlovePhysics& p, const hand::Angles& a) {
 }  // namespace
 
 TEST_CASE("sim random: streams are reproducible, independent of use order, and distributed as stated") {
-  Rng a(42), b(42);
+  core::Rng a(42), b(42);
   for (int i = 0; i < 100; ++i) REQUIRE(a.next() == b.next());
-  CHECK(derive_seed(1, {2, 3}) == derive_seed(1, {2, 3}));
-  CHECK(derive_seed(1, {2, 3}) != derive_seed(1, {3, 2}));
-  CHECK(derive_seed(1, {2, 3}) != derive_seed(2, {2, 3}));
-  Rng r(7);
+  CHECK(core::derive_seed(1, {2, 3}) == core::derive_seed(1, {2, 3}));
+  CHECK(core::derive_seed(1, {2, 3}) != core::derive_seed(1, {3, 2}));
+  CHECK(core::derive_seed(1, {2, 3}) != core::derive_seed(2, {2, 3}));
+  core::Rng r(7);
   double sum = 0.0, sq = 0.0;
   const int n = 200000;
   for (int i = 0; i < n; ++i) {

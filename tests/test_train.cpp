@@ -111,7 +111,7 @@ double directional_error(train::TrainableNetwork& net, const std::vector<float>&
   };
   loss();
   net.backward(grad.data(), pool);
-  sim::Rng rng(seed);
+  core::Rng rng(seed);
   // A random unit direction in parameter space: small enough steps cross no ReLU kink.
   std::vector<std::vector<float>> direction;
   double norm = 0.0;
@@ -186,7 +186,7 @@ TEST_CASE("train: FCN training step equals PyTorch autograd (committed fixture, 
 
 TEST_CASE("train: backward passes agree with central differences of the loss along random directions") {
   const int frames = 32;
-  sim::Rng rng(11);
+  core::Rng rng(11);
   std::vector<float> x(static_cast<std::size_t>(frames) * 44), t(static_cast<std::size_t>(frames) * 25);
   for (float& v : x) v = static_cast<float>(rng.uniform(-1.0, 1.0));
   for (float& v : t) v = static_cast<float>(rng.uniform(-0.8, 0.8));
@@ -203,7 +203,7 @@ TEST_CASE("train: the evaluation-mode forward equals the inference U-Net on the 
   const int frames = 16;
   train::TrainableUNet net(8, grid::GridMap::glauser2019(), frames);
   net.initialize(3);
-  sim::Rng rng(4);
+  core::Rng rng(4);
   for (train::Parameter& p : net.parameters().all())  // move BN statistics and biases off their defaults
     if (p.layout == train::Layout::Plain)
       for (float& v : p.value) v += static_cast<float>(p.name.find("running_var") != std::string::npos ? rng.uniform(0.2, 1.0) : rng.uniform(-0.3, 0.3));
@@ -221,7 +221,7 @@ TEST_CASE("train: the evaluation-mode forward equals the inference U-Net on the 
 
 TEST_CASE("train: a step is reproducible for a thread count and close across thread counts") {
   const int frames = 40;
-  sim::Rng rng(8);
+  core::Rng rng(8);
   std::vector<float> x(static_cast<std::size_t>(frames) * 44), t(static_cast<std::size_t>(frames) * 25), g(t.size());
   for (float& v : x) v = static_cast<float>(rng.uniform(-1.0, 1.0));
   for (float& v : t) v = static_cast<float>(rng.uniform(-0.8, 0.8));
@@ -303,13 +303,13 @@ TEST_CASE("train: augmentation perturbs each value as (1 + g) x + o + n with the
   for (long i = 0; i < frames * cells; ++i) base[static_cast<std::size_t>(i)] = (i % 2 == 0) ? 1.0f : 0.0f;  // x = 1 and x = 0
   train::Augmentation a;
   std::vector<float> x = base;
-  sim::Rng rng(3);
+  core::Rng rng(3);
   train::augment(x.data(), frames, cells, a, rng);
   CHECK(x == base);  // inactive: untouched
   a.gain = 0.1;
   a.offset = 0.05;
   a.noise = 0.02;
-  sim::Rng first(3), second(3);
+  core::Rng first(3), second(3);
   train::augment(x.data(), frames, cells, a, first);
   std::vector<float> again = base;
   train::augment(again.data(), frames, cells, a, second);

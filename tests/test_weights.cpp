@@ -52,8 +52,8 @@ TEST_CASE("weights: F16 and BF16 files are accepted and widened") {
   const WeightFile b = WeightFile::parse(f.serialize(DType::BF16));
   for (std::size_t i = 0; i < 4; ++i) {
     const float v = f.tensors.at("a").values[i];
-    CHECK(h.tensors.at("a").values[i] == f16_to_float(float_to_f16(v)));
-    CHECK(b.tensors.at("a").values[i] == bf16_to_float(float_to_bf16(v)));
+    CHECK(h.tensors.at("a").values[i] == io::f16_to_float(io::float_to_f16(v)));
+    CHECK(b.tensors.at("a").values[i] == io::bf16_to_float(io::float_to_bf16(v)));
   }
   CHECK(h.tensors.at("a").values[1] == -2.5f);  // exactly representable
   CHECK_THROWS_WITH_AS(f.serialize(DType::I32), doctest::Contains("WeightFile: dtype I32, expected F32, F16 or BF16"), Error);

@@ -341,7 +341,7 @@ class SoakStream {
         source_(source),
         config_(config),
         layout_(estimator_.model().solver()->layout()),
-        rng_(derive_seed(config.seed, {static_cast<std::uint64_t>(index)})) {
+        rng_(core::derive_seed(config.seed, {static_cast<std::uint64_t>(index)})) {
     rows_ = static_cast<int>(source.row_count);
     calibration_frames_ = calibration_frames(source);
     session_frames_ = source.frames() - calibration_frames_;
@@ -510,7 +510,7 @@ class SoakStream {
   const train::Dataset& source_;
   const SoakConfig& config_;
   const sensor::TraceLayout& layout_;
-  Rng rng_;
+  core::Rng rng_;
   int rows_ = 0;
   std::size_t calibration_frames_ = 0;
   std::size_t session_frames_ = 0;

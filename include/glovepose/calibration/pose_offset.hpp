@@ -34,7 +34,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
-#include "../nn/json.hpp"
+#include "../io/json.hpp"
 #include "sequence.hpp"
 
 namespace glovepose::calibration {
@@ -177,7 +177,7 @@ class PoseOffsetModel {
   std::string to_json() const {
     char rms[32];
     std::snprintf(rms, sizeof rms, "%.9g", max_rms_z_);
-    std::string out = "{\"format\": " + nn::json::quote(kPoseOffsetFormat) + ", \"version\": 1, \"cells\": " + std::to_string(cells_) +
+    std::string out = "{\"format\": " + io::json::quote(kPoseOffsetFormat) + ", \"version\": 1, \"cells\": " + std::to_string(cells_) +
                       ",\n\"sequence\": " + sequence_.to_json() + ",\n\"feature_mean\": " + numbers(mean_) +
                       ",\n\"feature_scale\": " + numbers(scale_) + ",\n\"max_rms_z\": " + rms + ",\n\"bias\": " + numbers(bias_) +
                       ",\n\"weight\": [";
@@ -187,11 +187,11 @@ class PoseOffsetModel {
 
   /// @brief Parses to_json()'s text; `source` names it in messages.
   static PoseOffsetModel parse(const std::string& text, const std::string& source) {
-    using nn::json::Value;
+    using io::json::Value;
     const auto fail = [&](const std::string& what) { return Error("pose offset model '" + source + "': " + what); };
     Value root;
     try {
-      root = nn::json::Parser::parse(text);
+      root = io::json::Parser::parse(text);
     } catch (const Error& e) {
       throw fail(e.what());
     }

@@ -24,7 +24,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
-#include "../nn/json.hpp"
+#include "../io/json.hpp"
 
 namespace glovepose::calibration {
 
@@ -91,9 +91,9 @@ class Sequence {
 
   /// @brief Parses the JSON text of a sequence file; `source` names it in messages.
   static Sequence parse(const std::string& text, const std::string& source) {
-    nn::json::Value root;
+    io::json::Value root;
     try {
-      root = nn::json::Parser::parse(text);
+      root = io::json::Parser::parse(text);
     } catch (const Error& e) {
       throw Error("calibration sequence '" + source + "': " + e.what());
     }
@@ -101,8 +101,8 @@ class Sequence {
   }
 
   /// @brief A sequence from a parsed JSON object (the file's top level, or a member of another file).
-  static Sequence from_json(const nn::json::Value& root, const std::string& source) {
-    using nn::json::Value;
+  static Sequence from_json(const io::json::Value& root, const std::string& source) {
+    using io::json::Value;
     const auto fail = [&](const std::string& what) { return Error("calibration sequence '" + source + "': " + what); };
     const auto member = [&](const Value& object, const char* key, Value::Kind kind, const std::string& where) -> const Value& {
       const Value* v = object.find(key);
@@ -156,14 +156,14 @@ class Sequence {
   std::string to_json() const {
     std::ostringstream out;
     out.precision(10);
-    out << "{\n  \"format\": " << nn::json::quote(kSequenceFormat) << ",\n  \"version\": " << kSequenceFormatVersion
-        << ",\n  \"id\": " << nn::json::quote(id_) << ",\n  \"settle_seconds\": " << settle_ << ",\n  \"steps\": [\n";
+    out << "{\n  \"format\": " << io::json::quote(kSequenceFormat) << ",\n  \"version\": " << kSequenceFormatVersion
+        << ",\n  \"id\": " << io::json::quote(id_) << ",\n  \"settle_seconds\": " << settle_ << ",\n  \"steps\": [\n";
     for (std::size_t i = 0; i < steps_.size(); ++i) {
       const Step& s = steps_[i];
-      out << "    {\n      \"name\": " << nn::json::quote(s.name) << ",\n      \"instruction\": " << nn::json::quote(s.instruction)
+      out << "    {\n      \"name\": " << io::json::quote(s.name) << ",\n      \"instruction\": " << io::json::quote(s.instruction)
           << ",\n      \"seconds\": " << s.seconds << ",\n      \"pose_degrees\": {";
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
-        out << (d ? "," : "") << (d % 4 == 0 ? "\n        " : " ") << nn::json::quote(hand::kDofs[d].name) << ": "
+        out << (d ? "," : "") << (d % 4 == 0 ? "\n        " : " ") << io::json::quote(hand::kDofs[d].name) << ": "
             << std::round(s.pose[d] / kRadiansPerDegree * 1e6) / 1e6;
       out << "\n      }";
       if (s.pins_any()) {
@@ -171,7 +171,7 @@ class Sequence {
         bool first = true;
         for (std::size_t d = 0; d < hand::kDofCount; ++d)
           if (s.pinned[d]) {
-            out << (first ? "" : ", ") << nn::json::quote(hand::kDofs[d].name);
+            out << (first ? "" : ", ") << io::json::quote(hand::kDofs[d].name);
             first = false;
           }
         out << "],\n      \"pinned_sd_degrees\": " << s.pinned_sd / kRadiansPerDegree;

@@ -64,7 +64,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
-#include "../nn/json.hpp"
+#include "../io/json.hpp"
 #include "../sensor/calibration.hpp"
 #include "grid_map.hpp"
 
@@ -209,12 +209,12 @@ class GloveDescription {
   /// @brief The description as JSON text (the file format above): one cell or DoF per line, DoFs in
   /// hand::kDofs order, ending with a newline.
   std::string to_json() const {
-    std::string out = "{\n  \"format\": " + nn::json::quote(kGloveFormat) +
-                      ",\n  \"version\": " + std::to_string(kGloveFormatVersion) + ",\n  \"id\": " + nn::json::quote(id_) +
+    std::string out = "{\n  \"format\": " + io::json::quote(kGloveFormat) +
+                      ",\n  \"version\": " + std::to_string(kGloveFormatVersion) + ",\n  \"id\": " + io::json::quote(id_) +
                       ",\n  \"cells\": [\n";
     for (std::size_t c = 0; c < cell_names_.size(); ++c) {
       const Slot& s = map_.cell_slots()[c];
-      out += "    {\"name\": " + nn::json::quote(cell_names_[c]);
+      out += "    {\"name\": " + io::json::quote(cell_names_[c]);
       out += s.on_maps() ? ", \"channel\": " + std::to_string(s.channel) + ", \"row\": " + std::to_string(s.row) +
                                ", \"col\": " + std::to_string(s.col) + "}"
                          : ", \"extra\": true}";
@@ -223,7 +223,7 @@ class GloveDescription {
     out += "  ],\n  \"dofs\": [\n";
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const Slot& s = map_.dof_slots()[d];
-      out += "    {\"name\": " + nn::json::quote(hand::kDofs[d].name) + ", \"row\": " + std::to_string(s.row) +
+      out += "    {\"name\": " + io::json::quote(hand::kDofs[d].name) + ", \"row\": " + std::to_string(s.row) +
              ", \"col\": " + std::to_string(s.col);
       if (const auto& own = settings_.limits_degrees[d])
         out += ", \"min_degrees\": " + shortest(own->min) + ", \"max_degrees\": " + shortest(own->max);
@@ -240,18 +240,18 @@ class GloveDescription {
   /// @brief Parses JSON text in the file format above. Throws glovepose::Error naming the field,
   /// cell or DoF that is wrong and what was expected.
   static GloveDescription from_json(const std::string& text) {
-    nn::json::Value root;
+    io::json::Value root;
     try {
-      root = nn::json::Parser::parse(text);
+      root = io::json::Parser::parse(text);
     } catch (const Error& e) {
       throw fail(std::string("not valid JSON (") + e.what() + "), expected a JSON object");
     }
-    if (root.kind != nn::json::Value::Kind::Object) throw fail("the text is not a JSON object, expected {\"format\": ...}");
+    if (root.kind != io::json::Value::Kind::Object) throw fail("the text is not a JSON object, expected {\"format\": ...}");
     const std::string format = string_field(root, "format", "the top-level object");
     if (format != kGloveFormat)
       throw fail("'format' is '" + format + "', expected '" + kGloveFormat + "' (is this a glove description file?)");
-    const nn::json::Value& version = field(root, "version", "the top-level object");
-    if (version.kind != nn::json::Value::Kind::Number || version.text != std::to_string(kGloveFormatVersion))
+    const io::json::Value& version = field(root, "version", "the top-level object");
+    if (version.kind != io::json::Value::Kind::Number || version.text != std::to_string(kGloveFormatVersion))
       throw fail("'version' is " + describe(version) + ", expected " + std::to_string(kGloveFormatVersion) +
                  " (the version this build of glovepose reads)");
     // After format and version: another file or version is named as such, not by its first unknown key.
@@ -260,8 +260,8 @@ class GloveDescription {
     if (id.empty()) throw fail("'id' is empty, expected a glove id such as 'glauser2019-44'");
 
     // Cells: names and slots, checked here so that messages name the cell (GridMap checks again).
-    const nn::json::Value& cells = field(root, "cells", "the top-level object");
-    if (cells.kind != nn::json::Value::Kind::Array) throw fail("'cells' is " + describe(cells) + ", expected an array of cells");
+    const io::json::Value& cells = field(root, "cells", "the top-level object");
+    if (cells.kind != io::json::Value::Kind::Array) throw fail("'cells' is " + describe(cells) + ", expected an array of cells");
     if (cells.items.empty()) throw fail("'cells' is empty, expected at least one cell");
     if (cells.items.size() > static_cast<std::size_t>(kMaxGloveInputs))
       throw fail("'cells' lists " + std::to_string(cells.items.size()) + " inputs, expected at most " +
@@ -269,9 +269,9 @@ class GloveDescription {
                  " stretch cells, one per slot of the maps, and extra inputs)");
     GloveSettings settings;
     if (root.find("rate_hz")) settings.rate_hz = number_field(root, "rate_hz", "the top-level object");
-    if (const nn::json::Value* calibration = root.find("calibration")) {
+    if (const io::json::Value* calibration = root.find("calibration")) {
       const std::string where = "'calibration'";
-      if (calibration->kind != nn::json::Value::Kind::Object)
+      if (calibration->kind != io::json::Value::Kind::Object)
         throw fail(where + " is " + describe(*calibration) + ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
       check_keys(*calibration, {"median_seconds", "flat_relative_range"}, where);
       if (calibration->find("median_seconds")) settings.calibration.median_seconds = number_field(*calibration, "median_seconds", where);
@@ -289,9 +289,9 @@ class GloveDescription {
     cell_owner.fill(-1);
     int stretch_cells = 0;
     for (std::size_t c = 0; c < cells.items.size(); ++c) {
-      const nn::json::Value& cell = cells.items[c];
+      const io::json::Value& cell = cells.items[c];
       std::string where = "cells[" + std::to_string(c) + "]";
-      if (cell.kind != nn::json::Value::Kind::Object)
+      if (cell.kind != io::json::Value::Kind::Object)
         throw fail(where + " is " + describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
       check_keys(cell, {"name", "channel", "row", "col", "extra"}, where);
       const std::string name = string_field(cell, "name", where);
@@ -300,8 +300,8 @@ class GloveDescription {
       for (std::size_t earlier = 0; earlier < c; ++earlier)
         if (names[earlier] == name)
           throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
-      if (const nn::json::Value* extra = cell.find("extra")) {
-        if (extra->kind != nn::json::Value::Kind::Bool || !extra->boolean)
+      if (const io::json::Value* extra = cell.find("extra")) {
+        if (extra->kind != io::json::Value::Kind::Bool || !extra->boolean)
           throw fail(where + ": 'extra' is " + describe(*extra) + ", expected true (an input that is not on the stretch maps) or no 'extra'");
         for (const char* key : {"channel", "row", "col"})
           if (cell.find(key))
@@ -326,8 +326,8 @@ class GloveDescription {
     }
 
     // DoFs: by name, any order, each exactly once.
-    const nn::json::Value& dofs = field(root, "dofs", "the top-level object");
-    if (dofs.kind != nn::json::Value::Kind::Array)
+    const io::json::Value& dofs = field(root, "dofs", "the top-level object");
+    if (dofs.kind != io::json::Value::Kind::Array)
       throw fail("'dofs' is " + describe(dofs) + ", expected an array of the " + std::to_string(hand::kDofCount) + " DoFs");
     std::array<Slot, hand::kDofCount> dof_slots{};
     std::array<int, hand::kDofCount> dof_entry{};  // which entry of 'dofs' placed each DoF
@@ -335,9 +335,9 @@ class GloveDescription {
     std::array<int, kMapSlots> dof_owner{};  // which DoF holds each pose-map slot
     dof_owner.fill(-1);
     for (std::size_t e = 0; e < dofs.items.size(); ++e) {
-      const nn::json::Value& entry = dofs.items[e];
+      const io::json::Value& entry = dofs.items[e];
       std::string where = "dofs[" + std::to_string(e) + "]";
-      if (entry.kind != nn::json::Value::Kind::Object)
+      if (entry.kind != io::json::Value::Kind::Object)
         throw fail(where + " is " + describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
       check_keys(entry, {"name", "row", "col", "min_degrees", "max_degrees"}, where);
       const std::string name = string_field(entry, "name", where);
@@ -442,20 +442,20 @@ class GloveDescription {
     return std::string(buffer, result.ptr);
   }
 
-  static double number_field(const nn::json::Value& object, const char* key, const std::string& where) {
-    const nn::json::Value& v = field(object, key, where);
-    if (v.kind != nn::json::Value::Kind::Number) throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a number");
+  static double number_field(const io::json::Value& object, const char* key, const std::string& where) {
+    const io::json::Value& v = field(object, key, where);
+    if (v.kind != io::json::Value::Kind::Number) throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a number");
     return v.number;
   }
 
-  static std::string describe(const nn::json::Value& v) {
+  static std::string describe(const io::json::Value& v) {
     switch (v.kind) {
-      case nn::json::Value::Kind::Null: return "null";
-      case nn::json::Value::Kind::Bool: return v.boolean ? "true" : "false";
-      case nn::json::Value::Kind::Number: return v.text;
-      case nn::json::Value::Kind::String: return nn::json::quote(v.text);
-      case nn::json::Value::Kind::Array: return "an array";
-      case nn::json::Value::Kind::Object: return "an object";
+      case io::json::Value::Kind::Null: return "null";
+      case io::json::Value::Kind::Bool: return v.boolean ? "true" : "false";
+      case io::json::Value::Kind::Number: return v.text;
+      case io::json::Value::Kind::String: return io::json::quote(v.text);
+      case io::json::Value::Kind::Array: return "an array";
+      case io::json::Value::Kind::Object: return "an object";
     }
     return "a value";
   }
@@ -466,7 +466,7 @@ class GloveDescription {
   }
 
   // Refuses keys outside `allowed`: a misspelt optional key would otherwise pass unnoticed.
-  static void check_keys(const nn::json::Value& object, std::initializer_list<const char*> allowed, const std::string& where) {
+  static void check_keys(const io::json::Value& object, std::initializer_list<const char*> allowed, const std::string& where) {
     for (const auto& member : object.members) {
       bool known = false;
       for (const char* key : allowed) known = known || member.first == key;
@@ -478,22 +478,22 @@ class GloveDescription {
     }
   }
 
-  static const nn::json::Value& field(const nn::json::Value& object, const char* key, const std::string& where) {
-    const nn::json::Value* v = object.find(key);
+  static const io::json::Value& field(const io::json::Value& object, const char* key, const std::string& where) {
+    const io::json::Value* v = object.find(key);
     if (!v) throw fail(where + " lacks the key '" + key + "'");
     return *v;
   }
 
-  static std::string string_field(const nn::json::Value& object, const char* key, const std::string& where) {
-    const nn::json::Value& v = field(object, key, where);
-    if (v.kind != nn::json::Value::Kind::String)
+  static std::string string_field(const io::json::Value& object, const char* key, const std::string& where) {
+    const io::json::Value& v = field(object, key, where);
+    if (v.kind != io::json::Value::Kind::String)
       throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a string");
     return v.text;
   }
 
   // A non-negative integer below `limit` (a channel, row or column index).
-  static int index_field(const nn::json::Value& object, const char* key, int limit, const std::string& where) {
-    const nn::json::Value& v = field(object, key, where);
+  static int index_field(const io::json::Value& object, const char* key, int limit, const std::string& where) {
+    const io::json::Value& v = field(object, key, where);
     long long value = -1;
     if (v.is_unsigned_integer()) std::from_chars(v.text.data(), v.text.data() + v.text.size(), value);
     if (value < 0 || value >= limit)

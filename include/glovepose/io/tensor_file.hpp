@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "../config.hpp"
-#include "../nn/half.hpp"
-#include "../nn/json.hpp"
-#include "../nn/tensor.hpp"
+#include "half.hpp"
+#include "json.hpp"
+#include "shape.hpp"
 
 namespace glovepose::io {
 
@@ -193,7 +193,7 @@ struct RawTensor {
   std::size_t element_count() const {
     std::size_t n = 1;
     for (std::int64_t d : shape) {
-      if (d < 0) throw Error("shape " + nn::shape_string(shape) + " has a negative dimension, expected sizes >= 0");
+      if (d < 0) throw Error("shape " + shape_string(shape) + " has a negative dimension, expected sizes >= 0");
       n *= static_cast<std::size_t>(d);
     }
     return n;
@@ -203,7 +203,7 @@ struct RawTensor {
   void check_size() const {
     const std::size_t expected = element_count() * dtype_size(dtype);
     if (bytes.size() != expected)
-      throw Error(std::to_string(bytes.size()) + " bytes for shape " + nn::shape_string(shape) + " of " + dtype_name(dtype) +
+      throw Error(std::to_string(bytes.size()) + " bytes for shape " + shape_string(shape) + " of " + dtype_name(dtype) +
                   ", expected " + std::to_string(expected));
   }
 
@@ -217,7 +217,7 @@ struct RawTensor {
     t.shape = std::move(shape);
     const std::size_t n = t.element_count();
     if (values.size() != n)
-      throw Error(std::to_string(values.size()) + " values for shape " + nn::shape_string(t.shape) + ", expected " + std::to_string(n));
+      throw Error(std::to_string(values.size()) + " values for shape " + shape_string(t.shape) + ", expected " + std::to_string(n));
     t.bytes.resize(n * dtype_size(dtype));
     char* dst = t.bytes.data();
     const T* src = values.data();
@@ -240,8 +240,8 @@ struct RawTensor {
       case DType::I64: detail::encode_all<std::int64_t>(src, dst, n, as(std::int64_t{})); break;
       case DType::I32: detail::encode_all<std::int32_t>(src, dst, n, as(std::int32_t{})); break;
       case DType::U8: detail::encode_all<std::uint8_t>(src, dst, n, as(std::uint8_t{})); break;
-      case DType::F16: detail::encode_all<std::uint16_t>(src, dst, n, half(nn::float_to_f16, nn::f16_to_float)); break;
-      case DType::BF16: detail::encode_all<std::uint16_t>(src, dst, n, half(nn::float_to_bf16, nn::bf16_to_float)); break;
+      case DType::F16: detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_f16, f16_to_float)); break;
+      case DType::BF16: detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_bf16, bf16_to_float)); break;
     }
     return t;
   }
@@ -258,8 +258,8 @@ struct RawTensor {
     switch (dtype) {
       case DType::F64: detail::decode_all<T, double>(src, out.data(), n, dtype, same); break;
       case DType::F32: detail::decode_all<T, float>(src, out.data(), n, dtype, same); break;
-      case DType::F16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, nn::f16_to_float); break;
-      case DType::BF16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, nn::bf16_to_float); break;
+      case DType::F16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, f16_to_float); break;
+      case DType::BF16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, bf16_to_float); break;
       case DType::I64: detail::decode_all<T, std::int64_t>(src, out.data(), n, dtype, same); break;
       case DType::I32: detail::decode_all<T, std::int32_t>(src, out.data(), n, dtype, same); break;
       case DType::U8: detail::decode_all<T, std::uint8_t>(src, out.data(), n, dtype, same); break;
@@ -348,7 +348,7 @@ struct TensorFile {
     if (!metadata.empty()) {
       header += "\"__metadata__\":{";
       for (const auto& [k, v] : metadata) {
-        header += (first ? "" : ",") + nn::json::quote(k) + ":" + nn::json::quote(v);
+        header += (first ? "" : ",") + json::quote(k) + ":" + json::quote(v);
         first = false;
       }
       header += "}";
@@ -361,8 +361,8 @@ struct TensorFile {
       } catch (const Error& e) {
         throw Error("TensorFile: tensor '" + name + "': " + e.what());
       }
-      header += std::string(first ? "" : ",") + nn::json::quote(name) + ":{\"dtype\":\"" + dtype_name(t.dtype) +
-                "\",\"shape\":" + nn::shape_string(t.shape) + ",\"data_offsets\":[" + std::to_string(offset) + "," +
+      header += std::string(first ? "" : ",") + json::quote(name) + ":{\"dtype\":\"" + dtype_name(t.dtype) +
+                "\",\"shape\":" + shape_string(t.shape) + ",\"data_offsets\":[" + std::to_string(offset) + "," +
                 std::to_string(offset + t.bytes.size()) + "]}";
       offset += t.bytes.size();
       first = false;
@@ -388,8 +388,8 @@ struct TensorFile {
                   std::to_string(file_size) + " bytes)");
     const std::string header_text = fetch(8, header_size);
     if (header_text[0] != '{') throw Error("byte 8: the header does not start with '{', expected a JSON object");
-    const nn::json::Value header = nn::json::Parser::parse(header_text, 8);
-    if (header.kind != nn::json::Value::Kind::Object) throw Error("byte 8: the header is not a JSON object");
+    const json::Value header = json::Parser::parse(header_text, 8);
+    if (header.kind != json::Value::Kind::Object) throw Error("byte 8: the header is not a JSON object");
     const std::uint64_t data_start = 8 + header_size;
     const std::uint64_t data_size = file_size - data_start;
 
@@ -401,33 +401,33 @@ struct TensorFile {
     std::vector<Span> spans;
     for (const auto& [name, entry] : header.members) {
       if (name == "__metadata__") {
-        if (entry.kind != nn::json::Value::Kind::Object)
+        if (entry.kind != json::Value::Kind::Object)
           throw Error("byte " + std::to_string(entry.offset) + ": __metadata__ is not an object");
         for (const auto& [key, value] : entry.members) {
-          if (value.kind != nn::json::Value::Kind::String)
+          if (value.kind != json::Value::Kind::String)
             throw Error("byte " + std::to_string(value.offset) + ": metadata '" + key + "' is not a string, expected string values");
           out.metadata[key] = value.text;
         }
         continue;
       }
       const std::string where = "tensor '" + name + "'";
-      if (entry.kind != nn::json::Value::Kind::Object) throw Error(where + ": entry is not an object");
-      const nn::json::Value* dtype = entry.find("dtype");
-      const nn::json::Value* shape = entry.find("shape");
-      const nn::json::Value* offsets = entry.find("data_offsets");
+      if (entry.kind != json::Value::Kind::Object) throw Error(where + ": entry is not an object");
+      const json::Value* dtype = entry.find("dtype");
+      const json::Value* shape = entry.find("shape");
+      const json::Value* offsets = entry.find("data_offsets");
       for (const auto& member : entry.members)
         if (member.first != "dtype" && member.first != "shape" && member.first != "data_offsets")
           throw Error(where + ": unexpected key '" + member.first + "', expected only dtype, shape and data_offsets");
-      if (!dtype || dtype->kind != nn::json::Value::Kind::String) throw Error(where + ": no \"dtype\" string");
+      if (!dtype || dtype->kind != json::Value::Kind::String) throw Error(where + ": no \"dtype\" string");
       RawTensor tensor;
       try {
         tensor.dtype = dtype_from_name(dtype->text);
       } catch (const Error& e) {
         throw Error(where + ": " + e.what());
       }
-      if (!shape || shape->kind != nn::json::Value::Kind::Array) throw Error(where + ": no \"shape\" list");
+      if (!shape || shape->kind != json::Value::Kind::Array) throw Error(where + ": no \"shape\" list");
       std::uint64_t count = 1;
-      for (const nn::json::Value& d : shape->items) {
+      for (const json::Value& d : shape->items) {
         if (!d.is_unsigned_integer())
           throw Error(where + ": shape entry at byte " + std::to_string(d.offset) + " is not a non-negative integer");
         const std::uint64_t dim = std::stoull(d.text);
@@ -435,7 +435,7 @@ struct TensorFile {
         count *= dim;
         tensor.shape.push_back(static_cast<std::int64_t>(dim));
       }
-      if (!offsets || offsets->kind != nn::json::Value::Kind::Array || offsets->items.size() != 2 ||
+      if (!offsets || offsets->kind != json::Value::Kind::Array || offsets->items.size() != 2 ||
           !offsets->items[0].is_unsigned_integer() || !offsets->items[1].is_unsigned_integer())
         throw Error(where + ": \"data_offsets\" is not a pair of non-negative integers");
       const std::uint64_t begin = std::stoull(offsets->items[0].text), end = std::stoull(offsets->items[1].text);
@@ -445,7 +445,7 @@ struct TensorFile {
                     ") but the file holds " + std::to_string(data_size) + " data bytes (truncated?)");
       const std::uint64_t expected = count * dtype_size(tensor.dtype);
       if (end - begin != expected)
-        throw Error(where + ": " + std::to_string(end - begin) + " data bytes for shape " + nn::shape_string(tensor.shape) + " of " +
+        throw Error(where + ": " + std::to_string(end - begin) + " data bytes for shape " + shape_string(tensor.shape) + " of " +
                     dtype_name(tensor.dtype) + ", expected " + std::to_string(expected));
       tensor.file_offset = data_start + begin;
       spans.push_back({begin, end, name});

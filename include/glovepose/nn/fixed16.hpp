@@ -23,7 +23,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "half.hpp"
+#include "../io/half.hpp"
 
 namespace glovepose::nn {
 
@@ -34,10 +34,10 @@ inline constexpr float kFixed16Offset = 1.5f;
 inline constexpr double kFixed16Range = 32767.0 / 65536.0;
 
 /// @brief Level of a word's low code: 1 + low / 2^16.
-inline float fixed16_low_level(std::uint32_t word) noexcept { return bits_float(0x3F800000u | ((word << 7) & 0x007FFFFFu)); }
+inline float fixed16_low_level(std::uint32_t word) noexcept { return io::bits_float(0x3F800000u | ((word << 7) & 0x007FFFFFu)); }
 
 /// @brief Level of a word's high code: 1 + (word >> 9) / 2^23 (the high code and the low code's top 7 bits).
-inline float fixed16_high_level(std::uint32_t word) noexcept { return bits_float(0x3F800000u | (word >> 9)); }
+inline float fixed16_high_level(std::uint32_t word) noexcept { return io::bits_float(0x3F800000u | (word >> 9)); }
 
 /// @brief The scale of an output channel whose largest |weight| is `largest` (0 for an all-zero channel).
 inline double fixed16_scale(double largest) noexcept { return largest / kFixed16Range; }

@@ -15,7 +15,7 @@
 
 #include "../config.hpp"
 #include "fixed16.hpp"
-#include "half.hpp"
+#include "../io/half.hpp"
 #include "kernels/weight_load.hpp"
 #include "tensor.hpp"
 #include "weight_storage.hpp"
@@ -68,11 +68,11 @@ inline PackedWeights encode_weights(const std::vector<float>& packed, WeightStor
     w.w32.assign(packed.begin(), packed.end());
   } else if (storage == WeightStorage::F16) {
     w.w16.resize(packed.size());
-    for (std::size_t i = 0; i < packed.size(); ++i) w.w16[i] = float_to_f16(packed[i]);
+    for (std::size_t i = 0; i < packed.size(); ++i) w.w16[i] = io::float_to_f16(packed[i]);
   } else if (storage == WeightStorage::BF16) {
     w.wbf16.resize(packed.size());
     for (std::size_t i = 0; i < packed.size(); ++i) {
-      w.wbf16[i] = static_cast<kernels::BFloat16>(float_to_bf16(packed[i]));
+      w.wbf16[i] = static_cast<kernels::BFloat16>(io::float_to_bf16(packed[i]));
       if (!std::isfinite(kernels::weight_value(w.wbf16[i])))  // within float range, but rounds up past bfloat16's largest
         throw Error(what + " has a weight of " + std::to_string(packed[i]) + ", too large for BF16 storage (load as F32 instead)");
     }

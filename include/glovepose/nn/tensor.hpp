@@ -52,6 +52,7 @@ constexpr int round_up(int n, int m) noexcept { return (n + m - 1) / m * m; }
 #include <string>
 
 #include "../config.hpp"
+#include "../io/shape.hpp"
 
 namespace glovepose::nn {
 
@@ -72,13 +73,6 @@ struct Tensor {
 /// @brief Tensors by name (PyTorch state_dict names).
 using TensorMap = std::map<std::string, Tensor>;
 
-/// @brief "[a, b, c]" for messages.
-inline std::string shape_string(const std::vector<std::int64_t>& shape) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
 /// @brief Checks a network's tensors against the names and shapes it is made of: every expected
 /// tensor present, of its shape, with as many values, all finite, and no other tensor. Throws
 /// glovepose::Error naming the tensor; messages start with `who` and say `which` network was
@@ -88,13 +82,13 @@ inline void check_tensors(const TensorMap& tensors, const std::map<std::string, 
   for (const auto& [name, shape] : expected) {
     const auto it = tensors.find(name);
     if (it == tensors.end())
-      throw Error(who + ": tensor '" + name + "' is missing, expected shape " + shape_string(shape) + " (" + which + ")");
+      throw Error(who + ": tensor '" + name + "' is missing, expected shape " + io::shape_string(shape) + " (" + which + ")");
     if (it->second.shape != shape)
-      throw Error(who + ": tensor '" + name + "' has shape " + shape_string(it->second.shape) + ", expected " + shape_string(shape) +
+      throw Error(who + ": tensor '" + name + "' has shape " + io::shape_string(it->second.shape) + ", expected " + io::shape_string(shape) +
                   " (" + which + ")");
     if (static_cast<std::int64_t>(it->second.values.size()) != it->second.element_count())
       throw Error(who + ": tensor '" + name + "' holds " + std::to_string(it->second.values.size()) + " values for shape " +
-                  shape_string(it->second.shape));
+                  io::shape_string(it->second.shape));
     for (float v : it->second.values)
       if (!std::isfinite(v)) throw Error(who + ": tensor '" + name + "' contains NaN or infinity, expected finite weights");
   }

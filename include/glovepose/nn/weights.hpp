@@ -18,8 +18,8 @@
 
 #include "../config.hpp"
 #include "../io/tensor_file.hpp"
-#include "half.hpp"
-#include "json.hpp"
+#include "../io/half.hpp"
+#include "../io/json.hpp"
 #include "tensor.hpp"
 
 namespace glovepose::nn {
@@ -77,7 +77,7 @@ struct WeightFile {
     for (const auto& [name, t] : tensors) {
       if (static_cast<std::int64_t>(t.values.size()) != t.element_count())
         throw Error("WeightFile::serialize: tensor '" + name + "' holds " + std::to_string(t.values.size()) +
-                    " values for shape " + shape_string(t.shape));
+                    " values for shape " + io::shape_string(t.shape));
       file.tensors[name] = io::RawTensor::from(t.shape, t.values, dtype);
     }
     return file;
@@ -98,11 +98,11 @@ struct WeightFile {
 
   /// @brief A metadata value holding a JSON array of numbers; throws naming the key when it is not.
   std::vector<double> meta_numbers(const std::string& key) const {
-    const json::Value v = json::Parser::parse(meta(key));
-    if (v.kind != json::Value::Kind::Array) throw Error("metadata '" + key + "' is not a JSON array of numbers");
+    const io::json::Value v = io::json::Parser::parse(meta(key));
+    if (v.kind != io::json::Value::Kind::Array) throw Error("metadata '" + key + "' is not a JSON array of numbers");
     std::vector<double> out;
-    for (const json::Value& item : v.items) {
-      if (item.kind != json::Value::Kind::Number || !std::isfinite(item.number))
+    for (const io::json::Value& item : v.items) {
+      if (item.kind != io::json::Value::Kind::Number || !std::isfinite(item.number))
         throw Error("metadata '" + key + "' has a non-number entry, expected finite numbers");
       out.push_back(item.number);
     }

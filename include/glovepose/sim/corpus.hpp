@@ -183,7 +183,7 @@ struct SessionSetup {
 /// @brief How `subject` wears glove `glove` in its donning `donning`: the same for every recording
 /// that shares the donning.
 inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, int glove, int donning) {
-  Rng rng(derive_seed(config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove),
+  core::Rng rng(core::derive_seed(config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove),
                                     static_cast<std::uint64_t>(donning)}));
   return don_glove(subject, rng);
 }
@@ -192,7 +192,7 @@ inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, 
 inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld& world, const SessionRecording& job) {
   const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
   const auto id = [&](std::uint64_t purpose, int index) {
-    return derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
+    return core::derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
                                      static_cast<std::uint64_t>(index)});
   };
   const GloveFit fit = donning_fit(config, subject, job.glove, job.donning);

@@ -5,7 +5,7 @@
 ///
 /// A FaultInjector is one fault of one kind, active for as long as the caller passes readings
 /// through it: each clean reading (row, value, timestamp) comes out as zero, one or two readings.
-/// Random choices come from a seeded sim::Rng, so a seed gives the same faulty stream everywhere.
+/// Random choices come from a seeded core::Rng, so a seed gives the same faulty stream everywhere.
 /// Faults with a rate (drops, spikes, NaN/Inf) hit one reading in every block of N, at a random
 /// place in the block: the rate is exact and hits never cluster (at most two in a row), so a test
 /// can rely on every readout interval of more than 2N readings seeing one.
@@ -21,7 +21,7 @@
 
 #include "../config.hpp"
 #include "../sensor/layout.hpp"
-#include "random.hpp"
+#include "../core/random.hpp"
 
 namespace glovepose::sim {
 
@@ -221,7 +221,7 @@ class FaultInjector {
 
   FaultKind kind_;
   FaultSettings settings_;
-  Rng rng_;
+  core::Rng rng_;
   int top_traces_;
   Reading held_{};
   bool holding_ = false;

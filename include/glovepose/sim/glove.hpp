@@ -36,7 +36,7 @@
 #include "../hand/dofs.hpp"
 #include "../hand/kinematics.hpp"
 #include "../sensor/layout.hpp"
-#include "random.hpp"
+#include "../core/random.hpp"
 #include "subject.hpp"
 
 namespace glovepose::sim {
@@ -159,7 +159,7 @@ struct Glove {
 
 /// @brief Glove `id` from `seed`: nominal C0 = eps_r eps_0 A0 / d with the fabrication spread.
 inline Glove make_glove(int id, std::uint64_t seed) {
-  Rng rng(derive_seed(seed, {2, static_cast<std::uint64_t>(id)}));
+  core::Rng rng(core::derive_seed(seed, {2, static_cast<std::uint64_t>(id)}));
   const auto sites = glauser2019_sites();
   Glove g;
   g.id = id;
@@ -181,7 +181,7 @@ struct GloveFit {
 
 /// @brief Puts the glove on a hand: the pre-stretch follows the hand's size against the glove's
 /// relaxed size, and every donning shifts the cells and varies their pre-stretch a little.
-inline GloveFit don_glove(const Subject& subject, Rng& rng) {
+inline GloveFit don_glove(const Subject& subject, core::Rng& rng) {
   const auto sites = glauser2019_sites();
   GloveFit fit;
   const double global_shift = rng.normal(0.0, kDonningShift);

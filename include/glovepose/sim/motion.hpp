@@ -26,7 +26,7 @@
 #include "../hand/kinematics.hpp"
 #include "../calibration/sequence.hpp"
 #include "pose_gallery.hpp"
-#include "random.hpp"
+#include "../core/random.hpp"
 #include "subject.hpp"
 
 namespace glovepose::sim {
@@ -66,7 +66,7 @@ class MotionSequence {
       : duration_(duration) {
     if (gallery.empty()) throw Error("MotionSequence: empty gallery, expected at least one key pose");
     if (!(duration > 0.0)) throw Error("MotionSequence: duration " + std::to_string(duration) + " s, expected > 0");
-    Rng rng(seed);
+    core::Rng rng(seed);
     const hand::Kinematics fk(subject.hand_model());
     const std::array<double, 16> radius = subject.distal_radius();
     hand::Skeleton skeleton;
@@ -105,7 +105,7 @@ class MotionSequence {
   /// tremor once reached. Starts at the first step's pose.
   MotionSequence(const Subject& subject, const calibration::Sequence& sequence, std::uint64_t seed, const MotionConfig& config = {})
       : duration_(sequence.total_seconds()) {
-    Rng rng(seed);
+    core::Rng rng(seed);
     const auto visit = [&](const calibration::Step& step) {
       hand::Angles q = shape(step.pose, subject, config, rng);
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
@@ -180,7 +180,7 @@ class MotionSequence {
   };
 
   // Slow wandering and tremor: two sinusoids per band and DoF, random frequencies and phases.
-  void make_wobble(const MotionConfig& config, Rng& rng) {
+  void make_wobble(const MotionConfig& config, core::Rng& rng) {
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;
       for (int k = 0; k < 2; ++k) {
@@ -194,7 +194,7 @@ class MotionSequence {
 
   // A visit of a key pose: the person's style, this visit's variation, finger enslaving, the tip
   // coupling, the joint limits.
-  static hand::Angles shape(const hand::Angles& key, const Subject& subject, const MotionConfig& config, Rng& rng) {
+  static hand::Angles shape(const hand::Angles& key, const Subject& subject, const MotionConfig& config, core::Rng& rng) {
     hand::Angles q = key;
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const bool small = hand::kDofs[d].motion == hand::Motion::Abduction || hand::kDofs[d].motion == hand::Motion::Twist;

@@ -29,7 +29,7 @@
 #include "../sensor/solver.hpp"
 #include "glove.hpp"
 #include "motion.hpp"
-#include "random.hpp"
+#include "../core/random.hpp"
 
 namespace glovepose::sim {
 
@@ -90,7 +90,7 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
         if (m(r, c) != 0.0) rows[static_cast<std::size_t>(r)].push_back(c);
     return rows;
   }();
-  Rng rng(seed);
+  core::Rng rng(seed);
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
   sensor::GloveReadout readout(solver, config.readout);

@@ -22,7 +22,7 @@
 #include "../hand/collision.hpp"
 #include "../hand/dofs.hpp"
 #include "../hand/kinematics.hpp"
-#include "random.hpp"
+#include "../core/random.hpp"
 
 namespace glovepose::sim {
 
@@ -131,7 +131,7 @@ struct Subject {
 };
 
 /// @brief Draws a hand size from the paper's ranges (Sec. 5.1), by rejection on the aspect ratio.
-inline HandSize draw_hand_size(Rng& rng) noexcept {
+inline HandSize draw_hand_size(core::Rng& rng) noexcept {
   for (;;) {
     const HandSize s{rng.uniform(170.0, 205.0), rng.uniform(90.0, 110.0), rng.uniform(40.0, 50.0)};
     const double ratio = s.length / s.width;
@@ -145,7 +145,7 @@ inline std::vector<Subject> make_subjects(int count, std::uint64_t seed) {
   if (count < 1) throw Error("make_subjects: " + std::to_string(count) + " subjects, expected at least 1");
   std::vector<Subject> subjects;
   for (int i = 0; i < count; ++i) {
-    Rng rng(derive_seed(seed, {1, static_cast<std::uint64_t>(i)}));
+    core::Rng rng(core::derive_seed(seed, {1, static_cast<std::uint64_t>(i)}));
     Subject s;
     s.id = i;
     s.size = i < static_cast<int>(kPaperHands.size()) ? kPaperHands[static_cast<std::size_t>(i)] : draw_hand_size(rng);

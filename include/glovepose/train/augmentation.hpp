@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "../config.hpp"
-#include "../sim/random.hpp"
+#include "../core/random.hpp"
 
 namespace glovepose::train {
 
@@ -33,7 +33,7 @@ struct Augmentation {
 
 /// @brief Perturbs `frames` rows of `cells` calibrated values in place: x -> (1 + g) x + o + n per
 /// value, g, o, n drawn from `rng` with the deviations of `augmentation`.
-inline void augment(float* x, long frames, int cells, const Augmentation& augmentation, sim::Rng& rng) noexcept {
+inline void augment(float* x, long frames, int cells, const Augmentation& augmentation, core::Rng& rng) noexcept {
   if (!augmentation.active()) return;
   for (long i = 0; i < frames * cells; ++i) {
     const double g = augmentation.gain * rng.normal(), o = augmentation.offset * rng.normal(), n = augmentation.noise * rng.normal();

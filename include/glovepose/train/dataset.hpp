@@ -249,7 +249,7 @@ struct Dataset {
                     "', expected only cells, raw_rows, angles, timestamps, subject, session, glove, donning, kind, outlier");
     }
     const io::RawTensor& times = tensor(file, "timestamps", io::DType::F64, "[N]");
-    if (times.shape.size() != 1) throw Error("tensor 'timestamps' has shape " + nn::shape_string(times.shape) + ", expected [N] (frames)");
+    if (times.shape.size() != 1) throw Error("tensor 'timestamps' has shape " + io::shape_string(times.shape) + ", expected [N] (frames)");
     const std::int64_t n = times.shape[0];
     out.timestamps = take<double>(file, "timestamps", io::DType::F64, {n}, "frames");
     out.cell_count = width(file, "cells", n);
@@ -473,7 +473,7 @@ struct Dataset {
     const bool is_cells = std::string(name) == "cells";
     const io::RawTensor& t = tensor(file, name, io::DType::F32, is_cells ? "[N, C]" : "[N, R]");
     if (t.shape.size() != 2 || t.shape[0] != n || t.shape[1] < 1)
-      throw Error(std::string("tensor '") + name + "' has shape " + nn::shape_string(t.shape) + ", expected [" + std::to_string(n) +
+      throw Error(std::string("tensor '") + name + "' has shape " + io::shape_string(t.shape) + ", expected [" + std::to_string(n) +
                   (is_cells ? ", C] with C >= 1 (frames x cells)" : ", R] with R >= 1 (frames x rows)"));
     return static_cast<std::size_t>(t.shape[1]);
   }
@@ -482,9 +482,9 @@ struct Dataset {
   template <typename T>
   static std::vector<T> take(io::TensorFile& file, const char* name, io::DType dtype, const std::vector<std::int64_t>& shape,
                              const char* meaning) {
-    const io::RawTensor& t = tensor(file, name, dtype, nn::shape_string(shape));
+    const io::RawTensor& t = tensor(file, name, dtype, io::shape_string(shape));
     if (t.shape != shape)
-      throw Error(std::string("tensor '") + name + "' has shape " + nn::shape_string(t.shape) + ", expected " + nn::shape_string(shape) +
+      throw Error(std::string("tensor '") + name + "' has shape " + io::shape_string(t.shape) + ", expected " + io::shape_string(shape) +
                   " (" + meaning + ")");
     std::vector<T> values = t.to<T>();
     file.tensors.erase(name);

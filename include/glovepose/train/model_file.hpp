@@ -144,7 +144,7 @@ inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
       if (file.tensors.size() != 2) throw Error("a linear model holds exactly the tensors 'weight' and 'bias'");
       const nn::Tensor& w = file.tensors.at("weight");
       if (w.shape != std::vector<std::int64_t>{kTargets, model.info.inputs})
-        throw Error("tensor 'weight' has shape " + nn::shape_string(w.shape) + ", expected [25, " + std::to_string(model.info.inputs) + "]");
+        throw Error("tensor 'weight' has shape " + io::shape_string(w.shape) + ", expected [25, " + std::to_string(model.info.inputs) + "]");
       model.linear.emplace(model.info.inputs, kTargets, w.values, file.tensors.at("bias").values);
     } else {
       model.network = make_network(model.info, model.glove, max_batch);

@@ -57,7 +57,7 @@ class ParameterSet {
     std::int64_t n = 1;
     for (std::int64_t d : shape) n *= d;
     if (layout != Layout::Plain && shape.size() != 4)
-      throw Error("ParameterSet: tensor '" + name + "' is a convolution weight of shape " + nn::shape_string(shape) +
+      throw Error("ParameterSet: tensor '" + name + "' is a convolution weight of shape " + io::shape_string(shape) +
                   ", expected 4 dimensions");
     Parameter p{std::move(name), std::move(shape), layout, trainable, std::vector<float>(static_cast<std::size_t>(n), 0.0f), {}};
     if (trainable) p.grad.assign(p.value.size(), 0.0f);
@@ -104,10 +104,10 @@ class ParameterSet {
     for (Parameter& p : params_) {
       const auto it = tensors.find(p.name);
       if (it == tensors.end())
-        throw Error("tensor '" + p.name + "' is missing, expected shape " + nn::shape_string(p.shape));
+        throw Error("tensor '" + p.name + "' is missing, expected shape " + io::shape_string(p.shape));
       if (it->second.shape != p.shape)
-        throw Error("tensor '" + p.name + "' has shape " + nn::shape_string(it->second.shape) + ", expected " +
-                    nn::shape_string(p.shape));
+        throw Error("tensor '" + p.name + "' has shape " + io::shape_string(it->second.shape) + ", expected " +
+                    io::shape_string(p.shape));
       if (it->second.values.size() != p.size())
         throw Error("tensor '" + p.name + "' holds " + std::to_string(it->second.values.size()) + " values, expected " +
                     std::to_string(p.size()));

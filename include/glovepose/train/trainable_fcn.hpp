@@ -16,7 +16,7 @@
 
 #include "../config.hpp"
 #include "../nn/fcn_topology.hpp"
-#include "../sim/random.hpp"
+#include "../core/random.hpp"
 #include "network.hpp"
 
 namespace glovepose::train {
@@ -54,7 +54,7 @@ class TrainableFcn final : public TrainableNetwork {
 
   /// @brief Xavier-uniform weights, zero biases; the draw depends only on `seed`.
   void initialize(std::uint64_t seed) {
-    sim::Rng rng(seed);
+    core::Rng rng(seed);
     for (std::size_t l = 0; l < weights_.size(); ++l) {
       Parameter& w = params_[weights_[l]];
       const double a = std::sqrt(6.0 / static_cast<double>(w.shape[0] + w.shape[1]));

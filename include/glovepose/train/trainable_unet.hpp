@@ -26,7 +26,7 @@
 #include "../nn/conv_plan.hpp"
 #include "../status.hpp"
 #include "../nn/unet_topology.hpp"
-#include "../sim/random.hpp"
+#include "../core/random.hpp"
 #include "network.hpp"
 
 namespace glovepose::train {
@@ -105,7 +105,7 @@ class TrainableUNet final : public TrainableNetwork {
   /// @brief Xavier-uniform convolution weights (torch.nn.init.xavier_uniform_'s fans), zero biases,
   /// batch norm scale 1, shift 0, running mean 0 and variance 1; the draw depends only on `seed`.
   void initialize(std::uint64_t seed) {
-    sim::Rng rng(seed);
+    core::Rng rng(seed);
     for (Parameter& p : params_.all()) {
       const bool conv_weight = p.layout != Layout::Plain;
       const bool bn_scale = !conv_weight && p.name.rfind(".weight") == p.name.size() - 7;

@@ -17,7 +17,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
-#include "../sim/random.hpp"
+#include "../core/random.hpp"
 #include "augmentation.hpp"
 #include "network.hpp"
 #include "optimizer.hpp"
@@ -149,7 +149,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
   };
   for (int epoch = 0; epoch < config.epochs && !result.stopped; ++epoch) {
     std::iota(order.begin(), order.end(), 0L);
-    sim::Rng rng(sim::derive_seed(config.seed, {0x5348554646ULL, static_cast<std::uint64_t>(epoch)}));
+    core::Rng rng(core::derive_seed(config.seed, {0x5348554646ULL, static_cast<std::uint64_t>(epoch)}));
     for (long i = train.frames() - 1; i > 0; --i) std::swap(order[static_cast<std::size_t>(i)], order[rng.next() % static_cast<std::uint64_t>(i + 1)]);
     double loss_sum = 0.0;
     long step = 0;
@@ -165,7 +165,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
         std::copy(train.targets.begin() + i * kTargets, train.targets.begin() + (i + 1) * kTargets, t.begin() + static_cast<long>(b) * kTargets);
       }
       if (config.augmentation.active()) {
-        sim::Rng draw(sim::derive_seed(config.seed, {0x4155474dULL, static_cast<std::uint64_t>(epoch), static_cast<std::uint64_t>(step)}));
+        core::Rng draw(core::derive_seed(config.seed, {0x4155474dULL, static_cast<std::uint64_t>(epoch), static_cast<std::uint64_t>(step)}));
         augment(x.data(), batch, train.cells, config.augmentation, draw);
       }
       net.forward(x.data(), batch, true, pool);

@@ -16,7 +16,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include "../fixed16.hpp"
-#include "../half.hpp"
+#include "../../io/half.hpp"
 
 #if defined(__F16C__) || defined(__AVX512F__) || defined(__SSE2__)
 #include <immintrin.h>
@@ -37,9 +37,9 @@ inline constexpr bool kPairLayout = std::is_same_v<W, BFloat16> || std::is_same_
 /// @brief One stored weight as float.
 inline float weight_value(float w) noexcept { return w; }
 /// @brief One stored F16 weight as float.
-inline float weight_value(std::uint16_t w) noexcept { return f16_to_float(w); }
+inline float weight_value(std::uint16_t w) noexcept { return io::f16_to_float(w); }
 /// @brief One stored BF16 weight as float.
-inline float weight_value(BFloat16 w) noexcept { return bf16_to_float(static_cast<std::uint16_t>(w)); }
+inline float weight_value(BFloat16 w) noexcept { return io::bf16_to_float(static_cast<std::uint16_t>(w)); }
 
 /// @brief Stored weight `i` of an array as float (the scalar kernels' read). For Fixed16 this is
 /// the code's level, which depends on the other half of its 32-bit word: `w` must start a word.
@@ -83,7 +83,7 @@ inline xsimd::batch<float, Arch> load_weights(const std::uint16_t* p) noexcept {
     return xsimd::batch<float, Arch>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
 #endif
   alignas(64) float wide[n];
-  for (std::size_t i = 0; i < n; ++i) wide[i] = f16_to_float(p[i]);
+  for (std::size_t i = 0; i < n; ++i) wide[i] = io::f16_to_float(p[i]);
   return xsimd::batch<float, Arch>::load_aligned(wide);
 }
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <cstring>
 
-namespace glovepose::nn {
+namespace glovepose::io {
 
 /// @brief The bits of a float.
 inline std::uint32_t float_bits(float f) noexcept {
@@ -72,4 +72,4 @@ inline std::uint16_t float_to_f16(float f) noexcept {
   return static_cast<std::uint16_t>(sign | (half_mantissa + round_up));
 }
 
-}  // namespace glovepose::nn
+}  // namespace glovepose::io

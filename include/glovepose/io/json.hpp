@@ -14,7 +14,7 @@
 
 #include "../config.hpp"
 
-namespace glovepose::nn::json {
+namespace glovepose::io::json {
 
 /// @brief A parsed JSON value. Objects keep their members in file order.
 struct Value {
@@ -253,4 +253,4 @@ inline std::string quote(const std::string& s) {
   return out + "\"";
 }
 
-}  // namespace glovepose::nn::json
+}  // namespace glovepose::io::json

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <initializer_list>
 
-namespace glovepose::sim {
+namespace glovepose::core {
 
 /// @brief SplitMix64 step (Steele, Lea & Flood 2014): a bijective mixer of 64-bit words.
 constexpr std::uint64_t splitmix64(std::uint64_t x) noexcept {
@@ -84,4 +84,4 @@ class Rng {
   bool has_spare_ = false;
 };
 
-}  // namespace glovepose::sim
+}  // namespace glovepose::core
