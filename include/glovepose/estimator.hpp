@@ -1,6 +1,6 @@
 /// @file estimator.hpp
 /// @brief GlovePoseEstimator: the one class that composes the stages, from the glove's rows to a
-/// hand pose (ARCHITECTURE.md, "One frame, end to end").
+/// hand pose (docs/architecture.md).
 ///
 /// Two objects:
 /// - PoseModel: what is loaded once and shared, immutable, by any number of estimators on any number
@@ -32,6 +32,7 @@
 #include "calibration/pose_offset.hpp"
 #include "calibration/user_calibration.hpp"
 #include "config.hpp"
+#include "estimator_config.hpp"
 #include "filter/one_euro.hpp"
 #include "filter/trend.hpp"
 #include "grid/glove_description.hpp"
@@ -41,6 +42,8 @@
 #include "hand/kinematics.hpp"
 #include "latest.hpp"
 #include "nn/model.hpp"
+#include "pose.hpp"
+#include "pose_model.hpp"
 #include "pose_network.hpp"
 #include "sensor/calibration.hpp"
 #include "sensor/layout.hpp"
@@ -51,376 +54,19 @@
 
 namespace glovepose {
 
-/// @brief How to load a PoseModel.
-struct PoseModelOptions {
-  /// In-memory weight precision. The 16-bit storages halve the bytes a frame reads (faster at
-  /// batch 1). Fixed16 is the real-time choice: its angles differ from F32 by under 0.005
-  /// degree (shipped model), F16's by a few hundredths, BF16's by tenths (README, "Figures").
-  nn::WeightStorage storage = nn::WeightStorage::F32;
-  /// The glove. Default: the description stored in the model file, else the built-in 44-cell glove
-  /// when the model was trained for it.
-  std::optional<grid::GloveDescription> glove;
-  /// The glove's wiring (which cells each measured row sums), needed for rows and C_m frames.
-  /// Default: the paper's 15 x 12 trace matrix for the built-in glove; none for other gloves (then
-  /// only already solved C_c frames are accepted).
-  std::optional<sensor::TraceLayout> layout;
-};
-
-/// @brief A loaded model with everything the estimators share. Immutable; share it with
-/// std::shared_ptr<const BasicPoseModel> between estimators and threads.
-template <typename Backend = nn::kernels::SimdBackend>
-class BasicPoseModel {
- public:
-  /// @brief The solver of a glove wiring of any size.
-  using Solver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
-  /// @brief The network: the U-Net or the FCN the model file holds.
-  using Network = BasicPoseNetwork<Backend>;
-
-  /// @brief Loads a model file (weights_format.md). Throws glovepose::Error naming the file and what
-  /// is wrong: unreadable or malformed file, not a U-Net or FCN, or a glove or wiring that does not fit it.
-  static std::shared_ptr<const BasicPoseModel> load(const std::string& path, PoseModelOptions options = {}) {
-    const nn::WeightFile file = nn::WeightFile::read(path);
-    try {
-      nn::ModelInfo info = nn::ModelInfo::from(file);
-      Network network = Network::from_tensors(info, file.tensors, options.storage);
-      return std::make_shared<const BasicPoseModel>(std::move(info), std::move(network), std::move(options));
-    } catch (const Error& e) {
-      throw Error("model file '" + path + "': " + e.what());
-    }
-  }
-
-  /// @brief A model from its parts (see load()). Throws glovepose::Error when the glove's cell count
-  /// or id differs from the model's, or the wiring's cells differ from the glove's.
-  BasicPoseModel(nn::ModelInfo info, Network network, PoseModelOptions options)
-      : info_(std::move(info)), network_(std::move(network)), glove_(choose_glove(info_, options.glove)) {
-    if (glove_.cell_count() != info_.inputs)
-      throw Error("glove '" + glove_.id() + "' has " + std::to_string(glove_.cell_count()) + " cells, expected " +
-                  std::to_string(info_.inputs) + " (the model's inputs)");
-    if (network_.required_cells() != 0 && network_.required_cells() != info_.inputs)
-      throw Error("the network reads " + std::to_string(network_.required_cells()) + " cells, expected " + std::to_string(info_.inputs) +
-                  " (metadata 'inputs')");
-    if (glove_.id() != info_.glove)
-      throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
-    if (const auto* unet = network_.unet(); unet && unet->extra_inputs() != glove_.map().extra_input_count())
-      throw Error("the U-Net reads " + std::to_string(unet->extra_inputs()) + " extra input planes (enc1.weight), expected " +
-                  std::to_string(glove_.map().extra_input_count()) + " (glove '" + glove_.id() + "' has that many extra inputs)");
-    std::optional<sensor::TraceLayout> layout = std::move(options.layout);
-    if (!layout && glove_.id() == grid::GloveDescription::glauser2019().id()) layout = sensor::TraceLayout::glauser2019();
-    if (layout) {
-      if (layout->cell_count() != glove_.cell_count())
-        throw Error("wiring '" + layout->id() + "' has " + std::to_string(layout->cell_count()) + " cells, expected " +
-                    std::to_string(glove_.cell_count()) + " (the glove's)");
-      solver_ = std::make_shared<const Solver>(*layout);
-    }
-    hand::Angles lo{}, hi{};
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-      lo[d] = info_.joint_limits_min[d];
-      hi[d] = info_.joint_limits_max[d];
-    }
-    limits_ = hand::JointLimits(lo, hi);
-    labelled_ = info_.labelled();
-    all_labelled_ = labelled_ == hand::all_dofs();
-    rest_normalized_ = limits_.normalize(limits_.rest());
-    if (!info_.pose_offset.empty()) {
-      pose_offset_.emplace(calibration::PoseOffsetModel::parse(info_.pose_offset, "metadata 'pose_offset'"));
-      if (pose_offset_->cells() != glove_.cell_count())
-        throw Error("metadata 'pose_offset' reads " + std::to_string(pose_offset_->cells()) + " cells, expected " +
-                    std::to_string(glove_.cell_count()) + " (the glove's)");
-    }
-    if (info_.calibration_min && info_.calibration_max) {
-      if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
-        throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
-                    " numbers, expected " + std::to_string(glove_.cell_count()) + " (one per cell)");
-      training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
-                              Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()),
-                              glove_.cell_names(), glove_.calibration().config());
-    }
-  }
-
-  /// @brief The file's metadata.
-  const nn::ModelInfo& info() const noexcept { return info_; }
-  /// @brief The network.
-  const Network& network() const noexcept { return network_; }
-  /// @brief The glove the model reads.
-  const grid::GloveDescription& glove() const noexcept { return glove_; }
-  /// @brief Number of sensor cells.
-  int cell_count() const noexcept { return glove_.cell_count(); }
-  /// @brief The solver of the glove's wiring; null when no wiring is known (C_c input only).
-  const std::shared_ptr<const Solver>& solver() const noexcept { return solver_; }
-  /// @brief What the network's outputs -1 and +1 mean, per DoF.
-  const hand::JointLimits& joint_limits() const noexcept { return limits_; }
-  /// @brief The DoFs the model was trained on reference angles for; the others read the rest pose
-  /// (hand::JointLimits::rest()) whatever the glove does.
-  const hand::DofSet& labelled_dofs() const noexcept { return labelled_; }
-  /// @brief The network's normalised outputs as the model reads them: DoFs outside labelled_dofs()
-  /// at the rest pose.
-  GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept {
-    if (all_labelled_) return normalized;
-    hand::Angles out = normalized;  // the rest pose computed once at load, not per frame
-    for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      if (!labelled_[d]) out[d] = rest_normalized_[d];
-    return out;
-  }
-  /// @brief The training data's per-cell range, when the file records one.
-  const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
-  /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.
-  const std::optional<calibration::PoseOffsetModel>& pose_offset() const noexcept { return pose_offset_; }
-
-  /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
-  /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one
-  /// Angles per frame (radians, unsmoothed). Set-up code: allocates; throws glovepose::Error for a
-  /// range of another size or a non-finite value (naming the frame).
-  std::vector<hand::Angles> predict(const float* cells, long frames, const sensor::CalibrationRange& range, int threads = 1) const {
-    const int n = cell_count();
-    if (range.size() != n)
-      throw Error("PoseModel::predict: calibration range of " + std::to_string(range.size()) + " cells, expected " + std::to_string(n));
-    std::vector<float> normalized_cells(static_cast<std::size_t>(frames) * static_cast<std::size_t>(n));
-    Eigen::VectorXd raw(n), normalized(n);
-    for (long f = 0; f < frames; ++f) {
-      for (int c = 0; c < n; ++c) raw(c) = cells[f * n + c];
-      if (range.normalize(raw, normalized) != Status::Ok)
-        throw Error("PoseModel::predict: frame " + std::to_string(f) + " has a non-finite cell value, expected finite C_c");
-      for (int c = 0; c < n; ++c) normalized_cells[static_cast<std::size_t>(f * n + c)] = static_cast<float>(normalized(c));
-    }
-    std::vector<hand::Angles> angles;
-    try {
-      angles = network_.normalized_dofs_batch(glove_.map(), normalized_cells.data(), n, frames, threads);
-    } catch (const Error& e) {
-      throw Error(std::string("PoseModel::predict: ") + e.what());
-    }
-    for (hand::Angles& a : angles) a = limits_.denormalize(model_outputs(a));
-    return angles;
-  }
-
- private:
-  static grid::GloveDescription choose_glove(const nn::ModelInfo& info, std::optional<grid::GloveDescription>& given) {
-    if (given) return std::move(*given);
-    if (!info.glove_description.empty()) return grid::GloveDescription::from_metadata(info.glove_description);
-    grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
-    if (info.glove != builtin.id())
-      throw Error("the model reads glove '" + info.glove + "' and carries no glove description, expected a glove description (PoseModelOptions::glove)");
-    return builtin;
-  }
-
-  nn::ModelInfo info_;
-  Network network_;
-  grid::GloveDescription glove_;
-  std::shared_ptr<const Solver> solver_;
-  hand::JointLimits limits_;
-  hand::DofSet labelled_ = hand::all_dofs();
-  bool all_labelled_ = true;
-  hand::Angles rest_normalized_{};
-  std::optional<sensor::CalibrationRange> training_range_;
-  std::optional<calibration::PoseOffsetModel> pose_offset_;
-};
-
-/// @brief The model of the default (SIMD) backend.
-using PoseModel = BasicPoseModel<>;
-
-/// @brief How finish_calibration() calibrates (docs/calibration.md).
-enum class CalibrationMethod : std::uint8_t {
-  /// Pose-guided when the model carries a pose-guided calibration, the whole sequence was performed
-  /// and the calibration looks like it (PoseOffsetModel::followed: a user who moved freely gets
-  /// min-max, not offsets fitted for poses they did not make); min-max otherwise.
-  /// calibration_method() tells which one was applied.
-  Auto,
-  MinMax,      ///< The paper's per-sensor min-max only (Sec. 4.3).
-  PoseGuided,  ///< Min-max plus the per-user angle offsets of the model's pose-guided calibration; finish_calibration() throws when it cannot.
-};
-
-/// @brief The estimator's default readout: the paper's solve cadence (every 16 rows) on each row's
-/// latest reading instead of the mean of its last 5. The 5-reading mean makes the pose trail the
-/// hand by about 30-47 ms; the latest reading by about 5-11 ms, and the shipped networks (trained on
-/// cells of 2-reading means) lose nothing by it (docs/results.md, "Lag"). The outlier bound
-/// scales with the readings averaged (ReadoutConfig::max_reading_residual). Set mean_window = 5 for
-/// the paper's filter.
-inline sensor::ReadoutConfig realtime_readout() noexcept {
-  sensor::ReadoutConfig config;
-  config.mean_window = 1;
-  return config;
-}
-
-/// @brief EstimatorConfig::calibration.min_relative_range that means "the glove's flat rule".
-inline constexpr double kGlovesFlatRule = -1.0;
-
-/// @brief Settings of one estimator (one glove stream).
-struct EstimatorConfig {
-  sensor::ReadoutConfig readout = realtime_readout();  ///< Mean window and solve cadence of the row stream (default 1, 16; paper: 5, 16).
-  /// Flat-sensor threshold and the clamp of normalised values. A negative min_relative_range (the
-  /// default) takes the glove's: its description's calibration.flat_relative_range (0.01 unless the
-  /// description says otherwise).
-  sensor::CalibrationConfig calibration{kGlovesFlatRule, sensor::CalibrationConfig{}.clamp_limit};
-  /// Frames of the on-the-fly calibration's median. 0 (the default): the glove's
-  /// calibration.median_seconds over the time between two frames taken (20 frames for the built-in
-  /// glove: a third of a second, as in the paper and in the training data's calibration).
-  int calibration_median_window = 0;
-  /// Stream time between two frames the on-the-fly calibration takes (s), or more when the glove's
-  /// description gives a slower rate_hz (then every frame). The median's window then spans the same
-  /// time however often the readout solves.
-  double calibration_sample_period = 1.0 / 60.0;
-  /// Min-max, or min-max plus the pose-guided offsets: then the user follows the model's calibration
-  /// sequence (PoseModel::pose_offset()->sequence()) from start_calibration() on.
-  CalibrationMethod calibration_method = CalibrationMethod::Auto;
-  /// For C_c frames (push_cells): this many consecutive frames timestamped before the last accepted
-  /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
-  /// ReadoutConfig::clock_restart_readings.
-  int clock_restart_frames = 10;
-  std::optional<filter::OneEuroConfig> smoothing;  ///< 1-euro smoothing of the angles; none: the network's output.
-  bool joint_transforms = false;                  ///< Compute the skeleton and the joint list with every pose.
-  hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
-  /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
-  /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,
-  /// and only the skeleton, the joint list and the OpenXR joints are mirrored (hand/handedness.hpp).
-  hand::Handedness handedness = hand::Handedness::Right;
-  /// Seconds of recent poses whose least-squares slope gives the angles' rate of change, for
-  /// pose_at()/joints_at() ahead of the newest pose and the joints' velocities (filter/trend.hpp;
-  /// at most the newest 128 poses: 0.19 s at the default cadence). Shorter windows follow turns
-  /// sooner but carry more of the network's pose-to-pose noise into the prediction: 0.03 s made
-  /// 40 ms ahead worse than holding the newest pose (docs/results.md, "Poses at a requested time").
-  double prediction_window = 0.15;
-  /// How far (s) past the newest pose pose_at()/joints_at() extrapolate; later times are located at
-  /// this bound and flagged clamped.
-  double max_prediction = 0.05;
-  /// Threads a U-Net's forward runs on: the calling thread plus network_threads - 1 workers of the
-  /// estimator's own (nn/team.hpp), each computing part of every large layer; the same poses as
-  /// with 1. Worth it for wide U-Nets on an otherwise idle second core (docs/performance.md); the
-  /// workers park when no frame comes, so an idle estimator costs no CPU. An FCN runs on one.
-  int network_threads = 1;
-};
-
-/// @brief Where the estimator's calibration range comes from.
-enum class CalibrationSource : std::uint8_t {
-  None,      ///< No range yet: no pose can be computed (Status::Uncalibrated).
-  OnTheFly,  ///< This user's range, from start_calibration() ... finish_calibration().
-  User,      ///< A range set or loaded by the caller (e.g. the user's saved calibration).
-  Training,  ///< The model's training-set range (the paper's "without calibration").
-};
-
-/// @brief How far an on-the-fly calibration has come.
-struct CalibrationProgress {
-  bool collecting = false;  ///< Between start_calibration() and finish/cancel.
-  long frames = 0;          ///< Frames taken so far.
-  int frames_needed = 0;    ///< Frames before finish_calibration() can succeed (the median window).
-  bool ready = false;       ///< finish_calibration() would succeed now.
-  /// Guided calibration: seconds since the sequence started (its first frame), and the step under
-  /// way (index into the sequence's steps; -1 before the first frame and after the last step).
-  double sequence_seconds = 0.0;
-  int step = -1;
-};
-
-/// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
-enum PoseFlag : std::uint32_t {
-  kPoseReadingsRejected = 1u << 0,    ///< Readings were rejected since the previous pose (dropped, NaN, negative, out of order): their rows kept older values.
-  kPoseInputClamped = 1u << 1,        ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
-  kPoseTrainingCalibration = 1u << 2, ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
-  kPoseCalibrating = 1u << 3,         ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
-  kPoseStaleReadings = 1u << 4,       ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
-  kPoseRecovering = 1u << 5,          ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
-  kPoseStuckRows = 1u << 6,           ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
-  kPoseDisconnectedRows = 1u << 7,    ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
-  kPoseOutlierRows = 1u << 8,         ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
-};
-
-/// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
-inline constexpr std::uint32_t kPoseFaultFlags =
-    kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows;
-
-/// @brief One estimated hand pose.
-struct Pose {
-  hand::Angles angles{};      ///< The 25 angles, radians (hand::kDofs order, theta 9..33); smoothed when smoothing is on.
-  hand::Angles raw_angles{};  ///< The network's angles before smoothing.
-  double timestamp = 0.0;     ///< Timestamp of the newest reading behind the pose (the stream's clock, s).
-  double oldest_age = 0.0;    ///< timestamp minus the timestamp of the oldest reading behind it (s): the readout's share of the latency.
-  double compute_seconds = 0.0;  ///< Wall time the estimator spent on this pose (solve to joint transforms).
-  std::uint64_t sequence = 0;    ///< Poses produced so far, this one included.
-  std::uint32_t rejected = 0;    ///< Readings rejected since the previous pose.
-  std::uint32_t flags = 0;       ///< PoseFlag bits.
-  bool valid = false;            ///< False until the first pose.
-  sensor::ReadoutHealth health;  ///< The readout's view of the frame (rows and C_m frames; zero for C_c frames).
-  /// @brief Whether no fault flag (kPoseFaultFlags) is set.
-  bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
-};
-
-/// @brief The hand at a requested time (GlovePoseEstimator::pose_at).
-struct PredictedPose {
-  hand::Angles angles{};   ///< Radians, within the joint limits.
-  hand::Angles rate{};     ///< Rate of change (rad/s): the slope of the recent poses.
-  bool has_rate = false;   ///< Whether rate comes from at least two poses.
-  double time = 0.0;       ///< The time asked for (the stream's clock, s).
-  double horizon = 0.0;    ///< Time located minus the newest pose's timestamp: > 0 predicted, <= 0 from the recent poses.
-  bool predicted = false;  ///< Extrapolated past the newest pose.
-  bool clamped = false;    ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
-  std::uint32_t flags = 0; ///< The newest pose's PoseFlag bits.
-  bool trusted = false;    ///< The newest pose's trusted().
-};
-
-/// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
-/// update and render threads through LatestHand.
-struct HandState {
-  Pose pose;                                ///< The pose (pose.valid false before the first).
-  hand::JointList joints{};                 ///< Its joint list (when EstimatorConfig::joint_transforms is on).
-  CalibrationProgress calibration;          ///< Where the calibration is.
-  hand::Angles rate{};                      ///< The angles' rate of change (rad/s), for predicting ahead.
-  bool has_rate = false;                    ///< Whether rate is known.
-};
-
-/// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
-/// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
-/// before the first pose, NonFinite for a non-finite t.
-GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const XrHandLocator& locator, double t,
-                                         double max_prediction, PredictedPose& out) noexcept {
-  if (!pose.valid) return Status::NotReady;
-  if (!std::isfinite(t)) return Status::NonFinite;
-  out.time = t;
-  out.horizon = std::min(t - pose.timestamp, max_prediction);
-  out.clamped = t - pose.timestamp > max_prediction;
-  out.predicted = out.horizon > 0.0;
-  out.rate = rate;
-  out.has_rate = has_rate;
-  out.flags = pose.flags;
-  out.trusted = pose.trusted();
-  out.angles = out.predicted ? locator.extrapolate(pose.angles, rate, out.horizon) : pose.angles;
-  return Status::Ok;
-}
-
-/// @brief predict() from a HandState (LatestHand's value).
-GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
-                                         PredictedPose& out) noexcept {
-  return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
-}
-
-/// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
-/// trusted and the time was within the prediction bound; velocities when the rate is known.
-GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLocator& locator, XrHandJoints& out) noexcept {
-  std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
-  if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
-  locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);
-  out.time = pose.time;
-  out.horizon = pose.horizon;
-  out.predicted = pose.predicted;
-  out.clamped = pose.clamped;
-  out.active = true;
-}
-
-/// @brief The newest HandState of one estimator for any number of reader threads (latest.hpp):
-/// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
-/// block it and never see a torn state.
-using LatestHand = Latest<HandState>;
-
 /// @brief One glove stream: rows, frames or solved cells in, poses out. See the file comment.
 ///
 /// Per-frame calls (push_*, pose(), joints(), calibration_progress(), start/cancel_calibration(),
 /// reset()) are noexcept and never allocate. Calibration calls that build a range (finish, set,
 /// load, save, use_training_calibration) are set-up code and throw glovepose::Error.
 /// One estimator is used by one thread at a time; estimators sharing a model may run concurrently.
-template <typename Backend = nn::kernels::SimdBackend>
-class BasicGlovePoseEstimator {
+class GlovePoseEstimator {
  public:
   /// @brief The shared model type.
-  using Model = BasicPoseModel<Backend>;
+  using Model = PoseModel;
 
   /// @brief An estimator over a shared model. Throws glovepose::Error for a null model or bad settings.
-  explicit BasicGlovePoseEstimator(std::shared_ptr<const Model> model, EstimatorConfig config = {})
+  explicit GlovePoseEstimator(std::shared_ptr<const Model> model, EstimatorConfig config = {})
       : model_(checked(std::move(model))),
         config_(with_glove_calibration(std::move(config), model_->glove())),
         calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
@@ -826,8 +472,5 @@ class BasicGlovePoseEstimator {
   hand::Skeleton skeleton_;
   hand::JointList joints_{};
 };
-
-/// @brief The estimator of the default (SIMD) backend.
-using GlovePoseEstimator = BasicGlovePoseEstimator<>;
 
 }  // namespace glovepose

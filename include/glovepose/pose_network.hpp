@@ -25,23 +25,22 @@
 namespace glovepose {
 
 /// @brief A U-Net or an FCN behind one per-frame call.
-template <typename Backend = nn::kernels::SimdBackend>
-class BasicPoseNetwork {
+class PoseNetwork {
  public:
-  /// @brief The U-Net of this backend.
-  using UNet = nn::UNet<Backend>;
-  /// @brief The FCN of this backend.
-  using Fcn = nn::Fcn<Backend>;
+  /// @brief The U-Net (SIMD kernels).
+  using UNet = nn::UNet<>;
+  /// @brief The FCN (SIMD kernels).
+  using Fcn = nn::Fcn<>;
 
   /// @brief Wraps a loaded U-Net.
-  BasicPoseNetwork(UNet unet) : net_(std::move(unet)) {}  // NOLINT: implicit, a U-Net is a pose network
+  PoseNetwork(UNet unet) : net_(std::move(unet)) {}  // NOLINT: implicit, a U-Net is a pose network
   /// @brief Wraps a loaded FCN.
-  BasicPoseNetwork(Fcn fcn) : net_(std::move(fcn)) {}  // NOLINT: implicit, an FCN is a pose network
+  PoseNetwork(Fcn fcn) : net_(std::move(fcn)) {}  // NOLINT: implicit, an FCN is a pose network
 
   /// @brief The network a model file's metadata names, built from its tensors with weights kept as
   /// `storage`. Throws glovepose::Error for an architecture the real-time path does not run (a
   /// linear map: train::load_model evaluates it) or tensors that do not make the network.
-  static BasicPoseNetwork from_tensors(const nn::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
+  static PoseNetwork from_tensors(const nn::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
     if (info.architecture == "unet") return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
     if (info.architecture == "fcn") return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
     throw Error("architecture '" + info.architecture + "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
@@ -71,7 +70,7 @@ class BasicPoseNetwork {
   /// @brief One stream's scratch for single frames.
   class Workspace {
    private:
-    friend class BasicPoseNetwork;
+    friend class PoseNetwork;
     std::variant<typename UNet::Workspace, typename Fcn::Workspace> net;
     std::vector<float> planes;  // U-Net input: the stretch maps and the extra inputs' planes
     std::array<float, grid::kMapSlots> pose_map{};

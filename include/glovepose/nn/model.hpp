@@ -33,7 +33,7 @@ struct ModelInfo {
   /// calibration sequence); empty: min-max calibration only.
   std::string pose_offset;
   /// The DoFs the model was trained on reference angles for (hand::dof_set_text()); empty: all 25.
-  /// The others were trained toward the rest pose and read it (BasicPoseModel).
+  /// The others were trained toward the rest pose and read it (PoseModel).
   std::string labelled_dofs;
 
   /// @brief labelled_dofs as a set (every DoF when empty).

@@ -1,0 +1,132 @@
+/// @file pose.hpp
+/// @brief What an estimator answers: a Pose (angles, flags, latency), its calibration's progress,
+/// the hand at a requested time (PredictedPose, OpenXR joints), and HandState, the plain copy a
+/// glove's thread publishes to readers on other threads (LatestHand).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "config.hpp"
+#include "hand/dofs.hpp"
+#include "hand/joint_list.hpp"
+#include "latest.hpp"
+#include "sensor/readout.hpp"
+#include "status.hpp"
+#include "xr_hand.hpp"
+
+namespace glovepose {
+
+/// @brief How far an on-the-fly calibration has come.
+struct CalibrationProgress {
+  bool collecting = false;  ///< Between start_calibration() and finish/cancel.
+  long frames = 0;          ///< Frames taken so far.
+  int frames_needed = 0;    ///< Frames before finish_calibration() can succeed (the median window).
+  bool ready = false;       ///< finish_calibration() would succeed now.
+  /// Guided calibration: seconds since the sequence started (its first frame), and the step under
+  /// way (index into the sequence's steps; -1 before the first frame and after the last step).
+  double sequence_seconds = 0.0;
+  int step = -1;
+};
+
+/// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
+enum PoseFlag : std::uint32_t {
+  kPoseReadingsRejected = 1u << 0,    ///< Readings were rejected since the previous pose (dropped, NaN, negative, out of order): their rows kept older values.
+  kPoseInputClamped = 1u << 1,        ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
+  kPoseTrainingCalibration = 1u << 2, ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
+  kPoseCalibrating = 1u << 3,         ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
+  kPoseStaleReadings = 1u << 4,       ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
+  kPoseRecovering = 1u << 5,          ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
+  kPoseStuckRows = 1u << 6,           ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
+  kPoseDisconnectedRows = 1u << 7,    ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
+  kPoseOutlierRows = 1u << 8,         ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
+};
+
+/// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
+inline constexpr std::uint32_t kPoseFaultFlags =
+    kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows;
+
+/// @brief One estimated hand pose.
+struct Pose {
+  hand::Angles angles{};      ///< The 25 angles, radians (hand::kDofs order, theta 9..33); smoothed when smoothing is on.
+  hand::Angles raw_angles{};  ///< The network's angles before smoothing.
+  double timestamp = 0.0;     ///< Timestamp of the newest reading behind the pose (the stream's clock, s).
+  double oldest_age = 0.0;    ///< timestamp minus the timestamp of the oldest reading behind it (s): the readout's share of the latency.
+  double compute_seconds = 0.0;  ///< Wall time the estimator spent on this pose (solve to joint transforms).
+  std::uint64_t sequence = 0;    ///< Poses produced so far, this one included.
+  std::uint32_t rejected = 0;    ///< Readings rejected since the previous pose.
+  std::uint32_t flags = 0;       ///< PoseFlag bits.
+  bool valid = false;            ///< False until the first pose.
+  sensor::ReadoutHealth health;  ///< The readout's view of the frame (rows and C_m frames; zero for C_c frames).
+  /// @brief Whether no fault flag (kPoseFaultFlags) is set.
+  bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
+};
+
+/// @brief The hand at a requested time (GlovePoseEstimator::pose_at).
+struct PredictedPose {
+  hand::Angles angles{};   ///< Radians, within the joint limits.
+  hand::Angles rate{};     ///< Rate of change (rad/s): the slope of the recent poses.
+  bool has_rate = false;   ///< Whether rate comes from at least two poses.
+  double time = 0.0;       ///< The time asked for (the stream's clock, s).
+  double horizon = 0.0;    ///< Time located minus the newest pose's timestamp: > 0 predicted, <= 0 from the recent poses.
+  bool predicted = false;  ///< Extrapolated past the newest pose.
+  bool clamped = false;    ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
+  std::uint32_t flags = 0; ///< The newest pose's PoseFlag bits.
+  bool trusted = false;    ///< The newest pose's trusted().
+};
+
+/// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
+/// update and render threads through LatestHand.
+struct HandState {
+  Pose pose;                                ///< The pose (pose.valid false before the first).
+  hand::JointList joints{};                 ///< Its joint list (when EstimatorConfig::joint_transforms is on).
+  CalibrationProgress calibration;          ///< Where the calibration is.
+  hand::Angles rate{};                      ///< The angles' rate of change (rad/s), for predicting ahead.
+  bool has_rate = false;                    ///< Whether rate is known.
+};
+
+/// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
+/// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
+/// before the first pose, NonFinite for a non-finite t.
+GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const XrHandLocator& locator, double t,
+                                         double max_prediction, PredictedPose& out) noexcept {
+  if (!pose.valid) return Status::NotReady;
+  if (!std::isfinite(t)) return Status::NonFinite;
+  out.time = t;
+  out.horizon = std::min(t - pose.timestamp, max_prediction);
+  out.clamped = t - pose.timestamp > max_prediction;
+  out.predicted = out.horizon > 0.0;
+  out.rate = rate;
+  out.has_rate = has_rate;
+  out.flags = pose.flags;
+  out.trusted = pose.trusted();
+  out.angles = out.predicted ? locator.extrapolate(pose.angles, rate, out.horizon) : pose.angles;
+  return Status::Ok;
+}
+
+/// @brief predict() from a HandState (LatestHand's value).
+GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
+                                         PredictedPose& out) noexcept {
+  return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
+}
+
+/// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
+/// trusted and the time was within the prediction bound; velocities when the rate is known.
+GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLocator& locator, XrHandJoints& out) noexcept {
+  std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
+  if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
+  locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);
+  out.time = pose.time;
+  out.horizon = pose.horizon;
+  out.predicted = pose.predicted;
+  out.clamped = pose.clamped;
+  out.active = true;
+}
+
+/// @brief The newest HandState of one estimator for any number of reader threads (latest.hpp):
+/// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
+/// block it and never see a torn state.
+using LatestHand = Latest<HandState>;
+
+}  // namespace glovepose
