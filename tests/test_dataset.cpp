@@ -396,7 +396,7 @@ TEST_CASE("dataset: each CSV import error names the line, the column and what wa
   for (int c = 0; c < 44; ++c) header += ",cell_" + std::to_string(c);
   for (const hand::Dof& dof : hand::kDofs) header += std::string(",") + dof.name;
   const auto row = [](const std::string& subject_session, double t, const std::string& cell3 = "1") {
-    std::string r = subject_session + "," + io::detail::number_text(t);
+    std::string r = subject_session + "," + io::number_text(t);
     for (int c = 0; c < 44; ++c) r += "," + (c == 3 ? cell3 : std::string("20.5"));
     for (int d = 0; d < 25; ++d) r += ",0.25";
     return r + "\n";

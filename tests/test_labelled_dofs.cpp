@@ -1,6 +1,7 @@
 // DoFs without reference angles (a dataset labelling a subset): not trained (zero gradient, the
 // output layer's rows for them untouched by training), not scored (metrics over the labelled ones,
 // against a mean computed here), and read as the rest pose by a model trained without them.
+#include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/train/metrics.hpp>
 #include <glovepose/train/model_file.hpp>

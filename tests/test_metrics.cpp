@@ -1,3 +1,4 @@
+#include <glovepose/train/metrics_report.hpp>
 #include <glovepose/train/metrics.hpp>
 
 #include <doctest/doctest.h>

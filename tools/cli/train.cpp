@@ -6,6 +6,7 @@
 //   fits the model's pose-guided calibration on people it was not trained on (guided_calibration.hpp)
 //   Trains, fine-tunes and evaluates models on dataset files (train/dataset.hpp), on all cores.
 //   Selection: --subjects / --exclude-subjects / --sessions / --gloves take lists like "0-3,7".
+#include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/train/guided_calibration.hpp>
 #include <glovepose/train/lag.hpp>

@@ -65,6 +65,7 @@
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/json.hpp"
+#include "../io/number_text.hpp"
 #include "../sensor/calibration.hpp"
 #include "grid_map.hpp"
 
@@ -226,14 +227,14 @@ class GloveDescription {
       out += "    {\"name\": " + io::json::quote(hand::kDofs[d].name) + ", \"row\": " + std::to_string(s.row) +
              ", \"col\": " + std::to_string(s.col);
       if (const auto& own = settings_.limits_degrees[d])
-        out += ", \"min_degrees\": " + shortest(own->min) + ", \"max_degrees\": " + shortest(own->max);
+        out += ", \"min_degrees\": " + io::number_text(own->min) + ", \"max_degrees\": " + io::number_text(own->max);
       out += d + 1 < hand::kDofCount ? "},\n" : "}\n";
     }
     out += "  ]";
-    if (settings_.rate_hz) out += ",\n  \"rate_hz\": " + shortest(*settings_.rate_hz);
+    if (settings_.rate_hz) out += ",\n  \"rate_hz\": " + io::number_text(*settings_.rate_hz);
     if (!(settings_.calibration == GloveCalibration{}))
-      out += ",\n  \"calibration\": {\"median_seconds\": " + shortest(settings_.calibration.median_seconds) +
-             ", \"flat_relative_range\": " + shortest(settings_.calibration.flat_relative_range) + "}";
+      out += ",\n  \"calibration\": {\"median_seconds\": " + io::number_text(settings_.calibration.median_seconds) +
+             ", \"flat_relative_range\": " + io::number_text(settings_.calibration.flat_relative_range) + "}";
     return out + "\n}\n";
   }
 
@@ -361,7 +362,7 @@ class GloveDescription {
       if (has_min) {
         const double lo = number_field(entry, "min_degrees", where), hi = number_field(entry, "max_degrees", where);
         if (!(lo < hi) || lo < -360.0 || hi > 360.0)
-          throw fail(where + " has limits [" + shortest(lo) + ", " + shortest(hi) +
+          throw fail(where + " has limits [" + io::number_text(lo) + ", " + io::number_text(hi) +
                      "] degrees, expected min_degrees < max_degrees within [-360, 360]");
         settings.limits_degrees[d] = DofLimitsDegrees{lo, hi};
       }
@@ -422,26 +423,20 @@ class GloveDescription {
   // The settings' ranges (the limits' order is checked where they are read, naming the DoF entry).
   static void check_settings(const GloveSettings& s, const std::string& prefix) {
     if (s.rate_hz && !(*s.rate_hz > 0.0 && *s.rate_hz <= 1e6))
-      throw Error(prefix + "'rate_hz' is " + shortest(*s.rate_hz) + ", expected frames per second > 0 (at most 1e6)");
+      throw Error(prefix + "'rate_hz' is " + io::number_text(*s.rate_hz) + ", expected frames per second > 0 (at most 1e6)");
     if (!(s.calibration.median_seconds > 0.0 && s.calibration.median_seconds <= kMaxMedianSeconds))
-      throw Error(prefix + "'calibration.median_seconds' is " + shortest(s.calibration.median_seconds) +
-                  ", expected a time > 0 s (at most " + shortest(kMaxMedianSeconds) + ": the median runs over the window every frame)");
+      throw Error(prefix + "'calibration.median_seconds' is " + io::number_text(s.calibration.median_seconds) +
+                  ", expected a time > 0 s (at most " + io::number_text(kMaxMedianSeconds) + ": the median runs over the window every frame)");
     if (!(s.calibration.flat_relative_range >= 0.0 && s.calibration.flat_relative_range < 1.0))
-      throw Error(prefix + "'calibration.flat_relative_range' is " + shortest(s.calibration.flat_relative_range) +
+      throw Error(prefix + "'calibration.flat_relative_range' is " + io::number_text(s.calibration.flat_relative_range) +
                   ", expected a fraction >= 0 and < 1 (0.01: a range within 1% of the value is flat)");
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
-        throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + shortest(own->min) + ", " + shortest(own->max) +
+        throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + io::number_text(own->min) + ", " + io::number_text(own->max) +
                     "] degrees, expected finite min < max");
   }
 
   // Shortest text that reads back as the same double.
-  static std::string shortest(double v) {
-    char buffer[32];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-    return std::string(buffer, result.ptr);
-  }
-
   static double number_field(const io::json::Value& object, const char* key, const std::string& where) {
     const io::json::Value& v = field(object, key, where);
     if (v.kind != io::json::Value::Kind::Number) throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a number");

@@ -22,6 +22,7 @@
 #include "../config.hpp"
 #include "half.hpp"
 #include "json.hpp"
+#include "number_text.hpp"
 #include "shape.hpp"
 
 namespace glovepose::io {
@@ -106,18 +107,6 @@ inline void copy_le(const void* src, void* dst, std::size_t n, std::size_t size)
   auto* to = static_cast<unsigned char*>(dst);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t k = 0; k < size; ++k) to[i * size + k] = from[i * size + size - 1 - k];
-}
-
-/// @brief A number as text for messages (shortest round-trip form, locale-independent).
-template <typename T>
-std::string number_text(T v) {
-  if constexpr (std::is_integral_v<T>) {
-    return std::to_string(static_cast<long long>(v));
-  } else {
-    char buf[64];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
-  }
 }
 
 /// @brief The error of a value that a conversion would not keep exactly.

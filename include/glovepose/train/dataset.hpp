@@ -23,6 +23,7 @@
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/csv_fields.hpp"
+#include "../io/number_text.hpp"
 #include "../io/tensor_file.hpp"
 
 namespace glovepose::train {
@@ -66,7 +67,7 @@ struct Dataset {
   Dataset(std::size_t cells, std::size_t rows, const std::string& glove_layout, double frame_rate)
       : cell_count(cells), row_count(rows) {
     metadata["glove_layout"] = glove_layout;
-    metadata["frame_rate"] = io::detail::number_text(frame_rate);
+    metadata["frame_rate"] = io::number_text(frame_rate);
   }
 
   /// @brief Number of frames N.
@@ -125,7 +126,7 @@ struct Dataset {
     for (std::size_t i = 0; i < cells.size(); ++i)
       if (!std::isfinite(cells[i]))
         throw Error("Dataset: tensor 'cells': frame " + std::to_string(i / cell_count) + ", cell " + std::to_string(i % cell_count) +
-                    " is " + io::detail::number_text(cells[i]) + ", expected a finite capacitance (pF)");
+                    " is " + io::number_text(cells[i]) + ", expected a finite capacitance (pF)");
     for (std::size_t i = 0; i < raw_rows.size(); ++i)
       if (std::isinf(raw_rows[i]))
         throw Error("Dataset: tensor 'raw_rows': frame " + std::to_string(i / row_count) + ", row " + std::to_string(i % row_count) +
@@ -135,7 +136,7 @@ struct Dataset {
       const bool has = labelled[i % hand::kDofCount];
       if (has ? !std::isfinite(angles[i]) : !std::isnan(angles[i]))
         throw Error("Dataset: tensor 'angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
-                    hand::kDofs[i % hand::kDofCount].name + "' is " + io::detail::number_text(angles[i]) +
+                    hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(angles[i]) +
                     (has ? ", expected a finite angle (radians)" : ", expected NaN (the DoF is not labelled: metadata 'labelled_dofs')"));
     }
     const std::pair<const char*, const std::vector<std::int32_t>*> ids[] = {
@@ -152,11 +153,11 @@ struct Dataset {
       if (outlier[i] > 1)
         throw Error("Dataset: tensor 'outlier': frame " + std::to_string(i) + " is " + std::to_string(outlier[i]) + ", expected 0 or 1");
       if (!std::isfinite(timestamps[i]))
-        throw Error("Dataset: tensor 'timestamps': frame " + std::to_string(i) + " is " + io::detail::number_text(timestamps[i]) +
+        throw Error("Dataset: tensor 'timestamps': frame " + std::to_string(i) + " is " + io::number_text(timestamps[i]) +
                     ", expected finite seconds");
       if (i > 0 && same_run(i - 1, i) && !(timestamps[i] > timestamps[i - 1]))
-        throw Error("Dataset: tensor 'timestamps': frame " + std::to_string(i) + " is " + io::detail::number_text(timestamps[i]) +
-                    " s, not after frame " + std::to_string(i - 1) + " (" + io::detail::number_text(timestamps[i - 1]) +
+        throw Error("Dataset: tensor 'timestamps': frame " + std::to_string(i) + " is " + io::number_text(timestamps[i]) +
+                    " s, not after frame " + std::to_string(i - 1) + " (" + io::number_text(timestamps[i - 1]) +
                     " s) of the same run (subject " + std::to_string(subject[i]) + ", glove " + std::to_string(glove[i]) +
                     ", session " + std::to_string(session[i]) + ", kind " + std::to_string(kind[i]) +
                     "), expected strictly increasing times");
@@ -378,8 +379,8 @@ struct Dataset {
       // The run rule of validate() as far as CSV can tell: rows of one (subject, session) in a row.
       const std::size_t n = out.frames();
       if (n > 0 && out.subject[n - 1] == subject && out.session[n - 1] == session && !(time > out.timestamps[n - 1]))
-        throw Error("line " + std::to_string(line_no) + ": timestamp " + io::detail::number_text(time) + " is not after the previous " +
-                    io::detail::number_text(out.timestamps[n - 1]) + " of subject " + std::to_string(subject) + " session " +
+        throw Error("line " + std::to_string(line_no) + ": timestamp " + io::number_text(time) + " is not after the previous " +
+                    io::number_text(out.timestamps[n - 1]) + " of subject " + std::to_string(subject) + " session " +
                     std::to_string(session));
       for (std::size_t c = 0; c < cells; ++c) out.cells.push_back(io::parse_csv_number<float>(fields[3 + c], where(3 + c)));
       std::fill(pose.begin(), pose.end(), NAN);

@@ -137,14 +137,6 @@ inline double sorted_sum(std::vector<double> values, bool squares) {
   return sum;
 }
 
-// Shortest text that reads back to the same double; JSON has no NaN or infinity, so those are null.
-inline std::string json_number(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
-
 }  // namespace detail
 
 /// @brief Accumulates predicted-against-true joint-angle errors frame by frame or in blocks, and
@@ -431,79 +423,5 @@ class AngleErrorAccumulator {
   std::vector<std::pair<std::size_t, double>> large_;  // (DoF, error) of errors >= kHistogramLimitDeg
   double min_ = std::numeric_limits<double>::infinity();  // smallest error, to clamp percentiles
 };
-
-/// @brief The report as one JSON object with stable keys, numbers in shortest round-trip form:
-/// "format" ("glovepose-angle-errors"), "version" (1), "frames", "skipped_frames", "angles",
-/// "mean_deg", "rms_deg", "max_deg", "median_deg", "p95_deg", "percentile_resolution_deg",
-/// "share_under_15deg", "fingers" (array of {"finger", "mean_deg", "rms_deg", "max_deg"}),
-/// "scored_dofs", "dofs" (array of {"dof", "theta", "scored", "mean_deg", "rms_deg", "max_deg"}) and "cumulative"
-/// ({"threshold_deg": [0..45], "share": [...]}). Non-finite numbers are written as null.
-/// `extra` members (key, JSON value text) follow "version", e.g. how the frames were calibrated.
-inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pair<std::string, std::string>>& extra = {}) {
-  const auto number = detail::json_number;
-  const auto summary = [&](const ErrorSummary& e) {
-    return "\"mean_deg\": " + number(e.mean_deg) + ", \"rms_deg\": " + number(e.rms_deg) + ", \"max_deg\": " + number(e.max_deg);
-  };
-  std::string out = "{\n";
-  out += "  \"format\": \"glovepose-angle-errors\",\n  \"version\": 1,\n";
-  for (const auto& [key, value] : extra) out += "  \"" + key + "\": " + value + ",\n";
-  out += "  \"frames\": " + std::to_string(r.frames) + ",\n";
-  out += "  \"skipped_frames\": " + std::to_string(r.skipped_frames) + ",\n";
-  out += "  \"angles\": " + std::to_string(r.angles) + ",\n";
-  out += "  \"scored_dofs\": " + std::to_string(r.scored_dofs) + ",\n";
-  out += "  " + summary(r.overall) + ",\n";
-  out += "  \"median_deg\": " + number(r.median_deg) + ",\n";
-  out += "  \"p95_deg\": " + number(r.p95_deg) + ",\n";
-  out += "  \"percentile_resolution_deg\": " + number(r.percentile_resolution_deg) + ",\n";
-  out += "  \"share_under_15deg\": " + number(r.share_under_15deg) + ",\n";
-  out += "  \"fingers\": [\n";
-  for (std::size_t f = 0; f < r.fingers.size(); ++f)
-    out += std::string("    {\"finger\": \"") + r.fingers[f].name + "\", " + summary(r.fingers[f].error) + "}" +
-           (f + 1 < r.fingers.size() ? ",\n" : "\n");
-  out += "  ],\n  \"dofs\": [\n";
-  for (std::size_t d = 0; d < r.dofs.size(); ++d)
-    out += std::string("    {\"dof\": \"") + r.dofs[d].name + "\", \"theta\": " + std::to_string(r.dofs[d].theta) +
-           ", \"scored\": " + (r.dofs[d].scored ? "true" : "false") + ", " + summary(r.dofs[d].error) + "}" +
-           (d + 1 < r.dofs.size() ? ",\n" : "\n");
-  out += "  ],\n  \"cumulative\": {\n    \"threshold_deg\": [";
-  for (std::size_t i = 0; i < r.curve.size(); ++i) out += (i ? ", " : "") + std::to_string(r.curve[i].threshold_deg);
-  out += "],\n    \"share\": [";
-  for (std::size_t i = 0; i < r.curve.size(); ++i) out += (i ? ", " : "") + number(r.curve[i].share);
-  out += "]\n  }\n}\n";
-  return out;
-}
-
-/// @brief The report as a plain-text table: frames (and skipped frames), the overall line, one line
-/// per finger, one per DoF, and the cumulative curve at 5, 10, 15, 20 and 30 degrees.
-inline std::string format_table(const AngleErrorReport& r) {
-  std::string out;
-  char line[256];
-  const auto add = [&](const char* format, auto... args) {
-    std::snprintf(line, sizeof line, format, args...);
-    out += line;
-  };
-  add("Angle errors (degrees): %zu frames x %zu angles", r.frames, r.scored_dofs);
-  if (r.scored_dofs < hand::kDofCount) add(" (%zu DoFs not labelled, not scored)", hand::kDofCount - r.scored_dofs);
-  if (r.skipped_frames > 0) add(", %zu frame%s skipped (non-finite angles)", r.skipped_frames, r.skipped_frames == 1 ? "" : "s");
-  out += "\n";
-  add("%-24s %8s %8s %8s %8s %8s %9s\n", "", "mean", "rms", "max", "median", "p95", "<15 deg");
-  add("%-24s %8.3f %8.3f %8.3f %8.3f %8.3f %8.1f%%\n", "all", r.overall.mean_deg, r.overall.rms_deg, r.overall.max_deg, r.median_deg,
-      r.p95_deg, 100.0 * r.share_under_15deg);
-  add("  (median and p95: nearest rank, resolved to %.4f degree)\n\n", r.percentile_resolution_deg);
-  add("%-24s %8s %8s %8s\n", "finger", "mean", "rms", "max");
-  for (const FingerError& f : r.fingers) add("%-24s %8.3f %8.3f %8.3f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
-  add("\n%-24s %8s %8s %8s\n", "DoF", "mean", "rms", "max");
-  for (const DofError& d : r.dofs) {
-    if (d.scored) add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
-    else add("%-24s %26s\n", d.name, "not labelled");
-  }
-  out += "\nShare of angles with error below:";
-  for (int t : {5, 10, 15, 20, 30}) {
-    const std::size_t i = static_cast<std::size_t>(t);
-    if (i < r.curve.size()) add("  %d deg %.1f%%", r.curve[i].threshold_deg, 100.0 * r.curve[i].share);
-  }
-  out += "\n";
-  return out;
-}
 
 }  // namespace glovepose::train

@@ -41,6 +41,7 @@
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/csv_fields.hpp"
+#include "../io/number_text.hpp"
 #include "../sensor/calibration.hpp"
 #include "dataset.hpp"
 
@@ -125,11 +126,11 @@ class RecordingImporter {
     const std::optional<double> described = glove.rate_hz();
     if (rate == 0.0 && described) return *described;
     if (!(rate > 0.0) || !std::isfinite(rate))
-      throw Error("frame rate " + io::detail::number_text(rate) +
+      throw Error("frame rate " + io::number_text(rate) +
                   ", expected a positive number of frames per second (or a glove description with 'rate_hz')");
     if (described && *described != rate)
-      throw Error("frame rate " + io::detail::number_text(rate) + ", but glove '" + glove.id() + "' is described at " +
-                  io::detail::number_text(*described) + " frames per second, expected the description's rate (or none)");
+      throw Error("frame rate " + io::number_text(rate) + ", but glove '" + glove.id() + "' is described at " +
+                  io::number_text(*described) + " frames per second, expected the description's rate (or none)");
     return rate;
   }
   int cell_of(const std::string& name) const {
@@ -255,8 +256,8 @@ class RecordingImporter {
                              data_.glove[n - 1] == glove && data_.kind[n - 1] == kind;
       if (!time) time = continues ? data_.timestamps[n - 1] + 1.0 / data_.frame_rate() : 0.0;
       if (continues && !(*time > data_.timestamps[n - 1]))
-        throw Error(at_line + ": time " + io::detail::number_text(*time) + " s is not after the frame before (" +
-                    io::detail::number_text(data_.timestamps[n - 1]) + " s) of subject " + std::to_string(subject) + ", session " +
+        throw Error(at_line + ": time " + io::number_text(*time) + " s is not after the frame before (" +
+                    io::number_text(data_.timestamps[n - 1]) + " s) of subject " + std::to_string(subject) + ", session " +
                     std::to_string(session) + ", expected increasing times within a run (give each take its own session id)");
       data_.cells.insert(data_.cells.end(), cells.begin(), cells.end());
       data_.angles.insert(data_.angles.end(), pose.begin(), pose.end());
@@ -302,8 +303,8 @@ class RecordingImporter {
           if (!options_.allow_flat)
             throw Error("CSV file '" + path + "', lines " + std::to_string(flat.first_line) + "-" + std::to_string(flat.last_line) +
                         " (calibration of subject " + std::to_string(data_.subject[begin]) + ", session " +
-                        std::to_string(data_.session[begin]) + "), column '" + flat.cell + "': flat (" + io::detail::number_text(lo) +
-                        " to " + io::detail::number_text(hi) + ", a range within " + io::detail::number_text(100.0 * flat_rule.min_relative_range) +
+                        std::to_string(data_.session[begin]) + "), column '" + flat.cell + "': flat (" + io::number_text(lo) +
+                        " to " + io::number_text(hi) + ", a range within " + io::number_text(100.0 * flat_rule.min_relative_range) +
                         "% of its value), expected a calibration that moves every sensor (calibrated, it would read 0; "
                         "allow flat sensors to keep the take, or give the glove description a smaller calibration.flat_relative_range)");
           flat_.push_back(std::move(flat));
