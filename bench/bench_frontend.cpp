@@ -8,37 +8,47 @@
 using namespace glovepose;
 
 namespace {
-std::shared_ptr<const sensor::GloveSolver> solver() {
-  static const auto s = std::make_shared<const sensor::GloveSolver>(sensor::TraceLayout::glauser2019());
+// The paper's glove with its sizes fixed at compile time (GloveSolver) or at run time.
+using DynamicSolver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
+
+template <typename Solver>
+std::shared_ptr<const Solver> solver() {
+  static const auto s = std::make_shared<const Solver>(sensor::TraceLayout::glauser2019());
   return s;
 }
-sensor::GloveSolver::Measurements measurements() {
-  return solver()->measurement_matrix() * sensor::GloveSolver::Capacitances::LinSpaced(10.0, 20.0);
+template <typename Solver>
+typename Solver::Measurements measurements() {
+  const typename Solver::Capacitances truth = Solver::Capacitances::LinSpaced(44, 10.0, 20.0);
+  return solver<Solver>()->measurement_matrix() * truth;
 }
 }  // namespace
 
 // One least-squares solve of the paper's glove (44 x 180 operator times C_m).
+template <typename Solver>
 static void BM_CapacitanceSolve(benchmark::State& state) {
-  const auto cm = measurements();
-  sensor::GloveSolver::Capacitances cc;
+  const auto cm = measurements<Solver>();
+  typename Solver::Capacitances cc(44);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(solver()->solve(cm, cc));
+    benchmark::DoNotOptimize(solver<Solver>()->solve(cm, cc));
     benchmark::ClobberMemory();
   }
 }
-BENCHMARK(BM_CapacitanceSolve);
+BENCHMARK_TEMPLATE(BM_CapacitanceSolve, sensor::GloveSolver);
+BENCHMARK_TEMPLATE(BM_CapacitanceSolve, DynamicSolver);
 
 // One frame's worth of row readings (180), with the solves every 16 rows they trigger.
+template <typename Solver>
 static void BM_ReadoutFrameOfRows(benchmark::State& state) {
-  sensor::GloveReadout readout(solver());
-  const auto cm = measurements();
+  sensor::Readout<Solver::Measurements::RowsAtCompileTime, Solver::Capacitances::RowsAtCompileTime> readout(solver<Solver>());
+  const auto cm = measurements<Solver>();
   double t = 0.0;
   for (auto _ : state) {
     for (int r = 0; r < 180; ++r) benchmark::DoNotOptimize(readout.push_row(r, cm(r), t += 1e-4));
   }
   state.SetItemsProcessed(state.iterations() * 180);
 }
-BENCHMARK(BM_ReadoutFrameOfRows);
+BENCHMARK_TEMPLATE(BM_ReadoutFrameOfRows, sensor::GloveSolver);
+BENCHMARK_TEMPLATE(BM_ReadoutFrameOfRows, DynamicSolver);
 
 // Calibrate + grid-map one frame of 44 cells.
 static void BM_NormalizeAndMap(benchmark::State& state) {

@@ -179,7 +179,7 @@ TEST_CASE("glove description: each malformed input is refused with a message nam
   refused(glove_text("[" + cell_entry("a", {0, 0, -1}) + "]"), "cells[0] ('a'): 'col' is -1, expected an integer 0..4");
   refused(glove_text("[{\"name\": \"a\", \"channel\": 0, \"row\": 1.0, \"col\": 0}]"), "'row' is 1.0, expected an integer 0..4");
   refused(glove_text("[{\"name\": \"a\", \"channel\": 0, \"row\": 99999999999999999999, \"col\": 0}]"),
-          "'row' is 99999999999999999999, expected an integer 0..4");
+          "'row' is 1e+20, expected an integer 0..4");
   refused(glove_text("[" + cell_entry("a", {1, 2, 3}) + ", " + cell_entry("b", {1, 2, 3}) + "]"),
           "cells[1] ('b') is placed at (channel 1, row 2, column 3), the slot of cells[0] ('a'), expected one cell per slot");
 

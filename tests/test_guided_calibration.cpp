@@ -187,7 +187,7 @@ TEST_CASE("pose offset: the model's JSON reads back to the same offsets, bad tex
   CHECK_THROWS_AS(calibration::PoseOffsetModel(two_steps(), 3, w, bias, mean, scale, 1.2), Error);  // 3 cells: 2 x 28 features
   CHECK_THROWS_AS(calibration::PoseOffsetModel(two_steps(), 2, w, bias, mean, Eigen::VectorXd::Zero(54), 1.2), Error);
   std::string text = model.to_json();
-  text.replace(text.find("\"cells\": 2"), 10, "\"cells\": 0");
+  text.replace(text.find("\"cells\":2"), 9, "\"cells\":0");
   CHECK_THROWS_WITH_AS((void)calibration::PoseOffsetModel::parse(text, "m"), doctest::Contains("'cells'"), Error);
 }
 

@@ -286,28 +286,28 @@ TEST_CASE("metrics: JSON carries the figures with stable keys and round-trip dig
   CHECK(text.find("{\"dof\": \"index_base_flexion\", \"theta\": 14, \"scored\": true, \"mean_deg\": 18,") != std::string::npos);
   CHECK(text.find("{\"finger\": \"thumb\", \"mean_deg\": 18.1,") != std::string::npos);
 
-  const io::json::Value json = io::json::Parser::parse(text);
-  REQUIRE(json.kind == io::json::Value::Kind::Object);
-  CHECK(json.find("format")->text == "glovepose-angle-errors");
-  CHECK(json.find("frames")->number == 2);
-  CHECK(json.find("angles")->number == 50);
-  CHECK(json.find("rms_deg")->number == r.overall.rms_deg);  // shortest round-trip text reads back exactly
-  CHECK(json.find("median_deg")->number == r.median_deg);
-  CHECK(json.find("p95_deg")->number == r.p95_deg);
-  CHECK(json.find("percentile_resolution_deg")->number == kPercentileResolutionDeg);
-  const io::json::Value& dofs = *json.find("dofs");
-  REQUIRE(dofs.items.size() == hand::kDofCount);
-  CHECK(dofs.items[24].find("dof")->text == "pinky_base_twist");
-  CHECK(dofs.items[24].find("rms_deg")->number == r.dofs[24].error.rms_deg);
-  const io::json::Value& fingers = *json.find("fingers");
-  REQUIRE(fingers.items.size() == hand::kFingerCount);
-  CHECK(fingers.items[3].find("mean_deg")->number == 23.2);
-  const io::json::Value& curve = *json.find("cumulative");
-  REQUIRE(curve.find("threshold_deg")->items.size() == kCurvePoints);
-  REQUIRE(curve.find("share")->items.size() == kCurvePoints);
-  CHECK(curve.find("threshold_deg")->items[15].number == 15);
-  CHECK(curve.find("share")->items[15].number == 0.3);
-  CHECK(curve.find("share")->items[45].number == 1.0);
+  const io::json::Value json = io::json::parse(text);
+  REQUIRE(json.is_object());
+  CHECK(json.at("format").get<std::string>() == "glovepose-angle-errors");
+  CHECK(json.at("frames").get<double>() == 2);
+  CHECK(json.at("angles").get<double>() == 50);
+  CHECK(json.at("rms_deg").get<double>() == r.overall.rms_deg);  // shortest round-trip text reads back exactly
+  CHECK(json.at("median_deg").get<double>() == r.median_deg);
+  CHECK(json.at("p95_deg").get<double>() == r.p95_deg);
+  CHECK(json.at("percentile_resolution_deg").get<double>() == kPercentileResolutionDeg);
+  const io::json::Value& dofs = json.at("dofs");
+  REQUIRE(dofs.size() == hand::kDofCount);
+  CHECK(dofs[24].at("dof").get<std::string>() == "pinky_base_twist");
+  CHECK(dofs[24].at("rms_deg").get<double>() == r.dofs[24].error.rms_deg);
+  const io::json::Value& fingers = json.at("fingers");
+  REQUIRE(fingers.size() == hand::kFingerCount);
+  CHECK(fingers[3].at("mean_deg").get<double>() == 23.2);
+  const io::json::Value& curve = json.at("cumulative");
+  REQUIRE(curve.at("threshold_deg").size() == kCurvePoints);
+  REQUIRE(curve.at("share").size() == kCurvePoints);
+  CHECK(curve.at("threshold_deg")[15].get<double>() == 15);
+  CHECK(curve.at("share")[15].get<double>() == 0.3);
+  CHECK(curve.at("share")[45].get<double>() == 1.0);
 
   AngleErrorReport hand_made = r;
   hand_made.overall.mean_deg = std::numeric_limits<double>::quiet_NaN();

@@ -81,7 +81,7 @@ TEST_CASE("weights: every malformed file is an Error naming the tensor or byte a
   SUBCASE("JSON that safetensors refuses") {
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(" {" + ok_a + "}", data)), doctest::Contains("does not start with '{'"), Error);
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[02],"data_offsets":[0,8]}})", data)),
-                         doctest::Contains("leading zero"), Error);
+                         doctest::Contains("JSON header: byte 38: syntax error"), Error);  // the '2' of "02"
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[2],"data_offsets":[0,8],"x":1}})", data)),
                          doctest::Contains("tensor 'a': unexpected key 'x'"), Error);
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[123456789012345678901],"data_offsets":[0,8]}})", data)),
@@ -114,7 +114,7 @@ TEST_CASE("weights: every malformed file is an Error naming the tensor or byte a
   }
   SUBCASE("bad shape and offsets") {
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[-2],"data_offsets":[0,8]}})", data)),
-                         doctest::Contains("tensor 'a': shape entry at byte"), Error);
+                         doctest::Contains("tensor 'a': shape entry -2 is not a non-negative integer"), Error);
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[2],"data_offsets":[8,0]}})", data)),
                          doctest::Contains("tensor 'a': data_offsets [8, 0] are reversed"), Error);
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[2],"data_offsets":[0]}})", data)),

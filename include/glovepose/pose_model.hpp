@@ -170,11 +170,11 @@ class PoseModel {
  private:
   static grid::GloveDescription choose_glove(const nn::ModelInfo& info, std::optional<grid::GloveDescription>& given) {
     if (given) return std::move(*given);
-    if (!info.glove_description.empty()) return grid::GloveDescription::from_metadata(info.glove_description);
-    grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
-    if (info.glove != builtin.id())
-      throw Error("the model reads glove '" + info.glove + "' and carries no glove description, expected a glove description (PoseModelOptions::glove)");
-    return builtin;
+    try {
+      return grid::GloveDescription::of_model(info.glove, info.glove_description);
+    } catch (const Error& e) {
+      throw Error(std::string(e.what()) + " (or a glove given as PoseModelOptions::glove)");
+    }
   }
 
   nn::ModelInfo info_;

@@ -175,76 +175,62 @@ class PoseOffsetModel {
 
   /// @brief The JSON text stored in a model file's metadata (key "pose_offset"; docs/calibration.md).
   std::string to_json() const {
-    char rms[32];
-    std::snprintf(rms, sizeof rms, "%.9g", max_rms_z_);
-    std::string out = "{\"format\": " + io::json::quote(kPoseOffsetFormat) + ", \"version\": 1, \"cells\": " + std::to_string(cells_) +
-                      ",\n\"sequence\": " + sequence_.to_json() + ",\n\"feature_mean\": " + numbers(mean_) +
-                      ",\n\"feature_scale\": " + numbers(scale_) + ",\n\"max_rms_z\": " + rms + ",\n\"bias\": " + numbers(bias_) +
-                      ",\n\"weight\": [";
-    for (Eigen::Index d = 0; d < weight_.rows(); ++d) out += (d ? ",\n" : "\n") + numbers(weight_.row(d).transpose());
-    return out + "]}\n";
+    const auto numbers = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+    io::json::Value weight = io::json::Value::array();
+    for (Eigen::Index d = 0; d < weight_.rows(); ++d) weight.push_back(numbers(weight_.row(d).transpose()));
+    const io::json::Value root = {{"format", kPoseOffsetFormat},     {"version", 1},
+                                  {"cells", cells_},                 {"sequence", io::json::parse(sequence_.to_json())},
+                                  {"feature_mean", numbers(mean_)},  {"feature_scale", numbers(scale_)},
+                                  {"max_rms_z", max_rms_z_},         {"bias", numbers(bias_)},
+                                  {"weight", std::move(weight)}};
+    return io::json::write(root);
   }
 
   /// @brief Parses to_json()'s text; `source` names it in messages.
   static PoseOffsetModel parse(const std::string& text, const std::string& source) {
     using io::json::Value;
-    const auto fail = [&](const std::string& what) { return Error("pose offset model '" + source + "': " + what); };
+    const io::json::Fields f("pose offset model '" + source + "': ");
     Value root;
     try {
-      root = io::json::Parser::parse(text);
+      root = io::json::parse(text);
     } catch (const Error& e) {
-      throw fail(e.what());
+      throw f.fail(e.what());
     }
-    const auto member = [&](const char* key, Value::Kind kind) -> const Value& {
-      const Value* v = root.find(key);
-      if (v == nullptr || v->kind != kind) throw fail(std::string("member '") + key + "' missing or of the wrong type");
-      return *v;
-    };
-    if (root.kind != Value::Kind::Object) throw fail("not a JSON object");
-    if (member("format", Value::Kind::String).text != kPoseOffsetFormat) throw fail("format is not '" + std::string(kPoseOffsetFormat) + "'");
-    if (member("version", Value::Kind::Number).text != "1") throw fail("version is not 1");
-    const Value& cells = member("cells", Value::Kind::Number);
-    if (!cells.is_unsigned_integer() || cells.number < 1 || cells.number > 100000) throw fail("'cells' is not a count of cells");
-    Sequence sequence = Sequence::from_json(member("sequence", Value::Kind::Object), source);
+    f.format(root, kPoseOffsetFormat, 1);
+    const int cells = f.index(root, "cells", kMaxCells + 1, "the top level");
+    if (cells < 1) throw f.fail("'cells' is 0, expected a count of cells 1.." + std::to_string(kMaxCells));
+    Sequence sequence = Sequence::from_json(f.object(root, "sequence", "the top level"), source);
     const auto vector = [&](const Value& v, const std::string& what) {
-      if (v.kind != Value::Kind::Array) throw fail(what + " is not an array of numbers");
-      Eigen::VectorXd out(static_cast<Eigen::Index>(v.items.size()));
-      for (std::size_t i = 0; i < v.items.size(); ++i) {
-        if (v.items[i].kind != Value::Kind::Number) throw fail(what + " holds a non-number");
-        out(static_cast<Eigen::Index>(i)) = v.items[i].number;
+      if (!v.is_array()) throw f.fail(what + " is " + io::json::describe(v) + ", expected an array of numbers");
+      Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        if (!v[i].is_number()) throw f.fail(what + " holds " + io::json::describe(v[i]) + ", expected numbers");
+        out(static_cast<Eigen::Index>(i)) = v[i].get<double>();
       }
       return out;
     };
-    const Eigen::VectorXd bias = vector(member("bias", Value::Kind::Array), "'bias'");
-    const Value& rows = member("weight", Value::Kind::Array);
-    if (rows.items.size() != hand::kDofCount) throw fail("'weight' has " + std::to_string(rows.items.size()) + " rows, expected 25");
+    const Eigen::VectorXd bias = vector(f.array(root, "bias", "the top level"), "'bias'");
+    const Value& rows = f.array(root, "weight", "the top level");
+    if (rows.size() != hand::kDofCount) throw f.fail("'weight' has " + std::to_string(rows.size()) + " rows, expected 25");
     Eigen::MatrixXd weight;
-    for (std::size_t d = 0; d < rows.items.size(); ++d) {
-      const Eigen::VectorXd row = vector(rows.items[d], "'weight' row " + std::to_string(d));
+    for (std::size_t d = 0; d < rows.size(); ++d) {
+      const Eigen::VectorXd row = vector(rows[d], "'weight' row " + std::to_string(d));
       if (d == 0) weight.resize(static_cast<Eigen::Index>(hand::kDofCount), row.size());
-      if (row.size() != weight.cols()) throw fail("'weight' rows differ in length");
+      if (row.size() != weight.cols()) throw f.fail("'weight' rows differ in length");
       weight.row(static_cast<Eigen::Index>(d)) = row.transpose();
     }
-    const Eigen::VectorXd mean = vector(member("feature_mean", Value::Kind::Array), "'feature_mean'");
-    const Eigen::VectorXd scale = vector(member("feature_scale", Value::Kind::Array), "'feature_scale'");
-    const double max_rms_z = member("max_rms_z", Value::Kind::Number).number;
+    const Eigen::VectorXd mean = vector(f.array(root, "feature_mean", "the top level"), "'feature_mean'");
+    const Eigen::VectorXd scale = vector(f.array(root, "feature_scale", "the top level"), "'feature_scale'");
+    const double max_rms_z = f.number(root, "max_rms_z", "the top level");
     try {
-      return PoseOffsetModel(std::move(sequence), static_cast<int>(cells.number), std::move(weight), bias, mean, scale, max_rms_z);
+      return PoseOffsetModel(std::move(sequence), cells, std::move(weight), bias, mean, scale, max_rms_z);
     } catch (const Error& e) {
-      throw fail(e.what());
+      throw f.fail(e.what());
     }
   }
 
  private:
-  static std::string numbers(const Eigen::VectorXd& v) {
-    std::string out = "[";
-    char text[32];
-    for (Eigen::Index i = 0; i < v.size(); ++i) {
-      std::snprintf(text, sizeof text, "%.9g", v(i));
-      out += (i ? ", " : "") + std::string(text);
-    }
-    return out + "]";
-  }
+  static constexpr int kMaxCells = 100000;
 
   void check_size(const Eigen::VectorXd& features) const {
     if (features.size() != feature_count())

@@ -93,7 +93,7 @@ class Sequence {
   static Sequence parse(const std::string& text, const std::string& source) {
     io::json::Value root;
     try {
-      root = io::json::Parser::parse(text);
+      root = io::json::parse(text);
     } catch (const Error& e) {
       throw Error("calibration sequence '" + source + "': " + e.what());
     }
@@ -103,52 +103,43 @@ class Sequence {
   /// @brief A sequence from a parsed JSON object (the file's top level, or a member of another file).
   static Sequence from_json(const io::json::Value& root, const std::string& source) {
     using io::json::Value;
-    const auto fail = [&](const std::string& what) { return Error("calibration sequence '" + source + "': " + what); };
-    const auto member = [&](const Value& object, const char* key, Value::Kind kind, const std::string& where) -> const Value& {
-      const Value* v = object.find(key);
-      if (v == nullptr || v->kind != kind) throw fail(where + ": member '" + key + "' missing or of the wrong type");
-      return *v;
-    };
-    if (root.kind != Value::Kind::Object) throw fail("not a JSON object, expected {\"format\": ...}");
-    if (member(root, "format", Value::Kind::String, "top level").text != kSequenceFormat)
-      throw fail("format is not '" + std::string(kSequenceFormat) + "'");
-    if (member(root, "version", Value::Kind::Number, "top level").text != std::to_string(kSequenceFormatVersion))
-      throw fail("version " + root.find("version")->text + ", expected " + std::to_string(kSequenceFormatVersion));
-    const std::string id = member(root, "id", Value::Kind::String, "top level").text;
-    const double settle = member(root, "settle_seconds", Value::Kind::Number, "top level").number;
+    const io::json::Fields f("calibration sequence '" + source + "': ");
+    const auto fail = [&](const std::string& what) { return f.fail(what); };
+    f.format(root, kSequenceFormat, kSequenceFormatVersion);
+    const std::string id = f.string(root, "id", "the top level");
+    const double settle = f.number(root, "settle_seconds", "the top level");
     std::vector<Step> steps;
-    for (const Value& item : member(root, "steps", Value::Kind::Array, "top level").items) {
+    for (const Value& item : f.array(root, "steps", "the top level")) {
       const std::string where = "step " + std::to_string(steps.size());
-      if (item.kind != Value::Kind::Object) throw fail(where + ": expected an object");
+      if (!item.is_object()) throw fail(where + " is " + io::json::describe(item) + ", expected an object");
       Step s;
-      s.name = member(item, "name", Value::Kind::String, where).text;
-      s.instruction = member(item, "instruction", Value::Kind::String, where).text;
-      s.seconds = member(item, "seconds", Value::Kind::Number, where).number;
-      const Value& pose = member(item, "pose_degrees", Value::Kind::Object, where);
+      s.name = f.string(item, "name", where);
+      s.instruction = f.string(item, "instruction", where);
+      s.seconds = f.number(item, "seconds", where);
+      const Value& pose = f.object(item, "pose_degrees", where);
       std::array<bool, hand::kDofCount> seen{};
-      for (const auto& [name, value] : pose.members) {
+      for (const auto& [name, value] : pose.items()) {
         const std::size_t d = dof_or_fail(name, where, fail);
-        if (value.kind != Value::Kind::Number) throw fail(where + ": pose_degrees." + name + " is not a number");
-        if (seen[d]) throw fail(where + ": pose_degrees." + name + " given twice");
+        if (!value.is_number()) throw fail(where + ": pose_degrees." + name + " is " + io::json::describe(value) + ", expected a number");
         seen[d] = true;
-        s.pose[d] = value.number * kRadiansPerDegree;
+        s.pose[d] = value.get<double>() * kRadiansPerDegree;
       }
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (!seen[d]) throw fail(where + ": pose_degrees lacks " + std::string(hand::kDofs[d].name) + ", expected all 25 angles");
-      if (const Value* pinned = item.find("pinned")) {
-        if (pinned->kind != Value::Kind::Array) throw fail(where + ": 'pinned' is not an array of DoF names");
-        for (const Value& name : pinned->items) {
-          if (name.kind != Value::Kind::String) throw fail(where + ": 'pinned' holds a non-string, expected DoF names");
-          s.pinned[dof_or_fail(name.text, where, fail)] = true;
+      if (const Value* pinned = io::json::Fields::find(item, "pinned")) {
+        if (!pinned->is_array()) throw fail(where + ": 'pinned' is " + io::json::describe(*pinned) + ", expected an array of DoF names");
+        for (const Value& name : *pinned) {
+          if (!name.is_string()) throw fail(where + ": 'pinned' holds " + io::json::describe(name) + ", expected DoF names");
+          s.pinned[dof_or_fail(name.get<std::string>(), where, fail)] = true;
         }
-        s.pinned_sd = member(item, "pinned_sd_degrees", Value::Kind::Number, where).number * kRadiansPerDegree;
+        s.pinned_sd = f.number(item, "pinned_sd_degrees", where) * kRadiansPerDegree;
       }
       steps.push_back(std::move(s));
     }
     try {
       return Sequence(id, std::move(steps), settle);
     } catch (const Error& e) {
-      throw fail(e.what());
+      throw f.fail(e.what());
     }
   }
 

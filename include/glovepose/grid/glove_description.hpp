@@ -153,6 +153,18 @@ class GloveDescription {
     return GloveDescription("glauser2019-44", std::move(names), std::move(map));
   }
 
+  /// @brief The glove a model file was trained for, from its metadata: the description it carries
+  /// (`description`, JSON text; may be empty), else the built-in glove when `id` names it. Throws
+  /// glovepose::Error when the file names another glove without describing it.
+  static GloveDescription of_model(const std::string& id, const std::string& description) {
+    if (!description.empty()) return from_metadata(description);
+    GloveDescription builtin = glauser2019();
+    if (id != builtin.id())
+      throw Error("the model reads glove '" + id + "' and carries no glove description, expected the built-in glove '" + builtin.id() +
+                  "' or a model with metadata 'glove_description'");
+    return builtin;
+  }
+
   /// @brief Glove id (e.g. the "glove" of a model file's metadata).
   const std::string& id() const noexcept { return id_; }
   /// @brief Name of each cell, in cell-id order.
@@ -243,41 +255,34 @@ class GloveDescription {
   static GloveDescription from_json(const std::string& text) {
     io::json::Value root;
     try {
-      root = io::json::Parser::parse(text);
+      root = io::json::parse(text);
     } catch (const Error& e) {
       throw fail(std::string("not valid JSON (") + e.what() + "), expected a JSON object");
     }
-    if (root.kind != io::json::Value::Kind::Object) throw fail("the text is not a JSON object, expected {\"format\": ...}");
-    const std::string format = string_field(root, "format", "the top-level object");
-    if (format != kGloveFormat)
-      throw fail("'format' is '" + format + "', expected '" + kGloveFormat + "' (is this a glove description file?)");
-    const io::json::Value& version = field(root, "version", "the top-level object");
-    if (version.kind != io::json::Value::Kind::Number || version.text != std::to_string(kGloveFormatVersion))
-      throw fail("'version' is " + describe(version) + ", expected " + std::to_string(kGloveFormatVersion) +
-                 " (the version this build of glovepose reads)");
-    // After format and version: another file or version is named as such, not by its first unknown key.
-    check_keys(root, {"format", "version", "id", "cells", "dofs", "rate_hz", "calibration"}, "the top-level object");
-    const std::string id = string_field(root, "id", "the top-level object");
+    const io::json::Fields f(kFailPrefix);
+    f.format(root, kGloveFormat, kGloveFormatVersion);
+    f.only(root, {"format", "version", "id", "cells", "dofs", "rate_hz", "calibration"}, "the top-level object");
+    const std::string id = f.string(root, "id", "the top-level object");
     if (id.empty()) throw fail("'id' is empty, expected a glove id such as 'glauser2019-44'");
 
     // Cells: names and slots, checked here so that messages name the cell (GridMap checks again).
-    const io::json::Value& cells = field(root, "cells", "the top-level object");
-    if (cells.kind != io::json::Value::Kind::Array) throw fail("'cells' is " + describe(cells) + ", expected an array of cells");
-    if (cells.items.empty()) throw fail("'cells' is empty, expected at least one cell");
-    if (cells.items.size() > static_cast<std::size_t>(kMaxGloveInputs))
-      throw fail("'cells' lists " + std::to_string(cells.items.size()) + " inputs, expected at most " +
+    const io::json::Value& cells = f.at(root, "cells", "the top-level object");
+    if (!cells.is_array()) throw fail("'cells' is " + io::json::describe(cells) + ", expected an array of cells");
+    if (cells.empty()) throw fail("'cells' is empty, expected at least one cell");
+    if (cells.size() > static_cast<std::size_t>(kMaxGloveInputs))
+      throw fail("'cells' lists " + std::to_string(cells.size()) + " inputs, expected at most " +
                  std::to_string(kMaxGloveInputs) + " (at most " + std::to_string(kStretchValues) +
                  " stretch cells, one per slot of the maps, and extra inputs)");
     GloveSettings settings;
-    if (root.find("rate_hz")) settings.rate_hz = number_field(root, "rate_hz", "the top-level object");
-    if (const io::json::Value* calibration = root.find("calibration")) {
+    if (root.contains("rate_hz")) settings.rate_hz = f.number(root, "rate_hz", "the top-level object");
+    if (const io::json::Value* calibration = io::json::Fields::find(root, "calibration")) {
       const std::string where = "'calibration'";
-      if (calibration->kind != io::json::Value::Kind::Object)
-        throw fail(where + " is " + describe(*calibration) + ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
-      check_keys(*calibration, {"median_seconds", "flat_relative_range"}, where);
-      if (calibration->find("median_seconds")) settings.calibration.median_seconds = number_field(*calibration, "median_seconds", where);
-      if (calibration->find("flat_relative_range"))
-        settings.calibration.flat_relative_range = number_field(*calibration, "flat_relative_range", where);
+      if (!calibration->is_object())
+        throw fail(where + " is " + io::json::describe(*calibration) + ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
+      f.only(*calibration, {"median_seconds", "flat_relative_range"}, where);
+      if (calibration->contains("median_seconds")) settings.calibration.median_seconds = f.number(*calibration, "median_seconds", where);
+      if (calibration->contains("flat_relative_range"))
+        settings.calibration.flat_relative_range = f.number(*calibration, "flat_relative_range", where);
     }
     try {
       check_settings(settings, "");
@@ -289,23 +294,23 @@ class GloveDescription {
     std::array<int, kStretchValues> cell_owner{};
     cell_owner.fill(-1);
     int stretch_cells = 0;
-    for (std::size_t c = 0; c < cells.items.size(); ++c) {
-      const io::json::Value& cell = cells.items[c];
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const io::json::Value& cell = cells[c];
       std::string where = "cells[" + std::to_string(c) + "]";
-      if (cell.kind != io::json::Value::Kind::Object)
-        throw fail(where + " is " + describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
-      check_keys(cell, {"name", "channel", "row", "col", "extra"}, where);
-      const std::string name = string_field(cell, "name", where);
+      if (!cell.is_object())
+        throw fail(where + " is " + io::json::describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
+      f.only(cell, {"name", "channel", "row", "col", "extra"}, where);
+      const std::string name = f.string(cell, "name", where);
       if (name.empty()) throw fail(where + ": 'name' is empty, expected a cell name");
       where += " ('" + name + "')";
       for (std::size_t earlier = 0; earlier < c; ++earlier)
         if (names[earlier] == name)
           throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
-      if (const io::json::Value* extra = cell.find("extra")) {
-        if (extra->kind != io::json::Value::Kind::Bool || !extra->boolean)
-          throw fail(where + ": 'extra' is " + describe(*extra) + ", expected true (an input that is not on the stretch maps) or no 'extra'");
+      if (const io::json::Value* extra = io::json::Fields::find(cell, "extra")) {
+        if (*extra != true)
+          throw fail(where + ": 'extra' is " + io::json::describe(*extra) + ", expected true (an input that is not on the stretch maps) or no 'extra'");
         for (const char* key : {"channel", "row", "col"})
-          if (cell.find(key))
+          if (cell.contains(key))
             throw fail(where + " has 'extra' and '" + key + "', expected either a slot (channel, row, col) or \"extra\": true");
         names.push_back(name);
         cell_slots.push_back(kOffMaps);
@@ -315,8 +320,8 @@ class GloveDescription {
         throw fail(where + " is stretch cell " + std::to_string(stretch_cells) + ", but the stretch maps (" + std::to_string(kStretchChannels) +
                    " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) + ") have only " + std::to_string(kStretchValues) +
                    " slots, expected at most " + std::to_string(kStretchValues) + " stretch cells (an input not on the maps is \"extra\": true)");
-      const Slot slot{index_field(cell, "channel", kStretchChannels, where), index_field(cell, "row", kGridSize, where),
-                      index_field(cell, "col", kGridSize, where)};
+      const Slot slot{f.index(cell, "channel", kStretchChannels, where), f.index(cell, "row", kGridSize, where),
+                      f.index(cell, "col", kGridSize, where)};
       int& owner = cell_owner[static_cast<std::size_t>(slot.flat())];
       if (owner >= 0)
         throw fail(where + " is placed at " + describe(slot, true) + ", the slot of cells[" + std::to_string(owner) +
@@ -327,27 +332,27 @@ class GloveDescription {
     }
 
     // DoFs: by name, any order, each exactly once.
-    const io::json::Value& dofs = field(root, "dofs", "the top-level object");
-    if (dofs.kind != io::json::Value::Kind::Array)
-      throw fail("'dofs' is " + describe(dofs) + ", expected an array of the " + std::to_string(hand::kDofCount) + " DoFs");
+    const io::json::Value& dofs = f.at(root, "dofs", "the top-level object");
+    if (!dofs.is_array())
+      throw fail("'dofs' is " + io::json::describe(dofs) + ", expected an array of the " + std::to_string(hand::kDofCount) + " DoFs");
     std::array<Slot, hand::kDofCount> dof_slots{};
     std::array<int, hand::kDofCount> dof_entry{};  // which entry of 'dofs' placed each DoF
     dof_entry.fill(-1);
     std::array<int, kMapSlots> dof_owner{};  // which DoF holds each pose-map slot
     dof_owner.fill(-1);
-    for (std::size_t e = 0; e < dofs.items.size(); ++e) {
-      const io::json::Value& entry = dofs.items[e];
+    for (std::size_t e = 0; e < dofs.size(); ++e) {
+      const io::json::Value& entry = dofs[e];
       std::string where = "dofs[" + std::to_string(e) + "]";
-      if (entry.kind != io::json::Value::Kind::Object)
-        throw fail(where + " is " + describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
-      check_keys(entry, {"name", "row", "col", "min_degrees", "max_degrees"}, where);
-      const std::string name = string_field(entry, "name", where);
+      if (!entry.is_object())
+        throw fail(where + " is " + io::json::describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
+      f.only(entry, {"name", "row", "col", "min_degrees", "max_degrees"}, where);
+      const std::string name = f.string(entry, "name", where);
       const std::size_t d = dof_named(name, where);
       where += " ('" + name + "')";
       if (dof_entry[d] >= 0)
         throw fail(where + " repeats the DoF of dofs[" + std::to_string(dof_entry[d]) + "], expected each of the " +
                    std::to_string(hand::kDofCount) + " DoFs exactly once");
-      const Slot slot{0, index_field(entry, "row", kGridSize, where), index_field(entry, "col", kGridSize, where)};
+      const Slot slot{0, f.index(entry, "row", kGridSize, where), f.index(entry, "col", kGridSize, where)};
       int& owner = dof_owner[static_cast<std::size_t>(slot.flat())];
       if (owner >= 0)
         throw fail(where + " is placed at " + describe(slot, false) + ", the slot of DoF '" +
@@ -355,12 +360,12 @@ class GloveDescription {
       owner = static_cast<int>(d);
       dof_entry[d] = static_cast<int>(e);
       dof_slots[d] = slot;
-      const bool has_min = entry.find("min_degrees") != nullptr, has_max = entry.find("max_degrees") != nullptr;
+      const bool has_min = entry.contains("min_degrees"), has_max = entry.contains("max_degrees");
       if (has_min != has_max)
         throw fail(where + " has '" + (has_min ? "min_degrees" : "max_degrees") + "' without '" +
                    (has_min ? "max_degrees" : "min_degrees") + "', expected both limits or neither");
       if (has_min) {
-        const double lo = number_field(entry, "min_degrees", where), hi = number_field(entry, "max_degrees", where);
+        const double lo = f.number(entry, "min_degrees", where), hi = f.number(entry, "max_degrees", where);
         if (!(lo < hi) || lo < -360.0 || hi > 360.0)
           throw fail(where + " has limits [" + io::number_text(lo) + ", " + io::number_text(hi) +
                      "] degrees, expected min_degrees < max_degrees within [-360, 360]");
@@ -418,7 +423,8 @@ class GloveDescription {
   static constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
   static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
 
-  static Error fail(const std::string& what) { return Error("glove description: " + what); }
+  static constexpr const char* kFailPrefix = "glove description: ";
+  static Error fail(const std::string& what) { return Error(kFailPrefix + what); }
 
   // The settings' ranges (the limits' order is checked where they are read, naming the DoF entry).
   static void check_settings(const GloveSettings& s, const std::string& prefix) {
@@ -436,64 +442,9 @@ class GloveDescription {
                     "] degrees, expected finite min < max");
   }
 
-  // Shortest text that reads back as the same double.
-  static double number_field(const io::json::Value& object, const char* key, const std::string& where) {
-    const io::json::Value& v = field(object, key, where);
-    if (v.kind != io::json::Value::Kind::Number) throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a number");
-    return v.number;
-  }
-
-  static std::string describe(const io::json::Value& v) {
-    switch (v.kind) {
-      case io::json::Value::Kind::Null: return "null";
-      case io::json::Value::Kind::Bool: return v.boolean ? "true" : "false";
-      case io::json::Value::Kind::Number: return v.text;
-      case io::json::Value::Kind::String: return io::json::quote(v.text);
-      case io::json::Value::Kind::Array: return "an array";
-      case io::json::Value::Kind::Object: return "an object";
-    }
-    return "a value";
-  }
-
   static std::string describe(const Slot& s, bool with_channel) {
     return std::string("(") + (with_channel ? "channel " + std::to_string(s.channel) + ", " : "") + "row " +
            std::to_string(s.row) + ", column " + std::to_string(s.col) + ")";
-  }
-
-  // Refuses keys outside `allowed`: a misspelt optional key would otherwise pass unnoticed.
-  static void check_keys(const io::json::Value& object, std::initializer_list<const char*> allowed, const std::string& where) {
-    for (const auto& member : object.members) {
-      bool known = false;
-      for (const char* key : allowed) known = known || member.first == key;
-      if (!known) {
-        std::string list;
-        for (const char* key : allowed) list += std::string(list.empty() ? "" : ", ") + "'" + key + "'";
-        throw fail(where + " has the unknown key '" + member.first + "', expected only " + list);
-      }
-    }
-  }
-
-  static const io::json::Value& field(const io::json::Value& object, const char* key, const std::string& where) {
-    const io::json::Value* v = object.find(key);
-    if (!v) throw fail(where + " lacks the key '" + key + "'");
-    return *v;
-  }
-
-  static std::string string_field(const io::json::Value& object, const char* key, const std::string& where) {
-    const io::json::Value& v = field(object, key, where);
-    if (v.kind != io::json::Value::Kind::String)
-      throw fail(where + ": '" + key + "' is " + describe(v) + ", expected a string");
-    return v.text;
-  }
-
-  // A non-negative integer below `limit` (a channel, row or column index).
-  static int index_field(const io::json::Value& object, const char* key, int limit, const std::string& where) {
-    const io::json::Value& v = field(object, key, where);
-    long long value = -1;
-    if (v.is_unsigned_integer()) std::from_chars(v.text.data(), v.text.data() + v.text.size(), value);
-    if (value < 0 || value >= limit)
-      throw fail(where + ": '" + key + "' is " + describe(v) + ", expected an integer 0.." + std::to_string(limit - 1));
-    return static_cast<int>(value);
   }
 
   static std::size_t dof_named(const std::string& name, const std::string& where) {

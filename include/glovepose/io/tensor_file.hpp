@@ -332,16 +332,8 @@ struct TensorFile {
  private:
   // The length prefix and the JSON header, padded; checks every tensor's size.
   std::string header_bytes() const {
-    std::string header = "{";
-    bool first = true;
-    if (!metadata.empty()) {
-      header += "\"__metadata__\":{";
-      for (const auto& [k, v] : metadata) {
-        header += (first ? "" : ",") + json::quote(k) + ":" + json::quote(v);
-        first = false;
-      }
-      header += "}";
-    }
+    json::Value header = json::Value::object();
+    if (!metadata.empty()) header["__metadata__"] = metadata;
     std::uint64_t offset = 0;
     for (const auto& [name, t] : tensors) {
       if (name == "__metadata__") throw Error("TensorFile: '__metadata__' is reserved, expected another tensor name");
@@ -350,17 +342,14 @@ struct TensorFile {
       } catch (const Error& e) {
         throw Error("TensorFile: tensor '" + name + "': " + e.what());
       }
-      header += std::string(first ? "" : ",") + json::quote(name) + ":{\"dtype\":\"" + dtype_name(t.dtype) +
-                "\",\"shape\":" + shape_string(t.shape) + ",\"data_offsets\":[" + std::to_string(offset) + "," +
-                std::to_string(offset + t.bytes.size()) + "]}";
+      header[name] = {{"dtype", dtype_name(t.dtype)}, {"shape", t.shape}, {"data_offsets", {offset, offset + t.bytes.size()}}};
       offset += t.bytes.size();
-      first = false;
     }
-    header += "}";
-    while ((8 + header.size()) % 8 != 0) header += ' ';
+    std::string text = json::write(header);
+    while ((8 + text.size()) % 8 != 0) text += ' ';
     std::string out(8, '\0');
-    for (int i = 0; i < 8; ++i) out[static_cast<std::size_t>(i)] = static_cast<char>((header.size() >> (8 * i)) & 0xff);
-    return out + header;
+    for (int i = 0; i < 8; ++i) out[static_cast<std::size_t>(i)] = static_cast<char>((text.size() >> (8 * i)) & 0xff);
+    return out + text;
   }
 
   // Checks the container's structure and fills the tensors; fetch(file_offset, n) returns n file bytes.
@@ -377,8 +366,13 @@ struct TensorFile {
                   std::to_string(file_size) + " bytes)");
     const std::string header_text = fetch(8, header_size);
     if (header_text[0] != '{') throw Error("byte 8: the header does not start with '{', expected a JSON object");
-    const json::Value header = json::Parser::parse(header_text, 8);
-    if (header.kind != json::Value::Kind::Object) throw Error("byte 8: the header is not a JSON object");
+    json::Value header;
+    try {
+      header = json::parse(header_text, 8);
+    } catch (const Error& e) {
+      throw Error(std::string("JSON header: ") + e.what());
+    }
+    if (!header.is_object()) throw Error("byte 8: the header is not a JSON object");
     const std::uint64_t data_start = 8 + header_size;
     const std::uint64_t data_size = file_size - data_start;
 
@@ -388,46 +382,44 @@ struct TensorFile {
       std::string name;
     };
     std::vector<Span> spans;
-    for (const auto& [name, entry] : header.members) {
+    for (const auto& [name, entry] : header.items()) {
       if (name == "__metadata__") {
-        if (entry.kind != json::Value::Kind::Object)
-          throw Error("byte " + std::to_string(entry.offset) + ": __metadata__ is not an object");
-        for (const auto& [key, value] : entry.members) {
-          if (value.kind != json::Value::Kind::String)
-            throw Error("byte " + std::to_string(value.offset) + ": metadata '" + key + "' is not a string, expected string values");
-          out.metadata[key] = value.text;
+        if (!entry.is_object()) throw Error("__metadata__ is " + json::describe(entry) + ", expected an object");
+        for (const auto& [key, value] : entry.items()) {
+          if (!value.is_string()) throw Error("metadata '" + key + "' is not a string (" + json::describe(value) + "), expected string values");
+          out.metadata[key] = value.template get<std::string>();
         }
         continue;
       }
       const std::string where = "tensor '" + name + "'";
-      if (entry.kind != json::Value::Kind::Object) throw Error(where + ": entry is not an object");
-      const json::Value* dtype = entry.find("dtype");
-      const json::Value* shape = entry.find("shape");
-      const json::Value* offsets = entry.find("data_offsets");
-      for (const auto& member : entry.members)
-        if (member.first != "dtype" && member.first != "shape" && member.first != "data_offsets")
-          throw Error(where + ": unexpected key '" + member.first + "', expected only dtype, shape and data_offsets");
-      if (!dtype || dtype->kind != json::Value::Kind::String) throw Error(where + ": no \"dtype\" string");
+      if (!entry.is_object()) throw Error(where + ": entry is not an object");
+      for (const auto& member : entry.items())
+        if (member.key() != "dtype" && member.key() != "shape" && member.key() != "data_offsets")
+          throw Error(where + ": unexpected key '" + member.key() + "', expected only dtype, shape and data_offsets");
+      const json::Value* dtype = json::Fields::find(entry, "dtype");
+      const json::Value* shape = json::Fields::find(entry, "shape");
+      const json::Value* offsets = json::Fields::find(entry, "data_offsets");
+      if (!dtype || !dtype->is_string()) throw Error(where + ": no \"dtype\" string");
       RawTensor tensor;
       try {
-        tensor.dtype = dtype_from_name(dtype->text);
+        tensor.dtype = dtype_from_name(dtype->get<std::string>());
       } catch (const Error& e) {
         throw Error(where + ": " + e.what());
       }
-      if (!shape || shape->kind != json::Value::Kind::Array) throw Error(where + ": no \"shape\" list");
+      if (!shape || !shape->is_array()) throw Error(where + ": no \"shape\" list");
       std::uint64_t count = 1;
-      for (const json::Value& d : shape->items) {
-        if (!d.is_unsigned_integer())
-          throw Error(where + ": shape entry at byte " + std::to_string(d.offset) + " is not a non-negative integer");
-        const std::uint64_t dim = std::stoull(d.text);
+      for (const json::Value& d : *shape) {
+        if (!d.is_number_unsigned())
+          throw Error(where + ": shape entry " + json::describe(d) + " is not a non-negative integer");
+        const std::uint64_t dim = d.get<std::uint64_t>();
         if (dim > (std::uint64_t{1} << 40) || (dim && count > (std::uint64_t{1} << 40) / dim)) throw Error(where + ": shape is too large");
         count *= dim;
         tensor.shape.push_back(static_cast<std::int64_t>(dim));
       }
-      if (!offsets || offsets->kind != json::Value::Kind::Array || offsets->items.size() != 2 ||
-          !offsets->items[0].is_unsigned_integer() || !offsets->items[1].is_unsigned_integer())
+      if (!offsets || !offsets->is_array() || offsets->size() != 2 || !(*offsets)[0].is_number_unsigned() ||
+          !(*offsets)[1].is_number_unsigned())
         throw Error(where + ": \"data_offsets\" is not a pair of non-negative integers");
-      const std::uint64_t begin = std::stoull(offsets->items[0].text), end = std::stoull(offsets->items[1].text);
+      const std::uint64_t begin = (*offsets)[0].get<std::uint64_t>(), end = (*offsets)[1].get<std::uint64_t>();
       if (begin > end) throw Error(where + ": data_offsets [" + std::to_string(begin) + ", " + std::to_string(end) + "] are reversed");
       if (end > data_size)
         throw Error(where + ": data ends at data byte " + std::to_string(end) + " (file byte " + std::to_string(data_start + end) +

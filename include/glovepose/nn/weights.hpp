@@ -98,27 +98,23 @@ struct WeightFile {
 
   /// @brief A metadata value holding a JSON array of numbers; throws naming the key when it is not.
   std::vector<double> meta_numbers(const std::string& key) const {
-    const io::json::Value v = io::json::Parser::parse(meta(key));
-    if (v.kind != io::json::Value::Kind::Array) throw Error("metadata '" + key + "' is not a JSON array of numbers");
+    io::json::Value v;
+    try {
+      v = io::json::parse(meta(key));
+    } catch (const Error& e) {
+      throw Error("metadata '" + key + "': " + e.what());
+    }
+    if (!v.is_array()) throw Error("metadata '" + key + "' is not a JSON array of numbers");
     std::vector<double> out;
-    for (const io::json::Value& item : v.items) {
-      if (item.kind != io::json::Value::Kind::Number || !std::isfinite(item.number))
-        throw Error("metadata '" + key + "' has a non-number entry, expected finite numbers");
-      out.push_back(item.number);
+    for (const io::json::Value& item : v) {
+      if (!item.is_number()) throw Error("metadata '" + key + "' holds " + io::json::describe(item) + ", expected numbers");
+      out.push_back(item.get<double>());
     }
     return out;
   }
 
-  /// @brief Numbers as a JSON array string with exact round trip (17 significant digits).
-  static std::string format_numbers(const std::vector<double>& values) {
-    std::string out = "[";
-    char buf[32];
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      std::snprintf(buf, sizeof buf, "%.17g", values[i]);
-      out += (i ? ", " : "") + std::string(buf);
-    }
-    return out + "]";
-  }
+  /// @brief Numbers as a JSON array string that reads back exactly (shortest round-trip digits).
+  static std::string format_numbers(const std::vector<double>& values) { return io::json::write(values); }
 };
 
 }  // namespace glovepose::nn

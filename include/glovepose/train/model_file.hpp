@@ -133,9 +133,7 @@ inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
     TrainedModel model;
     model.info = nn::ModelInfo::from(file);
     model.metadata = file.metadata;
-    if (!model.info.glove_description.empty()) model.glove = grid::GloveDescription::from_metadata(model.info.glove_description);
-    else if (model.info.glove != model.glove.id())
-      throw Error("glove '" + model.info.glove + "' is not built in and the file has no glove_description, expected one of them");
+    model.glove = grid::GloveDescription::of_model(model.info.glove, model.info.glove_description);
     if (model.glove.cell_count() != model.info.inputs)
       throw Error("metadata 'inputs' is " + std::to_string(model.info.inputs) + " but the glove has " + std::to_string(model.glove.cell_count()) + " cells");
     if (model.info.architecture == "linear") {
