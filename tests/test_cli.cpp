@@ -46,19 +46,92 @@ const std::string kModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/
 std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
 }  // namespace
 
-TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the usage on stderr") {
+TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the option named on stderr") {
   for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
       CHECK(asked.status == 0);
-      CHECK(asked.out.rfind("usage: glovepose ", 0) == 0);
+      CHECK(asked.out.find("Usage: glovepose" + (command.empty() ? "" : " " + command) + " [OPTIONS]") != std::string::npos);
       CHECK(run_stream(command + " " + help, 2).out.empty());
     }
     const Run wrong = run_stream(command + " --no-such-option", 2);
     CHECK(wrong.status == 2);
-    CHECK(wrong.out.find("usage: glovepose ") != std::string::npos);
+    CHECK(wrong.out.find("glovepose" + (command.empty() ? "" : " " + command) + ": ") == 0);
+    CHECK(wrong.out.find("--no-such-option") != std::string::npos);
     CHECK(run_stream(command + " --no-such-option", 1).out.empty());
+  }
+  const Run none = run_stream("", 2);
+  CHECK(none.status == 2);
+  CHECK(none.out.find("A command is required") != std::string::npos);
+  const Run unknown = run_stream("frobnicate", 2);
+  CHECK(unknown.status == 2);
+  CHECK(unknown.out.find("frobnicate") != std::string::npos);
+}
+
+TEST_CASE("cli: each command's --help describes its options") {
+  const std::pair<std::string, std::vector<std::string>> commands[] = {
+      {"predict", {"--model", "--in", "--fixed16", "--f16", "--bf16", "--no-header"}},
+      {"info", {"--model"}},
+      {"simulate", {"--seed", "--subjects", "--sessions", "--minutes", "--gloves", "--calibration-seconds", "--calibration-sequence",
+                    "--raw-rows", "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence"}},
+      {"import", {"CSV", "--calibration", "--takes", "--subject", "--session", "--rate", "--glove", "--degrees", "--ignore", "--allow-flat", "--out"}},
+      {"train", {"--data", "--model", "--out", "--glove", "--subjects", "--exclude-subjects", "--sessions", "--gloves", "--stride", "--threads",
+                 "--calibration", "--epochs", "--batch", "--lr", "--optimizer", "--validation", "--seed", "--max-minutes", "--quiet", "--dtype",
+                 "--augment"}},
+      {"finetune", {"--data", "--model", "--out", "--subjects", "--stride", "--epochs", "--batch", "--lr", "--seed", "--dtype"}},
+      {"eval", {"--data", "--model", "--subjects", "--stride", "--threads", "--calibration", "--json", "--replay-rows", "--mean-window",
+                "--predictions"}},
+      {"fit-guided", {"--data", "--model", "--out", "--sequence", "--subjects", "--threads"}},
+      {"demo", {"--model", "--out", "--seed", "--minutes", "--fixed16", "--f16", "--bf16"}},
+      {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
+      {"bench", {"--model", "--poses", "--json"}},
+      {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}}};
+  for (const auto& [command, options] : commands) {
+    const Run help = run_stream(command + " --help", 1);
+    REQUIRE(help.status == 0);
+    for (const std::string& option : options) {
+      INFO(command, " ", option, "\n", help.out);
+      CHECK(help.out.find("  " + option + " ") != std::string::npos);
+    }
+    if (command != "info") CHECK(help.out.find("(default") != std::string::npos);  // the defaults are told
+  }
+}
+
+TEST_CASE("cli: a bad number, a missing required option and clashing options are usage errors (exit code 2) naming the option") {
+  const std::pair<std::string, std::string> refused[] = {
+      {"simulate --seed 12x --out x", "--seed: '12x', expected a number"},
+      {"simulate --seed -1 --out x", "--seed: '-1', expected a number"},  // an unsigned seed: no wrap-around to 2^64 - 1
+      {"simulate --subjects 0x10 --out x", "--subjects: '0x10', expected a number"},
+      {"simulate --minutes abc --out x", "--minutes: 'abc', expected a number"},
+      {"simulate --minutes 1,5 --out x", "--minutes: '1,5', expected a number"},
+      {"simulate --minutes 700 --out x", "--minutes: '700', expected a number in (0, 600]"},
+      {"simulate --gloves 17 --out x", "--gloves"},
+      {"simulate --seed", "--seed"},
+      {"simulate --report --out x", "--out"},
+      {"demo --minutes abc", "--minutes: 'abc', expected a number"},
+      {"soak --estimators 65", "--estimators"},
+      {"bench --poses 1e3", "--poses: '1e3', expected a number"},
+      {"view --port 70000", "--port"},
+      {"view --replay " + kModel + " --stdin", "--stdin"},
+      {"eval --data " + kModel + " --model " + kModel + " --subjects 3-1", "--subjects: '3-1', expected ids like 0-3,7"},
+      {"train --data " + kModel + " --model unet:W --out x", "--model: 'unet:W', expected unet:W, fcn[:H] or linear"},
+      {"train --data " + kModel + " --model linear --out x --optimizer adagrad", "--optimizer: 'adagrad', expected one of adam|sgd"},
+      {"eval --data " + kModel + " --model " + kModel + " --calibration sometimes", "--calibration"},
+      {"train --data " + kModel + " --model linear --out x --calibration guided", "--calibration"},
+      {"predict --model " + kModel + " --f16 --bf16", "--f16 excludes --bf16"},
+      {"demo --fixed16 --f16", "--fixed16 excludes --f16"},
+      {"predict --in " + kModel, "--model is required"},
+      {"eval --model " + kModel, "--data is required"},
+      {"train --data " + kModel + " --model linear", "--out is required"},
+      {"import " + kModel, "--out is required"},
+      {"info --model " + temp("no_such_model.safetensors"), "--model: File does not exist"}};
+  for (const auto& [args, message] : refused) {
+    const Run r = run_stream(args, 2);
+    INFO(args, "\n", r.out);
+    CHECK(r.status == 2);
+    CHECK(r.out.find(message) != std::string::npos);
+    CHECK(run_stream(args, 1).out.empty());
   }
 }
 
@@ -116,20 +189,20 @@ TEST_CASE("cli: glovepose predict gives the library's angles for rows of 44 cali
 TEST_CASE("cli: bad input and bad models are refused with the line, column or file named") {
   std::ofstream(temp("short.csv")) << "0.1,0.2,0.3\n";
   Run r = run("predict --model " + kModel + " --in " + temp("short.csv"));
-  CHECK(r.status == 2);
+  CHECK(r.status == 1);
   CHECK(r.out.find("line 1: 3 values, expected 44") != std::string::npos);
   std::string bad;
   for (int c = 0; c < 44; ++c) bad += (c ? "," : "") + std::string(c == 7 ? "abc" : "0.5");
   std::ofstream(temp("text.csv")) << bad << "\n";
   r = run("predict --model " + kModel + " --in " + temp("text.csv"));
-  CHECK(r.status == 2);
+  CHECK(r.status == 1);
   CHECK(r.out.find("line 1, column 8: 'abc' is not a finite number") != std::string::npos);
   r = run("predict --model " + temp("missing.safetensors"));
   CHECK(r.status == 2);
-  CHECK(r.out.find("cannot open") != std::string::npos);
+  CHECK(r.out.find("--model: File does not exist: " + temp("missing.safetensors")) != std::string::npos);
   r = run("predict");
   CHECK(r.status == 2);
-  CHECK(r.out.find("--model FILE is required") != std::string::npos);
+  CHECK(r.out.find("--model is required") != std::string::npos);
   r = run("info --model " + kModel);
   CHECK(r.status == 0);
   CHECK(r.out.find("width: 4") != std::string::npos);
@@ -545,7 +618,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   r = run("eval --model " + from_import + " --data " + temp("import_take_1.csv"));
   CHECK(r.out.find("import it first with glovepose import") != std::string::npos);
   r = run("predict --model " + kModel + " --in " + temp("import_take_1.csv"));
-  CHECK(r.status == 2);
+  CHECK(r.status == 1);
   CHECK(r.out.find("line 1: '") != std::string::npos);
   CHECK(r.out.find("looks like a header, expected rows of calibrated cell values without one; a recording with named columns is "
                    "imported with glovepose import") != std::string::npos);
@@ -660,8 +733,8 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   // Set-up errors name what is wrong.
   const std::pair<std::string, std::string> refused[] = {
       {"--model " + temp("missing.safetensors"), "missing.safetensors"},
-      {"--minutes abc", "--minutes 'abc' is not a number"},
-      {"--minutes 0", "expected a session length"}};
+      {"--minutes abc", "--minutes: 'abc', expected a number"},
+      {"--minutes 0", "--minutes: '0', expected a number in (0, 600]"}};
   for (const auto& [options, message] : refused) {
     const Run bad = run("demo " + options + " --out " + out);
     INFO(bad.out);
@@ -705,7 +778,7 @@ TEST_CASE("cli: eval --predictions writes every frame's true and predicted angle
   CHECK(json_number(r.out, "mean_window") == 1);
   r = run("eval --model " + kModel + " --data " + data + " --mean-window 3");
   CHECK(r.status == 2);
-  CHECK(r.out.find("--mean-window is for --replay-rows") != std::string::npos);
+  CHECK(r.out.find("--mean-window requires --replay-rows") != std::string::npos);
   r = run("eval --model " + kModel + " --data " + data + " --calibration guided");
   CHECK(r.status == 1);
   CHECK(r.out.find("carries no pose-guided calibration") != std::string::npos);

@@ -6,11 +6,12 @@ set -euo pipefail
 # mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
-# nlohmann-json3-dev: JSON in the tools (glovepose bench --json, glovepose view) and their tests.
+# nlohmann-json3-dev: JSON, for the file formats the library reads (model files, glove descriptions) and the tools.
+# libcli11-dev: CLI11, the glovepose tool's command-line parsing (the library headers do not need it).
 # python3-pip, python3-setuptools: `pip install ./python` (the Python package) without any registry.
 # chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
-          libopenxr-dev nlohmann-json3-dev python3-pip python3-setuptools chromium "$@")
+          libopenxr-dev nlohmann-json3-dev libcli11-dev python3-pip python3-setuptools chromium "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,5 +1,4 @@
-// glovepose bench [--model FILE]... [--poses N] [--json]
-//   The latency of one pose on this machine, stage by stage, for every weight storage of each
+// glovepose bench: the latency of one pose on this machine, stage by stage, for every weight storage of each
 //   model (default: the two shipped ones), against the paper's 5 ms inference budget; the frames per
 //   second of batched inference; the machine it ran on. Stages are timed one call at a time with
 //   the steady clock over N poses of a simulated session (default 2000) and reported as p50 / p99 /
@@ -19,6 +18,7 @@
 #include <fstream>
 #include <optional>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -41,33 +41,6 @@ struct BenchOptions {
   int poses = 2000;
   bool json = false;
 };
-
-[[noreturn]] void usage(const std::string& problem) {
-  exit_with_usage("bench", problem,
-                  "usage: glovepose bench [--model FILE]... [--poses N] [--json]\n"
-                  "  --model FILE  a model to time (repeatable; default: the shipped FCN and U-Net)\n"
-                  "  --poses N     poses timed per model and weight storage (default 2000, at least 10)\n"
-                  "  --json        print the results as JSON instead of a table\n");
-}
-
-BenchOptions parse_options(int argc, char** argv) {
-  BenchOptions o;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--model") o.models.push_back(value());
-    else if (a == "--poses") o.poses = parse_number<int>(a, value());
-    else if (a == "--json") o.json = true;
-    else if (asks_for_help(a)) usage("");
-    else usage("unknown option " + a);
-  }
-  if (o.poses < 10) throw Error("--poses " + std::to_string(o.poses) + ", expected at least 10");
-  if (o.models.empty()) o.models = {shipped_model_path("glovepose_fcn512.safetensors"), shipped_model_path("glovepose_unet64.safetensors")};
-  return o;
-}
 
 // A simulated person's 3 s calibration sequence and a session, with every raw row.
 struct Session {
@@ -251,10 +224,8 @@ void print_table(const std::vector<Result>& results, const BenchOptions& o, cons
   }
 }
 
-}  // namespace
-
-int bench(int argc, char** argv) {
-  const BenchOptions o = parse_options(argc, argv);
+int bench(BenchOptions o) {
+  if (o.models.empty()) o.models = {shipped_model_path("glovepose_fcn512.safetensors"), shipped_model_path("glovepose_unet64.safetensors")};
   const Session session = simulate_session();
   std::vector<Result> results;
   for (const std::string& path : o.models)
@@ -280,6 +251,20 @@ int bench(int argc, char** argv) {
   }
   std::cout << out.dump(2) << "\n";
   return 0;
+}
+
+}  // namespace
+
+Command add_bench(CLI::App& tool) {
+  auto o = std::make_shared<BenchOptions>();
+  CLI::App* command = tool.add_subcommand(
+      "bench", "The latency of one pose on this machine, stage by stage (p50 / p99 / max), for every weight storage of each model, against "
+               "the paper's 5 ms inference budget; the frames per second of batched inference; the machine it ran on.");
+  add_model_file(*command, o->models, "a model to time (repeatable; default: the shipped FCN and U-Net)")->allow_extra_args(false);
+  add_number(*command, "--poses", "N", o->poses, "poses timed per model and weight storage (default 2000, at least 10)")
+      ->check(at_least(10));
+  command->add_flag("--json", o->json, "print the results as JSON instead of a table");
+  return {command, [o] { return bench(*o); }};
 }
 
 }  // namespace glovepose::cli

@@ -1,41 +1,52 @@
-// The glovepose tool's commands other than predict/info, each in its own file.
+// The glovepose tool's commands other than predict/info, each in its own file, and the
+// command-line set-up they share (CLI11).
 #pragma once
 
 #include <glovepose/config.hpp>
+#include <glovepose/io/number_text.hpp>
+#include <glovepose/nn/weight_storage.hpp>
 #include <glovepose/train/dataset.hpp>
+
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <charconv>
-#include <cstdlib>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
+#include <functional>
+#include <limits>
+#include <optional>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 namespace glovepose::cli {
 
-/// `glovepose simulate ...` (simulate.cpp); argv[1] is "simulate". Returns the exit code.
-int simulate(int argc, char** argv);
+/// A command of the tool: its options (a subcommand of the tool's CLI::App) and what runs it once
+/// they are parsed, returning the exit code. A glovepose::Error it throws is a runtime failure
+/// (exit code 1), a CLI::ParseError a usage error (exit code 2), as one from parsing.
+struct Command {
+  CLI::App* options = nullptr;
+  std::function<int()> run;
+};
 
-/// `glovepose train | finetune | eval ...` (train.cpp); argv[1] is the command. Returns the exit code.
-int train_tools(int argc, char** argv);
-
-/// `glovepose import ...` (import.cpp); argv[1] is "import". Returns the exit code.
-int import_recordings(int argc, char** argv);
-
-/// `glovepose demo ...` (demo.cpp); argv[1] is "demo". Returns the exit code.
-int demo(int argc, char** argv);
-
-/// `glovepose soak ...` (soak.cpp); argv[1] is "soak". Returns the exit code.
-int soak(int argc, char** argv);
-
-/// `glovepose bench ...` (bench.cpp); argv[1] is "bench". Returns the exit code.
-int bench(int argc, char** argv);
-
-/// `glovepose view ...` (view.cpp); argv[1] is "view". Returns the exit code.
-int view(int argc, char** argv);
+/// `glovepose simulate` (simulate.cpp).
+Command add_simulate(CLI::App& tool);
+/// `glovepose train`, `finetune`, `eval` and `fit-guided` (train.cpp); `command_line` is recorded
+/// in the models they write.
+std::vector<Command> add_training_commands(CLI::App& tool, const std::string& command_line);
+/// `glovepose import` (import.cpp).
+Command add_import(CLI::App& tool);
+/// `glovepose demo` (demo.cpp).
+Command add_demo(CLI::App& tool);
+/// `glovepose soak` (soak.cpp).
+Command add_soak(CLI::App& tool);
+/// `glovepose bench` (bench.cpp).
+Command add_bench(CLI::App& tool);
+/// `glovepose view` (view.cpp).
+Command add_view(CLI::App& tool);
 
 /// A file shipped in models/ (a model, the calibration sequence): where `cmake --install` puts them
 /// relative to the executable (GLOVEPOSE_MODELS_FROM_BIN, ../share/glovepose/models by default);
@@ -71,29 +82,94 @@ inline train::Dataset read_dataset(const std::string& path) {
   }
 }
 
-/// Whether a command-line argument asks for the usage.
-inline bool asks_for_help(const std::string& argument) { return argument == "--help" || argument == "-h"; }
-
-/// Ends the process with a command's usage: on stdout with exit code 0 when the user asked for it
-/// (`problem` empty), else `problem` and the usage on stderr with exit code 2.
-[[noreturn]] inline void exit_with_usage(const std::string& command, const std::string& problem, const std::string& usage) {
-  if (problem.empty()) {
-    std::cout << usage << std::flush;
-    std::exit(0);
-  }
-  std::cerr << "glovepose" << (command.empty() ? "" : " " + command) << ": " << problem << "\n" << usage << std::flush;
-  std::exit(2);
-}
-
-/// The value `text` of command-line option `option` as a number of type T (locale-independent).
-/// Throws glovepose::Error naming the option and the text when it is not one.
+/// `text` as a number of type T when it is one: decimal (no 0x or octal prefix, no sign on an
+/// unsigned type), the same in every locale, nothing before or after it. CLI11 2.1's own conversion
+/// (strtoull, strtold with base 0) would read "010" as 8 and "-1" as the largest unsigned.
 template <typename T>
-T parse_number(const std::string& option, const std::string& text) {
+std::optional<T> number_from_text(const std::string& text) {
   T value{};
   const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size())
-    throw Error(option + " '" + text + "' is not a number, expected one such as 2026 or 1.5");
+  if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size()) return std::nullopt;
   return value;
+}
+
+/// Adds option `name` (its value shown as `value_name`) whose text `parse` turns into a T for
+/// `store`; text it refuses (nullopt) is a usage error naming the option and what was `expected`.
+/// Validators added to the option afterwards (CLI::Range) see only text `parse` took.
+template <typename T>
+CLI::Option* add_parsed_option(CLI::App& command, const std::string& name, const std::string& value_name,
+                               std::function<std::optional<T>(const std::string&)> parse, std::function<void(T)> store,
+                               const std::string& expected, const std::string& description) {
+  const CLI::Validator parses(
+      [parse, expected](std::string& text) { return parse(text) ? std::string() : "'" + text + "', expected " + expected; }, "", "");
+  return command.add_option_function<std::string>(name, [parse, store](const std::string& text) { store(*parse(text)); }, description)
+      ->check(parses)
+      ->type_name(value_name);
+}
+
+/// Adds option `name` reading a number of type T (number_from_text) for `store`.
+template <typename T>
+CLI::Option* add_number_option(CLI::App& command, const std::string& name, const std::string& value_name, std::function<void(T)> store,
+                               const std::string& description) {
+  return add_parsed_option<T>(command, name, value_name, number_from_text<T>, std::move(store), "a number such as 2026 or 1.5", description);
+}
+
+/// Adds option `name` reading a number into `target` (a T or a std::optional<T>).
+template <typename T>
+CLI::Option* add_number(CLI::App& command, const std::string& name, const std::string& value_name, T& target, const std::string& description) {
+  return add_number_option<T>(command, name, value_name, [&target](T value) { target = value; }, description);
+}
+template <typename T>
+CLI::Option* add_number(CLI::App& command, const std::string& name, const std::string& value_name, std::optional<T>& target,
+                        const std::string& description) {
+  return add_number_option<T>(command, name, value_name, [&target](T value) { target = value; }, description);
+}
+
+/// Accepts finite numbers in [least, most], or (least, most] when `least_excluded`, for bounds
+/// CLI::Range cannot express: it includes both ends and its message would print an open one
+/// (DBL_MAX) in full.
+inline CLI::Validator bounded(double least, bool least_excluded, double most = std::numeric_limits<double>::infinity()) {
+  const std::string bounds = std::isinf(most) ? (least_excluded ? "> " : ">= ") + io::number_text(least)
+                                              : (least_excluded ? "(" : "[") + io::number_text(least) + ", " + io::number_text(most) + "]";
+  return CLI::Validator(
+      [=](std::string& text) {
+        const std::optional<double> value = number_from_text<double>(text);
+        const bool inside = value && std::isfinite(*value) && (least_excluded ? *value > least : *value >= least) && *value <= most;
+        return inside ? std::string() : "'" + text + "', expected a number " + (std::isinf(most) ? bounds : "in " + bounds);
+      },
+      bounds, "bounded");
+}
+/// Accepts finite numbers >= `least`.
+inline CLI::Validator at_least(double least) { return bounded(least, false); }
+/// Accepts finite numbers > `least` (and <= `most`).
+inline CLI::Validator above(double least, double most = std::numeric_limits<double>::infinity()) { return bounded(least, true, most); }
+
+/// CLI::ExistingFile without its description, which would repeat FILE after the value's name.
+inline const CLI::Validator kExistingFile = CLI::ExistingFile.description("");
+
+/// Adds `--model FILE`: a model file that must exist (`path` a string, or a vector when repeatable).
+template <typename Target>
+CLI::Option* add_model_file(CLI::App& command, Target& path, const std::string& description) {
+  return command.add_option("--model", path, description)->check(kExistingFile)->type_name("FILE");
+}
+
+/// Adds `--fixed16 | --f16 | --bf16`: how a loaded model keeps its weights in memory (default F32).
+inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) {
+  struct Flag {
+    const char* name;
+    nn::WeightStorage storage;
+    const char* description;
+  };
+  const Flag flags[] = {
+      {"--fixed16", nn::WeightStorage::Fixed16, "keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)"},
+      {"--f16", nn::WeightStorage::F16, "keep the weights as F16 in memory"},
+      {"--bf16", nn::WeightStorage::BF16, "keep the weights as BF16 in memory (the fastest)"}};
+  std::vector<CLI::Option*> added;
+  for (const Flag& flag : flags)
+    added.push_back(command.add_flag_callback(flag.name, [&storage, chosen = flag.storage] { storage = chosen; }, flag.description));
+  for (CLI::Option* flag : added)
+    for (CLI::Option* other : added)
+      if (flag != other) flag->excludes(other);
 }
 
 }  // namespace glovepose::cli

@@ -1,5 +1,4 @@
-// glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
-//   The product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
+// glovepose demo: the product's main job, end to end: a simulated new user (subject 0 of simulation seed S,
 //   default 2026; the shipped model was trained on seed 101 and its calibration fitted on seed 21)
 //   puts the glove on, performs the simulator's calibration sequence, then a session of poses.
 //   Every reading is streamed row by row through GlovePoseEstimator (default settings: a solve
@@ -17,10 +16,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -51,45 +50,6 @@ struct DemoOptions {
   double minutes = 1.5;
   nn::WeightStorage storage = nn::WeightStorage::F32;
 };
-
-// `problem` empty: the usage was asked for (--help).
-[[noreturn]] void usage(const std::string& problem) {
-  exit_with_usage("demo", problem,
-                  std::string("usage: glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n")
-                  + "  --model FILE  weights (default: models/" + kShippedModelName + ", shipped with glovepose)\n"
-                  + "  --out DIR     where the table and pictures go (default: demo-out)\n"
-                  + "  --seed S      simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)\n"
-                  + "  --minutes M   length of the session after the 30 s calibration (default 1.5)\n"
-                  + "  --fixed16     keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)\n"
-                  + "  --f16         keep the weights as F16 in memory\n"
-                  + "  --bf16        keep the weights as BF16 in memory (the fastest)\n");
-}
-
-DemoOptions parse_options(int argc, char** argv) {
-  DemoOptions o;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--model") o.model = value();
-    else if (a == "--out") o.out = value();
-    else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
-    else if (a == "--minutes") o.minutes = parse_number<double>(a, value());
-    else if (a == "--fixed16") o.storage = nn::WeightStorage::Fixed16;
-    else if (a == "--f16") o.storage = nn::WeightStorage::F16;
-    else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
-    else if (asks_for_help(a)) usage("");
-    else usage("unknown option " + a);
-  }
-  if (!(o.minutes > 0.0 && o.minutes <= 600.0)) {
-    char minutes[32];
-    std::snprintf(minutes, sizeof minutes, "%g", o.minutes);
-    throw Error(std::string("--minutes ") + minutes + ", expected a session length in (0, 600] minutes");
-  }
-  return o;
-}
 
 // What streaming the session produced.
 struct SessionRun {
@@ -416,46 +376,55 @@ void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::Hand
   doc.save(path);
 }
 
+int demo(const DemoOptions& o) {
+  const std::string model_path = o.model.empty() ? shipped_model_path(kShippedModelName) : o.model;
+  PoseModelOptions model_options;
+  model_options.storage = o.storage;
+  const auto model = PoseModel::load(model_path, model_options);
+  std::error_code error;
+  fs::create_directories(o.out, error);
+  if (error || !fs::is_directory(o.out))
+    throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
+
+  const NewUser user = simulate_new_user(o.seed, o.minutes, *model);
+  EstimatorConfig config;  // the default readout: a solve every 16 rows of their latest readings
+  config.joint_transforms = true;
+  GlovePoseEstimator estimator(model, config);
+  const CalibrationResult calibration = calibrate(estimator, user);
+  const SessionRun run = stream_session(estimator, user);
+  const train::AngleErrorReport report = measure_errors(user, run);
+
+  const std::string table = format_table(o, model_path, user, calibration, run, report);
+  const fs::path out(o.out);
+  const std::string files[] = {(out / "summary.txt").string(), (out / "angles_over_time.svg").string(),
+                               (out / "cumulative_error.svg").string(), (out / "skeletons.svg").string()};
+  std::ofstream summary(files[0]);
+  summary << table;
+  if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
+  draw_angles_over_time(user, run, files[1]);
+  draw_cumulative_error(report, files[2]);
+  draw_skeletons(user, run, estimator.config().hand, files[3]);
+  std::cout << table << "\nwrote";
+  for (const std::string& file : files) std::cout << " " << file;
+  std::cout << "\n";
+  return 0;
+}
+
 }  // namespace
 
-int demo(int argc, char** argv) {
-  try {
-    const DemoOptions o = parse_options(argc, argv);
-    const std::string model_path = o.model.empty() ? shipped_model_path(kShippedModelName) : o.model;
-    PoseModelOptions model_options;
-    model_options.storage = o.storage;
-    const auto model = PoseModel::load(model_path, model_options);
-    std::error_code error;
-    fs::create_directories(o.out, error);
-    if (error || !fs::is_directory(o.out))
-      throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
-
-    const NewUser user = simulate_new_user(o.seed, o.minutes, *model);
-    EstimatorConfig config;  // the default readout: a solve every 16 rows of their latest readings
-    config.joint_transforms = true;
-    GlovePoseEstimator estimator(model, config);
-    const CalibrationResult calibration = calibrate(estimator, user);
-    const SessionRun run = stream_session(estimator, user);
-    const train::AngleErrorReport report = measure_errors(user, run);
-
-    const std::string table = format_table(o, model_path, user, calibration, run, report);
-    const fs::path out(o.out);
-    const std::string files[] = {(out / "summary.txt").string(), (out / "angles_over_time.svg").string(),
-                                 (out / "cumulative_error.svg").string(), (out / "skeletons.svg").string()};
-    std::ofstream summary(files[0]);
-    summary << table;
-    if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
-    draw_angles_over_time(user, run, files[1]);
-    draw_cumulative_error(report, files[2]);
-    draw_skeletons(user, run, estimator.config().hand, files[3]);
-    std::cout << table << "\nwrote";
-    for (const std::string& file : files) std::cout << " " << file;
-    std::cout << "\n";
-    return 0;
-  } catch (const Error& e) {
-    std::cerr << "glovepose demo: " << e.what() << "\n";
-    return 2;
-  }
+Command add_demo(CLI::App& tool) {
+  auto o = std::make_shared<DemoOptions>();
+  CLI::App* command = tool.add_subcommand(
+      "demo", "The product's main job, end to end: a simulated new user puts the glove on, performs the calibration sequence, then a "
+              "session of poses, streamed row by row through the estimator; prints a table (angle errors, speed, latency, calibration) "
+              "and writes it and three SVG pictures (angles over time, cumulative error, skeletons) to --out.");
+  add_model_file(*command, o->model, std::string("weights (default: models/") + kShippedModelName + ", shipped with glovepose)");
+  command->add_option("--out", o->out, "where the table and pictures go (default: demo-out)")->type_name("DIR");
+  add_number(*command, "--seed", "S", o->seed, "simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)");
+  add_number(*command, "--minutes", "M", o->minutes, "length of the session after the 30 s calibration (default 1.5)")
+      ->check(above(0.0, 600.0));
+  add_storage_flags(*command, o->storage);
+  return {command, [o] { return demo(*o); }};
 }
 
 }  // namespace glovepose::cli

@@ -32,6 +32,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -39,55 +40,14 @@
 #include "commands.hpp"
 
 using namespace glovepose;
-using cli::asks_for_help;
-using cli::exit_with_usage;
 
 namespace {
 
-struct Options {
-  std::string command, model, input;
+struct PredictOptions {
+  std::string model, input;  // input empty: stdin
   nn::WeightStorage storage = nn::WeightStorage::F32;
-  bool header = true;
+  bool no_header = false;
 };
-
-// `problem` empty: the usage was asked for (--help).
-[[noreturn]] void usage(const std::string& problem) {
-  exit_with_usage("", problem,
-                  "usage: glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]\n"
-                  "       glovepose info --model FILE\n"
-                  "       glovepose simulate --help\n"
-                  "       glovepose import --rate HZ --out FILE [--glove FILE] [options] CSV...   (see import --help)\n"
-                  "       glovepose train | finetune | eval | fit-guided --help\n"
-                  "       glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]\n"
-                  "       glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]\n"
-                  "       glovepose bench [--model FILE]... [--poses N] [--json]\n"
-                  "       glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]\n");
-}
-
-Options parse(int argc, char** argv) {
-  if (argc < 2) usage("no command given");
-  Options o;
-  o.command = argv[1];
-  if (asks_for_help(o.command)) usage("");
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--model") o.model = value();
-    else if (a == "--in") o.input = value();
-    else if (a == "--fixed16") o.storage = nn::WeightStorage::Fixed16;
-    else if (a == "--f16") o.storage = nn::WeightStorage::F16;
-    else if (a == "--bf16") o.storage = nn::WeightStorage::BF16;
-    else if (a == "--no-header") o.header = false;
-    else if (asks_for_help(a)) usage("");
-    else usage("unknown option " + a);
-  }
-  if (o.command != "predict" && o.command != "info") usage("unknown command " + o.command);
-  if (o.model.empty()) usage("--model FILE is required");
-  return o;
-}
 
 // One row of `count` numbers; throws Error naming the line and column.
 std::vector<double> parse_row(const std::string& line, std::size_t line_no, std::size_t count) {
@@ -125,7 +85,7 @@ bool looks_like_header(const std::string& line) {
   return true;
 }
 
-int predict(const Options& o) {
+int predict(const PredictOptions& o) {
   PoseModelOptions options;
   options.storage = o.storage;
   const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model, options);  // the glove: from the file, or built in
@@ -138,7 +98,7 @@ int predict(const Options& o) {
     if (!file) throw Error("cannot open input '" + o.input + "'");
   }
   std::istream& in = o.input.empty() ? std::cin : file;
-  if (o.header) {
+  if (!o.no_header) {
     for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%s", d ? "," : "", hand::kDofs[d].name);
     std::printf("\n");
   }
@@ -165,8 +125,8 @@ int predict(const Options& o) {
   return 0;
 }
 
-int info(const Options& o) {
-  const std::shared_ptr<const PoseModel> loaded = PoseModel::load(o.model);
+int info(const std::string& model_path) {
+  const std::shared_ptr<const PoseModel> loaded = PoseModel::load(model_path);
   const PoseModel& model = *loaded;
   const auto& net = model.network();
   std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture.c_str(), model.info().width,
@@ -194,30 +154,63 @@ int info(const Options& o) {
   return 0;
 }
 
+cli::Command add_predict(CLI::App& tool) {
+  auto o = std::make_shared<PredictOptions>();
+  CLI::App* command = tool.add_subcommand(
+      "predict", "Rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in radians "
+                 "out (theta 9..33 of the hand model), one row per input row.");
+  cli::add_model_file(*command, o->model, "the model file")->required();
+  command->add_option("--in", o->input, "the rows, a CSV file without a header (default: stdin)")->check(cli::kExistingFile)->type_name("CSV");
+  cli::add_storage_flags(*command, o->storage);
+  command->add_flag("--no-header", o->no_header, "leave out the first output line (the DoF names)");
+  return {command, [o] { return predict(*o); }};
+}
+
+cli::Command add_info(CLI::App& tool) {
+  auto model = std::make_shared<std::string>();
+  CLI::App* command = tool.add_subcommand("info", "What a model file holds.");
+  cli::add_model_file(*command, *model, "the model file")->required();
+  return {command, [model] { return info(*model); }};
+}
+
+// A usage error: the command and the problem on stderr, and where its options are described.
+std::string usage_error(const CLI::App* tool, const CLI::Error& e) {
+  const std::vector<CLI::App*> chosen = tool->get_subcommands();
+  const std::string command = chosen.empty() ? "glovepose" : "glovepose " + chosen.front()->get_name();
+  return command + ": " + e.what() + "\nRun '" + command + " --help' for the options.\n";
+}
+
 }  // namespace
 
+// Exit codes: 0 done (or --help), 1 a runtime failure (or a failed check: soak), 2 a usage error,
+// 130 training interrupted by Ctrl-C.
 int main(int argc, char** argv) {
-  if (argc >= 2 && std::string(argv[1]) == "simulate") return cli::simulate(argc, argv);
-  if (argc >= 2 && (std::string(argv[1]) == "train" || std::string(argv[1]) == "finetune" || std::string(argv[1]) == "eval" ||
-                    std::string(argv[1]) == "fit-guided"))
-    return cli::train_tools(argc, argv);
-  if (argc >= 2 && std::string(argv[1]) == "import") return cli::import_recordings(argc, argv);
-  if (argc >= 2 && std::string(argv[1]) == "demo") return cli::demo(argc, argv);
-  if (argc >= 2 && std::string(argv[1]) == "soak") return cli::soak(argc, argv);
-  for (const auto& [name, command] : {std::pair{"bench", &cli::bench}, std::pair{"view", &cli::view}})
-    if (argc >= 2 && std::string(argv[1]) == name) {
-      try {
-        return command(argc, argv);
-      } catch (const Error& e) {
-        std::cerr << "glovepose " << name << ": " << e.what() << "\n";
-        return 2;
-      }
-    }
-  const Options o = parse(argc, argv);
+  CLI::App tool("The glovepose tool: hand poses from a stretch-sensing glove's readings, and the models, data and "
+                "measurements behind them. 'glovepose COMMAND --help' describes a command.",
+                "glovepose");
+  tool.require_subcommand(0, 1);  // an unknown command is then named as unexpected; none is refused below
+  tool.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // an option given twice: the last counts
+  tool.failure_message(usage_error);
+  std::vector<cli::Command> commands{add_predict(tool), add_info(tool), cli::add_simulate(tool), cli::add_import(tool)};
+  std::string command_line = "glovepose";
+  for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
+  for (cli::Command& command : cli::add_training_commands(tool, command_line)) commands.push_back(std::move(command));
+  for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view}) commands.push_back(add(tool));
   try {
-    return o.command == "predict" ? predict(o) : info(o);
-  } catch (const Error& e) {
-    std::cerr << "glovepose " << o.command << ": " << e.what() << "\n";
+    tool.parse(argc, argv);
+    if (tool.get_subcommands().empty()) throw CLI::RequiredError("A command");
+    const CLI::App* chosen = tool.get_subcommands().front();
+    return std::find_if(commands.begin(), commands.end(), [&](const cli::Command& c) { return c.options == chosen; })->run();
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return tool.exit(e);  // --help, printed on stdout
+    // CLI11 checks the required options before the unknown ones; an unknown one is named first,
+    // as it may be the required one misspelt.
+    const std::vector<std::string> unknown = tool.remaining(true);
+    if (!unknown.empty()) tool.exit(CLI::ExtrasError({unknown.rbegin(), unknown.rend()}));  // it lists them backwards
+    else tool.exit(e);
     return 2;
+  } catch (const Error& e) {
+    std::cerr << "glovepose " << tool.get_subcommands().front()->get_name() << ": " << e.what() << "\n";
+    return 1;
   }
 }

@@ -1,6 +1,4 @@
-// glovepose import [--rate HZ] --out FILE [--glove FILE] [--subject N] [--session N] [--calibration FILE]...
-//                  [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]
-//   Recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
+// glovepose import: recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
 //   dataset file for train, eval and finetune.
 #include <glovepose/train/recording_import.hpp>
 
@@ -8,7 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -18,73 +16,26 @@
 namespace glovepose::cli {
 namespace {
 
-// `problem` empty: the usage was asked for (--help).
-[[noreturn]] void usage(const std::string& problem) {
-  exit_with_usage("import", problem,
-                  "usage: glovepose import [--rate HZ] --out FILE [--glove FILE] [--subject N] [--session N]\n"
-                  "                        [--calibration FILE]... [--takes LIST] [--degrees] [--ignore COLUMN]... [--allow-flat] [FILE...]\n"
-                  "  FILE...             recording takes: CSV files whose first line names the columns: every cell of the\n"
-                  "                      glove, optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp\n"
-                  "                      (seconds) or timestamp_ms\n"
-                  "  --calibration FILE  a calibration take (its rows are calibration frames); repeatable\n"
-                  "  --takes LIST        a CSV list of takes with the header file,subject,session,kind (kind: recording or\n"
-                  "                      calibration; session and kind may be left out); files relative to the list\n"
-                  "  --subject N, --session N   ids of FILE and --calibration takes whose columns do not have them\n"
-                  "  --rate HZ           the glove's frames per second (frames are 1/HZ apart in takes without timestamps);\n"
-                  "                      required unless the glove description gives rate_hz\n"
-                  "  --glove FILE        the glove description (JSON); default: the built-in 44-cell glove\n"
-                  "  --degrees           angle columns are in degrees\n"
-                  "  --ignore COLUMN     a column to skip; repeatable\n"
-                  "  --allow-flat        keep calibration takes where a sensor does not move (it then reads 0); listed\n"
-                  "  --out FILE          the dataset file written\n");
-}
-
-struct Options {
-  std::vector<train::CsvTake> takes;
+struct ImportOptions {
+  std::vector<std::string> recordings, calibrations;  // FILE... and --calibration FILE
   std::string out, glove, takes_list;
   std::optional<std::int32_t> subject, session;
   train::CsvImportOptions import;
-};
+  const CLI::App* command = nullptr;
+  const CLI::Option* recordings_option = nullptr;
+  const CLI::Option* calibrations_option = nullptr;
 
-Options parse(int argc, char** argv) {
-  Options o;
-  std::vector<std::pair<std::string, std::uint8_t>> files;  // in the order given
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    const auto id = [&]() {
-      const std::string text = value();
-      try {
-        return io::parse_csv_id(text, a + " '" + text + "'");
-      } catch (const Error& e) {
-        usage(e.what());
-      }
-    };
-    if (a == "--out") o.out = value();
-    else if (a == "--glove") o.glove = value();
-    else if (a == "--takes") o.takes_list = value();
-    else if (a == "--calibration") files.emplace_back(value(), train::kKindCalibration);
-    else if (a == "--subject") o.subject = id();
-    else if (a == "--session") o.session = id();
-    else if (a == "--rate") {
-      const std::string text = value();
-      o.import.frame_rate = parse_number<double>(a, text);
-      if (!(o.import.frame_rate > 0.0)) usage("--rate '" + text + "', expected a positive number of frames per second");
-    } else if (a == "--degrees") o.import.degrees = true;
-    else if (a == "--ignore") o.import.ignored_columns.push_back(value());
-    else if (a == "--allow-flat") o.import.allow_flat = true;
-    else if (asks_for_help(a)) usage("");
-    else if (a.rfind("-", 0) == 0) usage("unknown option " + a);
-    else files.emplace_back(a, train::kKindRecording);
+  // The takes named on the command line, recordings and calibrations in the order given.
+  std::vector<train::CsvTake> command_line_takes() const {
+    std::vector<train::CsvTake> takes;
+    std::size_t next_recording = 0, next_calibration = 0;
+    for (const CLI::Option* given : command->parse_order()) {
+      if (given == recordings_option) takes.push_back({recordings[next_recording++], subject, session, train::kKindRecording});
+      else if (given == calibrations_option) takes.push_back({calibrations[next_calibration++], subject, session, train::kKindCalibration});
+    }
+    return takes;
   }
-  if (o.out.empty()) usage("--out FILE is required");
-  if (files.empty() && o.takes_list.empty()) usage("no takes, expected CSV files or --takes LIST");
-  for (const auto& [path, kind] : files) o.takes.push_back({path, o.subject, o.session, kind});
-  return o;
-}
+};
 
 // The takes of a list file: header file,subject[,session][,kind], one take per line.
 std::vector<train::CsvTake> read_takes_list(const std::string& path) {
@@ -136,38 +87,65 @@ std::string angles_text(const train::Dataset& data) {
   return count == static_cast<long>(hand::kDofCount) ? "with the 25 DoF angles" : "with angles for " + std::to_string(count) + " of the 25 DoFs";
 }
 
+int import_recordings(const ImportOptions& o) {
+  std::vector<train::CsvTake> takes = o.command_line_takes();
+  if (takes.empty() && o.takes_list.empty()) throw CLI::ValidationError("no takes, expected CSV files or --takes LIST");
+  if (!o.takes_list.empty())
+    for (train::CsvTake& take : read_takes_list(o.takes_list)) takes.push_back(std::move(take));
+  grid::GloveDescription glove = o.glove.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove);
+  train::RecordingImporter importer(std::move(glove), o.import);
+  for (const train::CsvTake& take : takes) importer.add(take);
+  const train::Dataset& data = importer.dataset();
+  data.write(o.out);
+
+  std::set<std::int32_t> subjects(data.subject.begin(), data.subject.end());
+  std::set<std::pair<std::int32_t, std::int32_t>> sessions;
+  std::size_t calibration = 0;
+  for (std::size_t i = 0; i < data.frames(); ++i) {
+    sessions.insert({data.subject[i], data.session[i]});
+    calibration += data.kind[i] == train::kKindCalibration;
+  }
+  std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n",
+              takes.size(), data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(),
+              data.cell_count, angles_text(data).c_str());
+  for (const train::FlatSensor& flat : importer.flat_sensors())
+    std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
+                flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
+  std::printf("wrote %s\n", o.out.c_str());
+  return 0;
+}
+
 }  // namespace
 
-int import_recordings(int argc, char** argv) {
-  Options o = parse(argc, argv);
-  try {
-    if (!o.takes_list.empty())
-      for (train::CsvTake& take : read_takes_list(o.takes_list)) o.takes.push_back(std::move(take));
-    grid::GloveDescription glove = o.glove.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove);
-    train::RecordingImporter importer(std::move(glove), o.import);
-    for (const train::CsvTake& take : o.takes) importer.add(take);
-    const train::Dataset& data = importer.dataset();
-    data.write(o.out);
-
-    std::set<std::int32_t> subjects(data.subject.begin(), data.subject.end());
-    std::set<std::pair<std::int32_t, std::int32_t>> sessions;
-    std::size_t calibration = 0;
-    for (std::size_t i = 0; i < data.frames(); ++i) {
-      sessions.insert({data.subject[i], data.session[i]});
-      calibration += data.kind[i] == train::kKindCalibration;
-    }
-    std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n",
-                o.takes.size(), data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(),
-                data.cell_count, angles_text(data).c_str());
-    for (const train::FlatSensor& flat : importer.flat_sensors())
-      std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
-                  flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
-    std::printf("wrote %s\n", o.out.c_str());
-    return 0;
-  } catch (const Error& e) {
-    std::cerr << "glovepose import: " << e.what() << "\n";
-    return 1;
-  }
+Command add_import(CLI::App& tool) {
+  auto o = std::make_shared<ImportOptions>();
+  CLI::App* command = tool.add_subcommand(
+      "import", "Recordings of any glove as CSV files with named columns into one dataset file for train, eval and finetune.");
+  o->command = command;
+  o->recordings_option =
+      command->add_option("CSV", o->recordings, "recording takes: CSV files whose first line names the columns: every cell of the glove, "
+                                                "optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
+          ->check(kExistingFile)
+          ->type_name("CSV");
+  o->calibrations_option = command->add_option("--calibration", o->calibrations, "a calibration take (its rows are calibration frames); repeatable")
+                               ->check(kExistingFile)
+                               ->type_name("FILE")
+                               ->allow_extra_args(false);
+  command->add_option("--takes", o->takes_list, "a CSV list of takes with the header file,subject,session,kind (kind: recording or "
+                                                "calibration; session and kind may be left out); files relative to the list")
+      ->check(kExistingFile)
+      ->type_name("LIST");
+  add_number(*command, "--subject", "N", o->subject, "subject id of the CSV and --calibration takes whose columns do not have one")->check(at_least(0));
+  add_number(*command, "--session", "N", o->session, "session id of the CSV and --calibration takes whose columns do not have one")->check(at_least(0));
+  add_number(*command, "--rate", "HZ", o->import.frame_rate, "the glove's frames per second (frames are 1/HZ apart in takes without "
+                                                             "timestamps); required unless the glove description gives rate_hz")
+      ->check(above(0.0));
+  command->add_option("--glove", o->glove, "the glove description (JSON) (default: the built-in 44-cell glove)")->check(kExistingFile)->type_name("FILE");
+  command->add_flag("--degrees", o->import.degrees, "angle columns are in degrees");
+  command->add_option("--ignore", o->import.ignored_columns, "a column to skip; repeatable")->type_name("COLUMN")->allow_extra_args(false);
+  command->add_flag("--allow-flat", o->import.allow_flat, "keep calibration takes where a sensor does not move (it then reads 0); listed");
+  command->add_option("--out", o->out, "the dataset file written")->required()->type_name("FILE");
+  return {command, [o] { return import_recordings(*o); }};
 }
 
 }  // namespace glovepose::cli

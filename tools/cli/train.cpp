@@ -1,11 +1,6 @@
-// glovepose train    --data FILE --model unet:W|fcn[:H]|linear --out FILE [selection] [training options]
-// glovepose finetune --model FILE --data FILE --out FILE [selection] [training options]
-// glovepose eval     --model FILE --data FILE [selection] [--calibration none|training|onthefly|guided] [--json]
-//                    [--replay-rows [--mean-window N]] [--predictions FILE.csv]
-// glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]
-//   fits the model's pose-guided calibration on people it was not trained on (guided_calibration.hpp)
-//   Trains, fine-tunes and evaluates models on dataset files (train/dataset.hpp), on all cores.
-//   Selection: --subjects / --exclude-subjects / --sessions / --gloves take lists like "0-3,7".
+// glovepose train, finetune, eval and fit-guided: train, fine-tune and evaluate models on dataset
+//   files (train/dataset.hpp), on all cores, and fit a model's pose-guided calibration on people it
+//   was not trained on (guided_calibration.hpp).
 #include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/train/guided_calibration.hpp>
@@ -20,13 +15,15 @@
 #include <atomic>
 #include <charconv>
 #include <chrono>
+#include <memory>
+#include <optional>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <iostream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "commands.hpp"
@@ -37,50 +34,60 @@ namespace {
 std::atomic<bool> interrupted{false};
 extern "C" void on_interrupt(int) { interrupted.store(true); }
 
-// `problem` empty: the usage was asked for (--help).
-[[noreturn]] void usage(const std::string& command, const std::string& problem) {
-  exit_with_usage(command, problem,
-                  "usage: glovepose train --data FILE --model unet:W|fcn[:H]|linear --out FILE [options]\n"
-                  "       glovepose finetune --model FILE --data FILE --out FILE [options]\n"
-                  "       glovepose eval --model FILE --data FILE [--calibration none|training|onthefly|guided] [--json] [selection]\n"
-                  "                      [--replay-rows [--mean-window N]] [--predictions FILE.csv]\n"
-                  "       glovepose fit-guided --model FILE --data FILE --out FILE [--sequence FILE] [selection]\n"
-                  "selection: --subjects LIST --exclude-subjects LIST --sessions LIST --gloves LIST (LIST: 0-3,7) --stride K\n"
-                  "training:  --calibration none|training|onthefly (default onthefly) --epochs N --batch N --lr X\n"
-                  "           (default batch: 1024 from 102,400 training frames, else about frames/100; default epochs: 10,\n"
-                  "           or enough for 2000 steps)\n"
-                  "           --optimizer adam|sgd --validation FRACTION --seed S --threads T --max-minutes M --glove FILE --quiet\n"
-                  "           --dtype f32|f16|bf16 (storage of the written model, default f32)\n"
-                  "           --augment GAIN,OFFSET,NOISE (deviations of each training frame's cell perturbation,\n"
-                  "           normalised units: (1 + g) x + o + n; default none)\n");
-}
-
-template <typename T>
-T number(const std::string& command, const std::string& option, const std::string& text) {
-  T v{};
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size()) usage(command, option + " '" + text + "' is not a number");
-  return v;
-}
-
-std::vector<int> id_list(const std::string& command, const std::string& option, const std::string& text) {
+// Ids like "0-3,7", or nullopt when `text` is not such a list.
+std::optional<std::vector<int>> id_list(const std::string& text) {
   std::vector<int> ids;
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string item = text.substr(start, comma - start);
     const std::size_t dash = item.find('-');
-    const int lo = number<int>(command, option, dash == std::string::npos ? item : item.substr(0, dash));
-    const int hi = dash == std::string::npos ? lo : number<int>(command, option, item.substr(dash + 1));
-    if (lo < 0 || hi < lo || hi - lo > 100000) usage(command, option + " '" + text + "': expected ids like 0-3,7");
-    for (int v = lo; v <= hi; ++v) ids.push_back(v);
+    const std::optional<int> lo = number_from_text<int>(dash == std::string::npos ? item : item.substr(0, dash));
+    const std::optional<int> hi = dash == std::string::npos ? lo : number_from_text<int>(item.substr(dash + 1));
+    if (!lo || !hi || *lo < 0 || *hi < *lo || *hi - *lo > 100000) return std::nullopt;
+    for (int v = *lo; v <= *hi; ++v) ids.push_back(v);
     start = comma + 1;
   }
   return ids;
 }
 
+// A network to train: "unet:W", "fcn[:H]" or "linear" (W default 64, H default 2048).
+struct Architecture {
+  std::string name;
+  int width = 0;
+};
+
+std::optional<Architecture> architecture(const std::string& text) {
+  const std::size_t colon = text.find(':');
+  Architecture a;
+  a.name = text.substr(0, colon);
+  if (a.name != "unet" && a.name != "fcn" && a.name != "linear") return std::nullopt;
+  a.width = a.name == "unet" ? 64 : (a.name == "fcn" ? 2048 : 0);
+  if (colon == std::string::npos) return a;
+  const std::optional<int> width = number_from_text<int>(text.substr(colon + 1));
+  if (a.name == "linear" || !width || *width < 1) return std::nullopt;
+  a.width = *width;
+  return a;
+}
+
+// GAIN,OFFSET,NOISE, or nullopt when `text` is not three numbers.
+std::optional<train::Augmentation> augmentation(const std::string& text) {
+  const std::size_t c1 = text.find(','), c2 = c1 == std::string::npos ? c1 : text.find(',', c1 + 1);
+  if (c2 == std::string::npos) return std::nullopt;
+  const std::optional<double> gain = number_from_text<double>(text.substr(0, c1)),
+                              offset = number_from_text<double>(text.substr(c1 + 1, c2 - c1 - 1)),
+                              noise = number_from_text<double>(text.substr(c2 + 1));
+  if (!gain || !offset || !noise) return std::nullopt;
+  train::Augmentation a;
+  a.gain = *gain;
+  a.offset = *offset;
+  a.noise = *noise;
+  return a;
+}
+
 struct Options {
-  std::string command, data, model, out, glove_file, sequence_file, predictions_file;
+  std::string command, command_line, data, model, out, glove_file, sequence_file, predictions_file;
+  Architecture architecture;  // train: the network to train (--model)
   bool replay = false;
   int mean_window = 0;  // --replay-rows: the readout's mean window; 0: the estimator's default
   std::string calibration;  // empty: the default of the command
@@ -93,68 +100,79 @@ struct Options {
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
 };
 
-Options parse(int argc, char** argv) {
-  Options o;
-  o.command = argv[1];
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(o.command, a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--data") o.data = value();
-    else if (a == "--model") o.model = value();
-    else if (a == "--out") o.out = value();
-    else if (a == "--glove") o.glove_file = value();
-    else if (a == "--sequence") o.sequence_file = value();
-    else if (a == "--predictions") o.predictions_file = value();
-    else if (a == "--replay-rows") o.replay = true;
-    else if (a == "--mean-window") o.mean_window = number<int>(o.command, a, value());
-    else if (a == "--calibration") o.calibration = value();
-    else if (a == "--subjects") o.filter.subjects = id_list(o.command, a, value());
-    else if (a == "--exclude-subjects") o.exclude_subjects = id_list(o.command, a, value());
-    else if (a == "--sessions") o.filter.sessions = id_list(o.command, a, value());
-    else if (a == "--gloves") o.filter.gloves = id_list(o.command, a, value());
-    else if (a == "--stride") o.stride = number<int>(o.command, a, value());
-    else if (a == "--threads") o.threads = number<int>(o.command, a, value());
-    else if (a == "--epochs") o.training.epochs = number<int>(o.command, a, value()), o.epochs_set = true;
-    else if (a == "--batch") o.training.batch = number<int>(o.command, a, value()), o.batch_set = true;
-    else if (a == "--lr") o.training.optimizer.learning_rate = number<double>(o.command, a, value()), o.lr_set = true;
-    else if (a == "--seed") o.training.seed = number<std::uint64_t>(o.command, a, value());
-    else if (a == "--augment") {
-      const std::string v = value();
-      const std::size_t c1 = v.find(','), c2 = c1 == std::string::npos ? c1 : v.find(',', c1 + 1);
-      if (c2 == std::string::npos) usage(o.command, "--augment '" + v + "', expected GAIN,OFFSET,NOISE");
-      o.training.augmentation.gain = number<double>(o.command, a, v.substr(0, c1));
-      o.training.augmentation.offset = number<double>(o.command, a, v.substr(c1 + 1, c2 - c1 - 1));
-      o.training.augmentation.noise = number<double>(o.command, a, v.substr(c2 + 1));
-      try {
-        o.training.augmentation.validate();
-      } catch (const Error& e) {
-        usage(o.command, std::string("--augment: ") + e.what());
-      }
-    }
-    else if (a == "--validation") o.validation = number<double>(o.command, a, value());
-    else if (a == "--max-minutes") o.training.max_seconds = 60.0 * number<double>(o.command, a, value());
-    else if (a == "--optimizer") {
-      const std::string v = value();
-      if (v != "adam" && v != "sgd") usage(o.command, "--optimizer '" + v + "', expected adam or sgd");
-      o.training.optimizer.kind = v == "adam" ? train::OptimizerKind::Adam : train::OptimizerKind::Sgd;
-    } else if (a == "--dtype") {
-      const std::string v = value();
-      if (v != "f32" && v != "f16" && v != "bf16") usage(o.command, "--dtype '" + v + "', expected f32, f16 or bf16");
-      o.dtype = v == "f32" ? io::DType::F32 : (v == "f16" ? io::DType::F16 : io::DType::BF16);
-    } else if (a == "--json") o.json = true;
-    else if (a == "--quiet") o.quiet = true;
-    else if (asks_for_help(a)) usage(o.command, "");
-    else usage(o.command, "unknown option " + a);
-  }
-  if (o.data.empty()) usage(o.command, "--data FILE is required");
-  if (o.model.empty()) usage(o.command, "--model is required");
-  if (o.command != "eval" && o.out.empty()) usage(o.command, "--out FILE is required");
-  if (o.calibration == "guided" && o.command != "eval") usage(o.command, "--calibration guided is for eval (training calibrates on the fly)");
-  if (o.threads <= 0) o.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return o;
+// Adds option `name` taking one of `choices` (their names are the value's name in the help).
+template <typename T>
+void add_choice(CLI::App& command, const std::string& name, const std::vector<std::pair<std::string, T>>& choices, T& target,
+                const std::string& description) {
+  std::string names;
+  for (const auto& choice : choices) names += (names.empty() ? "" : "|") + choice.first;
+  add_parsed_option<T>(
+      command, name, names,
+      [choices](const std::string& text) -> std::optional<T> {
+        for (const auto& [choice, value] : choices)
+          if (text == choice) return value;
+        return std::nullopt;
+      },
+      [&target](T value) { target = value; }, "one of " + names, description);
+}
+
+// The options every command has: --data, --threads, the selection (--stride too: `with_stride`).
+void add_data_options(CLI::App& command, Options& o, bool with_stride) {
+  command.add_option("--data", o.data, "the dataset file (glovepose simulate or import)")->required()->check(kExistingFile)->type_name("FILE");
+  add_number(command, "--threads", "T", o.threads, "threads (default 0: all cores)");
+  const std::tuple<const char*, std::vector<int>*, const char*> lists[] = {
+      {"--subjects", &o.filter.subjects, "only these subjects (default: all)"},
+      {"--exclude-subjects", &o.exclude_subjects, "leave these subjects out (default: none)"},
+      {"--sessions", &o.filter.sessions, "only these sessions (default: all)"},
+      {"--gloves", &o.filter.gloves, "only these gloves (default: all)"}};
+  for (const auto& [name, target, description] : lists)
+    add_parsed_option<std::vector<int>>(command, name, "LIST", id_list, [target = target](std::vector<int> ids) { *target = std::move(ids); },
+                                        "ids like 0-3,7", std::string(description) + "; LIST: ids like 0-3,7")
+        ->group("Selection");
+  if (with_stride) add_number(command, "--stride", "K", o.stride, "every K-th frame of the selection (default 1)")->check(at_least(1))->group("Selection");
+}
+
+// The defaults train and finetune give the training options, as the help tells them.
+struct TrainingDefaults {
+  std::string epochs, batch, lr;
+};
+
+// The training options of train and finetune.
+void add_training_options(CLI::App& command, const std::shared_ptr<Options>& o, const TrainingDefaults& defaults) {
+  command.add_option("--calibration", o->calibration, "how the inputs are calibrated (default onthefly)")
+      ->check(CLI::IsMember({"none", "training", "onthefly"}))
+      ->type_name("MODE");
+  add_number_option<int>(command, "--epochs", "N", [o](int v) { o->training.epochs = v, o->epochs_set = true; },
+                         "passes over the training frames (default " + defaults.epochs + ")")
+      ->check(at_least(1));
+  add_number_option<int>(command, "--batch", "N", [o](int v) { o->training.batch = v, o->batch_set = true; },
+                         "frames per step (default " + defaults.batch + ")")
+      ->check(at_least(1));
+  add_number_option<double>(command, "--lr", "X", [o](double v) { o->training.optimizer.learning_rate = v, o->lr_set = true; },
+                            "learning rate (default " + defaults.lr + ")")
+      ->check(above(0.0));
+  add_choice(command, "--optimizer", {{"adam", train::OptimizerKind::Adam}, {"sgd", train::OptimizerKind::Sgd}}, o->training.optimizer.kind,
+             "the optimizer (default adam)");
+  add_number(command, "--validation", "FRACTION", o->validation, "of the selected frames held out to pick the best epoch (default 0.1)");
+  add_number(command, "--seed", "S", o->training.seed, "seed of the initial weights, the batches and the augmentation (default 1)");
+  add_number_option<double>(command, "--max-minutes", "M", [o](double v) { o->training.max_seconds = 60.0 * v; },
+                            "stop training after M minutes (default: no limit)")
+      ->check(at_least(0.0));
+  command.add_flag("--quiet", o->quiet, "no progress on stderr");
+  add_choice(command, "--dtype", {{"f32", io::DType::F32}, {"f16", io::DType::F16}, {"bf16", io::DType::BF16}}, o->dtype,
+             "storage of the written model (default f32)");
+  add_parsed_option<train::Augmentation>(
+      command, "--augment", "GAIN,OFFSET,NOISE", augmentation,
+      [o](train::Augmentation a) {
+        try {
+          a.validate();
+        } catch (const Error& e) {
+          throw CLI::ValidationError("--augment", e.what());
+        }
+        o->training.augmentation = a;
+      },
+      "GAIN,OFFSET,NOISE",
+      "deviations of each training frame's cell perturbation, normalised units: (1 + g) x + o + n (default none)");
 }
 
 // Subjects present in the data minus the excluded ones, when --exclude-subjects is given.
@@ -241,12 +259,6 @@ grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
   return grid::GloveDescription(glove.id(), glove.cell_names(), glove.map(), settings);
 }
 
-std::string command_line(int argc, char** argv) {
-  std::string s = "glovepose";
-  for (int i = 1; i < argc; ++i) s += std::string(" ") + argv[i];
-  return s;
-}
-
 // Trains (or fine-tunes) a network, saving the best model so far at every improvement.
 int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& info, const train::Samples& all,
                 std::map<std::string, std::string> provenance) {
@@ -284,7 +296,7 @@ int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& in
   return interrupted.load() ? 130 : 0;
 }
 
-int train_command(Options o, int argc, char** argv) {
+int train_command(Options o) {
   const train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const grid::GloveDescription glove = glove_for(o, data);
@@ -294,30 +306,20 @@ int train_command(Options o, int argc, char** argv) {
   const hand::JointLimits limits = glove.joint_limits();
   const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride, glove.calibration());
   report_zeroed(o.command, all, glove);
-  std::string architecture = o.model;
-  int width = 0;
-  const std::size_t colon = o.model.find(':');
-  if (colon != std::string::npos) {
-    architecture = o.model.substr(0, colon);
-    width = number<int>(o.command, "--model", o.model.substr(colon + 1));
-  }
-  if (architecture == "unet" && width == 0) width = 64;
-  if (architecture == "fcn" && width == 0) width = 2048;
-  if (architecture != "unet" && architecture != "fcn" && architecture != "linear")
-    usage(o.command, "--model '" + o.model + "', expected unet:W, fcn[:H] or linear");
-  nn::ModelInfo info = train::make_model_info(architecture, width, glove, mode, range ? &*range : nullptr);
+  const std::string& architecture = o.architecture.name;
+  nn::ModelInfo info = train::make_model_info(architecture, o.architecture.width, glove, mode, range ? &*range : nullptr);
   if (all.labelled != hand::all_dofs()) {
     info.labelled_dofs = hand::dof_set_text(all.labelled);
     if (!o.quiet)
       std::fprintf(stderr, "%s: the data labels %zu of the 25 DoFs; the others are not trained and read the rest pose\n", o.command.c_str(),
                    static_cast<std::size_t>(std::count(all.labelled.begin(), all.labelled.end(), true)));
   }
-  std::map<std::string, std::string> provenance{{"training_command", command_line(argc, argv)},
+  std::map<std::string, std::string> provenance{{"training_command", o.command_line},
                                                 {"training_seed", std::to_string(o.training.seed)},
                                                 {"training_data", o.data}};
   if (architecture == "linear") {
     if (o.training.augmentation.active())
-      usage(o.command, "--augment trains networks; a linear map is fitted by least squares on the frames as they are");
+      throw CLI::ValidationError("--augment trains networks; a linear map is fitted by least squares on the frames as they are");
     const auto [training, validation] = train::split_validation(all, o.validation);
     const nn::LinearMap map = train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
     std::vector<float> predicted(static_cast<std::size_t>(validation.frames()) * train::kTargets);
@@ -352,7 +354,7 @@ std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const t
           mode};
 }
 
-int finetune_command(Options o, int argc, char** argv) {
+int finetune_command(Options o) {
   // The paper's fine-tuning (Sec. 5.2, scenario 5): all parameters, lr 1e-6, batch 64.
   if (!o.lr_set) o.training.optimizer.learning_rate = 1e-6;
   if (!o.batch_set) o.training.batch = 64;
@@ -364,7 +366,7 @@ int finetune_command(Options o, int argc, char** argv) {
   const train::Samples all = samples_for(o, model, data).first;
   report_zeroed(o.command, all, model.glove);
   std::map<std::string, std::string> provenance = model.metadata;
-  provenance["finetune_command"] = command_line(argc, argv);
+  provenance["finetune_command"] = o.command_line;
   provenance["finetune_data"] = o.data;
   return fit_network(o, *model.network, model.info, all, provenance);
 }
@@ -401,7 +403,6 @@ int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
   train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
-  if (o.mean_window != 0 && !o.replay) usage(o.command, "--mean-window is for --replay-rows");
   sensor::ReadoutConfig readout = EstimatorConfig{}.readout;
   if (o.mean_window != 0) readout.mean_window = o.mean_window;
   if (o.replay) train::replay_rows(data, readout);
@@ -455,7 +456,7 @@ int eval_command(Options o) {
 
 // Fits the model's pose-guided calibration on the selected people and writes the model with it
 // (tensors and every other metadata entry unchanged, bit for bit).
-int fit_guided_command(Options o, int argc, char** argv) {
+int fit_guided_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
   train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
@@ -465,7 +466,7 @@ int fit_guided_command(Options o, int argc, char** argv) {
   const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);
   io::TensorFile file = io::TensorFile::read(o.model, "model file");
   file.metadata["pose_offset"] = fit.model.to_json();
-  file.metadata["pose_offset_command"] = command_line(argc, argv);
+  file.metadata["pose_offset_command"] = o.command_line;
   file.write(o.out, "model file");
   std::printf("fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated); wrote %s\n",
               fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg, o.out.c_str());
@@ -474,17 +475,75 @@ int fit_guided_command(Options o, int argc, char** argv) {
 
 }  // namespace
 
-int train_tools(int argc, char** argv) {
-  const Options o = parse(argc, argv);
-  try {
-    if (o.command == "train") return train_command(o, argc, argv);
-    if (o.command == "finetune") return finetune_command(o, argc, argv);
-    if (o.command == "fit-guided") return fit_guided_command(o, argc, argv);
-    return eval_command(o);
-  } catch (const Error& e) {
-    std::cerr << "glovepose " << o.command << ": " << e.what() << "\n";
-    return 1;
+std::vector<Command> add_training_commands(CLI::App& tool, const std::string& command_line) {
+  const auto add = [&](const char* name, const std::string& description) {
+    auto o = std::make_shared<Options>();
+    o->command = name;
+    o->command_line = command_line;
+    return std::pair{tool.add_subcommand(name, description), o};
+  };
+  std::vector<Command> commands;
+  const auto finish = [&](CLI::App* command, const std::shared_ptr<Options>& o, int (*run)(Options)) {
+    commands.push_back({command, [o, run] {
+                          if (o->threads <= 0) o->threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+                          return run(*o);
+                        }});
+  };
+  {
+    auto [command, o] = add("train", "Trains a model on a dataset file on all cores, saving the best so far at every improvement "
+                                     "(Ctrl-C stops and keeps it).");
+    add_parsed_option<Architecture>(*command, "--model", "unet:W|fcn[:H]|linear", architecture,
+                                    [o = o](Architecture a) { o->architecture = std::move(a); }, "unet:W, fcn[:H] or linear",
+                                    "the network: a U-Net of width W, a fully connected network with H hidden units (default 2048) or a "
+                                    "linear map")
+        ->required();
+    command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
+    add_data_options(*command, *o, true);
+    add_training_options(*command, o,
+                         {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100",
+                          "2e-4; 0.01 with sgd for an FCN"});
+    command->add_option("--glove", o->glove_file, "the glove description the data was recorded with (default: the built-in glove)")
+        ->check(kExistingFile)
+        ->type_name("FILE");
+    finish(command, o, train_command);
   }
+  {
+    auto [command, o] = add("finetune", "Fine-tunes every parameter of a model on a dataset file (the paper's defaults: lr 1e-6, batch 64, "
+                                        "5 epochs).");
+    add_model_file(*command, o->model, "the model to fine-tune")->required();
+    command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
+    add_data_options(*command, *o, true);
+    add_training_options(*command, o, {"5", "64", "1e-6"});
+    finish(command, o, finetune_command);
+  }
+  {
+    auto [command, o] = add("eval", "Evaluates a model on a dataset file: angle errors per DoF and overall, and the motion lag.");
+    add_model_file(*command, o->model, "the model to evaluate")->required();
+    add_data_options(*command, *o, true);
+    command->add_option("--calibration", o->calibration, "how the inputs are calibrated (default: the model's; guided when the model "
+                                                         "carries a pose-guided calibration and the data followed its sequence)")
+        ->check(CLI::IsMember({"none", "training", "onthefly", "guided"}))
+        ->type_name("MODE");
+    command->add_flag("--json", o->json, "print the report as JSON");
+    CLI::Option* replay = command->add_flag("--replay-rows", o->replay, "replay the raw rows through the estimator's readout");
+    add_number(*command, "--mean-window", "N", o->mean_window, "the readout's mean window for --replay-rows (default: the estimator's)")
+        ->check(at_least(1))
+        ->needs(replay);
+    command->add_option("--predictions", o->predictions_file, "write every frame's true and predicted angles (CSV)")->type_name("FILE.csv");
+    finish(command, o, eval_command);
+  }
+  {
+    auto [command, o] = add("fit-guided", "Fits the model's pose-guided calibration on people it was not trained on and writes the model "
+                                          "with it.");
+    add_model_file(*command, o->model, "the model")->required();
+    command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
+    add_data_options(*command, *o, false);
+    command->add_option("--sequence", o->sequence_file, "the calibration sequence (default: the shipped calibration_glauser2019.json)")
+        ->check(kExistingFile)
+        ->type_name("FILE");
+    finish(command, o, fit_guided_command);
+  }
+  return commands;
 }
 
 }  // namespace glovepose::cli

@@ -1,5 +1,4 @@
-// glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin [--calibration-seconds S]] [--seconds N]
-//   A live view of the hand in the browser: a local web server (loopback only) whose page draws the
+// glovepose view: a live view of the hand in the browser: a local web server (loopback only) whose page draws the
 //   estimator's OpenXR joints in 3D with WebGL, the 25 angles, the trust flags, the calibration step
 //   with its target pose, and the latency. The glove is a simulated new user streamed in real time
 //   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove's
@@ -21,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -44,45 +44,6 @@ struct ViewOptions {
   double calibration_seconds = 30.0;  // --stdin: stream time the user moves through extreme poses
   double seconds = 0.0;  // 0: until the glove's stream ends (or Ctrl-C)
 };
-
-[[noreturn]] void usage(const std::string& problem) {
-  exit_with_usage("view", problem,
-                  "usage: glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin [--calibration-seconds S]]\n"
-                  "                      [--seconds N]\n"
-                  "  --port P       port on 127.0.0.1 (default 8765; 0: any free one); the address is printed\n"
-                  "  --model FILE   weights (default: the shipped model)\n"
-                  "  --seed S       simulation seed of the simulated user (default 2026)\n"
-                  "  --replay FILE  a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time\n"
-                  "  --stdin        a real glove's rows on stdin, one 'row,value,timestamp' line each;\n"
-                  "                 the first --calibration-seconds of stream time calibrate (default 30)\n"
-                  "  --seconds N    stop serving after N seconds (default: when the stream ends)\n");
-}
-
-ViewOptions parse_options(int argc, char** argv) {
-  ViewOptions o;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--port") o.port = parse_number<int>(a, value());
-    else if (a == "--model") o.model = value();
-    else if (a == "--seed") o.seed = parse_number<std::uint64_t>(a, value());
-    else if (a == "--replay") o.replay = value();
-    else if (a == "--stdin") o.from_stdin = true;
-    else if (a == "--calibration-seconds") o.calibration_seconds = parse_number<double>(a, value());
-    else if (a == "--seconds") o.seconds = parse_number<double>(a, value());
-    else if (asks_for_help(a)) usage("");
-    else usage("unknown option " + a);
-  }
-  if (o.port < 0 || o.port > 65535) throw Error("--port " + std::to_string(o.port) + ", expected 0..65535");
-  if (!o.replay.empty() && o.from_stdin) usage("--replay and --stdin both given, expected one source");
-  if (!(o.calibration_seconds > 0.0) || !std::isfinite(o.calibration_seconds))
-    throw Error("--calibration-seconds " + std::to_string(o.calibration_seconds) + ", expected a positive time");
-  if (o.seconds < 0.0) throw Error("--seconds " + std::to_string(o.seconds) + ", expected a time of at least 0");
-  return o;
-}
 
 const char* const kFlagNames[] = {"readings rejected", "input clamped", "training calibration", "calibrating", "stale readings",
                                   "recovering",        "stuck rows",    "disconnected rows",     "outlier rows"};
@@ -206,10 +167,7 @@ void respond(int fd, const char* status, const char* type, const std::string& bo
                    "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + body);
 }
 
-}  // namespace
-
-int view(int argc, char** argv) {
-  const ViewOptions o = parse_options(argc, argv);
+int view(const ViewOptions& o) {
   const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
   if (!model->solver()) throw Error("the model's glove has no wiring to solve rows with, expected a model of a glove with a trace layout");
   NewUser user;
@@ -263,6 +221,30 @@ int view(int argc, char** argv) {
   }
   glove.join();
   return 0;
+}
+
+}  // namespace
+
+Command add_view(CLI::App& tool) {
+  auto o = std::make_shared<ViewOptions>();
+  CLI::App* command = tool.add_subcommand(
+      "view", "A live view of the hand in the browser: a local web server (loopback only) whose page draws the estimator's joints in 3D, "
+              "the 25 angles, the trust flags, the calibration step with its target pose, and the latency. The glove is a simulated new "
+              "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove's rows on stdin (--stdin).");
+  add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")->check(CLI::Range(0, 65535));
+  add_model_file(*command, o->model, "weights (default: the shipped model)");
+  add_number(*command, "--seed", "S", o->seed, "simulation seed of the simulated user (default 2026)");
+  CLI::Option* replay = command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
+                            ->check(kExistingFile)
+                            ->type_name("FILE");
+  CLI::Option* from_stdin = command->add_flag("--stdin", o->from_stdin, "a real glove's rows on stdin, one 'row,value,timestamp' line each; "
+                                                                         "the first --calibration-seconds of stream time calibrate")
+                                ->excludes(replay);
+  add_number(*command, "--calibration-seconds", "S", o->calibration_seconds, "--stdin: stream time of the calibration (default 30)")
+      ->check(above(0.0))
+      ->needs(from_stdin);
+  add_number(*command, "--seconds", "N", o->seconds, "stop serving after N seconds (default: when the stream ends)")->check(at_least(0.0));
+  return {command, [o] { return view(*o); }};
 }
 
 }  // namespace glovepose::cli
