@@ -8,47 +8,37 @@
 using namespace glovepose;
 
 namespace {
-// The paper's glove with its sizes fixed at compile time (GloveSolver) or at run time.
-using DynamicSolver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
-
-template <typename Solver>
-std::shared_ptr<const Solver> solver() {
-  static const auto s = std::make_shared<const Solver>(sensor::TraceLayout::glauser2019());
+std::shared_ptr<const sensor::CapacitanceSolver> solver() {
+  static const auto s = std::make_shared<const sensor::CapacitanceSolver>(sensor::TraceLayout::glauser2019());
   return s;
 }
-template <typename Solver>
-typename Solver::Measurements measurements() {
-  const typename Solver::Capacitances truth = Solver::Capacitances::LinSpaced(44, 10.0, 20.0);
-  return solver<Solver>()->measurement_matrix() * truth;
+sensor::CapacitanceSolver::Measurements measurements() {
+  return solver()->measurement_matrix() * sensor::CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 20.0);
 }
 }  // namespace
 
 // One least-squares solve of the paper's glove (44 x 180 operator times C_m).
-template <typename Solver>
 static void BM_CapacitanceSolve(benchmark::State& state) {
-  const auto cm = measurements<Solver>();
-  typename Solver::Capacitances cc(44);
+  const auto cm = measurements();
+  sensor::CapacitanceSolver::Capacitances cc(44);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(solver<Solver>()->solve(cm, cc));
+    benchmark::DoNotOptimize(solver()->solve(cm, cc));
     benchmark::ClobberMemory();
   }
 }
-BENCHMARK_TEMPLATE(BM_CapacitanceSolve, sensor::GloveSolver);
-BENCHMARK_TEMPLATE(BM_CapacitanceSolve, DynamicSolver);
+BENCHMARK(BM_CapacitanceSolve);
 
 // One frame's worth of row readings (180), with the solves every 16 rows they trigger.
-template <typename Solver>
 static void BM_ReadoutFrameOfRows(benchmark::State& state) {
-  sensor::Readout<Solver::Measurements::RowsAtCompileTime, Solver::Capacitances::RowsAtCompileTime> readout(solver<Solver>());
-  const auto cm = measurements<Solver>();
+  sensor::Readout readout(solver());
+  const auto cm = measurements();
   double t = 0.0;
   for (auto _ : state) {
     for (int r = 0; r < 180; ++r) benchmark::DoNotOptimize(readout.push_row(r, cm(r), t += 1e-4));
   }
   state.SetItemsProcessed(state.iterations() * 180);
 }
-BENCHMARK_TEMPLATE(BM_ReadoutFrameOfRows, sensor::GloveSolver);
-BENCHMARK_TEMPLATE(BM_ReadoutFrameOfRows, DynamicSolver);
+BENCHMARK(BM_ReadoutFrameOfRows);
 
 // Calibrate + grid-map one frame of 44 cells.
 static void BM_NormalizeAndMap(benchmark::State& state) {

@@ -16,30 +16,30 @@ using namespace glovepose;
 using namespace glovepose::sensor;
 
 namespace {
-std::shared_ptr<const GloveSolver> glove_solver() {
-  static const auto solver = std::make_shared<const GloveSolver>(TraceLayout::glauser2019());
+std::shared_ptr<const CapacitanceSolver> glove_solver() {
+  static const auto solver = std::make_shared<const CapacitanceSolver>(TraceLayout::glauser2019());
   return solver;
 }
 constexpr double kRowPeriod = 1.0 / (60.0 * 180.0);  // 180 rows per frame, 60 frames per second
 
 // Measurements of frame f: M times cells that drift linearly with f.
-GloveSolver::Measurements frame_measurements(int f) {
-  const GloveSolver::Capacitances cells = GloveSolver::Capacitances::LinSpaced(10.0, 20.0).array() + 0.1 * f;
+CapacitanceSolver::Measurements frame_measurements(int f) {
+  const CapacitanceSolver::Capacitances cells = CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 20.0).array() + 0.1 * f;
   return glove_solver()->measurement_matrix() * cells;
 }
 }  // namespace
 
 TEST_CASE("readout: a whole frame is solved at once") {
-  GloveReadout readout(glove_solver());
+  Readout readout(glove_solver());
   CHECK(readout.push_frame(frame_measurements(0), 0.0) == Status::Solved);
-  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 20.0);
+  const CapacitanceSolver::Capacitances truth = CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 20.0);
   CHECK((readout.frame().cells - truth).cwiseAbs().maxCoeff() < 1e-10);
   CHECK(readout.frame().sequence == 1);
   CHECK(readout.frame().oldest_age == 0.0);
 }
 
 TEST_CASE("readout: rows one at a time, NotReady until every row was read, solved at once, then a solve every 16 updates") {
-  GloveReadout readout(glove_solver());
+  Readout readout(glove_solver());
   int solves = 0, not_ready = 0;
   std::vector<int> solve_positions;
   for (int f = 0; f < 3; ++f) {
@@ -68,7 +68,7 @@ TEST_CASE("readout: the solve uses the mean of each row's last 5 readings, and r
   ReadoutConfig config;
   config.mean_window = 5;
   config.solve_every = 16;
-  GloveReadout readout(glove_solver(), config);
+  Readout readout(glove_solver(), config);
   // Stream 12 frames row by row; stop right after a solve in the last frame.
   Status last = Status::Ok;
   int stop_f = -1, stop_r = -1;
@@ -85,7 +85,7 @@ TEST_CASE("readout: the solve uses the mean of each row's last 5 readings, and r
   }
   REQUIRE(stop_f == 11);
   // Row q <= stop_r holds frames f-4..f, row q > stop_r holds frames f-5..f-1.
-  GloveSolver::Measurements expected_mean;
+  CapacitanceSolver::Measurements expected_mean(180);
   for (int q = 0; q < 180; ++q) {
     const int newest = q <= stop_r ? stop_f : stop_f - 1;
     double sum = 0.0;
@@ -93,7 +93,7 @@ TEST_CASE("readout: the solve uses the mean of each row's last 5 readings, and r
     expected_mean(q) = sum / 5.0;
   }
   CHECK((readout.filtered_measurements() - expected_mean).cwiseAbs().maxCoeff() < 1e-9);
-  GloveSolver::Capacitances expected_cells;
+  CapacitanceSolver::Capacitances expected_cells(44);
   REQUIRE(glove_solver()->solve(expected_mean, expected_cells) == Status::Ok);
   CHECK((readout.frame().cells - expected_cells).cwiseAbs().maxCoeff() < 1e-9);
   // The oldest reading used is row stop_r + 1 of frame stop_f - 5.
@@ -108,21 +108,21 @@ TEST_CASE("readout: window and solve interval are configurable") {
   ReadoutConfig config;
   config.mean_window = 1;
   config.solve_every = 180;
-  GloveReadout readout(glove_solver(), config);
+  Readout readout(glove_solver(), config);
   int solves = 0;
   for (int f = 0; f < 4; ++f) {
     const auto cm = frame_measurements(f);
     for (int r = 0; r < 180; ++r) solves += readout.push_row(r, cm(r), (f * 180 + r) * kRowPeriod) == Status::Solved;
   }
   CHECK(solves == 4);  // once at the end of every full cycle
-  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 20.0).array() + 0.1 * 3;
+  const CapacitanceSolver::Capacitances truth = CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 20.0).array() + 0.1 * 3;
   CHECK((readout.frame().cells - truth).cwiseAbs().maxCoeff() < 1e-9);  // window 1: no averaging
   config.mean_window = 0;
-  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("mean_window 0, expected at least 1"), Error);
+  CHECK_THROWS_WITH_AS(Readout(glove_solver(), config), doctest::Contains("mean_window 0, expected at least 1"), Error);
   config.mean_window = 5;
   config.solve_every = 0;
-  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("solve_every 0, expected at least 1"), Error);
-  CHECK_THROWS_WITH_AS(GloveReadout(nullptr), doctest::Contains("no solver"), Error);
+  CHECK_THROWS_WITH_AS(Readout(glove_solver(), config), doctest::Contains("solve_every 0, expected at least 1"), Error);
+  CHECK_THROWS_WITH_AS(Readout(nullptr), doctest::Contains("no solver"), Error);
 }
 
 TEST_CASE("readout: streamed row by row, a static hand's cell estimates are the least-squares solve with its noise, w readings s^2/w") {
@@ -131,14 +131,14 @@ TEST_CASE("readout: streamed row by row, a static hand's cell estimates are the 
   // normal equations, apart from the readout's QR), and the estimates' spread s^2 (M^T M)^-1 / w.
   const auto& m = glove_solver()->measurement_matrix();
   const Eigen::MatrixXd normal_inverse = (m.transpose() * m).ldlt().solve(Eigen::MatrixXd::Identity(44, 44));
-  const GloveSolver::Capacitances truth = GloveSolver::Capacitances::LinSpaced(10.0, 30.0);
-  const GloveSolver::Measurements clean = m * truth;
+  const CapacitanceSolver::Capacitances truth = CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 30.0);
+  const CapacitanceSolver::Measurements clean = m * truth;
   const double sigma = 0.05;  // pF per reading
   for (int window : {1, 4}) {
     CAPTURE(window);
     ReadoutConfig config;
     config.mean_window = window;
-    GloveReadout readout(glove_solver(), config);
+    Readout readout(glove_solver(), config);
     std::mt19937 rng(17 + window);
     std::normal_distribution<double> noise(0.0, sigma);
     std::vector<std::vector<double>> held(180);  // each row's readings, newest last
@@ -188,8 +188,8 @@ TEST_CASE("readout: a row is an outlier when its residual exceeds max_reading_re
   config.mean_window = 4;
   const double bound = config.max_reading_residual;
   const auto stream = [&](double residual, int frames) {
-    GloveReadout readout(glove_solver(), config);
-    GloveSolver::Measurements cm = frame_measurements(0);
+    Readout readout(glove_solver(), config);
+    CapacitanceSolver::Measurements cm = frame_measurements(0);
     cm(q) += residual / leverage_left;
     for (int f = 0; f < frames; ++f) REQUIRE(readout.push_frame(cm, f * 180 * kRowPeriod) == Status::Solved);
     CHECK(readout.frame().health.max_residual == doctest::Approx(residual).epsilon(1e-6));
@@ -204,12 +204,12 @@ TEST_CASE("readout: a row is an outlier when its residual exceeds max_reading_re
   CHECK(stream(0.7 * bound, 4) == 1);
   CHECK(stream(1.1 * bound, 1) == 1);
   config.max_reading_residual = 0.0;
-  CHECK_THROWS_WITH_AS(GloveReadout(glove_solver(), config), doctest::Contains("max_reading_residual > 0"), Error);
+  CHECK_THROWS_WITH_AS(Readout(glove_solver(), config), doctest::Contains("max_reading_residual > 0"), Error);
 }
 
 TEST_CASE("readout: bad readings get a status, are not mixed in, and the next good rows are used normally") {
-  GloveReadout clean(glove_solver());
-  GloveReadout dirty(glove_solver());
+  Readout clean(glove_solver());
+  Readout dirty(glove_solver());
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   std::uint32_t injected = 0;
@@ -237,7 +237,7 @@ TEST_CASE("readout: bad readings get a status, are not mixed in, and the next go
   CHECK(injected > 0);
 
   // A whole frame: bad rows are skipped and counted, the rest is solved.
-  GloveReadout framed(glove_solver());
+  Readout framed(glove_solver());
   REQUIRE(framed.push_frame(frame_measurements(0), 0.0) == Status::Solved);
   auto cm = frame_measurements(1);
   cm(3) = nan;
@@ -251,14 +251,14 @@ TEST_CASE("readout: bad readings get a status, are not mixed in, and the next go
 }
 
 TEST_CASE("readout: reset forgets all readings") {
-  GloveReadout readout(glove_solver());
+  Readout readout(glove_solver());
   REQUIRE(readout.push_frame(frame_measurements(0), 5.0) == Status::Solved);
   readout.reset();
   CHECK(readout.push_row(0, 1.0, 0.0) == Status::NotReady);  // earlier timestamp accepted after reset
 }
 
 TEST_CASE("readout: per-reading calls allocate nothing") {
-  GloveReadout readout(glove_solver());
+  Readout readout(glove_solver());
   const auto cm = frame_measurements(0);
   const std::size_t allocations = test::allocations_during([&] {
     for (int f = 0; f < 3; ++f)

@@ -442,7 +442,7 @@ class GlovePoseEstimator {
 
   std::shared_ptr<const Model> model_;
   EstimatorConfig config_;
-  std::optional<sensor::Readout<Eigen::Dynamic, Eigen::Dynamic>> readout_;
+  std::optional<sensor::Readout> readout_;
   sensor::OnTheFlyCalibrator calibrator_;
   bool collecting_ = false;
   double next_calibration_sample_ = -std::numeric_limits<double>::infinity();

@@ -47,7 +47,7 @@ struct PoseModelOptions {
 class PoseModel {
  public:
   /// @brief The solver of a glove wiring of any size.
-  using Solver = sensor::CapacitanceSolver<Eigen::Dynamic, Eigen::Dynamic>;
+  using Solver = sensor::CapacitanceSolver;
   /// @brief The network: the U-Net or the FCN the model file holds.
   using Network = PoseNetwork;
 

@@ -7,10 +7,10 @@
 int main() {
   using namespace glovepose;
   const auto layout = sensor::TraceLayout::glauser2019();
-  auto solver = std::make_shared<const sensor::GloveSolver>(layout);
-  sensor::GloveSolver::Capacitances truth = sensor::GloveSolver::Capacitances::LinSpaced(1.0, 2.0);
-  const sensor::GloveSolver::Measurements measured = solver->measurement_matrix() * truth;
-  sensor::GloveReadout readout(solver);
+  auto solver = std::make_shared<const sensor::CapacitanceSolver>(layout);
+  sensor::CapacitanceSolver::Capacitances truth = sensor::CapacitanceSolver::Capacitances::LinSpaced(44, 1.0, 2.0);
+  const sensor::CapacitanceSolver::Measurements measured = solver->measurement_matrix() * truth;
+  sensor::Readout readout(solver);
   if (readout.push_frame(measured, 0.0) != Status::Solved) return 1;
   if ((readout.frame().cells - truth).cwiseAbs().maxCoeff() > 1e-9) return 2;
   std::printf("glovepose %s: solved %d cells, cond(M) = %.2f\n", kVersion, layout.cell_count(),

@@ -64,9 +64,8 @@ struct ReadoutHealth {
 };
 
 /// @brief One solved frame of cell capacitances.
-template <int Cells>
 struct CapacitanceFrame {
-  Eigen::Matrix<double, Cells, 1> cells;  ///< C_c, one value per cell.
+  Eigen::VectorXd cells;                  ///< C_c, one value per cell.
   double timestamp = 0.0;                 ///< Timestamp of the newest reading that went into the solve.
   double oldest_age = 0.0;                ///< timestamp minus the timestamp of the oldest reading used.
   std::uint32_t rejected = 0;             ///< Readings rejected since the previous solve.
@@ -78,15 +77,14 @@ struct CapacitanceFrame {
 ///
 /// The solver is shared (immutable); the rings are this stream's own and are allocated once, at
 /// construction. All per-reading calls are noexcept and allocation-free.
-template <int Rows = kGlauser2019Rows, int Cells = kGlauser2019Cells>
 class Readout {
  public:
   /// @brief The solver type this readout feeds.
-  using Solver = CapacitanceSolver<Rows, Cells>;
+  using Solver = CapacitanceSolver;
   /// @brief One frame of compound measurements.
-  using Measurements = typename Solver::Measurements;
+  using Measurements = Solver::Measurements;
   /// @brief A solved frame.
-  using Frame = CapacitanceFrame<Cells>;
+  using Frame = CapacitanceFrame;
 
   /// @brief A readout over a shared solver. Throws glovepose::Error for a null solver or a window
   /// or solve interval below 1.
@@ -300,8 +298,5 @@ class Readout {
   Measurements residual_;
   Frame frame_;
 };
-
-/// @brief The readout of the paper's glove.
-using GloveReadout = Readout<kGlauser2019Rows, kGlauser2019Cells>;
 
 }  // namespace glovepose::sensor

@@ -79,8 +79,8 @@ struct Recording {
 /// @brief Records `motion` through the glove physics. Deterministic in `seed`.
 inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii,
                         std::uint64_t seed, const RecordingConfig& config = {}) {
-  static const std::shared_ptr<const sensor::GloveSolver> solver =
-      std::make_shared<const sensor::GloveSolver>(sensor::TraceLayout::glauser2019());
+  static const std::shared_ptr<const sensor::CapacitanceSolver> solver =
+      std::make_shared<const sensor::CapacitanceSolver>(sensor::TraceLayout::glauser2019());
   // Cells each row sums (M's ones).
   static const std::vector<std::vector<int>> row_cells = [] {
     const Eigen::MatrixXd m = sensor::TraceLayout::glauser2019().measurement_matrix();
@@ -93,7 +93,7 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   core::Rng rng(seed);
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
-  sensor::GloveReadout readout(solver, config.readout);
+  sensor::Readout readout(solver, config.readout);
   const int cycles = static_cast<int>(std::floor(motion.duration() * config.cycle_rate));
 
   Recording rec;

@@ -30,9 +30,9 @@ inline void replay_rows(Dataset& data, const sensor::ReadoutConfig& config) {
     throw Error("replay: the dataset has " + std::to_string(data.row_count) + " raw rows per frame of glove '" + data.glove_layout() +
                 "', expected the " + std::to_string(layout.row_count()) + " rows of '" + layout.id() +
                 "' (glovepose simulate --raw-rows)");
-  const auto solver = std::make_shared<const sensor::GloveSolver>(layout);
+  const auto solver = std::make_shared<const sensor::CapacitanceSolver>(layout);
   const double row_period = 1.0 / (data.frame_rate() * static_cast<double>(data.row_count));
-  std::optional<sensor::GloveReadout> readout;
+  std::optional<sensor::Readout> readout;
   std::int64_t current = -1;
   bool solved = false;
   for (std::size_t f = 0; f < data.frames(); ++f) {
