@@ -18,7 +18,7 @@
 #include <xsimd/xsimd.hpp>
 
 #if defined(__AVX512VNNI__)
-#include <immintrin.h>
+#  include <immintrin.h>
 #endif
 
 #include <algorithm>
@@ -59,7 +59,7 @@ static void BM_PeakDpwssd(benchmark::State& state) {
   constexpr long kRounds = 1 << 16;
   for (auto _ : state) {
     for (long n = 0; n < kRounds; ++n)
-#pragma GCC unroll 16
+#  pragma GCC unroll 16
       for (int i = 0; i < kChains; ++i) acc[i] = _mm512_dpwssd_epi32(acc[i], a, b);
     benchmark::DoNotOptimize(acc);
   }
@@ -112,8 +112,8 @@ static void BM_StreamRows(benchmark::State& state) {
     benchmark::DoNotOptimize(sum);
   }
   // Bytes of the rows read, averaged over the patterns.
-  state.SetBytesProcessed(
-      static_cast<std::int64_t>(static_cast<double>(state.iterations()) * static_cast<double>(chosen * kRowBytes) / static_cast<double>(pattern_count)));
+  state.SetBytesProcessed(static_cast<std::int64_t>(static_cast<double>(state.iterations()) * static_cast<double>(chosen * kRowBytes) /
+                                                    static_cast<double>(pattern_count)));
 }
 BENCHMARK(BM_StreamRows)->ArgNames({"KiB", "patterns"})->Args({4224, 1})->Args({4224, 16});
 

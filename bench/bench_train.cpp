@@ -45,5 +45,12 @@ void BM_TrainStep(benchmark::State& state) {
 }
 }  // namespace
 
-BENCHMARK(BM_TrainStep)->Args({0, 64, 1024, 1})->Args({0, 64, 1024, 2})->Args({0, 100, 1024, 2})->Args({0, 64, 256, 2})
-    ->Args({0, 64, 64, 2})->Args({1, 2048, 1024, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TrainStep)
+    ->Args({0, 64, 1024, 1})
+    ->Args({0, 64, 1024, 2})
+    ->Args({0, 100, 1024, 2})
+    ->Args({0, 64, 256, 2})
+    ->Args({0, 64, 64, 2})
+    ->Args({1, 2048, 1024, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();

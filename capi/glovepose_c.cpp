@@ -118,7 +118,8 @@ glovepose_result fail(glovepose_result code, const char* message) noexcept {
 #if defined(__GNUC__) || defined(__clang__)
 __attribute__((format(printf, 2, 3)))
 #endif
-glovepose_result failf(glovepose_result code, const char* format, ...) noexcept {
+glovepose_result
+failf(glovepose_result code, const char* format, ...) noexcept {
   std::va_list args;
   va_start(args, format);
   std::vsnprintf(last_error_text, kLastErrorCapacity, format, args);
@@ -178,8 +179,7 @@ const glovepose::PoseModel* model_of(const glovepose_model* handle) noexcept {
 }
 
 glovepose::GlovePoseEstimator* estimator_of(const glovepose_estimator* handle) noexcept {
-  return handle != nullptr && handle->tag == kEstimatorTag ? &const_cast<glovepose_estimator*>(handle)->estimator
-                                                            : nullptr;
+  return handle != nullptr && handle->tag == kEstimatorTag ? &const_cast<glovepose_estimator*>(handle)->estimator : nullptr;
 }
 
 // Copies `text` into a C buffer of `capacity` bytes, NUL-terminated; a text too long is cut before
@@ -210,8 +210,8 @@ glovepose::EstimatorConfig to_config(const glovepose_estimator_config& c) {
   config.calibration.min_relative_range = c.calibration_min_relative_range;
   config.calibration.clamp_limit = c.calibration_clamp_limit;
   if (c.smoothing != 0)
-    config.smoothing = glovepose::filter::OneEuroConfig{c.smoothing_frequency, c.smoothing_min_cutoff, c.smoothing_beta,
-                                                        c.smoothing_d_cutoff};
+    config.smoothing =
+        glovepose::filter::OneEuroConfig{c.smoothing_frequency, c.smoothing_min_cutoff, c.smoothing_beta, c.smoothing_d_cutoff};
   config.joint_transforms = c.joint_transforms != 0;
   return config;
 }
@@ -258,17 +258,28 @@ const char* glovepose_last_error(void) noexcept { return last_error_text; }
 const char* glovepose_result_name(glovepose_result result) noexcept {
   if (result >= GLOVEPOSE_OK && result <= GLOVEPOSE_UNCALIBRATED) return glovepose::to_string(static_cast<Status>(result));
   switch (result) {
-    case GLOVEPOSE_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case GLOVEPOSE_ERROR_INVALID_HANDLE: return "invalid handle";
-    case GLOVEPOSE_ERROR_STRUCT_SIZE: return "unknown struct size";
-    case GLOVEPOSE_ERROR_FILE_NOT_FOUND: return "file not found";
-    case GLOVEPOSE_ERROR_INVALID_FILE: return "invalid file";
-    case GLOVEPOSE_ERROR_IO: return "i/o error";
-    case GLOVEPOSE_ERROR_CALIBRATION_STATE: return "calibration state";
-    case GLOVEPOSE_ERROR_DISABLED: return "disabled";
-    case GLOVEPOSE_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case GLOVEPOSE_ERROR_INTERNAL: return "internal error";
-    default: return "unknown result";
+    case GLOVEPOSE_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case GLOVEPOSE_ERROR_INVALID_HANDLE:
+      return "invalid handle";
+    case GLOVEPOSE_ERROR_STRUCT_SIZE:
+      return "unknown struct size";
+    case GLOVEPOSE_ERROR_FILE_NOT_FOUND:
+      return "file not found";
+    case GLOVEPOSE_ERROR_INVALID_FILE:
+      return "invalid file";
+    case GLOVEPOSE_ERROR_IO:
+      return "i/o error";
+    case GLOVEPOSE_ERROR_CALIBRATION_STATE:
+      return "calibration state";
+    case GLOVEPOSE_ERROR_DISABLED:
+      return "disabled";
+    case GLOVEPOSE_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case GLOVEPOSE_ERROR_INTERNAL:
+      return "internal error";
+    default:
+      return "unknown result";
   }
 }
 
@@ -395,19 +406,20 @@ int32_t glovepose_model_calibration_step_count(const glovepose_model* model) noe
 }
 
 glovepose_result glovepose_model_get_calibration_step(const glovepose_model* model, int32_t step,
-                                                  glovepose_calibration_step* out) noexcept {
+                                                      glovepose_calibration_step* out) noexcept {
   const glovepose::PoseModel* m = model_of(model);
   if (m == nullptr) return invalid_model();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: out is NULL");
   if (out->struct_size != sizeof(glovepose_calibration_step))
-    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_model_get_calibration_step: out->struct_size is not "
-                                             "sizeof(glovepose_calibration_step) (call glovepose_calibration_step_init first)");
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                "glovepose_model_get_calibration_step: out->struct_size is not "
+                "sizeof(glovepose_calibration_step) (call glovepose_calibration_step_init first)");
   if (!m->pose_offset())
     return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: the model has no guided calibration sequence");
   const auto& steps = m->pose_offset()->sequence().steps();
   if (step < 0 || static_cast<std::size_t>(step) >= steps.size())
-    return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: step %d, expected 0..%d",
-                 static_cast<int>(step), static_cast<int>(steps.size()) - 1);
+    return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_get_calibration_step: step %d, expected 0..%d", static_cast<int>(step),
+                 static_cast<int>(steps.size()) - 1);
   out->step = step;
   out->step_count = static_cast<int32_t>(steps.size());
   out->start_seconds = 0.0;
@@ -461,8 +473,7 @@ glovepose_result glovepose_estimator_create(const glovepose_model* model, const 
 
 glovepose_result glovepose_estimator_create_for_hand(const glovepose_model* model, const glovepose_estimator_config* config,
                                                      const glovepose_hand_options* options, glovepose_estimator** out_estimator) noexcept {
-  if (out_estimator == nullptr)
-    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_create: out_estimator is NULL");
+  if (out_estimator == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_create: out_estimator is NULL");
   *out_estimator = nullptr;
   if (model_of(model) == nullptr) return invalid_model();
   glovepose_estimator_config settings;
@@ -496,8 +507,7 @@ void glovepose_estimator_free(glovepose_estimator* estimator) noexcept {
   delete estimator;
 }
 
-glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row, double value,
-                                              double timestamp) noexcept {
+glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row, double value, double timestamp) noexcept {
   glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   return to_result(e->push_row(row, value, timestamp));
@@ -510,8 +520,8 @@ glovepose_result glovepose_estimator_push_measurements(glovepose_estimator* esti
   return to_result(e->push_measurements(values, count, timestamp));
 }
 
-glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells, int32_t count,
-                                                double timestamp, double oldest_age) noexcept {
+glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells, int32_t count, double timestamp,
+                                                double oldest_age) noexcept {
   glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   return to_result(e->push_cells(cells, count, timestamp, oldest_age));
@@ -522,14 +532,14 @@ glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimat
   if (e == nullptr) return invalid_estimator();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_pose: out is NULL");
   if (out->struct_size != sizeof(glovepose_pose))
-    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_get_pose: out->struct_size is not sizeof(glovepose_pose) "
-                                             "(call glovepose_pose_init first)");
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                "glovepose_estimator_get_pose: out->struct_size is not sizeof(glovepose_pose) "
+                "(call glovepose_pose_init first)");
   copy_pose(e->pose(), *out);
   return GLOVEPOSE_OK;
 }
 
-glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator, glovepose_joint* out,
-                                                int32_t count) noexcept {
+glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator, glovepose_joint* out, int32_t count) noexcept {
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_joints: out is NULL");
@@ -547,8 +557,9 @@ glovepose_result glovepose_estimator_get_pose_at(const glovepose_estimator* esti
   if (e == nullptr) return invalid_estimator();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_pose_at: out is NULL");
   if (out->struct_size != sizeof(glovepose_predicted_pose))
-    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_estimator_get_pose_at: out->struct_size is not sizeof(glovepose_predicted_pose) "
-                                             "(call glovepose_predicted_pose_init first)");
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                "glovepose_estimator_get_pose_at: out->struct_size is not sizeof(glovepose_predicted_pose) "
+                "(call glovepose_predicted_pose_init first)");
   glovepose::PredictedPose pose;
   const Status status = e->pose_at(time, pose);
   if (status != Status::Ok) return to_result(status);
@@ -619,13 +630,14 @@ glovepose_result glovepose_latest_publish(glovepose_latest* latest, const glovep
   return GLOVEPOSE_OK;
 }
 
-glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose, glovepose_joint* joints,
-                                       int32_t joint_count, uint64_t* number) noexcept {
+glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose, glovepose_joint* joints, int32_t joint_count,
+                                       uint64_t* number) noexcept {
   const glovepose::LatestHand* l = latest_of(latest);
   if (l == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_read: not a snapshot from glovepose_latest_create");
   if (pose != nullptr && pose->struct_size != sizeof(glovepose_pose))
-    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_latest_read: pose->struct_size is not sizeof(glovepose_pose) "
-                                             "(call glovepose_pose_init first)");
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                "glovepose_latest_read: pose->struct_size is not sizeof(glovepose_pose) "
+                "(call glovepose_pose_init first)");
   if (joint_count != (joints == nullptr ? 0 : GLOVEPOSE_JOINT_COUNT))
     return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_latest_read: joint_count must be GLOVEPOSE_JOINT_COUNT (21) with joints, 0 without");
   glovepose::HandState state;
@@ -638,7 +650,7 @@ glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose
 }
 
 glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, const glovepose_estimator* estimator, double time,
-                                               glovepose_xr_hand* out) noexcept {
+                                                glovepose_xr_hand* out) noexcept {
   const glovepose::LatestHand* l = latest_of(latest);
   if (l == nullptr)
     return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_get_xr_joints: not a snapshot from glovepose_latest_create");
@@ -647,7 +659,8 @@ glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, 
   if (const glovepose_result bad = check_xr_hand(out, "glovepose_latest_get_xr_joints"); bad != GLOVEPOSE_OK) return bad;
   glovepose::HandState state;
   glovepose::PredictedPose pose;
-  const Status status = l->read(state) == 0 ? Status::NotReady : glovepose::predict(state, e->locator(), time, e->config().max_prediction, pose);
+  const Status status =
+      l->read(state) == 0 ? Status::NotReady : glovepose::predict(state, e->locator(), time, e->config().max_prediction, pose);
   if (status != Status::Ok) {
     out->active = 0;
     return to_result(status);
@@ -667,14 +680,14 @@ glovepose_result glovepose_calibration_start(glovepose_estimator* estimator) noe
   return GLOVEPOSE_OK;
 }
 
-glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator,
-                                                glovepose_calibration_progress* out) noexcept {
+glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator, glovepose_calibration_progress* out) noexcept {
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_calibration_get_progress: out is NULL");
   if (out->struct_size != sizeof(glovepose_calibration_progress))
-    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE, "glovepose_calibration_get_progress: out->struct_size is not "
-                                             "sizeof(glovepose_calibration_progress) (call glovepose_calibration_progress_init first)");
+    return fail(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                "glovepose_calibration_get_progress: out->struct_size is not "
+                "sizeof(glovepose_calibration_progress) (call glovepose_calibration_progress_init first)");
   const glovepose::CalibrationProgress p = e->calibration_progress();
   out->collecting = p.collecting ? 1 : 0;
   out->frames = p.frames;
@@ -685,8 +698,7 @@ glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* e
   return GLOVEPOSE_OK;
 }
 
-glovepose_result glovepose_calibration_get_step(const glovepose_estimator* estimator, int32_t* step,
-                                            double* sequence_seconds) noexcept {
+glovepose_result glovepose_calibration_get_step(const glovepose_estimator* estimator, int32_t* step, double* sequence_seconds) noexcept {
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   const glovepose::CalibrationProgress p = e->calibration_progress();
@@ -762,8 +774,8 @@ glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator,
                  static_cast<int>(count), cells);
   try {
     const glovepose::sensor::CalibrationRange range(Eigen::Map<const Eigen::VectorXd>(min, count),
-                                                    Eigen::Map<const Eigen::VectorXd>(max, count),
-                                                    e->model().glove().cell_names(), e->config().calibration);
+                                                    Eigen::Map<const Eigen::VectorXd>(max, count), e->model().glove().cell_names(),
+                                                    e->config().calibration);
     e->set_calibration(range);
     return GLOVEPOSE_OK;
   } catch (...) {
@@ -771,8 +783,7 @@ glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator,
   }
 }
 
-glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min, double* max,
-                                                 int32_t count) noexcept {
+glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min, double* max, int32_t count) noexcept {
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   if (min == nullptr || max == nullptr)

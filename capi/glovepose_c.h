@@ -175,22 +175,22 @@ typedef struct glovepose_latest glovepose_latest;
 
 /** @brief Settings of an estimator. Fill with glovepose_estimator_config_default(), then change fields. */
 typedef struct glovepose_estimator_config {
-  uint32_t struct_size;               /**< sizeof(glovepose_estimator_config) (80 in ABI 1). */
-  int32_t readout_mean_window;        /**< Readings per row averaged before a solve (default 1; the paper: 5). */
-  int32_t readout_solve_every;        /**< Solve after this many accepted row readings (default 16; 180 = once per cycle). */
-  int32_t calibration_median_window;  /**< Frames of the on-the-fly calibration's median; 0 (default): the glove's
-                                           median_seconds over the period frames are taken (20 for the built-in glove). */
-  double calibration_sample_period;   /**< Stream time between two frames the calibration takes, s (default 1/60;
-                                           longer when the glove description gives a slower rate_hz). */
+  uint32_t struct_size;                  /**< sizeof(glovepose_estimator_config) (80 in ABI 1). */
+  int32_t readout_mean_window;           /**< Readings per row averaged before a solve (default 1; the paper: 5). */
+  int32_t readout_solve_every;           /**< Solve after this many accepted row readings (default 16; 180 = once per cycle). */
+  int32_t calibration_median_window;     /**< Frames of the on-the-fly calibration's median; 0 (default): the glove's
+                                              median_seconds over the period frames are taken (20 for the built-in glove). */
+  double calibration_sample_period;      /**< Stream time between two frames the calibration takes, s (default 1/60;
+                                              longer when the glove description gives a slower rate_hz). */
   double calibration_min_relative_range; /**< A cell whose range is below this fraction of its value is flat;
                                               negative (default -1): the glove's (0.01 unless its description says otherwise). */
-  double calibration_clamp_limit;     /**< Normalised cells are clamped to +-this (default 1.5). */
-  int32_t smoothing;                  /**< 1: 1-euro smoothing of the angles; 0: the network's output (default 0). */
-  int32_t joint_transforms;           /**< 1: compute the 21-joint list with every pose (default 0). */
-  double smoothing_frequency;         /**< 1-euro: initial sampling rate, Hz (default 60). */
-  double smoothing_min_cutoff;        /**< 1-euro: cutoff at rest, Hz (default 1). */
-  double smoothing_beta;              /**< 1-euro: speed coefficient (default 0). */
-  double smoothing_d_cutoff;          /**< 1-euro: cutoff of the derivative's low-pass, Hz (default 1). */
+  double calibration_clamp_limit;        /**< Normalised cells are clamped to +-this (default 1.5). */
+  int32_t smoothing;                     /**< 1: 1-euro smoothing of the angles; 0: the network's output (default 0). */
+  int32_t joint_transforms;              /**< 1: compute the 21-joint list with every pose (default 0). */
+  double smoothing_frequency;            /**< 1-euro: initial sampling rate, Hz (default 60). */
+  double smoothing_min_cutoff;           /**< 1-euro: cutoff at rest, Hz (default 1). */
+  double smoothing_beta;                 /**< 1-euro: speed coefficient (default 0). */
+  double smoothing_d_cutoff;             /**< 1-euro: cutoff of the derivative's low-pass, Hz (default 1). */
 } glovepose_estimator_config;
 
 /** @brief The hand an estimator serves and how it predicts ahead (glovepose_estimator_create_for_hand).
@@ -243,14 +243,14 @@ typedef struct glovepose_xr_joint_velocity {
 
 /** @brief One hand's OpenXR joints at one time. Set struct_size (glovepose_xr_hand_init) first. */
 typedef struct glovepose_xr_hand {
-  uint32_t struct_size;  /**< sizeof(glovepose_xr_hand) (1912 in ABI 1); set by the caller. */
-  int32_t active;        /**< 1 when a pose exists (XrHandJointLocationsEXT::isActive). */
-  int32_t predicted;     /**< 1 when extrapolated past the newest pose. */
-  int32_t clamped;       /**< 1 when asked further ahead than max_prediction: located at the bound. */
-  int32_t handedness;    /**< GLOVEPOSE_HAND_*. */
-  int32_t reserved;      /**< 0. */
-  double time;           /**< The time located (the glove stream's clock, s). */
-  double horizon;        /**< time minus the newest pose's timestamp, s (> 0 predicted). */
+  uint32_t struct_size; /**< sizeof(glovepose_xr_hand) (1912 in ABI 1); set by the caller. */
+  int32_t active;       /**< 1 when a pose exists (XrHandJointLocationsEXT::isActive). */
+  int32_t predicted;    /**< 1 when extrapolated past the newest pose. */
+  int32_t clamped;      /**< 1 when asked further ahead than max_prediction: located at the bound. */
+  int32_t handedness;   /**< GLOVEPOSE_HAND_*. */
+  int32_t reserved;     /**< 0. */
+  double time;          /**< The time located (the glove stream's clock, s). */
+  double horizon;       /**< time minus the newest pose's timestamp, s (> 0 predicted). */
   glovepose_xr_joint_location locations[GLOVEPOSE_XR_JOINT_COUNT]; /**< XrHandJointEXT order. */
   glovepose_xr_joint_velocity velocities[GLOVEPOSE_XR_JOINT_COUNT];
 } glovepose_xr_hand;
@@ -271,13 +271,13 @@ typedef struct glovepose_predicted_pose {
 
 /** @brief How far an on-the-fly calibration has come, and the range in use. */
 typedef struct glovepose_calibration_progress {
-  uint32_t struct_size;      /**< sizeof(glovepose_calibration_progress) (32 in ABI 1); set by the caller. */
-  int32_t collecting;        /**< 1 between start and finish/cancel. */
-  int64_t frames;            /**< Frames taken so far. */
-  int32_t frames_needed;     /**< Frames before finish can succeed (the median window). */
-  int32_t ready;             /**< 1 when finish would succeed now. */
-  int32_t source;            /**< GLOVEPOSE_CALIBRATION_* of the range in use. */
-  int32_t flat_cells;        /**< Cells of the range in use too flat to normalise by (they read 0); 0 without a range. */
+  uint32_t struct_size;  /**< sizeof(glovepose_calibration_progress) (32 in ABI 1); set by the caller. */
+  int32_t collecting;    /**< 1 between start and finish/cancel. */
+  int64_t frames;        /**< Frames taken so far. */
+  int32_t frames_needed; /**< Frames before finish can succeed (the median window). */
+  int32_t ready;         /**< 1 when finish would succeed now. */
+  int32_t source;        /**< GLOVEPOSE_CALIBRATION_* of the range in use. */
+  int32_t flat_cells;    /**< Cells of the range in use too flat to normalise by (they read 0); 0 without a range. */
 } glovepose_calibration_progress;
 
 /** @brief One step of the model's guided calibration sequence: what to show the user. */
@@ -325,8 +325,7 @@ GLOVEPOSE_C_API int32_t glovepose_xr_joint_parent(int32_t joint) GLOVEPOSE_C_NOE
  * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE / _INVALID_ARGUMENT /
  * _OUT_OF_MEMORY with a message naming the file.
  */
-GLOVEPOSE_C_API glovepose_result glovepose_model_load(const char* model_path, int32_t weight_storage,
-                                                      const char* glove_description_path,
+GLOVEPOSE_C_API glovepose_result glovepose_model_load(const char* model_path, int32_t weight_storage, const char* glove_description_path,
                                                       glovepose_model** out_model) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Releases the caller's reference. Estimators created from the model keep it alive until
  * they are freed. NULL is ignored. */
@@ -350,7 +349,7 @@ GLOVEPOSE_C_API int32_t glovepose_model_calibration_step_count(const glovepose_m
  * (struct_size set by glovepose_calibration_step_init). @return GLOVEPOSE_OK, _INVALID_HANDLE,
  * _INVALID_ARGUMENT (out NULL, no sequence, step out of range) or _STRUCT_SIZE. */
 GLOVEPOSE_C_API glovepose_result glovepose_model_get_calibration_step(const glovepose_model* model, int32_t step,
-                                                                  glovepose_calibration_step* out) GLOVEPOSE_C_NOEXCEPT;
+                                                                      glovepose_calibration_step* out) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- estimator ----------------------------------------------------------------------------- */
 
@@ -365,8 +364,7 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_config_default(glovepose_es
  * @return GLOVEPOSE_OK, or _INVALID_HANDLE / _STRUCT_SIZE / _INVALID_ARGUMENT (bad settings, named
  * in the message) / _OUT_OF_MEMORY.
  */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_create(const glovepose_model* model,
-                                                            const glovepose_estimator_config* config,
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_create(const glovepose_model* model, const glovepose_estimator_config* config,
                                                             glovepose_estimator** out_estimator) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Frees an estimator. NULL is ignored. */
 /** @brief Fills *options with the defaults (a right hand) and sets struct_size. */
@@ -374,8 +372,7 @@ GLOVEPOSE_C_API glovepose_result glovepose_hand_options_default(glovepose_hand_o
 /** @brief glovepose_estimator_create for a given hand: `options` NULL means the defaults (right hand,
  * glovepose_estimator_create's behaviour). A left glove is the right glove's sensor sheet turned
  * over, so the same model serves it and the joints come out mirrored. */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_create_for_hand(const glovepose_model* model,
-                                                                     const glovepose_estimator_config* config,
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_create_for_hand(const glovepose_model* model, const glovepose_estimator_config* config,
                                                                      const glovepose_hand_options* options,
                                                                      glovepose_estimator** out_estimator) GLOVEPOSE_C_NOEXCEPT;
 GLOVEPOSE_C_API void glovepose_estimator_free(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
@@ -386,18 +383,16 @@ GLOVEPOSE_C_API void glovepose_estimator_free(glovepose_estimator* estimator) GL
  * GLOVEPOSE_NOT_READY when accepted without a new pose; GLOVEPOSE_UNCALIBRATED when a frame was
  * solved without a calibration range; a rejection status (3..7); _INVALID_HANDLE.
  */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row,
-                                                              double value, double timestamp) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_row(glovepose_estimator* estimator, int32_t row, double value,
+                                                              double timestamp) GLOVEPOSE_C_NOEXCEPT;
 /** @brief A whole frame of `count` (= row_count) compound measurements at `timestamp`, solved at
  * once; bad rows are skipped and counted. Returns as glovepose_estimator_push_row. */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_measurements(glovepose_estimator* estimator,
-                                                                       const double* values, int32_t count,
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_measurements(glovepose_estimator* estimator, const double* values, int32_t count,
                                                                        double timestamp) GLOVEPOSE_C_NOEXCEPT;
 /** @brief A frame of `count` (= cell_count) already solved cell capacitances at `timestamp`;
  * `oldest_age` is the age of its oldest reading (0 if unknown). Returns as glovepose_estimator_push_row. */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells,
-                                                                int32_t count, double timestamp,
-                                                                double oldest_age) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_cells(glovepose_estimator* estimator, const double* cells, int32_t count,
+                                                                double timestamp, double oldest_age) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Copies the latest pose into *out (out->valid is 0 before the first pose).
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimator,
@@ -405,8 +400,8 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose(const glovepose_es
 /** @brief Copies the latest joint list into out[0..count-1]; `count` must be GLOVEPOSE_JOINT_COUNT.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out), GLOVEPOSE_SIZE_MISMATCH
  * (wrong count) or _DISABLED (joint_transforms was off in the config). */
-GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator,
-                                                                glovepose_joint* out, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_joints(const glovepose_estimator* estimator, glovepose_joint* out,
+                                                                int32_t count) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Copies the latest solved cell capacitances (pF, the network's input before calibration)
  * into out[0..count-1]; `count` must be the model's cell count.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or GLOVEPOSE_SIZE_MISMATCH. */
@@ -436,16 +431,15 @@ GLOVEPOSE_C_API void glovepose_latest_free(glovepose_latest* latest) GLOVEPOSE_C
  * pose and joint list the newest. Per-frame: wait-free, allocation-free; call it after a push that
  * returned GLOVEPOSE_SOLVED. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_latest_publish(glovepose_latest* latest,
-                                                         const glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+                                                          const glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Reader, any thread, any number of them: copies the newest published pose into *pose and
  * its joint list into joints[0..joint_count-1] (either may be NULL; joint_count must then be 0, else
  * GLOVEPOSE_JOINT_COUNT; without joint transforms in the estimator, rest values), and its number
  * (1 for the first publish; 0: nothing published yet, outputs untouched) into *number if not NULL.
  * Never blocks the writer, never returns a torn pose, allocation-free.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _STRUCT_SIZE (pose->struct_size) or GLOVEPOSE_SIZE_MISMATCH. */
-GLOVEPOSE_C_API glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose,
-                                                      glovepose_joint* joints, int32_t joint_count,
-                                                      uint64_t* number) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_latest_read(const glovepose_latest* latest, glovepose_pose* pose, glovepose_joint* joints,
+                                                       int32_t joint_count, uint64_t* number) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- calibration --------------------------------------------------------------------------- */
 
@@ -456,14 +450,14 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_start(glovepose_estimator
 /** @brief How far the calibration has come, and the range in use.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
 GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_progress(const glovepose_estimator* estimator,
-                                                                glovepose_calibration_progress* out) GLOVEPOSE_C_NOEXCEPT;
+                                                                    glovepose_calibration_progress* out) GLOVEPOSE_C_NOEXCEPT;
 /** @brief The guided step under way during a calibration: *step is its index (see
  * glovepose_model_get_calibration_step), -1 before the first frame, after the last step, when no
  * calibration is collecting or the model has no sequence; *sequence_seconds is the stream time
  * since the sequence's first frame (0 before it). Either pointer may be NULL. Never allocates.
  * @return GLOVEPOSE_OK or _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_step(const glovepose_estimator* estimator, int32_t* step,
-                                                            double* sequence_seconds) GLOVEPOSE_C_NOEXCEPT;
+                                                                double* sequence_seconds) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Ends the calibration and uses its range (set-up: allocates).
  * @return GLOVEPOSE_OK, or _CALIBRATION_STATE (none running, or fewer frames than the median window
  * so far: it keeps collecting), _INVALID_HANDLE, _OUT_OF_MEMORY. */
@@ -482,13 +476,13 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_use_training(glovepose_es
 /** @brief Uses the range min[i] .. max[i] of each of the `count` (= cell_count) cells.
  * @return GLOVEPOSE_OK, GLOVEPOSE_SIZE_MISMATCH, _INVALID_ARGUMENT (NULL array, non-finite or
  * min > max, named in the message), _INVALID_HANDLE. */
-GLOVEPOSE_C_API glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator, const double* min,
-                                                                 const double* max, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_set_range(glovepose_estimator* estimator, const double* min, const double* max,
+                                                                 int32_t count) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Copies the range in use into min/max[0..count-1] (count = cell_count).
  * @return GLOVEPOSE_OK, GLOVEPOSE_UNCALIBRATED (no range yet), GLOVEPOSE_SIZE_MISMATCH,
  * _INVALID_ARGUMENT (NULL array), _INVALID_HANDLE. */
-GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min,
-                                                                 double* max, int32_t count) GLOVEPOSE_C_NOEXCEPT;
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose_estimator* estimator, double* min, double* max,
+                                                                 int32_t count) GLOVEPOSE_C_NOEXCEPT;
 
 /** @brief A reader thread's OpenXR joints at `time`, predicted from the newest published hand with
  * the hand model, side and prediction bound of `estimator` (only its immutable parts are read, so

@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   }
 
   glovepose_estimator_config_default(&config);
-  config.smoothing = 1;        /* 1-euro smoothing of the angles */
+  config.smoothing = 1; /* 1-euro smoothing of the angles */
   config.smoothing_beta = 0.5;
   config.joint_transforms = 1; /* also the 21-joint list an engine drives a skeleton with */
   result = glovepose_estimator_create(model, &config, &estimator);
@@ -78,8 +78,8 @@ int main(int argc, char** argv) {
     if (step_now < 0 || step_now == step_shown) continue;
     step_shown = step_now;
     if (glovepose_model_get_calibration_step(model, step_now, &step) != GLOVEPOSE_OK) continue;
-    printf("  %5.2f s  step %d/%d %s (%.1f s): \"%s\"  target %s %.2f rad\n", sequence_seconds, (int)step.step + 1,
-           (int)step.step_count, step.name, step.seconds, step.instruction, glovepose_dof_name(5), step.pose[5]);
+    printf("  %5.2f s  step %d/%d %s (%.1f s): \"%s\"  target %s %.2f rad\n", sequence_seconds, (int)step.step + 1, (int)step.step_count,
+           step.name, step.seconds, step.instruction, glovepose_dof_name(5), step.pose[5]);
   }
   glovepose_calibration_progress_init(&progress);
   glovepose_calibration_get_progress(estimator, &progress);

@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
     grid::GloveSettings settings;
     settings.rate_hz = 20.0;
     settings.calibration.flat_relative_range = 0.001;
-    grid::GloveDescription("example-20", names, grid::GridMap(slots, paper.dof_slots()), settings).write((out / "example-20.json").string());
+    grid::GloveDescription("example-20", names, grid::GridMap(slots, paper.dof_slots()), settings)
+        .write((out / "example-20.json").string());
 
     std::vector<std::size_t> labelled;  // no finger twists: the reference measures 21 DoFs
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
@@ -95,7 +96,8 @@ int main(int argc, char** argv) {
       const bool calibration = corpus.kind[begin] == train::kKindCalibration;
       const std::string file = "person" + std::to_string(corpus.subject[begin]) + "_session" + std::to_string(corpus.session[begin]) +
                                (calibration ? "_calibration.csv" : "_recording.csv");
-      takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording") << "\n";
+      takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording")
+            << "\n";
       std::ofstream take(out / file);
       take << "timestamp_ms";
       for (const Sensor& s : sensors) take << "," << s.name;
@@ -106,7 +108,8 @@ int main(int argc, char** argv) {
         std::snprintf(number, sizeof number, "%.1f", 1000.0 * (corpus.timestamps[i] - corpus.timestamps[begin]));
         take << number;
         for (const Sensor& s : sensors) {
-          const double stretch = corpus.cells[i * 44 + static_cast<std::size_t>(s.main_cell)] + 0.3 * corpus.cells[i * 44 + static_cast<std::size_t>(s.neighbour)];
+          const double stretch = corpus.cells[i * 44 + static_cast<std::size_t>(s.main_cell)] +
+                                 0.3 * corpus.cells[i * 44 + static_cast<std::size_t>(s.neighbour)];
           std::snprintf(number, sizeof number, "%.3f", s.offset + s.gain * stretch + noise(rng));
           take << "," << number;
         }

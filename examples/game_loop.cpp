@@ -92,7 +92,8 @@ int main(int argc, char** argv) {
   }
   try {
     const double play_seconds = argc == 3 ? std::atof(argv[2]) : 3.0;
-    if (!(play_seconds > 0.0 && play_seconds <= 600.0)) throw Error("SECONDS is '" + std::string(argv[2]) + "', expected 0 < SECONDS <= 600");
+    if (!(play_seconds > 0.0 && play_seconds <= 600.0))
+      throw Error("SECONDS is '" + std::string(argv[2]) + "', expected 0 < SECONDS <= 600");
 
     // Smoothing on (1-euro: steady when the hand rests, little lag when it moves) and the joint list.
     EstimatorConfig config;
@@ -142,9 +143,9 @@ int main(int argc, char** argv) {
           const Bone& middle = rig[static_cast<int>(hand::Joint::IndexIntermediate)];
           const Bone& distal = rig[static_cast<int>(hand::Joint::IndexDistal)];
           const Eigen::Vector3f tip = 1e3f * global_transform(rig, static_cast<int>(hand::Joint::IndexTip)).position;
-          std::printf("%5.2f s  pose %6llu, %4.1f ms old  index bones bent %5.1f %5.1f deg  index tip at (%5.1f %5.1f %5.1f) mm\n",
-                      now, static_cast<unsigned long long>(hand.pose.sequence), 1e3 * (now - hand.pose.timestamp),
-                      bend_degrees(middle), bend_degrees(distal), tip.x(), tip.y(), tip.z());
+          std::printf("%5.2f s  pose %6llu, %4.1f ms old  index bones bent %5.1f %5.1f deg  index tip at (%5.1f %5.1f %5.1f) mm\n", now,
+                      static_cast<unsigned long long>(hand.pose.sequence), 1e3 * (now - hand.pose.timestamp), bend_degrees(middle),
+                      bend_degrees(distal), tip.x(), tip.y(), tip.z());
           // OpenXR joints for the display time (the stream's clock here is seconds since start):
           // what an OpenXR layer copies into XrHandJointLocationEXT, wrist-relative.
           PredictedPose ahead;
@@ -153,11 +154,11 @@ int main(int argc, char** argv) {
             locate(ahead, locator, xr);
             const hand::XrJointLocation& index_tip = xr.locations[static_cast<int>(hand::XrJoint::IndexTip)];
             const hand::XrJointVelocity& speed = xr.velocities[static_cast<int>(hand::XrJoint::IndexTip)];
-            std::printf("          OpenXR, %4.1f ms ahead: index tip (%5.1f %5.1f %5.1f) mm from the wrist, moving %5.1f cm/s\n",
-                        1e3 * ahead.horizon, 1e3 * index_tip.pose.position.x, 1e3 * index_tip.pose.position.y,
-                        1e3 * index_tip.pose.position.z,
-                        100.0 * std::sqrt(speed.linear_velocity.x * speed.linear_velocity.x + speed.linear_velocity.y * speed.linear_velocity.y +
-                                          speed.linear_velocity.z * speed.linear_velocity.z));
+            std::printf(
+                "          OpenXR, %4.1f ms ahead: index tip (%5.1f %5.1f %5.1f) mm from the wrist, moving %5.1f cm/s\n",
+                1e3 * ahead.horizon, 1e3 * index_tip.pose.position.x, 1e3 * index_tip.pose.position.y, 1e3 * index_tip.pose.position.z,
+                100.0 * std::sqrt(speed.linear_velocity.x * speed.linear_velocity.x + speed.linear_velocity.y * speed.linear_velocity.y +
+                                  speed.linear_velocity.z * speed.linear_velocity.z));
           }
         }
       }

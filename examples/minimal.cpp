@@ -51,13 +51,12 @@ int main(int argc, char** argv) {
           const auto degrees = [&](hand::Finger finger, hand::Motion motion) {
             return pose.angles[hand::dof_of(finger, motion)] * 180.0 / 3.14159265358979;
           };
-          std::printf("t = %5.2f s  index flexion %5.1f %5.1f %5.1f deg  thumb abduction %5.1f deg  "
-                      "(oldest reading %4.1f ms, computed in %3.0f us)\n",
-                      pose.timestamp, degrees(hand::Finger::Index, hand::Motion::BaseFlexion),
-                      degrees(hand::Finger::Index, hand::Motion::MiddleFlexion),
-                      degrees(hand::Finger::Index, hand::Motion::TipFlexion),
-                      degrees(hand::Finger::Thumb, hand::Motion::Abduction), 1e3 * pose.oldest_age,
-                      1e6 * pose.compute_seconds);
+          std::printf(
+              "t = %5.2f s  index flexion %5.1f %5.1f %5.1f deg  thumb abduction %5.1f deg  "
+              "(oldest reading %4.1f ms, computed in %3.0f us)\n",
+              pose.timestamp, degrees(hand::Finger::Index, hand::Motion::BaseFlexion),
+              degrees(hand::Finger::Index, hand::Motion::MiddleFlexion), degrees(hand::Finger::Index, hand::Motion::TipFlexion),
+              degrees(hand::Finger::Thumb, hand::Motion::Abduction), 1e3 * pose.oldest_age, 1e6 * pose.compute_seconds);
         }
       }
     }

@@ -35,11 +35,16 @@ Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--fast") o.fast = true;
-    else if (a == "--csv" && i + 1 < argc) o.csv = argv[++i];
-    else if (a.rfind("--", 0) != 0 && o.model.empty()) o.model = a;
-    else if (a.rfind("--", 0) != 0 && o.session.empty()) o.session = a;
-    else throw Error("argument '" + a + "' not understood; " + usage);
+    if (a == "--fast")
+      o.fast = true;
+    else if (a == "--csv" && i + 1 < argc)
+      o.csv = argv[++i];
+    else if (a.rfind("--", 0) != 0 && o.model.empty())
+      o.model = a;
+    else if (a.rfind("--", 0) != 0 && o.session.empty())
+      o.session = a;
+    else
+      throw Error("argument '" + a + "' not understood; " + usage);
   }
   if (o.session.empty()) throw Error("expected a model and a session file; " + usage);
   return o;
@@ -80,7 +85,8 @@ int main(int argc, char** argv) {
     if (!data.has_raw_rows() || !data.has_angles())
       throw Error("'" + options.session + "' holds no raw rows or no angles, expected a recording made with glovepose simulate --raw-rows");
     if (data.glove_layout() != model->glove().id())
-      throw Error("'" + options.session + "' was recorded with glove '" + data.glove_layout() + "', the model reads '" + model->glove().id() + "'");
+      throw Error("'" + options.session + "' was recorded with glove '" + data.glove_layout() + "', the model reads '" +
+                  model->glove().id() + "'");
     GlovePoseEstimator estimator(model);
     CsvWriter csv(options.csv);
     train::AngleErrorAccumulator errors;
@@ -99,7 +105,8 @@ int main(int argc, char** argv) {
       if (data.kind[f] == train::kKindCalibration && !calibrating) estimator.start_calibration();
       if (data.kind[f] == train::kKindRecording && calibrating) estimator.finish_calibration();
       if (data.kind[f] == train::kKindRecording && !estimator.calibration())
-        throw Error("frame " + std::to_string(f) + " is recorded before any calibration frame, expected the session's calibration sequence (kind 1) first");
+        throw Error("frame " + std::to_string(f) +
+                    " is recorded before any calibration frame, expected the session's calibration sequence (kind 1) first");
 
       // The frame's rows, each at its own time: row r was read (R - 1 - r) row slots before the frame's end.
       const std::uint64_t poses_before = estimator.pose().sequence;
@@ -123,7 +130,8 @@ int main(int argc, char** argv) {
       std::copy_n(data.angles.begin() + static_cast<std::ptrdiff_t>(f * hand::kDofCount), hand::kDofCount, truth.begin());
       errors.add(pose.angles, truth);
     }
-    if (errors.empty()) throw Error("'" + options.session + "' gave no recording frame to score, expected calibration frames then recording frames");
+    if (errors.empty())
+      throw Error("'" + options.session + "' gave no recording frame to score, expected calibration frames then recording frames");
 
     const train::AngleErrorReport report = errors.report();
     std::printf("%zu frames scored (%zu outlier frames left out), %llu poses, slowest pose %.0f us\n", report.frames, outliers,

@@ -37,9 +37,9 @@ void check_dataset_csv(const std::string& text) {
   GLOVEPOSE_FUZZ_REQUIRE(again.cell_count == dataset.cell_count);
   GLOVEPOSE_FUZZ_REQUIRE(again.cells == dataset.cells);
   // Angles of DoFs not labelled are NaN on both sides: compare the bits.
-  GLOVEPOSE_FUZZ_REQUIRE(again.angles.size() == dataset.angles.size() &&
-                         (dataset.angles.empty() ||
-                          std::memcmp(again.angles.data(), dataset.angles.data(), dataset.angles.size() * sizeof(float)) == 0));
+  GLOVEPOSE_FUZZ_REQUIRE(
+      again.angles.size() == dataset.angles.size() &&
+      (dataset.angles.empty() || std::memcmp(again.angles.data(), dataset.angles.data(), dataset.angles.size() * sizeof(float)) == 0));
   GLOVEPOSE_FUZZ_REQUIRE(again.labelled_dofs() == dataset.labelled_dofs());
   GLOVEPOSE_FUZZ_REQUIRE(again.timestamps == dataset.timestamps);
   GLOVEPOSE_FUZZ_REQUIRE(again.subject == dataset.subject);
@@ -50,8 +50,7 @@ void check_calibration(const std::string& text) {
   static const std::vector<std::string> names = glovepose::grid::GloveDescription::glauser2019().cell_names();
   std::istringstream in(text);
   try {
-    const glovepose::sensor::CalibrationRange range =
-        glovepose::sensor::CalibrationRange::load(in, "fuzz input", "glauser2019-44", names);
+    const glovepose::sensor::CalibrationRange range = glovepose::sensor::CalibrationRange::load(in, "fuzz input", "glauser2019-44", names);
     GLOVEPOSE_FUZZ_REQUIRE(range.size() == static_cast<int>(names.size()));
     Eigen::VectorXd reading = 0.5 * range.min() + 0.5 * range.max(), normalized(range.size());  // no overflow
     reading[0] = range.max()[0];

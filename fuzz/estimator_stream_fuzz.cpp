@@ -31,11 +31,10 @@ using glovepose::Status;
 /// One frame of C_c (pF) from a simulated session (`glovepose simulate`, subject 0, first frame):
 /// a plausible hand, which the fuzzer perturbs.
 constexpr std::array<double, 44> kPlausibleCells{
-    10.258956,  5.3165617, 4.79115152, 5.52944279, 5.48886776, 5.34741068, 5.7981739,  6.36660528, 6.49165821,
-    5.87227297, 5.05117512, 5.44433975, 5.27580309, 5.26548624, 5.15029049, 5.50713873, 5.45572376, 5.23373365,
-    5.87615442, 5.67038059, 8.6448946,  9.50343418, 8.6990099,  8.60666847, 9.54970455, 7.76580191, 6.80983877,
-    4.95926142, 6.18497133, 5.93694401, 6.99730682, 6.3174634,  8.51974964, 11.0602036, 9.04660225, 8.20644188,
-    8.49531651, 6.50580883, 5.94312954, 5.56613541, 9.25481415, 8.73732376, 8.3549881,  6.27224588};
+    10.258956,  5.3165617,  4.79115152, 5.52944279, 5.48886776, 5.34741068, 5.7981739,  6.36660528, 6.49165821, 5.87227297, 5.05117512,
+    5.44433975, 5.27580309, 5.26548624, 5.15029049, 5.50713873, 5.45572376, 5.23373365, 5.87615442, 5.67038059, 8.6448946,  9.50343418,
+    8.6990099,  8.60666847, 9.54970455, 7.76580191, 6.80983877, 4.95926142, 6.18497133, 5.93694401, 6.99730682, 6.3174634,  8.51974964,
+    11.0602036, 9.04660225, 8.20644188, 8.49531651, 6.50580883, 5.94312954, 5.56613541, 9.25481415, 8.73732376, 8.3549881,  6.27224588};
 
 /// Per-frame calls per input: each costs a solve and a network forward (~0.5 ms under the
 /// sanitizers), so an input of bursts could otherwise run for seconds and be reported as a timeout.
@@ -65,29 +64,46 @@ const Fixture& fixture() {
 /// firmware sends.
 double reading(FuzzedDataProvider& in, double plausible) {
   switch (in.ConsumeIntegralInRange<int>(0, 11)) {
-    case 0: return std::numeric_limits<double>::quiet_NaN();
-    case 1: return std::numeric_limits<double>::infinity();
-    case 2: return -std::numeric_limits<double>::infinity();
-    case 3: return -plausible;
-    case 4: return 0.0;
-    case 5: return std::numeric_limits<double>::max();
-    case 6: return std::numeric_limits<double>::denorm_min();
-    case 7: return in.ConsumeFloatingPoint<double>();  // any double
-    default: return plausible * (1.0 + in.ConsumeFloatingPointInRange<double>(-0.3, 0.3));
+    case 0:
+      return std::numeric_limits<double>::quiet_NaN();
+    case 1:
+      return std::numeric_limits<double>::infinity();
+    case 2:
+      return -std::numeric_limits<double>::infinity();
+    case 3:
+      return -plausible;
+    case 4:
+      return 0.0;
+    case 5:
+      return std::numeric_limits<double>::max();
+    case 6:
+      return std::numeric_limits<double>::denorm_min();
+    case 7:
+      return in.ConsumeFloatingPoint<double>();  // any double
+    default:
+      return plausible * (1.0 + in.ConsumeFloatingPointInRange<double>(-0.3, 0.3));
   }
 }
 
 /// The next timestamp: mostly a step forward from `clock`, else backwards, a gap, or not a time.
 double next_time(FuzzedDataProvider& in, double& clock, double step) {
   switch (in.ConsumeIntegralInRange<int>(0, 11)) {
-    case 0: return std::numeric_limits<double>::quiet_NaN();
-    case 1: return std::numeric_limits<double>::infinity();
-    case 2: return -std::numeric_limits<double>::infinity();
-    case 3: return clock - in.ConsumeFloatingPointInRange<double>(0.0, 10.0);  // backwards, not kept
-    case 4: return clock = in.ConsumeFloatingPoint<double>();                   // a restarted or corrupt clock
-    case 5: return clock += in.ConsumeFloatingPointInRange<double>(0.1, 1e6);   // a gap
-    case 6: return clock;                                                      // the same instant again
-    default: return clock += step;
+    case 0:
+      return std::numeric_limits<double>::quiet_NaN();
+    case 1:
+      return std::numeric_limits<double>::infinity();
+    case 2:
+      return -std::numeric_limits<double>::infinity();
+    case 3:
+      return clock - in.ConsumeFloatingPointInRange<double>(0.0, 10.0);  // backwards, not kept
+    case 4:
+      return clock = in.ConsumeFloatingPoint<double>();  // a restarted or corrupt clock
+    case 5:
+      return clock += in.ConsumeFloatingPointInRange<double>(0.1, 1e6);  // a gap
+    case 6:
+      return clock;  // the same instant again
+    default:
+      return clock += step;
   }
 }
 
@@ -157,7 +173,8 @@ class StreamChecker {
                          p.orientation.w * p.orientation.w;
       GLOVEPOSE_FUZZ_REQUIRE(std::abs(norm - 1.0f) < 1e-4f);
       const glovepose::hand::XrJointVelocity& v = joints.velocities[j];
-      GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v.linear_velocity.x) && std::isfinite(v.linear_velocity.y) && std::isfinite(v.linear_velocity.z));
+      GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v.linear_velocity.x) && std::isfinite(v.linear_velocity.y) &&
+                             std::isfinite(v.linear_velocity.z));
       GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v.angular_velocity.x) && std::isfinite(v.angular_velocity.y) &&
                              std::isfinite(v.angular_velocity.z));
     }
@@ -183,7 +200,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   config.clock_restart_frames = in.ConsumeIntegralInRange<int>(1, 12);
   config.calibration_median_window = in.ConsumeIntegralInRange<int>(1, 25);
   config.calibration_sample_period = in.ConsumeBool() ? 0.0 : 1.0 / 60.0;
-  if (in.ConsumeBool()) config.smoothing = glovepose::filter::OneEuroConfig{60.0, 1.0, in.ConsumeFloatingPointInRange<double>(0.0, 10.0), 1.0};
+  if (in.ConsumeBool())
+    config.smoothing = glovepose::filter::OneEuroConfig{60.0, 1.0, in.ConsumeFloatingPointInRange<double>(0.0, 10.0), 1.0};
   config.joint_transforms = in.ConsumeBool();
   // The side from a setting already drawn, so that stored inputs keep their meaning.
   config.handedness = config.readout.stuck_readings % 2 == 0 ? glovepose::hand::Handedness::Right : glovepose::hand::Handedness::Left;
@@ -202,10 +220,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 0: {  // one reading of any row, any value, any time
         int row = next_row;
         switch (in.ConsumeIntegralInRange<int>(0, 4)) {
-          case 0: row = in.ConsumeIntegral<int>(); break;
-          case 1: row = in.ConsumeBool() ? -1 : rows; break;
-          case 2: row = in.ConsumeIntegralInRange<int>(0, rows - 1); break;
-          default: next_row = (next_row + 1) % rows; break;
+          case 0:
+            row = in.ConsumeIntegral<int>();
+            break;
+          case 1:
+            row = in.ConsumeBool() ? -1 : rows;
+            break;
+          case 2:
+            row = in.ConsumeIntegralInRange<int>(0, rows - 1);
+            break;
+          default:
+            next_row = (next_row + 1) % rows;
+            break;
         }
         const double value = reading(in, f.rows[(row % rows + rows) % rows]);
         check.after(estimator.push_row(row, value, next_time(in, clock, kRowPeriod)));
@@ -254,7 +280,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
         break;
       }
-      case 4: estimator.start_calibration(); break;
+      case 4:
+        estimator.start_calibration();
+        break;
       case 5:
         try {
           const glovepose::sensor::CalibrationRange& range = estimator.finish_calibration();
@@ -264,8 +292,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           // Too few frames or no calibration running: refused, as documented.
         }
         break;
-      case 6: estimator.cancel_calibration(); break;
-      case 7: estimator.reset(); break;
+      case 6:
+        estimator.cancel_calibration();
+        break;
+      case 7:
+        estimator.reset();
+        break;
       case 8: {  // a user range around the plausible hand, of any spread (negative: min > max)
         const double spread = reading(in, 0.2);
         const double shift = in.ConsumeFloatingPointInRange<double>(-0.5, 0.5);

@@ -8,12 +8,12 @@
 #include <cstdlib>
 
 /// @brief Aborts with the failed condition and its line when `condition` is false.
-#define GLOVEPOSE_FUZZ_REQUIRE(condition)                                                                    \
-  do {                                                                                                       \
-    if (!(condition)) {                                                                                      \
-      std::fprintf(stderr, "%s:%d: fuzz invariant violated: %s\n", __FILE__, __LINE__, #condition);        \
-      std::abort();                                                                                          \
-    }                                                                                                        \
+#define GLOVEPOSE_FUZZ_REQUIRE(condition)                                                           \
+  do {                                                                                              \
+    if (!(condition)) {                                                                             \
+      std::fprintf(stderr, "%s:%d: fuzz invariant violated: %s\n", __FILE__, __LINE__, #condition); \
+      std::abort();                                                                                 \
+    }                                                                                               \
   } while (0)
 
 namespace glovepose::fuzz {

@@ -39,15 +39,16 @@ Run run(const std::string& args) {
   return {WEXITSTATUS(status), out};
 }
 // The command's stdout alone (`stream` 1) or its stderr alone (2), and its exit code.
-Run run_stream(const std::string& args, int stream) {
-  return run(args + (stream == 1 ? " 2>/dev/null" : " 2>&1 1>/dev/null") + " #");
-}
+Run run_stream(const std::string& args, int stream) { return run(args + (stream == 1 ? " 2>/dev/null" : " 2>&1 1>/dev/null") + " #"); }
 const std::string kModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/unet_w4.safetensors";
 std::string temp(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
 }  // namespace
 
-TEST_CASE("cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the option named on stderr") {
-  for (const std::string command : {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import"}) {
+TEST_CASE(
+    "cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the option named "
+    "on stderr") {
+  for (const std::string command :
+       {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
@@ -73,15 +74,20 @@ TEST_CASE("cli: each command's --help describes its options") {
   const std::pair<std::string, std::vector<std::string>> commands[] = {
       {"predict", {"--model", "--in", "--fixed16", "--f16", "--bf16", "--no-header"}},
       {"info", {"--model"}},
-      {"simulate", {"--seed", "--subjects", "--sessions", "--minutes", "--gloves", "--calibration-seconds", "--calibration-sequence",
-                    "--raw-rows", "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence"}},
-      {"import", {"CSV", "--calibration", "--takes", "--subject", "--session", "--rate", "--glove", "--degrees", "--ignore", "--allow-flat", "--out"}},
-      {"train", {"--data", "--model", "--out", "--glove", "--subjects", "--exclude-subjects", "--sessions", "--gloves", "--stride", "--threads",
-                 "--calibration", "--epochs", "--batch", "--lr", "--optimizer", "--validation", "--seed", "--max-minutes", "--quiet", "--dtype",
-                 "--augment"}},
+      {"simulate",
+       {"--seed", "--subjects", "--sessions", "--minutes", "--gloves", "--calibration-seconds", "--calibration-sequence", "--raw-rows",
+        "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence"}},
+      {"import",
+       {"CSV", "--calibration", "--takes", "--subject", "--session", "--rate", "--glove", "--degrees", "--ignore", "--allow-flat",
+        "--out"}},
+      {"train", {"--data",     "--model",  "--out",       "--glove",      "--subjects",    "--exclude-subjects",
+                 "--sessions", "--gloves", "--stride",    "--threads",    "--calibration", "--epochs",
+                 "--batch",    "--lr",     "--optimizer", "--validation", "--seed",        "--max-minutes",
+                 "--quiet",    "--dtype",  "--augment"}},
       {"finetune", {"--data", "--model", "--out", "--subjects", "--stride", "--epochs", "--batch", "--lr", "--seed", "--dtype"}},
-      {"eval", {"--data", "--model", "--subjects", "--stride", "--threads", "--calibration", "--json", "--replay-rows", "--mean-window",
-                "--predictions"}},
+      {"eval",
+       {"--data", "--model", "--subjects", "--stride", "--threads", "--calibration", "--json", "--replay-rows", "--mean-window",
+        "--predictions"}},
       {"fit-guided", {"--data", "--model", "--out", "--sequence", "--subjects", "--threads"}},
       {"demo", {"--model", "--out", "--seed", "--minutes", "--fixed16", "--f16", "--bf16"}},
       {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
@@ -259,8 +265,8 @@ TEST_CASE("cli: glovepose simulate --report prints every section of the realism 
   const Run r = run("simulate --report --seed 2 --subjects 3 --sessions 2 --minutes 0.3");
   INFO(r.out);
   REQUIRE(r.status == 0);
-  for (const char* part : {"Per-cell signal", "cell 43 (index distal, across", "Per-DoF coverage", "pinky_base_twist", "Re-donning vs pose change",
-                           "Oldest reading behind each frame", "Outlier frames", "leave-one-subject-out"})
+  for (const char* part : {"Per-cell signal", "cell 43 (index distal, across", "Per-DoF coverage", "pinky_base_twist",
+                           "Re-donning vs pose change", "Oldest reading behind each frame", "Outlier frames", "leave-one-subject-out"})
     CHECK(r.out.find(part) != std::string::npos);
 }
 
@@ -297,7 +303,8 @@ double json_number(const std::string& json, const std::string& key) {
 
 TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every architecture, model files that load") {
   const std::string data = small_corpus("train");
-  const std::string unet = temp("t_unet.safetensors"), fcn = temp("t_fcn.safetensors"), lin = temp("t_lin.safetensors"), tuned = temp("t_tuned.safetensors");
+  const std::string unet = temp("t_unet.safetensors"), fcn = temp("t_fcn.safetensors"), lin = temp("t_lin.safetensors"),
+                    tuned = temp("t_tuned.safetensors");
   Run r = run("train --data " + data + " --model unet:8 --exclude-subjects 2 --epochs 2 --batch 256 --seed 3 --out " + unet);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("samples/s") != std::string::npos);  // the progress lines
@@ -350,7 +357,8 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::isfinite(json_number(r.out, "mean_deg")));
 
-  r = run("train --data " + data + " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --augment 0.05,0.05,0.02 --out " + temp("t_aug.safetensors"));
+  r = run("train --data " + data + " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --augment 0.05,0.05,0.02 --out " +
+          temp("t_aug.safetensors"));
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("train --data " + data + " --model linear --augment 0.05,0.05,0.02 --out " + temp("x.safetensors"));
   CHECK(r.status == 2);
@@ -372,7 +380,8 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
 TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
   const std::string data = small_corpus("interrupt"), out = temp("t_interrupted.safetensors");
   std::remove(out.c_str());
-  const Run r = run("train --data " + data + " --model unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
+  const Run r =
+      run("train --data " + data + " --model unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
   CHECK(r.status == 130);
   CHECK(r.out.find("stopped") != std::string::npos);
   const auto model = nn::Model<>::load(out);
@@ -399,7 +408,8 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   Run r = run("train --data " + data + " --model unet:8 --epochs 1 --batch 256 --out " + model_file);
   CHECK(r.status == 1);
   CHECK(r.out.find("pass its description with --glove FILE") != std::string::npos);
-  r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --exclude-subjects 2 --epochs 1 --batch 256 --out " + model_file);
+  r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --exclude-subjects 2 --epochs 1 --batch 256 --out " +
+          model_file);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("eval --model " + model_file + " --data " + data + " --subjects 2 --json");
   REQUIRE_MESSAGE(r.status == 0, r.out);
@@ -416,7 +426,8 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 24);
 }
 
-TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains, evaluates and predicts with a linear map, an FCN and a U-Net") {
+TEST_CASE(
+    "cli: a glove with an extra input (not on the stretch maps) trains, evaluates and predicts with a linear map, an FCN and a U-Net") {
   // The 14 main-joint cells on their slots and cell 2 (a back-of-thumb cell) as an extra input.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42, 2};
   const train::Dataset part = cells_of(train::Dataset::read(small_corpus("extra")), keep, "main14-extra");
@@ -434,7 +445,8 @@ TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains, ev
     grid::GloveSettings twenty;
     twenty.rate_hz = 20.0;
     grid::GloveDescription("main14-extra", names, grid::GridMap(slots, paper.dof_slots()), twenty).write(temp("extra15_20hz.json"));
-    const Run refused = run("train --data " + data + " --glove " + temp("extra15_20hz.json") + " --model linear --out " + temp("extra_rate.safetensors"));
+    const Run refused =
+        run("train --data " + data + " --glove " + temp("extra15_20hz.json") + " --model linear --out " + temp("extra_rate.safetensors"));
     CHECK(refused.status == 1);
     CHECK_MESSAGE(refused.out.find("rate_hz is 20.000000, expected the same rate") != std::string::npos, refused.out);
   }
@@ -443,7 +455,8 @@ TEST_CASE("cli: a glove with an extra input (not on the stretch maps) trains, ev
   for (const std::string model : {"linear", "fcn:16", "unet:8"}) {
     CAPTURE(model);
     const std::string out = temp("extra_" + model.substr(0, 3) + ".safetensors");
-    r = run("train --data " + data + " --glove " + glove_file + " --model " + model + " --exclude-subjects 2 --epochs 1 --batch 256 --out " + out);
+    r = run("train --data " + data + " --glove " + glove_file + " --model " + model +
+            " --exclude-subjects 2 --epochs 1 --batch 256 --out " + out);
     REQUIRE_MESSAGE(r.status == 0, r.out);
     r = run("eval --model " + out + " --data " + data + " --subjects 2 --json");
     REQUIRE_MESSAGE(r.status == 0, r.out);
@@ -481,7 +494,8 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   reference.write(reference_file);
   const grid::GridMap paper = grid::GridMap::glauser2019();
   std::vector<std::string> names;
-  for (int c = 0; c < paper.cell_count(); ++c) names.push_back("stretch_" + std::string(1, static_cast<char>('A' + c / 10)) + std::to_string(c % 10));
+  for (int c = 0; c < paper.cell_count(); ++c)
+    names.push_back("stretch_" + std::string(1, static_cast<char>('A' + c / 10)) + std::to_string(c % 10));
   const std::string glove_file = temp("import_glove.json");
   grid::GloveDescription("maker-44", names, paper).write(glove_file);
 
@@ -495,12 +509,13 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   std::size_t takes = 0;
   for (std::size_t begin = 0; begin < reference.frames();) {
     std::size_t end = begin + 1;
-    while (end < reference.frames() && reference.subject[end] == reference.subject[begin] && reference.session[end] == reference.session[begin] &&
-           reference.kind[end] == reference.kind[begin])
+    while (end < reference.frames() && reference.subject[end] == reference.subject[begin] &&
+           reference.session[end] == reference.session[begin] && reference.kind[end] == reference.kind[begin])
       ++end;
     const bool calibration = reference.kind[begin] == train::kKindCalibration;
     const std::string name = "import_take_" + std::to_string(takes++) + ".csv";
-    list << name << "," << reference.subject[begin] << "," << reference.session[begin] << "," << (calibration ? "calibration" : "recording") << "\n";
+    list << name << "," << reference.subject[begin] << "," << reference.session[begin] << "," << (calibration ? "calibration" : "recording")
+         << "\n";
     std::ofstream take(temp(name));
     for (std::size_t k = 0; k < columns.size(); ++k) take << (k ? "," : "") << columns[k];
     take << "\n";
@@ -510,10 +525,14 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
         std::size_t d = 0;
         while (d < hand::kDofCount && columns[k] != hand::kDofs[d].name) ++d;
         take << (k ? "," : "");
-        if (cell != names.end()) take << number17(reference.cells[i * 44 + static_cast<std::size_t>(cell - names.begin())]);
-        else if (d < hand::kDofCount) take << number17(reference.angles[i * hand::kDofCount + d]);
-        else if (columns[k] == "timestamp") take << number17(reference.timestamps[i]);
-        else take << i;
+        if (cell != names.end())
+          take << number17(reference.cells[i * 44 + static_cast<std::size_t>(cell - names.begin())]);
+        else if (d < hand::kDofCount)
+          take << number17(reference.angles[i * hand::kDofCount + d]);
+        else if (columns[k] == "timestamp")
+          take << number17(reference.timestamps[i]);
+        else
+          take << i;
       }
       take << "\n";
     }
@@ -636,9 +655,11 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   }
   r = run("import --glove " + glove_file + " --rate 60 --out " + temp("never.safetensors") + " --calibration " + temp("import_flat.csv"));
   CHECK(r.status == 1);
-  CHECK(r.out.find("glovepose import: CSV file '" + temp("import_flat.csv") + "', lines 3-32 (calibration of subject 9, session 0), column "
+  CHECK(r.out.find("glovepose import: CSV file '" + temp("import_flat.csv") +
+                   "', lines 3-32 (calibration of subject 9, session 0), column "
                    "'stretch_B7': flat (1.5 to 1.5") != std::string::npos);
-  r = run("import --glove " + glove_file + " --rate 60 --out " + temp("flat.safetensors") + " --allow-flat --calibration " + temp("import_flat.csv"));
+  r = run("import --glove " + glove_file + " --rate 60 --out " + temp("flat.safetensors") + " --allow-flat --calibration " +
+          temp("import_flat.csv"));
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("flat sensor kept: 'stretch_B7' in calibration lines 3-32") != std::string::npos);
   CHECK(r.out.find("(30 calibration) of 1 subjects, 1 sessions, glove 'maker-44', 44 cells, without angles") != std::string::npos);
@@ -715,7 +736,7 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   const double age_p50 = number_after(r.out, "age of the oldest row         p50");
   CHECK(age_p50 > 15.0);
   CHECK(age_p50 < 40.0);
-  CHECK(r.out.find("; pose-guided") != std::string::npos);  // the user followed the model's sequence
+  CHECK(r.out.find("; pose-guided") != std::string::npos);              // the user followed the model's sequence
   CHECK(number_after(r.out, "sequence streamed row by row:") >= 20.0);  // at least the median window
   CHECK(r.out.find("3.0 s: 32400 rows streamed") != std::string::npos);
 
@@ -727,14 +748,13 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   for (const std::string* svg : {&angles, &curve, &hands}) CHECK(well_formed_svg(*svg));
   CHECK(occurrences(angles, "<polyline") == 8);  // 4 DoFs, predicted and true
   CHECK(occurrences(curve, "<polyline") >= 1);
-  CHECK(occurrences(hands, "<line") >= 4 * 2 * 20);  // 4 frames, 2 hands, 20 bones each
+  CHECK(occurrences(hands, "<line") >= 4 * 2 * 20);   // 4 frames, 2 hands, 20 bones each
   CHECK_FALSE(well_formed_svg("<svg><line></svg>"));  // the checker can fail
 
   // Set-up errors name what is wrong.
-  const std::pair<std::string, std::string> refused[] = {
-      {"--model " + temp("missing.safetensors"), "missing.safetensors"},
-      {"--minutes abc", "--minutes: 'abc', expected a number"},
-      {"--minutes 0", "--minutes: '0', expected a number in (0, 600]"}};
+  const std::pair<std::string, std::string> refused[] = {{"--model " + temp("missing.safetensors"), "missing.safetensors"},
+                                                         {"--minutes abc", "--minutes: 'abc', expected a number"},
+                                                         {"--minutes 0", "--minutes: '0', expected a number in (0, 600]"}};
   for (const auto& [options, message] : refused) {
     const Run bad = run("demo " + options + " --out " + out);
     INFO(bad.out);
@@ -787,7 +807,8 @@ TEST_CASE("cli: eval --predictions writes every frame's true and predicted angle
 TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed the sequence, eval and info use it") {
   const std::string sequence = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json";
   const std::string data = temp("guided_people.safetensors"), guided = temp("guided_w4.safetensors");
-  Run r = run("simulate --seed 7 --subjects 10 --sessions 1 --minutes 0.1 --gloves 1 --calibration-sequence " + sequence + " --out " + data);
+  Run r =
+      run("simulate --seed 7 --subjects 10 --sessions 1 --minutes 0.1 --gloves 1 --calibration-sequence " + sequence + " --out " + data);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("fit-guided --model " + kModel + " --data " + data + " --out " + guided);
   REQUIRE_MESSAGE(r.status == 0, r.out);
@@ -824,7 +845,8 @@ TEST_CASE("cli: glovepose bench --json times every stage for every weight storag
   for (const auto& result : out["results"]) {
     storages.push_back(result["weights"].get<std::string>());
     CHECK(result["architecture"].get<std::string>() == "unet");
-    for (const char* stage : {"solve", "calibration", "stretch maps", "network", "pose map", "angles", "1-euro", "joint list", "OpenXR joints"}) {
+    for (const char* stage :
+         {"solve", "calibration", "stretch maps", "network", "pose map", "angles", "1-euro", "joint list", "OpenXR joints"}) {
       CAPTURE(stage);
       const auto& s = result["stages"].at(stage);
       CHECK(s["p50_us"].get<double>() > 0.0);

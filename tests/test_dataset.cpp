@@ -33,7 +33,8 @@ Dataset make_dataset(std::size_t frames = 12, bool raw = true, bool angles = tru
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (std::size_t i = 0; i < frames; ++i) {
-    for (std::size_t c = 0; c < d.cell_count; ++c) d.cells.push_back(std::ldexp(unit(rng), static_cast<int>(c * 7) - 14) + 20.0f * static_cast<float>(c));
+    for (std::size_t c = 0; c < d.cell_count; ++c)
+      d.cells.push_back(std::ldexp(unit(rng), static_cast<int>(c * 7) - 14) + 20.0f * static_cast<float>(c));
     for (std::size_t r = 0; r < d.row_count; ++r)
       d.raw_rows.push_back((i + r) % 5 == 0 ? std::numeric_limits<float>::quiet_NaN() : 100.0f + unit(rng));
     if (angles)
@@ -84,11 +85,14 @@ TEST_CASE("tensor_file: every dtype round-trips byte-exactly (serialize -> parse
   f.metadata["format"] = "test";
   f.metadata["note"] = "\"quoted\"\n\\";
   f.tensors["f64"] = RawTensor::from<double>({2, 3}, {0.1, -0.0, kNaN, kInf, 5e-324, 1.7976931348623157e308});
-  f.tensors["f32"] = RawTensor::from<float>({4}, {0.1f, std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::infinity(), 1e-45f});
+  f.tensors["f32"] =
+      RawTensor::from<float>({4}, {0.1f, std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::infinity(), 1e-45f});
   f.tensors["f16"] = RawTensor::from<float>({3}, {0.5f, -65504.0f, 6e-8f}, DType::F16);
   f.tensors["bf16"] = RawTensor::from<float>({3}, {1.0f, -3.0e38f, std::numeric_limits<float>::quiet_NaN()}, DType::BF16);
-  f.tensors["i64"] = RawTensor::from<std::int64_t>({3}, {std::numeric_limits<std::int64_t>::min(), -1, std::numeric_limits<std::int64_t>::max()});
-  f.tensors["i32"] = RawTensor::from<std::int32_t>({1, 3}, {std::numeric_limits<std::int32_t>::min(), 0, std::numeric_limits<std::int32_t>::max()});
+  f.tensors["i64"] =
+      RawTensor::from<std::int64_t>({3}, {std::numeric_limits<std::int64_t>::min(), -1, std::numeric_limits<std::int64_t>::max()});
+  f.tensors["i32"] =
+      RawTensor::from<std::int32_t>({1, 3}, {std::numeric_limits<std::int32_t>::min(), 0, std::numeric_limits<std::int32_t>::max()});
   f.tensors["u8"] = RawTensor::from<std::uint8_t>({2, 2}, {0, 1, 128, 255});
   f.tensors["scalar"] = RawTensor::from<double>({}, {42.0});
   f.tensors["empty"] = RawTensor::from<float>({0, 3}, {});
@@ -139,10 +143,13 @@ TEST_CASE("tensor_file: conversions: floating dtypes freely, integers only when 
   CHECK_THROWS_WITH_AS(RawTensor::from<double>({1}, {kNaN}).to<std::int64_t>(), doctest::Contains("element 0: nan (F64)"), Error);
   CHECK_THROWS_WITH_AS(RawTensor::from<std::int64_t>({1}, {(std::int64_t{1} << 53) + 1}).to<double>(),
                        doctest::Contains("9007199254740993 (I64) cannot be stored exactly as F64"), Error);
-  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({1}, {16777217}).to<float>(), doctest::Contains("cannot be stored exactly as F32"), Error);
-  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({2}, {1, 256}, DType::U8), doctest::Contains("element 1: 256 (I32) cannot be stored exactly as U8"), Error);
+  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({1}, {16777217}).to<float>(), doctest::Contains("cannot be stored exactly as F32"),
+                       Error);
+  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({2}, {1, 256}, DType::U8),
+                       doctest::Contains("element 1: 256 (I32) cannot be stored exactly as U8"), Error);
   CHECK_THROWS_WITH_AS(RawTensor::from<double>({1}, {-1.0}, DType::U8), doctest::Contains("an integer within the range of U8"), Error);
-  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({1}, {2049}, DType::F16), doctest::Contains("2049 (I32) cannot be stored exactly as F16"), Error);
+  CHECK_THROWS_WITH_AS(RawTensor::from<std::int32_t>({1}, {2049}, DType::F16),
+                       doctest::Contains("2049 (I32) cannot be stored exactly as F16"), Error);
   CHECK_THROWS_WITH_AS(RawTensor::from<std::int64_t>({1}, {std::numeric_limits<std::int64_t>::max()}).to<double>(),
                        doctest::Contains("cannot be stored exactly as F64"), Error);
   CHECK_THROWS_WITH_AS(RawTensor::from<float>({2, 2}, {1.0f}), doctest::Contains("1 values for shape [2, 2], expected 4"), Error);
@@ -183,10 +190,9 @@ TEST_CASE("dataset: write and read back exactly, NaN kept in raw_rows, the file 
   CHECK(e.frame_rate() == 59.94);
 
   const TensorFile file = TensorFile::read(temp_path("roundtrip.dataset"));
-  const std::pair<const char*, DType> expected[] = {{"cells", DType::F32},     {"raw_rows", DType::F32}, {"angles", DType::F32},
-                                                    {"timestamps", DType::F64}, {"subject", DType::I32}, {"session", DType::I32},
-                                                    {"glove", DType::I32},      {"donning", DType::I32}, {"kind", DType::U8},
-                                                    {"outlier", DType::U8}};
+  const std::pair<const char*, DType> expected[] = {
+      {"cells", DType::F32},   {"raw_rows", DType::F32}, {"angles", DType::F32},  {"timestamps", DType::F64}, {"subject", DType::I32},
+      {"session", DType::I32}, {"glove", DType::I32},    {"donning", DType::I32}, {"kind", DType::U8},        {"outlier", DType::U8}};
   CHECK(file.tensors.size() == 10);
   for (const auto& entry : expected) {  // no structured binding: clang 14 (C++17) cannot capture one in INFO's lambda
     const char* const name = entry.first;
@@ -233,7 +239,8 @@ TEST_CASE("dataset: every read error names the tensor and what was expected") {
   }
   SUBCASE("unknown tensor") {
     f.tensors["pressure"] = RawTensor::from<float>({12}, std::vector<float>(12, 0.0f));
-    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("unknown tensor 'pressure', expected only cells, raw_rows"), Error);
+    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("unknown tensor 'pressure', expected only cells, raw_rows"),
+                         Error);
   }
   SUBCASE("wrong dtype") {
     f.tensors["subject"] = RawTensor::from<std::int32_t>({12}, std::vector<std::int32_t>(12, 0), DType::I64);
@@ -247,20 +254,23 @@ TEST_CASE("dataset: every read error names the tensor and what was expected") {
   }
   SUBCASE("wrong shape") {
     f.tensors["angles"] = RawTensor::from<float>({12, 24}, std::vector<float>(12 * 24, 0.0f));
-    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("tensor 'angles' has shape [12, 24], expected [12, 25] (frames x 25 DoFs)"), Error);
+    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f),
+                         doctest::Contains("tensor 'angles' has shape [12, 24], expected [12, 25] (frames x 25 DoFs)"), Error);
     f = good;
     f.tensors["kind"] = RawTensor::from<std::uint8_t>({11}, std::vector<std::uint8_t>(11, 0));
     CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("tensor 'kind' has shape [11], expected [12] (frames)"), Error);
     f = good;
     f.tensors["cells"] = RawTensor::from<float>({60}, std::vector<float>(60, 0.0f));
-    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("tensor 'cells' has shape [60], expected [12, C] with C >= 1"), Error);
+    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("tensor 'cells' has shape [60], expected [12, C] with C >= 1"),
+                         Error);
     f = good;
     f.tensors["timestamps"] = RawTensor::from<double>({3, 4}, good.tensors.at("timestamps").to<double>());
     CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("tensor 'timestamps' has shape [3, 4], expected [N]"), Error);
   }
   SUBCASE("not a dataset, or another version") {
     f.metadata["format"] = "glovepose-model";
-    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("metadata 'format' is 'glovepose-model', expected 'glovepose-dataset'"), Error);
+    CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f),
+                         doctest::Contains("metadata 'format' is 'glovepose-model', expected 'glovepose-dataset'"), Error);
     f = good;
     f.metadata["version"] = "2";
     CHECK_THROWS_WITH_AS(Dataset::from_tensor_file(f), doctest::Contains("metadata 'version' is '2', expected '1'"), Error);
@@ -274,7 +284,8 @@ TEST_CASE("dataset: every read error names the tensor and what was expected") {
     f.tensors["cells"] = RawTensor::from<float>({12, 5}, cells);
     f.write(temp_path("bad.dataset"));
     CHECK_THROWS_WITH_AS(Dataset::read(temp_path("bad.dataset")),
-                         doctest::Contains("bad.dataset': Dataset: tensor 'cells': frame 1, cell 2 is inf, expected a finite capacitance"), Error);
+                         doctest::Contains("bad.dataset': Dataset: tensor 'cells': frame 1, cell 2 is inf, expected a finite capacitance"),
+                         Error);
   }
 }
 
@@ -294,14 +305,18 @@ TEST_CASE("dataset: validate names the tensor, the frame and what was expected")
   CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'raw_rows' holds 84 values, expected 12 frames x 0 (row_count) = 0"), Error);
   d = good;
   d.angles[25 * 3 + 5] = std::numeric_limits<float>::quiet_NaN();
-  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'angles': frame 3, DoF 'index_base_flexion' is nan, expected a finite angle"), Error);
+  CHECK_THROWS_WITH_AS(d.validate(),
+                       doctest::Contains("tensor 'angles': frame 3, DoF 'index_base_flexion' is nan, expected a finite angle"), Error);
   d = good;
   d.raw_rows[8] = -std::numeric_limits<float>::infinity();
-  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'raw_rows': frame 1, row 1 is infinite, expected a finite capacitance (pF) or NaN"), Error);
+  CHECK_THROWS_WITH_AS(
+      d.validate(), doctest::Contains("tensor 'raw_rows': frame 1, row 1 is infinite, expected a finite capacitance (pF) or NaN"), Error);
   d = good;
   d.timestamps[2] = d.timestamps[1];
   CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'timestamps': frame 2 is 0.017683350016683353 s, not after frame 1"), Error);
-  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("of the same run (subject 0, glove 0, session 0, kind 0), expected strictly increasing times"), Error);
+  CHECK_THROWS_WITH_AS(d.validate(),
+                       doctest::Contains("of the same run (subject 0, glove 0, session 0, kind 0), expected strictly increasing times"),
+                       Error);
   d = good;
   d.timestamps[3] = 0.0;  // frame 3 starts a new run (session 1): allowed
   CHECK_NOTHROW(d.validate());
@@ -409,24 +424,32 @@ TEST_CASE("dataset: each CSV import error names the line, the column and what wa
   CHECK_THROWS_WITH_AS(import(good + "1,0,0.6,1,2,3,4,5,6,7,8,9\n"), doctest::Contains("line 7: 12 columns, expected 72"), Error);
   CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.6, "abc")), doctest::Contains("line 7, column 'cell_3': 'abc' is not a number"), Error);
   CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.6, "1.5x")), doctest::Contains("line 7, column 'cell_3': '1.5x' is not a number"), Error);
-  CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.6, "nan")), doctest::Contains("line 7, column 'cell_3': 'nan' is not a finite number"), Error);
+  CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.6, "nan")), doctest::Contains("line 7, column 'cell_3': 'nan' is not a finite number"),
+                       Error);
   CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.6, "")), doctest::Contains("line 7, column 'cell_3': '' is not a number"), Error);
-  CHECK_THROWS_WITH_AS(import(good + row("x,0", 0.6)), doctest::Contains("line 7, column 'subject': 'x' is not a non-negative integer"), Error);
-  CHECK_THROWS_WITH_AS(import(good + row("1,-2", 0.6)), doctest::Contains("line 7, column 'session': '-2' is not a non-negative integer"), Error);
+  CHECK_THROWS_WITH_AS(import(good + row("x,0", 0.6)), doctest::Contains("line 7, column 'subject': 'x' is not a non-negative integer"),
+                       Error);
+  CHECK_THROWS_WITH_AS(import(good + row("1,-2", 0.6)), doctest::Contains("line 7, column 'session': '-2' is not a non-negative integer"),
+                       Error);
   CHECK_THROWS_WITH_AS(import(good + row("2,0", 0.0) + row("1,0", 0.5) + row("1,0", 0.5)),
                        doctest::Contains("line 9: timestamp 0.5 is not after the previous 0.5 of subject 1 session 0"), Error);
   CHECK_THROWS_WITH_AS(import(good + row("1,0", 0.3)), doctest::Contains("line 7: timestamp 0.3 is not after the previous 0.4"), Error);
   CHECK_NOTHROW(import(good + row("1,1", 0.0) + row("2,0", 0.0)));  // other sessions and subjects restart the clock
   CHECK_NOTHROW(import(good + row("1,1", 0.0) + row("1,0", 0.0)));  // a new run of subject 1 session 0 (e.g. another glove)
   CHECK_THROWS_WITH_AS(import(""), doctest::Contains("line 1: no header, expected subject,session,timestamp,cell_0"), Error);
-  CHECK_THROWS_WITH_AS(import("subject,session,time,cell_0\n"), doctest::Contains("line 1, column 3: unknown column 'time', expected 'timestamp'"), Error);
-  CHECK_THROWS_WITH_AS(import("subject,session,timestamp,cell_1\n"), doctest::Contains("line 1, column 4: unknown column 'cell_1', expected 'cell_0'"), Error);
-  CHECK_THROWS_WITH_AS(import("subject,session,timestamp\n"), doctest::Contains("line 1: 3 columns, expected subject,session,timestamp,cell_0"), Error);
+  CHECK_THROWS_WITH_AS(import("subject,session,time,cell_0\n"),
+                       doctest::Contains("line 1, column 3: unknown column 'time', expected 'timestamp'"), Error);
+  CHECK_THROWS_WITH_AS(import("subject,session,timestamp,cell_1\n"),
+                       doctest::Contains("line 1, column 4: unknown column 'cell_1', expected 'cell_0'"), Error);
+  CHECK_THROWS_WITH_AS(import("subject,session,timestamp\n"),
+                       doctest::Contains("line 1: 3 columns, expected subject,session,timestamp,cell_0"), Error);
   CHECK_THROWS_WITH_AS(import("subject,session,timestamp,cell_0,cell_2\n"),
                        doctest::Contains("line 1, column 5: unknown column 'cell_2', expected 'cell_1' or a DoF name"), Error);
-  CHECK_THROWS_WITH_AS(import("subject,session,timestamp,cell_0,thumb_base_flexion,thumb_base_abduction\n"),
-                       doctest::Contains("line 1, column 6: unknown column 'thumb_base_abduction', expected a DoF after 'thumb_base_flexion' "
-                                         "(the DoFs in the order of hand::kDofs)"), Error);
+  CHECK_THROWS_WITH_AS(
+      import("subject,session,timestamp,cell_0,thumb_base_flexion,thumb_base_abduction\n"),
+      doctest::Contains("line 1, column 6: unknown column 'thumb_base_abduction', expected a DoF after 'thumb_base_flexion' "
+                        "(the DoFs in the order of hand::kDofs)"),
+      Error);
   CHECK_THROWS_WITH_AS(import(header + ",extra\n"), doctest::Contains("unknown column 'extra', expected a DoF after '"), Error);
   {
     // A subset of the DoFs: the others are not labelled (NaN, metadata), and write_csv writes the same subset.
@@ -438,15 +461,18 @@ TEST_CASE("dataset: each CSV import error names the line, the column and what wa
     REQUIRE(part.angles.size() == hand::kDofCount);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       CAPTURE(d);
-      if (expected[d]) CHECK(part.angles[d] == (d == 0 ? 0.25f : -0.5f));
-      else CHECK(std::isnan(part.angles[d]));
+      if (expected[d])
+        CHECK(part.angles[d] == (d == 0 ? 0.25f : -0.5f));
+      else
+        CHECK(std::isnan(part.angles[d]));
     }
     std::ostringstream written;
     part.write_csv(written);
     CHECK(written.str() == "subject,session,timestamp,cell_0,thumb_base_abduction,index_base_flexion\n1,0,0.5,2.5,0.25,-0.5\n");
     Dataset broken = part;
     broken.angles[1] = 0.0f;  // a DoF not labelled with a value
-    CHECK_THROWS_WITH_AS(broken.validate(), doctest::Contains("DoF 'thumb_base_flexion' is 0, expected NaN (the DoF is not labelled"), Error);
+    CHECK_THROWS_WITH_AS(broken.validate(), doctest::Contains("DoF 'thumb_base_flexion' is 0, expected NaN (the DoF is not labelled"),
+                         Error);
     broken = part;
     broken.angles[0] = NAN;
     CHECK_THROWS_WITH_AS(broken.validate(), doctest::Contains("DoF 'thumb_base_abduction' is nan, expected a finite angle"), Error);

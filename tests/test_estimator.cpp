@@ -34,22 +34,22 @@ struct Session {
 };
 
 Session simulate_session(hand::Handedness side) {
-    sim::CorpusConfig config;
-    config.handedness = side;
-    config.seed = 41;
-    config.subjects = 1;
-    config.sessions = 1;
-    config.gloves = 1;
-    config.minutes = 0.1;
-    config.calibration_seconds = 3.0;
-    config.threads = 1;
-    config.recording.raw_rows = true;
-    config.recording.readout.solve_every = sim::kRows;
-    config.recording.noise.drop_probability = 0.0;
-    Session out;
-    out.data = sim::to_dataset(sim::simulate_corpus(config), config);
-    while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
-    return out;
+  sim::CorpusConfig config;
+  config.handedness = side;
+  config.seed = 41;
+  config.subjects = 1;
+  config.sessions = 1;
+  config.gloves = 1;
+  config.minutes = 0.1;
+  config.calibration_seconds = 3.0;
+  config.threads = 1;
+  config.recording.raw_rows = true;
+  config.recording.readout.solve_every = sim::kRows;
+  config.recording.noise.drop_probability = 0.0;
+  Session out;
+  out.data = sim::to_dataset(sim::simulate_corpus(config), config);
+  while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
+  return out;
 }
 
 const Session& session() {
@@ -86,7 +86,8 @@ GlovePoseEstimator calibrated(const std::shared_ptr<const PoseModel>& model, Est
                               const Session& on = session()) {
   GlovePoseEstimator estimator(model, std::move(config));
   estimator.start_calibration();
-  stream_rows(estimator, 0, on.first_session_frame, [](std::size_t) {}, on.data);
+  stream_rows(
+      estimator, 0, on.first_session_frame, [](std::size_t) {}, on.data);
   estimator.finish_calibration();
   return estimator;
 }
@@ -132,8 +133,8 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   REQUIRE(ranges.size() == 1);
   const sensor::CalibrationRange& offline = ranges.begin()->second;
   const sensor::CalibrationRange& online = *estimator.calibration();
-  const double range_difference = std::max((offline.min() - online.min()).cwiseAbs().maxCoeff(),
-                                           (offline.max() - online.max()).cwiseAbs().maxCoeff());
+  const double range_difference =
+      std::max((offline.min() - online.min()).cwiseAbs().maxCoeff(), (offline.max() - online.max()).cwiseAbs().maxCoeff());
   MESSAGE("on-the-fly range, stream vs recorded frames: largest difference " << range_difference << " pF");
   CHECK(range_difference < 1e-4);
 
@@ -159,8 +160,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   // And the poses are poses: the shipped model tracks this unseen subject (mean error in degrees).
   double error = 0.0;
   for (std::size_t i = kSettle; i < streamed.size(); ++i)
-    for (std::size_t k = 0; k < hand::kDofCount; ++k)
-      error += std::abs(streamed[i][k] - d.angles[(begin + i) * hand::kDofCount + k]);
+    for (std::size_t k = 0; k < hand::kDofCount; ++k) error += std::abs(streamed[i][k] - d.angles[(begin + i) * hand::kDofCount + k]);
   error *= 180.0 / 3.14159265358979 / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
   MESSAGE("mean angle error of the streamed poses: " << error << " degrees");
   CHECK(error < 10.0);
@@ -173,8 +173,8 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 de
   const auto predict = [&](nn::WeightStorage storage) {
     PoseModelOptions options;
     options.storage = storage;
-    return PoseModel::load(kShippedModel, options)->predict(d.cells.data() + begin * d.cell_count, static_cast<long>(end - begin),
-                                                            *estimator.calibration(), 2);
+    return PoseModel::load(kShippedModel, options)
+        ->predict(d.cells.data() + begin * d.cell_count, static_cast<long>(end - begin), *estimator.calibration(), 2);
   };
   const std::vector<hand::Angles> exact = predict(nn::WeightStorage::F32);
   const nn::WeightStorage storages[3] = {nn::WeightStorage::Fixed16, nn::WeightStorage::F16, nn::WeightStorage::BF16};
@@ -220,8 +220,8 @@ TEST_CASE("estimator: the shipped U-Net leaves about half of each hidden layer e
     const auto fractions = nn::zero_fractions(unet, ws, 1);
     for (std::size_t l = 0; l < mean.size(); ++l) mean[l] += fractions[l] / static_cast<double>(frames);
   }
-  MESSAGE("shipped model, " << frames << " frames, mean share of exact zeros e1..d3: " << mean[0] << " " << mean[1] << " " << mean[2]
-                            << " " << mean[3] << " " << mean[4] << " " << mean[5] << " " << mean[6]);
+  MESSAGE("shipped model, " << frames << " frames, mean share of exact zeros e1..d3: " << mean[0] << " " << mean[1] << " " << mean[2] << " "
+                            << mean[3] << " " << mean[4] << " " << mean[5] << " " << mean[6]);
   for (double share : mean) CHECK((share > 0.2 && share < 0.8));
 }
 
@@ -469,7 +469,8 @@ TEST_CASE("estimator: set-up errors name what is wrong") {
   CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("calibration_sample_period"), Error);
   config = EstimatorConfig{};
   config.prediction_window = 0.0;
-  CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("prediction_window 0.000000 s, expected a positive time"), Error);
+  CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("prediction_window 0.000000 s, expected a positive time"),
+                       Error);
   config = EstimatorConfig{};
   config.max_prediction = std::nan("");
   CHECK_THROWS_WITH_AS(GlovePoseEstimator(shipped(), config), doctest::Contains("max_prediction"), Error);
@@ -502,7 +503,8 @@ TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates the
   REQUIRE(estimator.pose_at(mid, out) == Status::Ok);
   CHECK_FALSE(out.predicted);
   CHECK(out.horizon == doctest::Approx(mid - times[n - 1]));
-  for (std::size_t k = 0; k < hand::kDofCount; ++k) CHECK(out.angles[k] == doctest::Approx(0.25 * poses[n - 3][k] + 0.75 * poses[n - 2][k]).epsilon(1e-12));
+  for (std::size_t k = 0; k < hand::kDofCount; ++k)
+    CHECK(out.angles[k] == doctest::Approx(0.25 * poses[n - 3][k] + 0.75 * poses[n - 2][k]).epsilon(1e-12));
   // Ahead: the newest pose moved along the least-squares line through the poses of the window.
   std::vector<std::size_t> window;
   for (std::size_t i = 0; i < n; ++i)
@@ -513,7 +515,8 @@ TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates the
   for (std::size_t i = 0; i < window.size(); ++i) {
     design(static_cast<Eigen::Index>(i), 0) = 1.0;
     design(static_cast<Eigen::Index>(i), 1) = times[window[i]] - times[n - 1];
-    for (std::size_t k = 0; k < hand::kDofCount; ++k) values(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = poses[window[i]][k];
+    for (std::size_t k = 0; k < hand::kDofCount; ++k)
+      values(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = poses[window[i]][k];
   }
   const Eigen::MatrixXd line = design.colPivHouseholderQr().solve(values);
   const double t = times[n - 1] + 0.02;
@@ -561,30 +564,34 @@ TEST_CASE("estimator: a left-hand session gives the mirrored joints of the right
   const std::size_t begin = right_session.first_session_frame;
   double worst_xr = 0.0, worst_list = 0.0, thumb_x = 0.0;
   int poses = 0;
-  stream_rows(right, begin, begin + 60, [&](std::size_t f) {
-    stream_rows(left, f, f + 1, [](std::size_t) {}, left_session.data);
-    ++poses;
-    XrHandJoints r, l;
-    REQUIRE(right.joints_at(right.pose().timestamp + 0.01, r) == Status::Ok);
-    REQUIRE(left.joints_at(right.pose().timestamp + 0.01, l) == Status::Ok);
-    CHECK(l.side == hand::Handedness::Left);
-    for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
-      const hand::XrPose& a = r.locations[j].pose;
-      const hand::XrPose& b = l.locations[j].pose;
-      for (float diff : {b.position.x + a.position.x, b.position.y - a.position.y, b.position.z - a.position.z, b.orientation.x - a.orientation.x,
-                         b.orientation.y + a.orientation.y, b.orientation.z + a.orientation.z, b.orientation.w - a.orientation.w,
-                         l.velocities[j].linear_velocity.x + r.velocities[j].linear_velocity.x,
-                         l.velocities[j].linear_velocity.y - r.velocities[j].linear_velocity.y})
-        worst_xr = std::max(worst_xr, static_cast<double>(std::abs(diff)));
-    }
-    thumb_x = l.locations[static_cast<std::size_t>(hand::XrJoint::ThumbTip)].pose.position.x;
-    for (std::size_t j = 0; j < hand::kJointCount; ++j) {
-      const auto& a = right.joints()[j].position;
-      const auto& b = left.joints()[j].position;
-      worst_list = std::max({worst_list, static_cast<double>(std::abs(a[0] + b[0])), static_cast<double>(std::abs(a[1] - b[1])),
-                             static_cast<double>(std::abs(a[2] - b[2]))});
-    }
-  }, right_session.data);
+  stream_rows(
+      right, begin, begin + 60,
+      [&](std::size_t f) {
+        stream_rows(
+            left, f, f + 1, [](std::size_t) {}, left_session.data);
+        ++poses;
+        XrHandJoints r, l;
+        REQUIRE(right.joints_at(right.pose().timestamp + 0.01, r) == Status::Ok);
+        REQUIRE(left.joints_at(right.pose().timestamp + 0.01, l) == Status::Ok);
+        CHECK(l.side == hand::Handedness::Left);
+        for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
+          const hand::XrPose& a = r.locations[j].pose;
+          const hand::XrPose& b = l.locations[j].pose;
+          for (float diff : {b.position.x + a.position.x, b.position.y - a.position.y, b.position.z - a.position.z,
+                             b.orientation.x - a.orientation.x, b.orientation.y + a.orientation.y, b.orientation.z + a.orientation.z,
+                             b.orientation.w - a.orientation.w, l.velocities[j].linear_velocity.x + r.velocities[j].linear_velocity.x,
+                             l.velocities[j].linear_velocity.y - r.velocities[j].linear_velocity.y})
+            worst_xr = std::max(worst_xr, static_cast<double>(std::abs(diff)));
+        }
+        thumb_x = l.locations[static_cast<std::size_t>(hand::XrJoint::ThumbTip)].pose.position.x;
+        for (std::size_t j = 0; j < hand::kJointCount; ++j) {
+          const auto& a = right.joints()[j].position;
+          const auto& b = left.joints()[j].position;
+          worst_list = std::max({worst_list, static_cast<double>(std::abs(a[0] + b[0])), static_cast<double>(std::abs(a[1] - b[1])),
+                                 static_cast<double>(std::abs(a[2] - b[2]))});
+        }
+      },
+      right_session.data);
   CHECK(poses == 60);
   MESSAGE("left vs mirrored right: OpenXR joints " << worst_xr << ", joint list " << worst_list << " m");
   CHECK(worst_xr < 1e-5);

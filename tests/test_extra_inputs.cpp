@@ -72,7 +72,8 @@ std::vector<float> apply(const Eigen::MatrixXd& weight, const Eigen::VectorXd& b
   for (long f = 0; f < s.frames(); ++f) {
     const Eigen::Map<const Eigen::VectorXf> x(s.inputs.data() + f * s.cells, s.cells);
     const Eigen::VectorXd y = weight * x.cast<double>() + bias;
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) out[static_cast<std::size_t>(f) * hand::kDofCount + d] = static_cast<float>(y(static_cast<Eigen::Index>(d)));
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      out[static_cast<std::size_t>(f) * hand::kDofCount + d] = static_cast<float>(y(static_cast<Eigen::Index>(d)));
   }
   return out;
 }
@@ -141,8 +142,10 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
     const int width = architecture == "fcn" ? 32 : 8;
     const nn::ModelInfo info = train::make_model_info(architecture, width, glove, train::CalibrationMode::OnTheFly, nullptr);
     const std::unique_ptr<train::TrainableNetwork> trainer = train::make_network(info, glove, frames);
-    if (auto* unet = dynamic_cast<train::TrainableUNet*>(trainer.get())) unet->initialize(21);
-    else dynamic_cast<train::TrainableFcn&>(*trainer).initialize(21);
+    if (auto* unet = dynamic_cast<train::TrainableUNet*>(trainer.get()))
+      unet->initialize(21);
+    else
+      dynamic_cast<train::TrainableFcn&>(*trainer).initialize(21);
     const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + architecture + "_extra.safetensors";
     train::save_model(path, info, trainer->parameters().to_tensors());
     const auto model = PoseModel::load(path);
@@ -167,7 +170,8 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
     for (int f = 0; f < frames; ++f) {
       REQUIRE(estimator.push_cells(raw.data() + f * n, n, 0.01 * f) == Status::Solved);
       hand::Angles expected_normalized{};
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) expected_normalized[d] = trainer->output()[static_cast<std::size_t>(f) * hand::kDofCount + d];
+      for (std::size_t d = 0; d < hand::kDofCount; ++d)
+        expected_normalized[d] = trainer->output()[static_cast<std::size_t>(f) * hand::kDofCount + d];
       const hand::Angles expected = model->joint_limits().denormalize(expected_normalized);
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         CHECK(estimator.pose().raw_angles[d] * kDegrees == doctest::Approx(expected[d] * kDegrees).epsilon(1e-4));
@@ -208,7 +212,8 @@ train::Dataset with_bend_sensor(const train::Dataset& plain, std::size_t joint) 
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.4);
   for (std::size_t i = 0; i < plain.frames(); ++i) {
-    data.cells.insert(data.cells.end(), plain.cells.begin() + static_cast<long>(i * 44), plain.cells.begin() + static_cast<long>((i + 1) * 44));
+    data.cells.insert(data.cells.end(), plain.cells.begin() + static_cast<long>(i * 44),
+                      plain.cells.begin() + static_cast<long>((i + 1) * 44));
     data.cells.push_back(static_cast<float>(120.0 + 40.0 * plain.angles[i * hand::kDofCount + joint] + noise(rng)));
   }
   data.validate();
@@ -238,7 +243,8 @@ TEST_CASE("extra inputs: on people held out, a bend sensor beside the 44 cells m
   const train::LinearFit plain_fit = fit(plain_train);
   const std::vector<double> plain_errors = dof_errors_deg(apply(plain_fit.weight, plain_fit.bias, plain_test), plain_test, limits);
   const std::size_t worst = static_cast<std::size_t>(std::max_element(plain_errors.begin(), plain_errors.end()) - plain_errors.begin());
-  MESSAGE("44 cells: mean " << mean_of(plain_errors) << " deg, worst DoF " << std::string(hand::kDofs[worst].name) << " " << plain_errors[worst] << " deg");
+  MESSAGE("44 cells: mean " << mean_of(plain_errors) << " deg, worst DoF " << std::string(hand::kDofs[worst].name) << " "
+                            << plain_errors[worst] << " deg");
 
   // A resistive bend sensor over that joint.
   const train::Dataset data = with_bend_sensor(plain, worst);
@@ -259,8 +265,8 @@ TEST_CASE("extra inputs: on people held out, a bend sensor beside the 44 cells m
 
   const std::vector<double> errors = dof_errors_deg(apply(library.weight, library.bias, test_set), test_set, limits);
   const std::vector<double> reference = dof_errors_deg(apply(weight, bias, test_set), test_set, limits);
-  MESSAGE("45 inputs: mean " << mean_of(errors) << " deg (least squares here " << mean_of(reference) << "), " << std::string(hand::kDofs[worst].name) << " "
-                             << errors[worst] << " deg (here " << reference[worst] << ")");
+  MESSAGE("45 inputs: mean " << mean_of(errors) << " deg (least squares here " << mean_of(reference) << "), "
+                             << std::string(hand::kDofs[worst].name) << " " << errors[worst] << " deg (here " << reference[worst] << ")");
   CHECK(mean_of(errors) == doctest::Approx(mean_of(reference)).epsilon(0.01));
   CHECK(errors[worst] == doctest::Approx(reference[worst]).epsilon(0.01));
   // The sensor reads the joint to 0.6 deg: the map leans on it, and the mean over all DoFs improves.

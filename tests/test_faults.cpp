@@ -142,10 +142,10 @@ double mean_error_degrees(const Run& run, std::size_t begin, std::size_t end) {
 }
 
 struct Expectation {
-  std::uint32_t flag = 0;          // the flag the fault must raise (0: none required)
-  double flagged_share = 0.0;      // of the fault's frames after `detect_after` frames
-  std::size_t detect_after = 0;    // frames into the fault before it must be visible
-  std::size_t recovery_frames = 6; // frames after the fault ends until the stream is normal again
+  std::uint32_t flag = 0;           // the flag the fault must raise (0: none required)
+  double flagged_share = 0.0;       // of the fault's frames after `detect_after` frames
+  std::size_t detect_after = 0;     // frames into the fault before it must be visible
+  std::size_t recovery_frames = 6;  // frames after the fault ends until the stream is normal again
 };
 
 // Mean error over the DoFs of one frame, degrees.
@@ -216,7 +216,7 @@ TEST_CASE("faults: the clean stream is trusted and accurate") {
   for (std::size_t i = 6; i < clean.frames.size(); ++i) flagged += (clean.frames[i].flags & kPoseFaultFlags) != 0;
   MESSAGE("clean stream: " << flagged << " of " << clean.frames.size() - 6 << " frames flagged; error "
                            << mean_error_degrees(clean, 6, clean.frames.size()) << " deg");
-  CHECK(flagged <= clean.frames.size() / 100);  // the simulator's own rare spikes may be flagged
+  CHECK(flagged <= clean.frames.size() / 100);                     // the simulator's own rare spikes may be flagged
   CHECK(mean_error_degrees(clean, 6, clean.frames.size()) < 4.0);  // measured 2.87 with the shipped model
 }
 
@@ -309,7 +309,7 @@ TEST_CASE("faults: the injector turns each clean reading into what the faulty gl
   CHECK(readings(sim::FaultKind::ClockJumpBack, clean).at(0).timestamp == -99.0);
   CHECK(readings(sim::FaultKind::DisconnectedTrace, {4, 30.0, 1.0}).at(0).value == 0.05);  // top trace 4
   CHECK(readings(sim::FaultKind::DisconnectedTrace, {5, 30.0, 1.0}).at(0).value == 30.0);
-  CHECK(readings(sim::FaultKind::LostTraceBurst, {24, 30.0, 1.0}).empty());                 // bottom trace 2
+  CHECK(readings(sim::FaultKind::LostTraceBurst, {24, 30.0, 1.0}).empty());  // bottom trace 2
   CHECK(readings(sim::FaultKind::LostTraceBurst, {36, 30.0, 1.0}).size() == 1);
 
   // Swapped pairs: the first reading waits and arrives after the second.

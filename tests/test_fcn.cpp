@@ -84,7 +84,8 @@ double relative_error(const TensorMap& tensors, int inputs, int hidden, WeightSt
 }  // namespace
 
 TEST_CASE("fcn: the F32 forward equals PyTorch's (committed fixture: 44 inputs, hidden 16, 8 frames)") {
-  const io::TensorFile fx = io::TensorFile::read(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_fcn_h16_c44.safetensors", "fixture");
+  const io::TensorFile fx =
+      io::TensorFile::read(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_fcn_h16_c44.safetensors", "fixture");
   TensorMap tensors;
   for (const auto& [name, t] : fx.tensors)
     if (name.rfind("param.", 0) == 0) tensors[name.substr(6)] = Tensor{t.shape, t.to<float>()};
@@ -241,7 +242,8 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
     std::vector<hand::Angles> streamed(static_cast<std::size_t>(frames));
     std::vector<double> frame(static_cast<std::size_t>(glove.cell_count()));
     for (int f = 0; f < frames; ++f) {
-      for (int c = 0; c < glove.cell_count(); ++c) frame[static_cast<std::size_t>(c)] = cells[static_cast<std::size_t>(f * glove.cell_count() + c)];
+      for (int c = 0; c < glove.cell_count(); ++c)
+        frame[static_cast<std::size_t>(c)] = cells[static_cast<std::size_t>(f * glove.cell_count() + c)];
       REQUIRE(estimator.push_cells(frame.data(), glove.cell_count(), 0.01 * f) == Status::Solved);
       streamed[static_cast<std::size_t>(f)] = estimator.pose().raw_angles;
     }

@@ -98,8 +98,8 @@ TEST_CASE("fuzz regression: readings so large that the residual overflows give n
   config.readout.mean_window = 1;
   GlovePoseEstimator estimator(model, config);
   const int cells = model->cell_count();
-  estimator.set_calibration(sensor::CalibrationRange(Eigen::VectorXd::Constant(cells, 4.0), Eigen::VectorXd::Constant(cells, 12.0),
-                                                     model->glove().cell_names()));
+  estimator.set_calibration(
+      sensor::CalibrationRange(Eigen::VectorXd::Constant(cells, 4.0), Eigen::VectorXd::Constant(cells, 12.0), model->glove().cell_names()));
   const Eigen::VectorXd plausible = model->solver()->measurement_matrix() * Eigen::VectorXd::Constant(cells, 7.0);
   const int rows = static_cast<int>(plausible.size());
   double time = 0.0;
@@ -116,6 +116,6 @@ TEST_CASE("fuzz regression: readings so large that the residual overflows give n
       if (status == Status::NonFinite) ++refused;
     }
   }
-  CHECK(refused > 0);              // the overflowing frames are reported
-  CHECK(last_solved_cycle == 2);   // and poses resume once plausible readings replace the huge ones
+  CHECK(refused > 0);             // the overflowing frames are reported
+  CHECK(last_solved_cycle == 2);  // and poses resume once plausible readings replace the huge ones
 }

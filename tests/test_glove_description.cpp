@@ -34,13 +34,13 @@ std::string paper_dofs() {
   const auto slots = GridMap::paper_pose_slots();
   std::string out;
   for (std::size_t i = hand::kDofCount; i-- > 0;)
-    out += std::string(out.empty() ? "" : ", ") + "{\"name\": \"" + hand::kDofs[i].name +
-           "\", \"row\": " + std::to_string(slots[i].row) + ", \"col\": " + std::to_string(slots[i].col) + "}";
+    out += std::string(out.empty() ? "" : ", ") + "{\"name\": \"" + hand::kDofs[i].name + "\", \"row\": " + std::to_string(slots[i].row) +
+           ", \"col\": " + std::to_string(slots[i].col) + "}";
   return "[" + out + "]";
 }
 
-std::string glove_text(const std::string& cells, const std::string& dofs = paper_dofs(), const std::string& head =
-                                                                                               "\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"test\"") {
+std::string glove_text(const std::string& cells, const std::string& dofs = paper_dofs(),
+                       const std::string& head = "\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"test\"") {
   return "{" + head + ", \"cells\": " + cells + ", \"dofs\": " + dofs + "}";
 }
 
@@ -98,7 +98,9 @@ TEST_CASE("glove description: a 14-cell glove of the main-joint cells (paper Fig
   std::array<double, 44> full_cells{};
   for (int c = 0; c < 44; ++c) full_cells[static_cast<std::size_t>(c)] = 0.5 + 0.01 * c;
   std::array<double, 14> cells14{};
-  for (int c = 0; c < 14; ++c) cells14[static_cast<std::size_t>(c)] = full_cells[static_cast<std::size_t>(full.cell_index(glove.cell_names()[static_cast<std::size_t>(c)]))];
+  for (int c = 0; c < 14; ++c)
+    cells14[static_cast<std::size_t>(c)] =
+        full_cells[static_cast<std::size_t>(full.cell_index(glove.cell_names()[static_cast<std::size_t>(c)]))];
   std::array<float, kStretchValues> maps14{}, maps44{};
   REQUIRE(glove.map().to_stretch_maps(cells14.data(), maps14) == Status::Ok);
   REQUIRE(full.map().to_stretch_maps(full_cells.data(), maps44) == Status::Ok);
@@ -116,8 +118,7 @@ TEST_CASE("glove description: a 14-cell glove of the main-joint cells (paper Fig
   CHECK(maps14[static_cast<std::size_t>(Slot{0, 4, 4}.flat())] == static_cast<float>(full_cells[32]));
 
   // DoFs listed in reverse order still land in their paper slots.
-  for (std::size_t d = 0; d < hand::kDofCount; ++d)
-    CHECK(same_slot(glove.map().dof_slots()[d], GridMap::paper_pose_slots()[d]));
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(same_slot(glove.map().dof_slots()[d], GridMap::paper_pose_slots()[d]));
   CHECK(GloveDescription::from_json(glove.to_json()) == glove);
 }
 
@@ -126,7 +127,8 @@ TEST_CASE("glove description: more cells than the 50 slots of the stretch maps i
   for (int c = 0; c < 60; ++c)
     cells += std::string(cells.empty() ? "" : ", ") + cell_entry("c" + std::to_string(c), {c / 25 % 2, c / 5 % 5, c % 5});
   CHECK_THROWS_WITH_AS(GloveDescription::from_json(glove_text("[" + cells + "]")),
-                       doctest::Contains("cells[50] ('c50') is stretch cell 51, but the stretch maps (2 x 5 x 5) have only 50 slots"), Error);
+                       doctest::Contains("cells[50] ('c50') is stretch cell 51, but the stretch maps (2 x 5 x 5) have only 50 slots"),
+                       Error);
   // 50 cells fill every slot and are fine.
   cells.clear();
   for (int c = 0; c < 50; ++c)
@@ -156,8 +158,7 @@ TEST_CASE("glove description: each malformed input is refused with a message nam
   // Missing and unknown fields.
   refused(glove_text(kTwoCells, paper_dofs(), "\"format\": \"glovepose-glove\", \"version\": 1"),
           "the top-level object lacks the key 'id'");
-  refused("{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"cells\": " + kTwoCells + "}",
-          "lacks the key 'dofs'");
+  refused("{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"cells\": " + kTwoCells + "}", "lacks the key 'dofs'");
   refused(glove_text(kTwoCells, paper_dofs(), "\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"colour\": 3"),
           "the top-level object has the unknown key 'colour'");
   refused(glove_text(kTwoCells, paper_dofs(), "\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"\""), "'id' is empty");
@@ -192,8 +193,7 @@ TEST_CASE("glove description: each malformed input is refused with a message nam
     std::string out;
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       if (d == replaced && drop) continue;
-      out += std::string(out.empty() ? "" : ", ") +
-             (d == replaced ? entry : dof_entry(hand::kDofs[d].name, slots[d].row, slots[d].col));
+      out += std::string(out.empty() ? "" : ", ") + (d == replaced ? entry : dof_entry(hand::kDofs[d].name, slots[d].row, slots[d].col));
     }
     return "[" + out + "]";
   };
@@ -206,22 +206,22 @@ TEST_CASE("glove description: each malformed input is refused with a message nam
           "dofs[1] ('thumb_base_abduction') repeats the DoF of dofs[0], expected each of the 25 DoFs exactly once");
   refused(glove_text(kTwoCells, dofs_with(1, dof_entry("thumb_base_flexion", 0, 5))),
           "dofs[1] ('thumb_base_flexion'): 'col' is 5, expected an integer 0..4");
-  refused(glove_text(kTwoCells, dofs_with(1, dof_entry("thumb_base_flexion", 0, 0))),
-          "dofs[1] ('thumb_base_flexion') is placed at (row 0, column 0), the slot of DoF 'thumb_base_abduction', expected one DoF per slot");
+  refused(
+      glove_text(kTwoCells, dofs_with(1, dof_entry("thumb_base_flexion", 0, 0))),
+      "dofs[1] ('thumb_base_flexion') is placed at (row 0, column 0), the slot of DoF 'thumb_base_abduction', expected one DoF per slot");
   refused(glove_text(kTwoCells, dofs_with(1, "{\"name\": \"thumb_base_flexion\", \"channel\": 0, \"row\": 0, \"col\": 1}")),
           "dofs[1] has the unknown key 'channel', expected only 'name', 'row', 'col'");
 }
 
 TEST_CASE("glove description: files: unreadable and malformed files name the path") {
   CHECK_THROWS_WITH_AS(GloveDescription::read(temp_path("no_such.glove.json")),
-                       doctest::Contains(("glove description file '" + temp_path("no_such.glove.json") + "': cannot open").c_str()),
-                       Error);
+                       doctest::Contains(("glove description file '" + temp_path("no_such.glove.json") + "': cannot open").c_str()), Error);
   const std::string path = temp_path("bad.glove.json");
   std::ofstream(path) << "{\"format\": \"glovepose-glove\", \"version\": 1}";
-  CHECK_THROWS_WITH_AS(GloveDescription::read(path),
-                       doctest::Contains(
-                           ("glove description file '" + path + "': glove description: the top-level object lacks the key 'id'").c_str()),
-                       Error);
+  CHECK_THROWS_WITH_AS(
+      GloveDescription::read(path),
+      doctest::Contains(("glove description file '" + path + "': glove description: the top-level object lacks the key 'id'").c_str()),
+      Error);
   CHECK_THROWS_WITH_AS(GloveDescription::read(GLOVEPOSE_TEST_TMP_DIR), doctest::Contains("glove description file"), Error);  // a folder
   CHECK_THROWS_WITH_AS(GloveDescription::glauser2019().write(temp_path("no_such_folder/x.json")),
                        doctest::Contains("cannot open for writing"), Error);
@@ -271,7 +271,8 @@ TEST_CASE("glove description: joint limits, rate and calibration: defaults, roun
   add_limits("index_base_flexion", ", \"min_degrees\": -25, \"max_degrees\": 100.5");
   add_limits("thumb_base_abduction", ", \"max_degrees\": 40, \"min_degrees\": -12");
   const std::string text = "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"own\", \"cells\": " + kTwoCells +
-                           ", \"dofs\": " + dofs + ", \"rate_hz\": 20, \"calibration\": {\"median_seconds\": 0.5, \"flat_relative_range\": 0.001}}";
+                           ", \"dofs\": " + dofs +
+                           ", \"rate_hz\": 20, \"calibration\": {\"median_seconds\": 0.5, \"flat_relative_range\": 0.001}}";
   const GloveDescription own = GloveDescription::from_json(text);
   REQUIRE(own.rate_hz());
   CHECK(*own.rate_hz() == 20.0);
@@ -314,8 +315,8 @@ TEST_CASE("glove description: joint limits, rate and calibration: defaults, roun
 
 TEST_CASE("glove description: malformed joint limits, rate and calibration are refused naming the field") {
   const auto refused = [](const std::string& dofs, const std::string& tail, const std::string& expected) {
-    const std::string text = "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"cells\": " + kTwoCells +
-                             ", \"dofs\": " + dofs + tail + "}";
+    const std::string text =
+        "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"x\", \"cells\": " + kTwoCells + ", \"dofs\": " + dofs + tail + "}";
     INFO(text);
     CHECK_THROWS_WITH_AS(GloveDescription::from_json(text), doctest::Contains(expected.c_str()), Error);
   };
@@ -326,7 +327,8 @@ TEST_CASE("glove description: malformed joint limits, rate and calibration are r
     return dofs;
   };
   const std::string dofs = paper_dofs();
-  refused(with(", \"min_degrees\": -25"), "", "('index_base_flexion') has 'min_degrees' without 'max_degrees', expected both limits or neither");
+  refused(with(", \"min_degrees\": -25"), "",
+          "('index_base_flexion') has 'min_degrees' without 'max_degrees', expected both limits or neither");
   refused(with(", \"max_degrees\": 90"), "", "has 'max_degrees' without 'min_degrees'");
   refused(with(", \"min_degrees\": 90, \"max_degrees\": 90"), "", "has limits [90, 90] degrees, expected min_degrees < max_degrees");
   refused(with(", \"min_degrees\": -400, \"max_degrees\": 90"), "", "within [-360, 360]");
@@ -337,7 +339,8 @@ TEST_CASE("glove description: malformed joint limits, rate and calibration are r
   refused(dofs, ", \"rate_hz\": \"60\"", "'rate_hz' is \"60\", expected a number");
   refused(dofs, ", \"calibration\": 3", "'calibration' is 3, expected an object");
   refused(dofs, ", \"calibration\": {\"median_seconds\": 0}", "'calibration.median_seconds' is 0, expected a time > 0 s");
-  refused(dofs, ", \"calibration\": {\"flat_relative_range\": 1}", "'calibration.flat_relative_range' is 1, expected a fraction >= 0 and < 1");
+  refused(dofs, ", \"calibration\": {\"flat_relative_range\": 1}",
+          "'calibration.flat_relative_range' is 1, expected a fraction >= 0 and < 1");
   refused(dofs, ", \"calibration\": {\"flat_relative_range\": -0.1}", "'calibration.flat_relative_range' is -0.1");
   refused(dofs, ", \"calibration\": {\"median_window\": 20}", "'calibration' has the unknown key 'median_window'");
   // The constructor checks the same.

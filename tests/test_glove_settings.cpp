@@ -134,7 +134,8 @@ TEST_CASE("glove settings: a model for the glove records and normalises by the g
   for (long f = 0; f < s.frames(); ++f) {
     const double angle = data.angles[static_cast<std::size_t>(s.source[static_cast<std::size_t>(f)]) * hand::kDofCount + index];
     const double lo = -30.0 * kPi / 180.0, hi = 110.0 * kPi / 180.0;
-    CHECK(s.targets[static_cast<std::size_t>(f) * hand::kDofCount + index] == doctest::Approx(2.0 * (angle - lo) / (hi - lo) - 1.0).epsilon(1e-6));
+    CHECK(s.targets[static_cast<std::size_t>(f) * hand::kDofCount + index] ==
+          doctest::Approx(2.0 * (angle - lo) / (hi - lo) - 1.0).epsilon(1e-6));
   }
   // The model file carries the description (with its settings) and the limits.
   nn::WeightFile file;
@@ -156,7 +157,7 @@ TEST_CASE("glove settings: the estimator takes the glove's median window and fla
   CHECK(model->joint_limits().max()[hand::dof_from_name("index_base_flexion")] == 110.0 * kPi / 180.0);
 
   {
-    GlovePoseEstimator estimator(model);  // defaults: the glove's
+    GlovePoseEstimator estimator(model);                        // defaults: the glove's
     CHECK(estimator.config().calibration_median_window == 10);  // 0.5 s at the glove's 20 Hz (slower than the 60 Hz sample period)
     CHECK(estimator.config().calibration.min_relative_range == 0.001);
     CHECK(estimator.config().calibration_sample_period == 1.0 / 20.0);  // frames taken at the glove's rate

@@ -43,8 +43,8 @@ TEST_CASE("grid: every cell of the paper's glove has its own stretch-map slot, c
     INFO(layout.cell_name(c));
     used.insert(s.flat());
     CHECK(s.channel == (cell.direction == sensor::Direction::Along ? 0 : 1));  // along / across maps
-    CHECK(s.row == static_cast<int>(cell.digit));                                // digit rows
-    if (cell.category == sensor::Category::MainJoint) {                         // joints: proximal..distal columns
+    CHECK(s.row == static_cast<int>(cell.digit));                              // digit rows
+    if (cell.category == sensor::Category::MainJoint) {                        // joints: proximal..distal columns
       const int expected_col = cell.segment == sensor::Segment::Proximal ? 2 : (cell.segment == sensor::Segment::Middle ? 3 : 4);
       CHECK(s.col == expected_col);
     }
@@ -79,5 +79,6 @@ TEST_CASE("grid: invalid tables are rejected, naming the cell or DoF") {
   CHECK_THROWS_WITH_AS(GridMap({{0, 5, 0}}, poses), doctest::Contains("expected channel 0..1 and row, column 0..4"), Error);
   auto bad = poses;
   bad[hand::dof_from_name("ring_base_twist")] = bad[hand::dof_from_name("ring_tip_flexion")];
-  CHECK_THROWS_WITH_AS(GridMap({{0, 0, 0}}, bad), doctest::Contains("DoF ring_base_twist is placed on the slot of DoF ring_tip_flexion"), Error);
+  CHECK_THROWS_WITH_AS(GridMap({{0, 0, 0}}, bad), doctest::Contains("DoF ring_base_twist is placed on the slot of DoF ring_tip_flexion"),
+                       Error);
 }

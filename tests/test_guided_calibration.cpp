@@ -157,9 +157,9 @@ TEST_CASE("pose offset: the features are each step's mean over its holding frame
   REQUIRE(means.missing_step().empty());
   const Eigen::VectorXd f = means.features();
   REQUIRE(f.size() == 2 * (25 + 2));
-  CHECK(f(0) == doctest::Approx(0.2));   // step 0, DoF 0: mean of 0.1 and 0.3, pose 0
-  CHECK(f(25) == doctest::Approx(0.75)); // step 0, cell 0
-  CHECK(f(26) == doctest::Approx(-0.5)); // step 0, cell 1
+  CHECK(f(0) == doctest::Approx(0.2));    // step 0, DoF 0: mean of 0.1 and 0.3, pose 0
+  CHECK(f(25) == doctest::Approx(0.75));  // step 0, cell 0
+  CHECK(f(26) == doctest::Approx(-0.5));  // step 0, cell 1
   const std::size_t flexion = hand::dof_from_theta(14);
   CHECK(f(27 + static_cast<Eigen::Index>(flexion)) == doctest::Approx(-1.2));  // step 1: 0 predicted, pose 1.2
   CHECK(f(27 + 25) == doctest::Approx(1.0));
@@ -183,7 +183,7 @@ TEST_CASE("pose offset: the model's JSON reads back to the same offsets, bad tex
   CHECK(back.rms_z(f) == doctest::Approx(model.rms_z(f)).epsilon(1e-7));
   CHECK(model.rms_z(mean) == 0.0);
   CHECK(model.followed(mean));
-  CHECK_FALSE(model.followed(Eigen::VectorXd(mean.array() + 0.5 * 1.2 * 1.5 * 1.01)));  // every z just beyond the margin
+  CHECK_FALSE(model.followed(Eigen::VectorXd(mean.array() + 0.5 * 1.2 * 1.5 * 1.01)));              // every z just beyond the margin
   CHECK_THROWS_AS(calibration::PoseOffsetModel(two_steps(), 3, w, bias, mean, scale, 1.2), Error);  // 3 cells: 2 x 28 features
   CHECK_THROWS_AS(calibration::PoseOffsetModel(two_steps(), 2, w, bias, mean, Eigen::VectorXd::Zero(54), 1.2), Error);
   std::string text = model.to_json();
@@ -245,7 +245,9 @@ TEST_CASE("lag: predictions that trail the truth by a whole or half number of fr
   for (int r = 0; r < 2; ++r)
     for (int f = 0; f < 600; ++f) {
       for (std::size_t d = 0; d < 25; ++d) {
-        const auto angle = [&](double frame) { return std::sin(0.07 * frame * (1.0 + 0.1 * static_cast<double>(d)) + static_cast<double>(d + r)); };
+        const auto angle = [&](double frame) {
+          return std::sin(0.07 * frame * (1.0 + 0.1 * static_cast<double>(d)) + static_cast<double>(d + r));
+        };
         truth.push_back(static_cast<float>(angle(f)));
         whole.push_back(static_cast<float>(angle(f - 3.0)));
         half.push_back(static_cast<float>(angle(f - 1.5)));
@@ -279,7 +281,9 @@ TEST_CASE("replay: re-solving the raw rows with the recorder's readout gives the
   std::size_t compared = 0, position = 0;
   double worst = 0.0;
   for (std::size_t f = 0; f < recorded.frames(); ++f) {
-    position = f > 0 && recorded.kind[f] == recorded.kind[f - 1] && train::run_key(recorded, f) == train::run_key(recorded, f - 1) ? position + 1 : 0;
+    position = f > 0 && recorded.kind[f] == recorded.kind[f - 1] && train::run_key(recorded, f) == train::run_key(recorded, f - 1)
+                   ? position + 1
+                   : 0;
     if (position < 4) continue;
     for (std::size_t c = 0; c < recorded.cell_count; ++c)
       worst = std::max(worst, std::abs(static_cast<double>(recorded.cells[f * 44 + c] - replayed.cells[f * 44 + c])));
@@ -321,7 +325,8 @@ TEST_CASE("estimator: pose-guided calibration on simulated new users: the offlin
         calibrating = false;
         CHECK(estimator->calibration_method() == config.calibration_method);
         if (method == 1)
-          for (std::size_t d = 0; d < 25; ++d) CHECK(estimator->calibration_offsets()[d] == doctest::Approx(expected.at(key)[d]).epsilon(1e-3).scale(1e-3));
+          for (std::size_t d = 0; d < 25; ++d)
+            CHECK(estimator->calibration_offsets()[d] == doctest::Approx(expected.at(key)[d]).epsilon(1e-3).scale(1e-3));
       }
       std::vector<double> cells(data.cells.begin() + static_cast<long>(f * 44), data.cells.begin() + static_cast<long>((f + 1) * 44));
       const Status status = estimator->push_cells(cells.data(), 44, data.timestamps[f]);

@@ -26,7 +26,7 @@ TEST_CASE("half: every binary16 value survives f16 -> float -> f16, and known va
 }
 
 TEST_CASE("half: float -> f16 rounds to nearest even, overflows to infinity, underflows to zero") {
-  CHECK(float_to_f16(1.0f + std::ldexp(1.0f, -11)) == 0x3c00);  // halfway: ties to even (down)
+  CHECK(float_to_f16(1.0f + std::ldexp(1.0f, -11)) == 0x3c00);      // halfway: ties to even (down)
   CHECK(float_to_f16(1.0f + 3 * std::ldexp(1.0f, -11)) == 0x3c02);  // halfway: ties to even (up)
   CHECK(float_to_f16(1.0f + std::ldexp(1.0f, -11) + std::ldexp(1.0f, -20)) == 0x3c01);
   CHECK(float_to_f16(65520.0f) == 0x7c00);
@@ -42,7 +42,7 @@ TEST_CASE("half: bfloat16 is the top half of a float, rounded to nearest even") 
     if (!std::isnan(f)) CHECK(float_to_bf16(f) == h);
   }
   CHECK(bf16_to_float(0x3f80) == 1.0f);
-  CHECK(float_to_bf16(1.0f + std::ldexp(1.0f, -8)) == 0x3f80);   // tie -> even
+  CHECK(float_to_bf16(1.0f + std::ldexp(1.0f, -8)) == 0x3f80);  // tie -> even
   CHECK(float_to_bf16(1.0f + 3 * std::ldexp(1.0f, -8)) == 0x3f82);
   CHECK(std::isnan(bf16_to_float(float_to_bf16(std::numeric_limits<float>::quiet_NaN()))));
 }

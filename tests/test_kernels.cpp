@@ -17,18 +17,24 @@ namespace kernels = glovepose::nn::kernels;
 namespace {
 template <typename W>
 W to_weight(float v) {
-  if constexpr (std::is_same_v<W, float>) return v;
-  else if constexpr (std::is_same_v<W, std::uint16_t>) return glovepose::io::float_to_f16(v);
-  else if constexpr (std::is_same_v<W, kernels::Fixed16>) return static_cast<W>(std::lround((v - 1.0f) * 65536.0f));  // levels below
-  else return static_cast<W>(glovepose::io::float_to_bf16(v));
+  if constexpr (std::is_same_v<W, float>)
+    return v;
+  else if constexpr (std::is_same_v<W, std::uint16_t>)
+    return glovepose::io::float_to_f16(v);
+  else if constexpr (std::is_same_v<W, kernels::Fixed16>)
+    return static_cast<W>(std::lround((v - 1.0f) * 65536.0f));  // levels below
+  else
+    return static_cast<W>(glovepose::io::float_to_bf16(v));
 }
 
 // A value exact in W. Fixed16: a level 1 + u / 2^16 with u < 512, so that the low code's top 7 bits,
 // which a high level carries, are zero and the level is the same whichever column it is paired with.
 template <typename W>
 float exact_weight(std::mt19937& rng, std::uniform_real_distribution<float>& u) {
-  if constexpr (std::is_same_v<W, kernels::Fixed16>) return 1.0f + static_cast<float>(rng() % 512) / 65536.0f;
-  else return kernels::weight_value(to_weight<W>(u(rng)));
+  if constexpr (std::is_same_v<W, kernels::Fixed16>)
+    return 1.0f + static_cast<float>(rng() % 512) / 65536.0f;
+  else
+    return kernels::weight_value(to_weight<W>(u(rng)));
 }
 
 // A k x n matrix (row-major, values exact in W) in the layout a backend reads: its column panels,
@@ -39,7 +45,8 @@ std::vector<W> pack(const std::vector<float>& logical, int k, int n, int panel, 
   for (int kk = 0; kk < k; ++kk)
     for (int j = 0; j < n; ++j) {
       const int column = kernels::kPairLayout<W> ? kernels::paired_slot(j, lanes) : j;
-      packed[static_cast<std::size_t>(kernels::panel_index(kk, column, k, n, panel))] = to_weight<W>(logical[static_cast<std::size_t>(kk * n + j)]);
+      packed[static_cast<std::size_t>(kernels::panel_index(kk, column, k, n, panel))] =
+          to_weight<W>(logical[static_cast<std::size_t>(kk * n + j)]);
     }
   return packed;
 }
@@ -71,7 +78,8 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
   for (int r = 0; r < rows; ++r)
     for (int kk = 0; kk < k; ++kk)
       for (int j = 0; j < n; ++j)
-        y_reference[static_cast<std::size_t>(r * n + j)] += xr[static_cast<std::size_t>(r)][kk] * logical[static_cast<std::size_t>(kk * n + j)];
+        y_reference[static_cast<std::size_t>(r * n + j)] +=
+            xr[static_cast<std::size_t>(r)][kk] * logical[static_cast<std::size_t>(kk * n + j)];
   SimdBackend::gemm_rows(xr.data(), yv.data(), rows, w.data(), k, n);
   for (std::size_t i = 0; i < y_reference.size(); ++i) REQUIRE(y_simd[i] == doctest::Approx(y_reference[i]).epsilon(1e-5).scale(1.0));
   // The same product from the rows' nonzero entries: SIMD and scalar compaction agree, and both
@@ -105,7 +113,8 @@ void check_gemm(int rows, int k, int n, unsigned seed) {
 
 }  // namespace
 
-TEST_CASE("kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16, BF16, Fixed16 weights)") {
+TEST_CASE(
+    "kernels: the SIMD products (dense and sparse rows) equal the scalar reference (all blockings, F32, F16, BF16, Fixed16 weights)") {
   const int lanes = SimdBackend::lanes;
   MESSAGE("SIMD backend: " << lanes << " floats per vector");
   unsigned seed = 1;
@@ -184,7 +193,7 @@ TEST_CASE("kernels: Fixed16 levels: the SIMD widening equals the definition, and
     }
   }
   CHECK(fixed16_low_level(0x0000u) == 1.0f);
-  CHECK(fixed16_low_level(0xFFFF8000u) == 1.5f);             // the high half does not leak into the low level
+  CHECK(fixed16_low_level(0xFFFF8000u) == 1.5f);  // the high half does not leak into the low level
   CHECK(fixed16_high_level(0x80000000u) == 1.5f);
   CHECK(fixed16_high_level(0x8000FE00u) == 1.5f + 127.0f / 8388608.0f);  // the low code's top 7 bits, below
   // Encoding: every level within 2^-17 of 1.5 + weight / scale, over the whole range and its ends.

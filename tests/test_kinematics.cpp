@@ -45,8 +45,8 @@ TEST_CASE("kinematics: the zero pose reproduces the rest pose and the template's
   const Finger order[] = {Finger::Pinky, Finger::Ring, Finger::Middle, Finger::Index, Finger::Thumb};
   for (int k = 0; k < 5; ++k) {
     const auto base = static_cast<std::size_t>(kFingerBase[static_cast<std::size_t>(order[k])]);
-    const Eigen::Vector3d points[4] = {fk.fingertip(skeleton, order[k]), skeleton[base + 2].translation(),
-                                       skeleton[base + 1].translation(), skeleton[base].translation()};
+    const Eigen::Vector3d points[4] = {fk.fingertip(skeleton, order[k]), skeleton[base + 2].translation(), skeleton[base + 1].translation(),
+                                       skeleton[base].translation()};
     Eigen::Vector3d centres[4];
     for (int j = 0; j < 4; ++j) {
       const auto at = static_cast<std::size_t>(3 * (4 * k + j));
@@ -91,8 +91,7 @@ TEST_CASE("kinematics: rotation order is flexion, then abduction, then twist (re
   Skeleton s;
   fk.pose(a, s);
   const Eigen::Affine3d expected = fk.model().rest[static_cast<std::size_t>(Phalanx::Index1)] *
-                                   Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()) *
-                                   Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
                                    Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitY());
   CHECK((s[static_cast<std::size_t>(Phalanx::Index1)].matrix() - expected.matrix()).cwiseAbs().maxCoeff() < 1e-12);
 }

@@ -32,7 +32,8 @@ TEST_CASE("labelled DoFs: the set reads and writes as DoF names, and bad lists a
   CHECK(hand::parse_dof_set(hand::dof_set_text(kSubset), "t") == kSubset);
   CHECK(hand::dof_set_text(without({})).rfind("thumb_base_abduction,", 0) == 0);
   CHECK_THROWS_WITH_AS(hand::parse_dof_set("index_base_flexion,wrist", "metadata 'labelled_dofs'"),
-                       "metadata 'labelled_dofs': 'wrist' is not a DoF, expected comma-separated names such as 'index_base_flexion'", Error);
+                       "metadata 'labelled_dofs': 'wrist' is not a DoF, expected comma-separated names such as 'index_base_flexion'",
+                       Error);
   CHECK_THROWS_WITH_AS(hand::parse_dof_set("index_base_flexion,index_base_flexion", "x"),
                        "x: 'index_base_flexion' is listed twice, expected each DoF once", Error);
   CHECK_THROWS_AS(hand::parse_dof_set("", "x"), Error);
@@ -57,8 +58,10 @@ TEST_CASE("labelled DoFs: the masked loss is the mean over labelled values only,
   for (long f = 0; f < frames; ++f)
     for (std::size_t d = 0; d < 25; ++d) {
       const std::size_t i = static_cast<std::size_t>(f) * 25 + d;
-      if (kSubset[d]) CHECK(grad[i] == doctest::Approx(2.0 * (y[i] - t[i]) / (frames * 22)).epsilon(1e-6));
-      else CHECK(grad[i] == 0.0f);
+      if (kSubset[d])
+        CHECK(grad[i] == doctest::Approx(2.0 * (y[i] - t[i]) / (frames * 22)).epsilon(1e-6));
+      else
+        CHECK(grad[i] == 0.0f);
     }
   // Every DoF labelled: the same bits as the plain loss.
   const double all = train::masked_mse_loss(y.data(), t.data(), frames, hand::all_dofs(), grad.data());
@@ -66,7 +69,8 @@ TEST_CASE("labelled DoFs: the masked loss is the mean over labelled values only,
   CHECK(grad == grad_all);
 }
 
-TEST_CASE("labelled DoFs: samples train toward the rest pose where there is no angle, and training leaves those outputs' weights untouched") {
+TEST_CASE(
+    "labelled DoFs: samples train toward the rest pose where there is no angle, and training leaves those outputs' weights untouched") {
   // A dataset of 6 cells labelling 22 DoFs: angles a fixed linear function of the cells.
   const std::size_t cells = 6, n = 300;
   train::Dataset data(cells, 0, "six", 60.0);
@@ -190,7 +194,9 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   for (std::size_t f = 0; f < 2; ++f)
     for (std::size_t d = 0; d < 25; ++d) {
       double expected = b[d];
-      for (int c = 0; c < cells; ++c) expected += static_cast<double>(w[d * cells + static_cast<std::size_t>(c)]) * samples.inputs[f * cells + static_cast<std::size_t>(c)];
+      for (int c = 0; c < cells; ++c)
+        expected +=
+            static_cast<double>(w[d * cells + static_cast<std::size_t>(c)]) * samples.inputs[f * cells + static_cast<std::size_t>(c)];
       CHECK(out[f * 25 + d] == doctest::Approx(kSubset[d] ? expected : rest[d]).epsilon(1e-5));
     }
 

@@ -98,7 +98,8 @@ TEST_CASE("latest: an estimator's thread publishes every pose, two readers see w
   const train::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   EstimatorConfig estimator_config;
   estimator_config.joint_transforms = true;
-  GlovePoseEstimator estimator(PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors"), estimator_config);
+  GlovePoseEstimator estimator(PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors"),
+                               estimator_config);
   LatestHand latest;
   std::vector<std::array<float, 3>> tips(data.frames());  // the pinky tip of pose n, at [n - 1]
   std::atomic<bool> done{false};

@@ -43,12 +43,10 @@ TEST_CASE("layout: cell categories and places follow the paper's Sec. 3.1 and Fi
   CHECK(cells_where(layout, [](const Cell& c) { return c.category == Category::Abduction; }) == S{16, 25, 26, 27});
   CHECK(cells_where(layout, [](const Cell& c) { return c.category == Category::Perpendicular; }) ==
         S{1, 8, 9, 28, 29, 30, 31, 37, 38, 39, 43});
-  CHECK(cells_where(layout, [](const Cell& c) {
-          return c.category == Category::BackOfHandGrid && c.direction == Direction::Across;
-        }) == S{2, 4, 7, 10, 17, 18, 19});
-  CHECK(cells_where(layout, [](const Cell& c) {
-          return c.category == Category::BackOfHandGrid && c.direction == Direction::Along;
-        }) == S{3, 5, 6, 11, 12, 13, 14, 15});
+  CHECK(cells_where(layout, [](const Cell& c) { return c.category == Category::BackOfHandGrid && c.direction == Direction::Across; }) ==
+        S{2, 4, 7, 10, 17, 18, 19});
+  CHECK(cells_where(layout, [](const Cell& c) { return c.category == Category::BackOfHandGrid && c.direction == Direction::Along; }) ==
+        S{3, 5, 6, 11, 12, 13, 14, 15});
   // Main-joint cells sense stretch along the finger; perpendicular and abduction cells across.
   for (const Cell& c : layout.cells()) {
     if (c.category == Category::MainJoint) CHECK(c.direction == Direction::Along);

@@ -197,9 +197,7 @@ TEST_CASE("linear fit: the ridge shrinks the weights, is relative to the input s
 
 TEST_CASE("linear fit: bad input is refused with a message naming the problem") {
   Problem p = noisy_problem(100, 4, 2, 0.1);
-  const auto refused = [](auto&& call, const char* expected) {
-    CHECK_THROWS_WITH_AS(call(), doctest::Contains(expected), Error);
-  };
+  const auto refused = [](auto&& call, const char* expected) { CHECK_THROWS_WITH_AS(call(), doctest::Contains(expected), Error); };
   refused([&] { return train::fit_linear(p.x.data(), 0, 4, p.y.data(), 2); }, "0 frames, expected at least 1");
   refused([&] { return train::fit_linear(p.x.data(), 100, 0, p.y.data(), 2); }, "0 inputs and 2 outputs, expected at least 1 of each");
   refused([&] { return train::fit_linear(p.x.data(), 100, 4, p.y.data(), 0); }, "expected at least 1 of each");
@@ -216,7 +214,8 @@ TEST_CASE("linear fit: bad input is refused with a message naming the problem") 
 
   // Singular systems without a ridge: a repeated input, a constant input, fewer frames than unknowns.
   Problem repeated = p;
-  for (long f = 0; f < p.frames; ++f) repeated.x[static_cast<std::size_t>(f * 4 + 3)] = 2.0f * repeated.x[static_cast<std::size_t>(f * 4 + 1)];
+  for (long f = 0; f < p.frames; ++f)
+    repeated.x[static_cast<std::size_t>(f * 4 + 3)] = 2.0f * repeated.x[static_cast<std::size_t>(f * 4 + 1)];
   refused([&] { return repeated.fit(0.0); }, "singular system");
   refused([&] { return repeated.fit(0.0); }, "linearly dependent, expected independent inputs or a larger ridge");
   CHECK(repeated.fit(1e-6).weight.allFinite());  // the ridge makes it solvable
@@ -309,7 +308,8 @@ TEST_CASE("linear fit: a glove-sized problem (44 inputs, 25 outputs) fits and pr
   double worst = 0.0;
   for (int f = 0; f < 100; ++f)
     for (int o = 0; o < 25; ++o)
-      worst = std::max(worst, std::fabs(out[static_cast<std::size_t>(f * 25 + o)] - expected(f, o)) / std::max(1.0, std::fabs(expected(f, o))));
+      worst =
+          std::max(worst, std::fabs(out[static_cast<std::size_t>(f * 25 + o)] - expected(f, o)) / std::max(1.0, std::fabs(expected(f, o))));
   CHECK(worst < 1e-5);
   // The residual is the noise: its RMS is close to 0.05.
   double squared = 0.0;

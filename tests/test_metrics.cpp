@@ -179,7 +179,7 @@ TEST_CASE("metrics: merged accumulators equal one sequential accumulator exactly
   AngleErrorAccumulator sequential;
   for (std::size_t f = 0; f < frames; ++f) sequential.add(predicted.data() + f * 25, truth.data() + f * 25);
   const AngleErrorReport expected = sequential.report();
-  REQUIRE(expected.skipped_frames > 0);                 // the split covers skipped frames
+  REQUIRE(expected.skipped_frames > 0);                    // the split covers skipped frames
   REQUIRE(expected.overall.max_deg > kHistogramLimitDeg);  // and errors kept outside the histogram
 
   // Three uneven parts, merged in two different orders.

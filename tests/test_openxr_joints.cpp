@@ -82,20 +82,37 @@ void check_conventions(const XrJointLocations& joints) {
 
 TEST_CASE("openxr joints: order, count, struct layout and flags are those of openxr.h") {
   CHECK(kXrJointCount == XR_HAND_JOINT_COUNT_EXT);
-#define GLOVEPOSE_XR(name) {XR_HAND_JOINT_##name##_EXT, #name}
+#define GLOVEPOSE_XR(name) \
+  { XR_HAND_JOINT_##name##_EXT, #name }
   const struct {
     XrHandJointEXT value;
     const char* name;
-  } spec[] = {GLOVEPOSE_XR(PALM), GLOVEPOSE_XR(WRIST),
-              GLOVEPOSE_XR(THUMB_METACARPAL), GLOVEPOSE_XR(THUMB_PROXIMAL), GLOVEPOSE_XR(THUMB_DISTAL), GLOVEPOSE_XR(THUMB_TIP),
-              GLOVEPOSE_XR(INDEX_METACARPAL), GLOVEPOSE_XR(INDEX_PROXIMAL), GLOVEPOSE_XR(INDEX_INTERMEDIATE),
-              GLOVEPOSE_XR(INDEX_DISTAL), GLOVEPOSE_XR(INDEX_TIP),
-              GLOVEPOSE_XR(MIDDLE_METACARPAL), GLOVEPOSE_XR(MIDDLE_PROXIMAL), GLOVEPOSE_XR(MIDDLE_INTERMEDIATE),
-              GLOVEPOSE_XR(MIDDLE_DISTAL), GLOVEPOSE_XR(MIDDLE_TIP),
-              GLOVEPOSE_XR(RING_METACARPAL), GLOVEPOSE_XR(RING_PROXIMAL), GLOVEPOSE_XR(RING_INTERMEDIATE),
-              GLOVEPOSE_XR(RING_DISTAL), GLOVEPOSE_XR(RING_TIP),
-              GLOVEPOSE_XR(LITTLE_METACARPAL), GLOVEPOSE_XR(LITTLE_PROXIMAL), GLOVEPOSE_XR(LITTLE_INTERMEDIATE),
-              GLOVEPOSE_XR(LITTLE_DISTAL), GLOVEPOSE_XR(LITTLE_TIP)};
+  } spec[] = {GLOVEPOSE_XR(PALM),
+              GLOVEPOSE_XR(WRIST),
+              GLOVEPOSE_XR(THUMB_METACARPAL),
+              GLOVEPOSE_XR(THUMB_PROXIMAL),
+              GLOVEPOSE_XR(THUMB_DISTAL),
+              GLOVEPOSE_XR(THUMB_TIP),
+              GLOVEPOSE_XR(INDEX_METACARPAL),
+              GLOVEPOSE_XR(INDEX_PROXIMAL),
+              GLOVEPOSE_XR(INDEX_INTERMEDIATE),
+              GLOVEPOSE_XR(INDEX_DISTAL),
+              GLOVEPOSE_XR(INDEX_TIP),
+              GLOVEPOSE_XR(MIDDLE_METACARPAL),
+              GLOVEPOSE_XR(MIDDLE_PROXIMAL),
+              GLOVEPOSE_XR(MIDDLE_INTERMEDIATE),
+              GLOVEPOSE_XR(MIDDLE_DISTAL),
+              GLOVEPOSE_XR(MIDDLE_TIP),
+              GLOVEPOSE_XR(RING_METACARPAL),
+              GLOVEPOSE_XR(RING_PROXIMAL),
+              GLOVEPOSE_XR(RING_INTERMEDIATE),
+              GLOVEPOSE_XR(RING_DISTAL),
+              GLOVEPOSE_XR(RING_TIP),
+              GLOVEPOSE_XR(LITTLE_METACARPAL),
+              GLOVEPOSE_XR(LITTLE_PROXIMAL),
+              GLOVEPOSE_XR(LITTLE_INTERMEDIATE),
+              GLOVEPOSE_XR(LITTLE_DISTAL),
+              GLOVEPOSE_XR(LITTLE_TIP)};
 #undef GLOVEPOSE_XR
   static_assert(sizeof(spec) / sizeof(spec[0]) == kXrJointCount);
   for (std::size_t j = 0; j < kXrJointCount; ++j) {
@@ -244,10 +261,9 @@ TEST_CASE("openxr joints: a left hand is the right hand mirrored through the wri
     for (std::size_t j = 0; j < kXrJointCount; ++j) {
       const XrPose& a = r[j].pose;
       const XrPose& b = l[j].pose;
-      const float diffs[] = {b.position.x + a.position.x, b.position.y - a.position.y, b.position.z - a.position.z,
-                             b.orientation.x - a.orientation.x, b.orientation.y + a.orientation.y,
-                             b.orientation.z + a.orientation.z, b.orientation.w - a.orientation.w,
-                             l[j].radius - r[j].radius};
+      const float diffs[] = {b.position.x + a.position.x,       b.position.y - a.position.y,       b.position.z - a.position.z,
+                             b.orientation.x - a.orientation.x, b.orientation.y + a.orientation.y, b.orientation.z + a.orientation.z,
+                             b.orientation.w - a.orientation.w, l[j].radius - r[j].radius};
       for (float d : diffs) worst = std::max(worst, static_cast<double>(std::abs(d)));
     }
     CHECK(worst < 1e-6);
@@ -280,12 +296,14 @@ TEST_CASE("openxr joints: velocities are the derivative of the located joints al
       const XrJointVelocity& v = joints.velocities[j];
       CHECK(v.velocity_flags == (kXrLinearVelocityValid | kXrAngularVelocityValid));
       const Eigen::Vector3d linear = (position(a[j]) - position(b[j])) / (2 * h);
-      worst_linear = std::max(worst_linear, (Eigen::Vector3d(v.linear_velocity.x, v.linear_velocity.y, v.linear_velocity.z) - linear).norm());
+      worst_linear =
+          std::max(worst_linear, (Eigen::Vector3d(v.linear_velocity.x, v.linear_velocity.y, v.linear_velocity.z) - linear).norm());
       fastest = std::max(fastest, linear.norm());
       // Turning the joint by the angular velocity for h takes it from its orientation to the next.
       const Eigen::Vector3d w(v.angular_velocity.x, v.angular_velocity.y, v.angular_velocity.z);
-      const Eigen::Matrix3d predicted = (w.norm() > 0 ? Eigen::AngleAxisd(w.norm() * 2 * h, w.normalized()).toRotationMatrix()
-                                                      : Eigen::Matrix3d::Identity()) * rotation(b[j]);
+      const Eigen::Matrix3d predicted =
+          (w.norm() > 0 ? Eigen::AngleAxisd(w.norm() * 2 * h, w.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity()) *
+          rotation(b[j]);
       worst_angular = std::max(worst_angular, (predicted - rotation(a[j])).cwiseAbs().maxCoeff() / (2 * h));
     }
     INFO("fastest joint " << fastest << " m/s");

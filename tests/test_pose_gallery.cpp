@@ -36,8 +36,10 @@ TEST_CASE("pose gallery: at least 24 named poses, all inside the joint limits, t
 TEST_CASE("pose gallery: in pinches and OK the thumb tip meets the fingertip (solved on the chain)") {
   const hand::Kinematics fk;
   hand::Skeleton s;
-  const std::pair<const char*, hand::Finger> pinches[] = {{"pinch_index", hand::Finger::Index}, {"pinch_middle", hand::Finger::Middle},
-                                                          {"pinch_ring", hand::Finger::Ring}, {"pinch_pinky", hand::Finger::Pinky},
+  const std::pair<const char*, hand::Finger> pinches[] = {{"pinch_index", hand::Finger::Index},
+                                                          {"pinch_middle", hand::Finger::Middle},
+                                                          {"pinch_ring", hand::Finger::Ring},
+                                                          {"pinch_pinky", hand::Finger::Pinky},
                                                           {"ok", hand::Finger::Index}};
   const auto gallery = pose_gallery();
   for (const auto& entry : pinches) {  // no structured binding: C++17 lambdas cannot capture one (clang 14 rejects it)

@@ -150,7 +150,8 @@ TEST_CASE("readout: streamed row by row, a static hand's cell estimates are the 
       for (int r = 0; r < 180; ++r) {
         const double reading = clean(r) + noise(rng);
         held[static_cast<std::size_t>(r)].push_back(reading);
-        if (static_cast<int>(held[static_cast<std::size_t>(r)].size()) > window) held[static_cast<std::size_t>(r)].erase(held[static_cast<std::size_t>(r)].begin());
+        if (static_cast<int>(held[static_cast<std::size_t>(r)].size()) > window)
+          held[static_cast<std::size_t>(r)].erase(held[static_cast<std::size_t>(r)].begin());
         if (readout.push_row(r, reading, (f * 180 + r) * kRowPeriod) != Status::Solved || f < window) continue;
         Eigen::VectorXd means(180);
         for (int q = 0; q < 180; ++q) {
@@ -165,7 +166,8 @@ TEST_CASE("readout: streamed row by row, a static hand's cell estimates are the 
     squared_error /= solves;
     CHECK(worst_solve_gap < 1e-9);
     const double expected_total = sigma * sigma * normal_inverse.trace() / window;
-    MESSAGE("window " << window << ", " << solves << " solves: mean squared error of C_c " << squared_error.sum() << ", theory " << expected_total);
+    MESSAGE("window " << window << ", " << solves << " solves: mean squared error of C_c " << squared_error.sum() << ", theory "
+                      << expected_total);
     // Consecutive solves share most readings, so the spread is estimated from fewer independent
     // samples than solves: the cells' total within 10%, each cell within 35%.
     CHECK(squared_error.sum() == doctest::Approx(expected_total).epsilon(0.10));

@@ -59,7 +59,8 @@ std::string csv(const Frames& f, const std::vector<std::string>& columns, Extra 
       const auto& names = glove.cell_names();
       const auto cell = std::find(names.begin(), names.end(), columns[k]);
       std::string value;
-      if (cell != names.end()) value = text(f.cells[i * 5 + static_cast<std::size_t>(cell - names.begin())]);
+      if (cell != names.end())
+        value = text(f.cells[i * 5 + static_cast<std::size_t>(cell - names.begin())]);
       else {
         std::size_t d = 0;
         while (d < hand::kDofCount && columns[k] != hand::kDofs[d].name) ++d;
@@ -139,7 +140,8 @@ TEST_CASE("import: named columns in any order read back to the frames written, w
 
 TEST_CASE("import: without a time column frames are 1/rate apart per run, degrees, ids and kind from the take") {
   const Frames f = random_frames(30, 3);
-  const std::string take = csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); }, 180.0 / 3.14159265358979323846);
+  const std::string take = csv(
+      f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); }, 180.0 / 3.14159265358979323846);
   train::CsvImportOptions o = options(50.0);
   o.degrees = true;
   train::RecordingImporter importer(small_glove(), o);
@@ -168,7 +170,8 @@ TEST_CASE("import: without a time column frames are 1/rate apart per run, degree
 TEST_CASE("import: a sensor flat over a calibration take is refused with file, lines and column, or kept and listed") {
   Frames f = random_frames(12, 4);
   for (std::size_t i = 0; i < 12; ++i) f.cells[i * 5 + 2] = 2.0f + 0.001f * static_cast<float>(i % 3);  // 0.1% of its value
-  const std::string take = "# a glove maker's calibration\n" + csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); });
+  const std::string take =
+      "# a glove maker's calibration\n" + csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); });
   const std::string error = import_error(take, {"cal_s1.csv", 1, {}, train::kKindCalibration});
   CHECK(error.find("CSV file 'cal_s1.csv', lines 3-14") == 0);
   CHECK(error.find("column 'middle_bend': flat (2 to 2.002") != std::string::npos);
@@ -204,7 +207,8 @@ TEST_CASE("import: a sensor flat over a calibration take is refused with file, l
   settings.calibration.flat_relative_range = 0.002;
   train::RecordingImporter strict(grid::GloveDescription(five.id(), five.cell_names(), five.map(), settings), options());
   std::istringstream in3(take);
-  CHECK_THROWS_WITH_AS(strict.add(in3, {"cal_s1.csv", 1, {}, train::kKindCalibration}), doctest::Contains("a range within 0.2% of its value"), Error);
+  CHECK_THROWS_WITH_AS(strict.add(in3, {"cal_s1.csv", 1, {}, train::kKindCalibration}),
+                       doctest::Contains("a range within 0.2% of its value"), Error);
 }
 
 TEST_CASE("import: the frame rate comes from --rate or the glove description, and the two must agree") {
@@ -239,10 +243,12 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   };
   const std::string header = good.substr(0, good.find('\n'));
 
-  CHECK(import_error("", take) == "CSV file 't.csv', line 1: no header, expected the column names (the glove's cells, optionally the 25 DoFs, "
-                                  "subject, session, glove, kind, timestamp)");
+  CHECK(import_error("", take) ==
+        "CSV file 't.csv', line 1: no header, expected the column names (the glove's cells, optionally the 25 DoFs, "
+        "subject, session, glove, kind, timestamp)");
   CHECK(import_error(header + "\n", take) == "CSV file 't.csv': no frames after the header, expected at least one row of readings");
-  CHECK(import_error(replace(good, "ring_bend,", ""), take).find("CSV file 't.csv', line 1: no column 'ring_bend', expected one column per cell") == 0);
+  CHECK(import_error(replace(good, "ring_bend,", ""), take)
+            .find("CSV file 't.csv', line 1: no column 'ring_bend', expected one column per cell") == 0);
   CHECK(import_error(replace(good, "ring_bend", "ring_bent"), take)
             .find("CSV file 't.csv', line 1, column 6 'ring_bent': unknown column, expected a cell of glove 'five-cell'") == 0);
   CHECK(import_error(replace(good, "ring_bend", "thumb_bend"), take)
@@ -268,7 +274,8 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   bad = good;
   const std::size_t time3 = bad.find(',', line3) + 1;
   bad.replace(time3, bad.find(',', time3) - time3, "0");
-  CHECK(import_error(bad, take).find("CSV file 't.csv', line 3: time 0 s is not after the frame before (0 s) of subject 0, session 0") == 0);
+  CHECK(import_error(bad, take).find("CSV file 't.csv', line 3: time 0 s is not after the frame before (0 s) of subject 0, session 0") ==
+        0);
   CHECK(import_error(replace(replace(good, "subject", "kind"), "\n0,", "\nwarmup,"), {"t.csv", 1, {}, {}}) ==
         "CSV file 't.csv', line 2, column 'kind': 'warmup' is not a kind, expected recording, calibration, 0 or 1");
   CHECK(import_error(replace(good, "subject,timestamp", "subject,timestamp,timestamp_ms"), take)
@@ -278,7 +285,8 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   train::RecordingImporter importer(small_glove(), options());
   std::istringstream first(good);
   importer.add(first, take);
-  const std::string no_angles = csv(f, {"subject", "timestamp", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
+  const std::string no_angles =
+      csv(f, {"subject", "timestamp", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
   std::istringstream second(no_angles);
   CHECK_THROWS_WITH_AS(importer.add(second, {"u.csv", {}, {}, {}}),
                        "CSV file 'u.csv', line 1: has no DoF columns, expected the DoFs as the takes before it", Error);
@@ -316,8 +324,10 @@ TEST_CASE("import: a take labelling some DoFs: the others are NaN and not labell
   CHECK(data.labelled_dofs() == expected);
   for (std::size_t i = 0; i < f.angles.size(); ++i) {
     CAPTURE(i);
-    if (expected[i % hand::kDofCount]) CHECK(data.angles[i] == f.angles[i]);
-    else CHECK(std::isnan(data.angles[i]));
+    if (expected[i % hand::kDofCount])
+      CHECK(data.angles[i] == f.angles[i]);
+    else
+      CHECK(std::isnan(data.angles[i]));
   }
   const std::string other = csv(f, all_columns({"subject"}), [](const std::string&, std::size_t) { return std::string("2"); });
   std::istringstream second(other);

@@ -43,8 +43,8 @@ TEST_CASE("sim random: streams are reproducible, independent of use order, and d
     sum += x;
     sq += x * x;
   }
-  CHECK(std::abs(sum / n) < 0.01);              // SE 0.0022
-  CHECK(std::abs(sq / n - 1.0) < 0.02);         // SE 0.0032
+  CHECK(std::abs(sum / n) < 0.01);       // SE 0.0022
+  CHECK(std::abs(sq / n - 1.0) < 0.02);  // SE 0.0032
   int counts[4] = {};
   for (int i = 0; i < n; ++i) ++counts[r.index(4)];
   for (int c : counts) CHECK(std::abs(c - n / 4) < 1000);  // SE ~194
@@ -98,7 +98,7 @@ TEST_CASE("sim physics: each joint cell answers its joint, along cells barely se
   CHECK(index_knuckle > 1.5);
   CHECK(flexed[22] / rest[22] < 1.0 + 0.2 * (index_knuckle - 1.0));  // middle finger's knuckle: sheet tension only
   CHECK(flexed[29] / rest[29] < 1.0 + 0.4 * (index_knuckle - 1.0));  // index girth cell: much less sensitive
-  CHECK(flexed[40] == doctest::Approx(rest[40]).epsilon(0.05));     // index tip cell: far away
+  CHECK(flexed[40] == doctest::Approx(rest[40]).epsilon(0.05));      // index tip cell: far away
   // Middle and tip joints reach their own cells.
   hand::Angles pip{};
   pip[dof(15)] = 1.5;
@@ -138,7 +138,7 @@ TEST_CASE("sim physics: hand size pre-stretches the glove, slack on small hands,
   const CellArray rest_large = cells_at(physics_of(large), hand::Angles{});
   const CellArray rest_small = cells_at(physics_of(small), hand::Angles{});
   const Glove glove = make_glove(0, 1);
-  CHECK(rest_large[21] > 1.2 * glove.base_capacitance[21]);             // pre-stretched
+  CHECK(rest_large[21] > 1.2 * glove.base_capacitance[21]);                            // pre-stretched
   CHECK(rest_small[21] == doctest::Approx(glove.base_capacitance[21]).epsilon(0.02));  // slack
   // On the small hand the first few degrees only take up slack.
   hand::Angles a{};

@@ -63,9 +63,7 @@ TEST_CASE("solver: the condition number of M is exposed and equals its singular-
   MESSAGE("cond(M) of the paper's glove: " << solver.condition_number());
   CHECK(solver.condition_number() < 100.0);  // well-posed: noise is not blown up
   // P is a left inverse of M.
-  CHECK((solver.solution_operator() * solver.measurement_matrix() - Eigen::MatrixXd::Identity(44, 44))
-            .cwiseAbs()
-            .maxCoeff() < 1e-10);
+  CHECK((solver.solution_operator() * solver.measurement_matrix() - Eigen::MatrixXd::Identity(44, 44)).cwiseAbs().maxCoeff() < 1e-10);
 }
 
 TEST_CASE("solver: a rank-deficient layout is rejected, naming the cells that cannot be told apart") {

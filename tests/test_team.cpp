@@ -30,11 +30,11 @@ namespace {
 #if defined(__SANITIZE_THREAD__)
 constexpr bool kUnderTsan = true;  // GCC
 #elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
+#  if __has_feature(thread_sanitizer)
 constexpr bool kUnderTsan = true;  // clang
-#else
+#  else
 constexpr bool kUnderTsan = false;
-#endif
+#  endif
 #else
 constexpr bool kUnderTsan = false;
 #endif

@@ -102,7 +102,8 @@ void check_against_fixture(Net& net, const Fixture& fx, Forward&& forward_and_ba
   }
 }
 
-double directional_error(train::TrainableNetwork& net, const std::vector<float>& x, const std::vector<float>& t, int frames, unsigned seed) {
+double directional_error(train::TrainableNetwork& net, const std::vector<float>& x, const std::vector<float>& t, int frames,
+                         unsigned seed) {
   train::ThreadPool pool(2);
   std::vector<float> grad(t.size());
   const auto loss = [&] {
@@ -146,10 +147,12 @@ double directional_error(train::TrainableNetwork& net, const std::vector<float>&
 
 }  // namespace
 
-TEST_CASE("train: U-Net training step equals PyTorch autograd (committed fixtures, width 4, the built-in glove and two extra input planes)") {
+TEST_CASE(
+    "train: U-Net training step equals PyTorch autograd (committed fixtures, width 4, the built-in glove and two extra input planes)") {
   for (const int extra : {0, 2}) {
     CAPTURE(extra);
-    const Fixture fx = read_fixture(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_unet_w4" + (extra ? "_e2" : "") + ".safetensors");
+    const Fixture fx =
+        read_fixture(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/grad_unet_w4" + (extra ? "_e2" : "") + ".safetensors");
     const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
     REQUIRE(fx.file.tensors.at("input").shape[1] == 2 + extra);
     const int frames = static_cast<int>(fx.file.tensors.at("input").shape[0]);
@@ -206,7 +209,8 @@ TEST_CASE("train: the evaluation-mode forward equals the inference U-Net on the 
   core::Rng rng(4);
   for (train::Parameter& p : net.parameters().all())  // move BN statistics and biases off their defaults
     if (p.layout == train::Layout::Plain)
-      for (float& v : p.value) v += static_cast<float>(p.name.find("running_var") != std::string::npos ? rng.uniform(0.2, 1.0) : rng.uniform(-0.3, 0.3));
+      for (float& v : p.value)
+        v += static_cast<float>(p.name.find("running_var") != std::string::npos ? rng.uniform(0.2, 1.0) : rng.uniform(-0.3, 0.3));
   std::vector<float> maps(static_cast<std::size_t>(frames) * 50), ours(static_cast<std::size_t>(frames) * 25), theirs(ours.size());
   for (float& v : maps) v = static_cast<float>(rng.uniform(-1.2, 1.2));
   train::ThreadPool pool(2);
@@ -330,11 +334,12 @@ TEST_CASE("train: augmentation perturbs each value as (1 + g) x + o + n with the
   CHECK_THROWS_WITH_AS(a.validate(), doctest::Contains("augmentation noise deviation"), Error);
 }
 
-TEST_CASE("train: default batch and epochs follow the data's size: the paper's 1024 x 10 on a large corpus, at least 2000 steps on a small one") {
+TEST_CASE(
+    "train: default batch and epochs follow the data's size: the paper's 1024 x 10 on a large corpus, at least 2000 steps on a small one") {
   CHECK(train::default_batch(1'300'000) == 1024);
   CHECK(train::default_epochs(1'300'000, 1024) == 10);
   CHECK(train::default_batch(102'400) == 1024);
-  CHECK(train::default_batch(20'000) == 256);  // the power of two nearest 200
+  CHECK(train::default_batch(20'000) == 256);       // the power of two nearest 200
   CHECK(train::default_epochs(20'000, 256) == 26);  // 78 steps an epoch: 26 x 78 = 2028 >= 2000
   CHECK(train::default_batch(5'000) == 64);
   CHECK(train::default_batch(500) == 32);

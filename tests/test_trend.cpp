@@ -23,8 +23,7 @@ using Sample = std::pair<double, std::array<double, kChannels>>;
 
 // The slope of the samples of the last `window` seconds (at least the two newest, at most
 // `capacity`), fitted about their means in extended precision.
-std::array<double, kChannels> fitted_slope(const std::deque<Sample>& samples, double window, std::size_t capacity,
-                                           std::size_t& used) {
+std::array<double, kChannels> fitted_slope(const std::deque<Sample>& samples, double window, std::size_t capacity, std::size_t& used) {
   const double newest = samples.back().first;
   used = 0;
   for (auto it = samples.rbegin(); it != samples.rend() && used < capacity; ++it, ++used)
@@ -77,7 +76,7 @@ TEST_CASE("trend: the slope is the least-squares fit over the window, sample aft
     const auto slope = trend.slope();
     for (std::size_t c = 0; c < kChannels; ++c) worst = std::max(worst, std::abs(slope[c] - expected[c]) / (1.0 + std::abs(expected[c])));
   }
-  CHECK(saw_two);       // a gap left only the two newest samples in the window
+  CHECK(saw_two);             // a gap left only the two newest samples in the window
   CHECK_FALSE(saw_capacity);  // 0.05 s never held 64 samples at these intervals
   CHECK(worst < 1e-10);
 }

@@ -37,7 +37,8 @@ double max_difference_to_reference(const TensorMap& tensors, int width, int fram
       std::copy_n(x.begin() + f * kUNetInputs, kUNetInputs, in.begin());
       REQUIRE(net.forward(in, y, ws) == Status::Ok);
       const std::vector<double> expected = test::unet_reference(tensors, in.data());
-      for (int i = 0; i < kUNetOutputs; ++i) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(i)]));
+      for (int i = 0; i < kUNetOutputs; ++i)
+        worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(i)]));
     }
     return worst;
   }
@@ -48,15 +49,16 @@ double max_difference_to_reference(const TensorMap& tensors, int width, int fram
   double worst = 0.0;
   for (int f = 0; f < frames; ++f) {
     const std::vector<double> expected = test::unet_reference(tensors, x.data() + f * kUNetInputs);
-    for (int i = 0; i < kUNetOutputs; ++i) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(f * kUNetOutputs + i)]));
+    for (int i = 0; i < kUNetOutputs; ++i)
+      worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - y[static_cast<std::size_t>(f * kUNetOutputs + i)]));
   }
   return worst;
 }
 
 std::size_t paper_parameter_count(std::size_t w) {
   // Conv weights (Table 6 with concatenating skips) + conv biases + BN scale and shift.
-  const std::size_t weights = 2 * w * 25 + w * 2 * w * 9 + 2 * w * 4 * w * 9 + 4 * w * 8 * w * 16 + 8 * w * 4 * w * 16 +
-                              8 * w * 2 * w * 9 + 4 * w * w * 9 + 2 * w * 25;
+  const std::size_t weights = 2 * w * 25 + w * 2 * w * 9 + 2 * w * 4 * w * 9 + 4 * w * 8 * w * 16 + 8 * w * 4 * w * 16 + 8 * w * 2 * w * 9 +
+                              4 * w * w * 9 + 2 * w * 25;
   return weights + (22 * w + 1) + 2 * (2 * w + 4 * w + 8 * w + 4 * w + 2 * w + w);
 }
 }  // namespace
@@ -80,14 +82,13 @@ TEST_CASE("unet: presets have the paper's sizes, the fixed 5x5 grid lets most 4x
   CHECK(paper_parameter_count(196) == doctest::Approx(50.0e6).epsilon(0.01));
   const auto net = UNet<>::from_tensors(test::random_tensors(UNet<>::expected_tensors(64), 1), 64);
   CHECK(net.parameter_count() == paper_parameter_count(64));
-  MESSAGE("w = 64: " << net.stored_weight_count() << " weights can meet a 5x5 input; " << net.weight_bytes()
-                     << " bytes packed (F32)");
+  MESSAGE("w = 64: " << net.stored_weight_count() << " weights can meet a 5x5 input; " << net.weight_bytes() << " bytes packed (F32)");
   CHECK(net.stored_weight_count() == doctest::Approx(2.2e6).epsilon(0.03));
   // Multiply-adds per frame, counted by hand from the tap plans (docs/performance.md):
   // enc1 361*2w, enc2 49*w*2w, enc3 16*2w*4w, enc4 4*4w*8w, dec1 4*8w*4w, dec2 16*8w*2w, dec3 49*4w*w, out 361*2w.
   const std::size_t w = 64;
-  const std::size_t macs = 361 * 2 * w + 49 * w * 2 * w + 16 * 2 * w * 4 * w + 4 * 4 * w * 8 * w + 4 * 8 * w * 4 * w +
-                           16 * 8 * w * 2 * w + 49 * 4 * w * w + 361 * 2 * w;
+  const std::size_t macs = 361 * 2 * w + 49 * w * 2 * w + 16 * 2 * w * 4 * w + 4 * 4 * w * 8 * w + 4 * 8 * w * 4 * w + 16 * 8 * w * 2 * w +
+                           49 * 4 * w * w + 361 * 2 * w;
   MESSAGE("w = 64: " << net.mac_count() << " multiply-adds per frame");
   CHECK(net.mac_count() == macs);
 }
@@ -102,7 +103,8 @@ TEST_CASE("unet: the SIMD and scalar backends equal an independent reference for
       CAPTURE(frames);
       const double simd = max_difference_to_reference<kernels::SimdBackend>(tensors, width, frames, 7);
       const double scalar = max_difference_to_reference<kernels::ScalarBackend>(tensors, width, frames, 7);
-      MESSAGE("w = " << width << ", " << frames << " frame(s): max |simd - reference| = " << simd << ", max |scalar - reference| = " << scalar);
+      MESSAGE("w = " << width << ", " << frames << " frame(s): max |simd - reference| = " << simd
+                     << ", max |scalar - reference| = " << scalar);
       CHECK(simd <= 1e-5);
       CHECK(scalar <= 1e-5);
     }
@@ -128,7 +130,8 @@ TEST_CASE("unet: extra input planes (a glove's inputs off the maps) are read as 
       for (float& v : x) v = u(rng);
       for (int f = 0; f < frames; ++f)  // as GridMap::to_input_planes writes them: each extra plane one value
         for (int e = 0; e < extra; ++e)
-          std::fill_n(x.begin() + f * simd.input_values() + (2 + e) * 25 + 1, 24, x[static_cast<std::size_t>(f * simd.input_values() + (2 + e) * 25)]);
+          std::fill_n(x.begin() + f * simd.input_values() + (2 + e) * 25 + 1, 24,
+                      x[static_cast<std::size_t>(f * simd.input_values() + (2 + e) * 25)]);
       std::vector<float> dense(static_cast<std::size_t>(frames * kUNetOutputs)), single = dense, small = dense, scalar_out = dense;
       auto dense_ws = simd.make_workspace(frames), one = simd.make_workspace(1), small_ws = simd.make_workspace(6);
       auto scalar_ws = scalar.make_workspace(frames);
@@ -142,7 +145,8 @@ TEST_CASE("unet: extra input planes (a glove's inputs off the maps) are read as 
         const std::vector<double> expected = test::unet_reference(tensors, x.data() + f * simd.input_values());
         for (int i = 0; i < kUNetOutputs; ++i) {
           const std::size_t at = static_cast<std::size_t>(f * kUNetOutputs + i);
-          worst = std::max({worst, std::abs(expected[static_cast<std::size_t>(i)] - dense[at]), std::abs(expected[static_cast<std::size_t>(i)] - single[at]),
+          worst = std::max({worst, std::abs(expected[static_cast<std::size_t>(i)] - dense[at]),
+                            std::abs(expected[static_cast<std::size_t>(i)] - single[at]),
                             std::abs(expected[static_cast<std::size_t>(i)] - scalar_out[at])});
           if (f < 6) worst = std::max(worst, std::abs(expected[static_cast<std::size_t>(i)] - small[at]));
         }
@@ -191,7 +195,8 @@ TEST_CASE("unet: equals PyTorch with two extra input planes (committed fixture, 
   // enc1.weight reading 2 + 300 planes is refused, naming the tensor.
   TensorMap wide = file.tensors;
   wide["enc1.weight"] = Tensor{{4, 302, 5, 5}, std::vector<float>(4 * 302 * 25, 0.0f)};
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(wide, 4), doctest::Contains("'enc1.weight' reads 302 input planes, expected 2 stretch maps and at most 256 extra"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(wide, 4),
+                       doctest::Contains("'enc1.weight' reads 302 input planes, expected 2 stretch maps and at most 256 extra"), Error);
 }
 
 TEST_CASE("unet: a batch gives the same outputs as frames one at a time, forward_batch on threads too") {
@@ -221,9 +226,8 @@ std::size_t expected_weight_bytes_read(const TensorMap& tensors, const float* in
     int out_channels;
   };
   const int w = width;
-  const Layer products[] = {{5, 3, 3, 2, 1, false, {0}, 2 * w},     {3, 2, 3, 2, 1, false, {1}, 4 * w},
-                            {2, 1, 4, 2, 1, false, {2}, 8 * w},     {1, 2, 4, 2, 1, true, {3}, 4 * w},
-                            {2, 3, 3, 2, 1, true, {4, 2}, 2 * w},   {3, 5, 3, 2, 1, true, {5, 1}, w}};
+  const Layer products[] = {{5, 3, 3, 2, 1, false, {0}, 2 * w}, {3, 2, 3, 2, 1, false, {1}, 4 * w},   {2, 1, 4, 2, 1, false, {2}, 8 * w},
+                            {1, 2, 4, 2, 1, true, {3}, 4 * w},  {2, 3, 3, 2, 1, true, {4, 2}, 2 * w}, {3, 5, 3, 2, 1, true, {5, 1}, w}};
   const auto nonzero_rows = [&](const test::Grid& g, const std::vector<std::pair<int, int>>& positions) {
     std::size_t rows = 0;
     for (int c = 0; c < g.channels; ++c) {
@@ -247,7 +251,8 @@ std::size_t expected_weight_bytes_read(const TensorMap& tensors, const float* in
           for (int x = 0; x < l.in; ++x)
             if (joins(y, ky) && joins(x, kx)) positions.emplace_back(y, x);
         for (int src : l.sources)
-          bytes += nonzero_rows(act[static_cast<std::size_t>(src)], positions) * static_cast<std::size_t>(l.out_channels) * product_weight_size;
+          bytes +=
+              nonzero_rows(act[static_cast<std::size_t>(src)], positions) * static_cast<std::size_t>(l.out_channels) * product_weight_size;
       }
   std::vector<std::pair<int, int>> everywhere;  // out (F32): a row per nonzero source channel, the 25 taps as its columns
   for (int y = 0; y < 5; ++y)
@@ -283,8 +288,8 @@ TEST_CASE("unet: weight_bytes_read counts the weight rows a single frame meets, 
   auto ws = net.make_workspace(1);
   std::vector<float> y(kUNetOutputs);
   REQUIRE(net.forward(x.data(), y.data(), 1, ws) == Status::Ok);
-  CHECK(std::abs(static_cast<double>(nn::weight_bytes_read(net, ws)) - static_cast<double>(expected_weight_bytes_read(tensors, x.data(), width, 4))) <=
-        8.0 * width * 4);
+  CHECK(std::abs(static_cast<double>(nn::weight_bytes_read(net, ws)) -
+                 static_cast<double>(expected_weight_bytes_read(tensors, x.data(), width, 4))) <= 8.0 * width * 4);
 }
 
 TEST_CASE("unet: zero_fractions counts the zeros each ReLU leaves as the independent reference forward does") {
@@ -317,8 +322,8 @@ TEST_CASE("unet: zero_fractions counts the zeros each ReLU leaves as the indepen
     return fractions;
   };
   const auto random = fractions_of(tensors);
-  MESSAGE("random w = 16 network, zero fractions e1..d3: " << random[0] << " " << random[1] << " " << random[2] << " " << random[3]
-                                                             << " " << random[4] << " " << random[5] << " " << random[6]);
+  MESSAGE("random w = 16 network, zero fractions e1..d3: " << random[0] << " " << random[1] << " " << random[2] << " " << random[3] << " "
+                                                           << random[4] << " " << random[5] << " " << random[6]);
   for (double f : random) CHECK((f > 0.2 && f < 0.8));  // about half, as docs/performance.md says
   // A first layer that only ever outputs -1 before its ReLU: all of e1 is zero.
   std::fill(tensors.at("enc1.weight").values.begin(), tensors.at("enc1.weight").values.end(), 0.0f);
@@ -345,7 +350,8 @@ TEST_CASE("unet: bad input gets a status and the single-frame forward allocates 
   for (float v : out) CHECK(std::abs(v) < 1.0f);
 }
 
-TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, sparse (single frames, small batches) and dense (large batches)") {
+TEST_CASE(
+    "unet: BF16 weights: SIMD (pair layout) and scalar backends agree, sparse (single frames, small batches) and dense (large batches)") {
   for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 300 + static_cast<unsigned>(width));
@@ -354,7 +360,7 @@ TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, spa
     const int frames = kSparseMaxFrames + 3, small = 9;  // dense products; sparse ones over `small` frames
     const std::vector<float> x = random_inputs(frames, 5);
     std::vector<float> batched(static_cast<std::size_t>(frames * kUNetOutputs)), single = batched, reference = batched,
-        small_batch = batched;
+                                                                                 small_batch = batched;
     auto ws = simd.make_workspace(frames), one = simd.make_workspace(1), small_ws = simd.make_workspace(small);
     auto scalar_ws = scalar.make_workspace(frames);
     REQUIRE(simd.forward(x.data(), batched.data(), frames, ws) == Status::Ok);
@@ -365,12 +371,15 @@ TEST_CASE("unet: BF16 weights: SIMD (pair layout) and scalar backends agree, spa
     for (std::size_t i = 0; i < batched.size(); ++i) {
       CHECK(batched[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
       CHECK(single[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
-      if (i < static_cast<std::size_t>(small * kUNetOutputs)) CHECK(small_batch[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
+      if (i < static_cast<std::size_t>(small * kUNetOutputs))
+        CHECK(small_batch[i] == doctest::Approx(reference[i]).epsilon(1e-5).scale(1.0));
     }
   }
 }
 
-TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, sparse (single frames, small batches) and dense (large batches), near F32") {
+TEST_CASE(
+    "unet: Fixed16 weights: SIMD (pair layout) and scalar backends, sparse (single frames, small batches) and dense (large batches), near "
+    "F32") {
   for (int width : {1, 3, 16, 24, 64}) {  // 1, 3, 24: channels padded to whole pairs of vectors
     CAPTURE(width);
     const TensorMap tensors = test::random_tensors(UNet<>::expected_tensors(width), 400 + static_cast<unsigned>(width));
@@ -380,8 +389,9 @@ TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, sparse
     const auto f16 = UNet<>::from_tensors(tensors, width, 1e-5, WeightStorage::F16);
     const int frames = kSparseMaxFrames + 3, small = 9;  // dense products; sparse ones over `small` frames
     const std::vector<float> x = random_inputs(frames, 6);
-    std::vector<float> reference(static_cast<std::size_t>(frames * kUNetOutputs)), batched = reference, single = reference,
-        scalar_out = reference, f16_out = reference, small_batch(static_cast<std::size_t>(small * kUNetOutputs));
+    std::vector<float> reference(static_cast<std::size_t>(frames * kUNetOutputs)),
+        batched = reference, single = reference, scalar_out = reference, f16_out = reference,
+        small_batch(static_cast<std::size_t>(small * kUNetOutputs));
     auto ws = simd.make_workspace(frames), one = simd.make_workspace(1), exact_ws = exact.make_workspace(frames);
     auto small_ws = simd.make_workspace(small);
     REQUIRE(simd.forward(x.data(), small_batch.data(), small, small_ws) == Status::Ok);
@@ -404,8 +414,8 @@ TEST_CASE("unet: Fixed16 weights: SIMD (pair layout) and scalar backends, sparse
       if (i < small_batch.size()) worst[3] = std::max(worst[3], static_cast<double>(std::abs(small_batch[i] - reference[i])));
       worst_f16 = std::max(worst_f16, static_cast<double>(std::abs(f16_out[i] - reference[i])));
     }
-    MESSAGE("width " << width << ": Fixed16 vs F32 " << worst[0] << " (batch), " << worst[1] << " (single), " << worst[2]
-                     << " (scalar), " << worst[3] << " (small batch); F16 vs F32 " << worst_f16);
+    MESSAGE("width " << width << ": Fixed16 vs F32 " << worst[0] << " (batch), " << worst[1] << " (single), " << worst[2] << " (scalar), "
+                     << worst[3] << " (small batch); F16 vs F32 " << worst_f16);
     for (double w : worst) {
       CHECK(w < 2e-4);
       CHECK(w < worst_f16);
@@ -457,7 +467,8 @@ TEST_CASE("unet: folded weights the storage cannot hold are refused, naming the 
   tensors["bn3.weight"].values.assign(64, 1.0f);
   tensors["bn3.running_var"].values.assign(64, 1.0f);
   tensors["enc3.weight"].values[5] = 3.4e38f;  // folded 3.39998e38: bfloat16 rounds it up past its largest (3.3895e38)
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::BF16), doctest::Contains("too large for BF16 storage"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 16, 1e-5, WeightStorage::BF16), doctest::Contains("too large for BF16 storage"),
+                       Error);
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(tensors, 0), doctest::Contains("width 0, expected 1..4096"), Error);
 }
 
@@ -499,7 +510,8 @@ TEST_CASE("unet: equals PyTorch for every preset (fixtures regenerated with PyTo
     std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
     REQUIRE(model.unet.forward(io.tensors.at("input").values.data(), out.data(), frames, ws) == Status::Ok);
     double worst = 0.0;
-    for (std::size_t i = 0; i < out.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(out[i] - io.tensors.at("output").values[i])));
+    for (std::size_t i = 0; i < out.size(); ++i)
+      worst = std::max(worst, static_cast<double>(std::abs(out[i] - io.tensors.at("output").values[i])));
     MESSAGE(std::string(p.name) << " (w = " << p.width << "): max |C++ - PyTorch| = " << worst);
     CHECK(worst <= 1e-5);
     std::remove((base + ".safetensors").c_str());

@@ -84,8 +84,9 @@ TEST_CASE("weights: every malformed file is an Error naming the tensor or byte a
                          doctest::Contains("JSON header: byte 38: syntax error"), Error);  // the '2' of "02"
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[2],"data_offsets":[0,8],"x":1}})", data)),
                          doctest::Contains("tensor 'a': unexpected key 'x'"), Error);
-    CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[123456789012345678901],"data_offsets":[0,8]}})", data)),
-                         doctest::Contains("is not a non-negative integer"), Error);
+    CHECK_THROWS_WITH_AS(
+        WeightFile::parse(make_file(R"({"a":{"dtype":"F32","shape":[123456789012345678901],"data_offsets":[0,8]}})", data)),
+        doctest::Contains("is not a non-negative integer"), Error);
     std::string deep(70, '[');
     CHECK_THROWS_WITH_AS(WeightFile::parse(make_file(R"({"a":)" + deep, "")), doctest::Contains("nesting deeper than 64"), Error);
   }
@@ -152,13 +153,16 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
   REQUIRE_NOTHROW(UNet<>::from_tensors(good, width));
   TensorMap missing = good;
   missing.erase("dbn2.running_var");
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(missing, width), doctest::Contains("tensor 'dbn2.running_var' is missing, expected shape [8]"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(missing, width), doctest::Contains("tensor 'dbn2.running_var' is missing, expected shape [8]"),
+                       Error);
   TensorMap extra = good;
   extra["bn2.num_batches_tracked"] = {{}, {0.0f}};
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(extra, width), doctest::Contains("tensor 'bn2.num_batches_tracked' is not part of a width-4 U-Net"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(extra, width),
+                       doctest::Contains("tensor 'bn2.num_batches_tracked' is not part of a width-4 U-Net"), Error);
   TensorMap shaped = good;
   shaped["dec1.weight"].shape = {16, 8, 2, 8};
-  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(shaped, width), doctest::Contains("tensor 'dec1.weight' has shape [16, 8, 2, 8], expected [32, 16, 4, 4]"), Error);
+  CHECK_THROWS_WITH_AS(UNet<>::from_tensors(shaped, width),
+                       doctest::Contains("tensor 'dec1.weight' has shape [16, 8, 2, 8], expected [32, 16, 4, 4]"), Error);
   CHECK_THROWS_WITH_AS(UNet<>::from_tensors(good, 5), doctest::Contains("expected [10] (a width-5 U-Net)"), Error);
   TensorMap nan = good;
   nan["out.bias"].values[0] = std::numeric_limits<float>::quiet_NaN();
@@ -185,7 +189,8 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
   CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("metadata 'width' is 'four', expected an integer 1..4096"), Error);
   file.metadata["width"] = "4";
   file.metadata["calibration"] = "sometimes";
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("metadata 'calibration' is 'sometimes', expected none, training or onthefly"), Error);
+  CHECK_THROWS_WITH_AS(ModelInfo::from(file),
+                       doctest::Contains("metadata 'calibration' is 'sometimes', expected none, training or onthefly"), Error);
   file.metadata["calibration"] = "training";
   file.metadata["architecture"] = "lstm";
   CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("expected 'unet', 'fcn' or 'linear'"), Error);

@@ -74,8 +74,8 @@ inline Grid cat(const Grid& a, const Grid& b) {
   return out;
 }
 
-// One frame: (2 + E) x 5 x 5 inputs (E extra input planes: enc1.weight's input channels less 2) -> the hidden activations e1..e4, d1..d3 (after their ReLU) and the
-// 25 outputs (1x5x5, last).
+// One frame: (2 + E) x 5 x 5 inputs (E extra input planes: enc1.weight's input channels less 2) -> the hidden activations e1..e4, d1..d3
+// (after their ReLU) and the 25 outputs (1x5x5, last).
 inline std::vector<Grid> unet_reference_activations(const nn::TensorMap& t, const float* input) {
   const int planes = static_cast<int>(t.at("enc1.weight").shape[1]);
   Grid x{planes, 5, std::vector<double>(input, input + planes * 25)};
@@ -107,11 +107,16 @@ inline nn::TensorMap random_tensors(const std::map<std::string, std::vector<std:
     const auto uniform = [&](double lo, double hi) { return static_cast<float>(std::uniform_real_distribution<double>(lo, hi)(rng)); };
     const bool bn = name.find("bn") != std::string::npos;
     for (float& v : t.values) {
-      if (bn && name.find(".running_var") != std::string::npos) v = uniform(0.5, 2.0);
-      else if (bn && name.find(".running_mean") != std::string::npos) v = uniform(-0.2, 0.2);
-      else if (bn && name.find(".weight") != std::string::npos) v = uniform(0.5, 1.5);
-      else if (bn) v = uniform(-0.2, 0.2);
-      else if (name.find(".bias") != std::string::npos) v = uniform(-0.1, 0.1);
+      if (bn && name.find(".running_var") != std::string::npos)
+        v = uniform(0.5, 2.0);
+      else if (bn && name.find(".running_mean") != std::string::npos)
+        v = uniform(-0.2, 0.2);
+      else if (bn && name.find(".weight") != std::string::npos)
+        v = uniform(0.5, 1.5);
+      else if (bn)
+        v = uniform(-0.2, 0.2);
+      else if (name.find(".bias") != std::string::npos)
+        v = uniform(-0.1, 0.1);
       else {
         const double receptive = static_cast<double>(shape[2] * shape[3]);
         const double bound = std::sqrt(6.0 / (static_cast<double>(shape[0] + shape[1]) * receptive));

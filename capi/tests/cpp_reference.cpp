@@ -37,8 +37,8 @@ EstimatorConfig session_config() {
 
 void print_pose(std::size_t frame, int row, const GlovePoseEstimator& estimator) {
   const Pose& p = estimator.pose();
-  std::printf("pose %zu %d %llu %.17g %.17g %u %u", frame, row, static_cast<unsigned long long>(p.sequence), p.timestamp,
-              p.oldest_age, static_cast<unsigned>(p.flags), static_cast<unsigned>(p.rejected));
+  std::printf("pose %zu %d %llu %.17g %.17g %u %u", frame, row, static_cast<unsigned long long>(p.sequence), p.timestamp, p.oldest_age,
+              static_cast<unsigned>(p.flags), static_cast<unsigned>(p.rejected));
   for (double a : p.angles) std::printf(" %.17g", a);
   for (double a : p.raw_angles) std::printf(" %.17g", a);
   for (const hand::JointTransform& j : estimator.joints()) {

@@ -13,27 +13,27 @@
 static int passed = 0;
 static int failed = 0;
 
-#define CHECK(condition)                                                  \
-  do {                                                                    \
-    if (condition) {                                                      \
-      ++passed;                                                           \
-    } else {                                                              \
-      ++failed;                                                           \
-      printf("FAILED %s:%d: %s\n", __FILE__, __LINE__, #condition);       \
-    }                                                                     \
+#define CHECK(condition)                                            \
+  do {                                                              \
+    if (condition) {                                                \
+      ++passed;                                                     \
+    } else {                                                        \
+      ++failed;                                                     \
+      printf("FAILED %s:%d: %s\n", __FILE__, __LINE__, #condition); \
+    }                                                               \
   } while (0)
 
 /* A call's result code, with the last error printed when it differs from the expected one. */
-#define CHECK_RESULT(call, expected)                                                              \
-  do {                                                                                            \
-    glovepose_result result_ = (call);                                                            \
-    if (result_ == (expected)) {                                                                  \
-      ++passed;                                                                                   \
-    } else {                                                                                      \
-      ++failed;                                                                                   \
-      printf("FAILED %s:%d: %s returned %d (%s), expected %s; last error: %s\n", __FILE__, __LINE__, \
-             #call, (int)result_, glovepose_result_name(result_), #expected, glovepose_last_error()); \
-    }                                                                                             \
+#define CHECK_RESULT(call, expected)                                                                                      \
+  do {                                                                                                                    \
+    glovepose_result result_ = (call);                                                                                    \
+    if (result_ == (expected)) {                                                                                          \
+      ++passed;                                                                                                           \
+    } else {                                                                                                              \
+      ++failed;                                                                                                           \
+      printf("FAILED %s:%d: %s returned %d (%s), expected %s; last error: %s\n", __FILE__, __LINE__, #call, (int)result_, \
+             glovepose_result_name(result_), #expected, glovepose_last_error());                                          \
+    }                                                                                                                     \
   } while (0)
 
 static int contains(const char* text, const char* part) { return text != NULL && strstr(text, part) != NULL; }
@@ -184,8 +184,7 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
   CHECK(glovepose_model_cell_count(f16) == 44);
   CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_BF16, NULL, &bf16), GLOVEPOSE_OK);
   CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_FIXED16, NULL, &fixed16), GLOVEPOSE_OK);
-  CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_F32, path_in(3, dir, "glauser2019-44.json"), &with_glove),
-               GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_F32, path_in(3, dir, "glauser2019-44.json"), &with_glove), GLOVEPOSE_OK);
   CHECK(strcmp(glovepose_model_glove_id(with_glove), "glauser2019-44") == 0);
   CHECK_RESULT(glovepose_model_load(path_in(4, dir, "training_range.safetensors"), GLOVEPOSE_WEIGHTS_F32, NULL, &with_training),
                GLOVEPOSE_OK);
@@ -205,8 +204,8 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
     f16_degrees = angle_difference_degrees(model, f16);
     bf16_degrees = angle_difference_degrees(model, bf16);
     fixed16_degrees = angle_difference_degrees(model, fixed16);
-    printf("16-bit vs F32 weights: largest angle difference %.3g degrees (F16), %.3g degrees (BF16), %.3g degrees (Fixed16)\n",
-           f16_degrees, bf16_degrees, fixed16_degrees);
+    printf("16-bit vs F32 weights: largest angle difference %.3g degrees (F16), %.3g degrees (BF16), %.3g degrees (Fixed16)\n", f16_degrees,
+           bf16_degrees, fixed16_degrees);
     CHECK(fixed16_degrees > 0.0);
     CHECK(fixed16_degrees < 0.05);
     CHECK(f16_degrees == 0.0);
@@ -245,7 +244,7 @@ static void test_create(glovepose_model* model) {
   CHECK(config.struct_size == sizeof config);
   CHECK(config.readout_mean_window == 1); /* glovepose::realtime_readout(); the paper's is 5 */
   CHECK(config.readout_solve_every == 16);
-  CHECK(config.calibration_median_window == 0);       /* the glove's: 20 frames for the built-in glove */
+  CHECK(config.calibration_median_window == 0);         /* the glove's: 20 frames for the built-in glove */
   CHECK(config.calibration_min_relative_range == -1.0); /* the glove's: 0.01 */
   CHECK(fabs(config.calibration_sample_period - 1.0 / 60.0) < 1e-15);
   CHECK(config.smoothing == 0);
@@ -313,7 +312,7 @@ static void test_null_estimator(void) {
   CHECK_RESULT(glovepose_calibration_use_training(NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_set_range(NULL, values, values, 44), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_get_range(NULL, values, values, 44), GLOVEPOSE_ERROR_INVALID_HANDLE);
-  glovepose_pose_init(NULL);                /* ignored */
+  glovepose_pose_init(NULL);                 /* ignored */
   glovepose_calibration_progress_init(NULL); /* ignored */
 }
 
@@ -383,8 +382,7 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
           glovepose_estimator_push_row(e, r, cells[r % 44] + cells[(r / 15) % 44], t - (179 - r) / (180.0 * 60.0));
       if (result == GLOVEPOSE_SOLVED) ++solved;
       if (result == GLOVEPOSE_UNCALIBRATED) ++uncalibrated;
-      if (result != GLOVEPOSE_SOLVED && result != GLOVEPOSE_UNCALIBRATED && result != GLOVEPOSE_OK &&
-          result != GLOVEPOSE_NOT_READY)
+      if (result != GLOVEPOSE_SOLVED && result != GLOVEPOSE_UNCALIBRATED && result != GLOVEPOSE_OK && result != GLOVEPOSE_NOT_READY)
         ++refused;
     }
   }
@@ -635,7 +633,7 @@ static void test_xr_joints(glovepose_model* model) {
         (GLOVEPOSE_XR_ORIENTATION_VALID | GLOVEPOSE_XR_POSITION_VALID));
   CHECK(r.velocities[10].velocity_flags == (GLOVEPOSE_XR_LINEAR_VELOCITY_VALID | GLOVEPOSE_XR_ANGULAR_VELOCITY_VALID));
   CHECK(r.locations[1].orientation[3] == 1.0f && r.locations[1].position[2] == 0.0f); /* the wrist: identity */
-  CHECK(r.locations[15].position[2] < -0.05f);                                         /* the middle tip: fingers along -Z */
+  CHECK(r.locations[15].position[2] < -0.05f);                                        /* the middle tip: fingers along -Z */
   for (j = 0; j < GLOVEPOSE_XR_JOINT_COUNT; ++j) {
     CHECK(r.locations[j].radius > 0.003f && r.locations[j].radius < 0.02f);
     worst = fmax(worst, fabs(l.locations[j].position[0] + r.locations[j].position[0]));

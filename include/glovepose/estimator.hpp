@@ -93,7 +93,9 @@ class GlovePoseEstimator {
     normalized_ = Eigen::VectorXd::Zero(model_->cell_count());
     skeleton_.fill(Eigen::Affine3d::Identity());
     if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
-      throw Error("GlovePoseEstimator: calibration_method PoseGuided, but the model carries no pose-guided calibration, expected a model fitted by glovepose fit-guided");
+      throw Error(
+          "GlovePoseEstimator: calibration_method PoseGuided, but the model carries no pose-guided calibration, expected a model fitted by "
+          "glovepose fit-guided");
     if (model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax) {
       // Room for every frame the calibrator takes during the sequence (set-up: the per-frame path only copies).
       const double period = std::max(config_.calibration_sample_period, 1e-3);
@@ -269,7 +271,9 @@ class GlovePoseEstimator {
   /// @brief Uses the model's training-set range. Throws glovepose::Error when the file has none.
   void use_training_calibration() {
     if (!model_->training_range())
-      throw Error("GlovePoseEstimator::use_training_calibration: the model records no training-set range, expected a model trained with --calibration training");
+      throw Error(
+          "GlovePoseEstimator::use_training_calibration: the model records no training-set range, expected a model trained with "
+          "--calibration training");
     set_range(*model_->training_range(), CalibrationSource::Training);
   }
   /// @brief The range in use, if any.
@@ -336,7 +340,8 @@ class GlovePoseEstimator {
   // angles as the pose and the pose-guided calibration both see them. `angles` is untouched on failure.
   Status network_angles(const Eigen::VectorXd& normalized, hand::Angles& angles) noexcept {
     hand::Angles normalized_angles{};
-    const Status net = model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_, team_.get());
+    const Status net =
+        model_->network().normalized_dofs(model_->glove().map(), normalized.data(), normalized_angles, workspace_, team_.get());
     if (net != Status::Ok) return net;
     angles = model_->joint_limits().denormalize(model_->model_outputs(normalized_angles));
     return Status::Ok;
@@ -448,8 +453,8 @@ class GlovePoseEstimator {
   double next_calibration_sample_ = -std::numeric_limits<double>::infinity();
   std::optional<sensor::CalibrationRange> range_;
   CalibrationSource source_ = CalibrationSource::None;
-  bool guided_ = false;       // offsets_ apply (pose-guided calibration in use)
-  hand::Angles offsets_{};    // per-user angle offsets, radians
+  bool guided_ = false;               // offsets_ apply (pose-guided calibration in use)
+  hand::Angles offsets_{};            // per-user angle offsets, radians
   Eigen::MatrixXd guided_cells_;      // frames the calibrator took during the sequence (rows), C_c
   std::vector<double> guided_times_;  // their seconds since the sequence's first frame
   Eigen::Index guided_count_ = 0;

@@ -22,7 +22,8 @@ enum class CalibrationMethod : std::uint8_t {
   /// calibration_method() tells which one was applied.
   Auto,
   MinMax,      ///< The paper's per-sensor min-max only (Sec. 4.3).
-  PoseGuided,  ///< Min-max plus the per-user angle offsets of the model's pose-guided calibration; finish_calibration() throws when it cannot.
+  PoseGuided,  ///< Min-max plus the per-user angle offsets of the model's pose-guided calibration; finish_calibration() throws when it
+               ///< cannot.
 };
 
 /// @brief The estimator's default readout: the paper's solve cadence (every 16 rows) on each row's
@@ -62,8 +63,8 @@ struct EstimatorConfig {
   /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
   /// ReadoutConfig::clock_restart_readings.
   int clock_restart_frames = 10;
-  std::optional<filter::OneEuroConfig> smoothing;  ///< 1-euro smoothing of the angles; none: the network's output.
-  bool joint_transforms = false;                  ///< Compute the skeleton and the joint list with every pose.
+  std::optional<filter::OneEuroConfig> smoothing;       ///< 1-euro smoothing of the angles; none: the network's output.
+  bool joint_transforms = false;                        ///< Compute the skeleton and the joint list with every pose.
   hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
   /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
   /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,

@@ -32,15 +32,20 @@ struct CalibrationProgress {
 
 /// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
 enum PoseFlag : std::uint32_t {
-  kPoseReadingsRejected = 1u << 0,    ///< Readings were rejected since the previous pose (dropped, NaN, negative, out of order): their rows kept older values.
-  kPoseInputClamped = 1u << 1,        ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
-  kPoseTrainingCalibration = 1u << 2, ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
-  kPoseCalibrating = 1u << 3,         ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
-  kPoseStaleReadings = 1u << 4,       ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
-  kPoseRecovering = 1u << 5,          ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
-  kPoseStuckRows = 1u << 6,           ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
-  kPoseDisconnectedRows = 1u << 7,    ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
-  kPoseOutlierRows = 1u << 8,         ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
+  kPoseReadingsRejected =
+      1u << 0,  ///< Readings were rejected since the previous pose (dropped, NaN, negative, out of order): their rows kept older values.
+  kPoseInputClamped =
+      1u << 1,  ///< A calibrated cell lay beyond the clamp limit: the glove stretched beyond the calibrated range, or a glitch.
+  kPoseTrainingCalibration =
+      1u << 2,  ///< Normalised with the model's training-set range, not the user's own (expect larger errors: paper Table 1 (3)).
+  kPoseCalibrating = 1u << 3,  ///< Produced while an on-the-fly calibration was collecting (with the range set before it).
+  kPoseStaleReadings =
+      1u << 4,  ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
+  kPoseRecovering = 1u << 5,        ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
+  kPoseStuckRows = 1u << 6,         ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
+  kPoseDisconnectedRows = 1u << 7,  ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
+  kPoseOutlierRows =
+      1u << 8,  ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
 };
 
 /// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
@@ -49,10 +54,10 @@ inline constexpr std::uint32_t kPoseFaultFlags =
 
 /// @brief One estimated hand pose.
 struct Pose {
-  hand::Angles angles{};      ///< The 25 angles, radians (hand::kDofs order, theta 9..33); smoothed when smoothing is on.
-  hand::Angles raw_angles{};  ///< The network's angles before smoothing.
-  double timestamp = 0.0;     ///< Timestamp of the newest reading behind the pose (the stream's clock, s).
-  double oldest_age = 0.0;    ///< timestamp minus the timestamp of the oldest reading behind it (s): the readout's share of the latency.
+  hand::Angles angles{};         ///< The 25 angles, radians (hand::kDofs order, theta 9..33); smoothed when smoothing is on.
+  hand::Angles raw_angles{};     ///< The network's angles before smoothing.
+  double timestamp = 0.0;        ///< Timestamp of the newest reading behind the pose (the stream's clock, s).
+  double oldest_age = 0.0;       ///< timestamp minus the timestamp of the oldest reading behind it (s): the readout's share of the latency.
   double compute_seconds = 0.0;  ///< Wall time the estimator spent on this pose (solve to joint transforms).
   std::uint64_t sequence = 0;    ///< Poses produced so far, this one included.
   std::uint32_t rejected = 0;    ///< Readings rejected since the previous pose.
@@ -65,25 +70,25 @@ struct Pose {
 
 /// @brief The hand at a requested time (GlovePoseEstimator::pose_at).
 struct PredictedPose {
-  hand::Angles angles{};   ///< Radians, within the joint limits.
-  hand::Angles rate{};     ///< Rate of change (rad/s): the slope of the recent poses.
-  bool has_rate = false;   ///< Whether rate comes from at least two poses.
-  double time = 0.0;       ///< The time asked for (the stream's clock, s).
-  double horizon = 0.0;    ///< Time located minus the newest pose's timestamp: > 0 predicted, <= 0 from the recent poses.
-  bool predicted = false;  ///< Extrapolated past the newest pose.
-  bool clamped = false;    ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
-  std::uint32_t flags = 0; ///< The newest pose's PoseFlag bits.
-  bool trusted = false;    ///< The newest pose's trusted().
+  hand::Angles angles{};    ///< Radians, within the joint limits.
+  hand::Angles rate{};      ///< Rate of change (rad/s): the slope of the recent poses.
+  bool has_rate = false;    ///< Whether rate comes from at least two poses.
+  double time = 0.0;        ///< The time asked for (the stream's clock, s).
+  double horizon = 0.0;     ///< Time located minus the newest pose's timestamp: > 0 predicted, <= 0 from the recent poses.
+  bool predicted = false;   ///< Extrapolated past the newest pose.
+  bool clamped = false;     ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
+  std::uint32_t flags = 0;  ///< The newest pose's PoseFlag bits.
+  bool trusted = false;     ///< The newest pose's trusted().
 };
 
 /// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
 /// update and render threads through LatestHand.
 struct HandState {
-  Pose pose;                                ///< The pose (pose.valid false before the first).
-  hand::JointList joints{};                 ///< Its joint list (when EstimatorConfig::joint_transforms is on).
-  CalibrationProgress calibration;          ///< Where the calibration is.
-  hand::Angles rate{};                      ///< The angles' rate of change (rad/s), for predicting ahead.
-  bool has_rate = false;                    ///< Whether rate is known.
+  Pose pose;                        ///< The pose (pose.valid false before the first).
+  hand::JointList joints{};         ///< Its joint list (when EstimatorConfig::joint_transforms is on).
+  CalibrationProgress calibration;  ///< Where the calibration is.
+  hand::Angles rate{};              ///< The angles' rate of change (rad/s), for predicting ahead.
+  bool has_rate = false;            ///< Whether rate is known.
 };
 
 /// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`

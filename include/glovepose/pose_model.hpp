@@ -74,8 +74,7 @@ class PoseModel {
     if (network_.required_cells() != 0 && network_.required_cells() != info_.inputs)
       throw Error("the network reads " + std::to_string(network_.required_cells()) + " cells, expected " + std::to_string(info_.inputs) +
                   " (metadata 'inputs')");
-    if (glove_.id() != info_.glove)
-      throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
+    if (glove_.id() != info_.glove) throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
     if (const auto* unet = network_.unet(); unet && unet->extra_inputs() != glove_.map().extra_input_count())
       throw Error("the U-Net reads " + std::to_string(unet->extra_inputs()) + " extra input planes (enc1.weight), expected " +
                   std::to_string(glove_.map().extra_input_count()) + " (glove '" + glove_.id() + "' has that many extra inputs)");
@@ -104,11 +103,11 @@ class PoseModel {
     }
     if (info_.calibration_min && info_.calibration_max) {
       if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
-        throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) +
-                    " numbers, expected " + std::to_string(glove_.cell_count()) + " (one per cell)");
+        throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) + " numbers, expected " +
+                    std::to_string(glove_.cell_count()) + " (one per cell)");
       training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
-                              Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()),
-                              glove_.cell_names(), glove_.calibration().config());
+                              Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()), glove_.cell_names(),
+                              glove_.calibration().config());
     }
   }
 

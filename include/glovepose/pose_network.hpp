@@ -43,7 +43,8 @@ class PoseNetwork {
   static PoseNetwork from_tensors(const nn::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
     if (info.architecture == "unet") return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
     if (info.architecture == "fcn") return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
-    throw Error("architecture '" + info.architecture + "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
+    throw Error("architecture '" + info.architecture +
+                "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
   }
 
   /// @brief "unet" or "fcn", as the model file names it.
@@ -98,8 +99,8 @@ class PoseNetwork {
   /// are not `map`'s extra inputs; never allocates.
   /// A U-Net's layers are shared by `team`'s members when one is given (UNet::forward with a
   /// Team: the same results); an FCN runs on the calling thread.
-  GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized,
-                                            Workspace& ws, nn::Team* team = nullptr) const noexcept {
+  GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized, Workspace& ws,
+                                            nn::Team* team = nullptr) const noexcept {
     if (const UNet* u = unet()) {
       auto* w = std::get_if<typename UNet::Workspace>(&ws.net);
       if (!w || map.input_plane_count() * grid::kMapSlots != u->input_values() ||
@@ -147,11 +148,13 @@ class PoseNetwork {
       return out;
     }
     if (cell_count != fcn()->inputs())
-      throw Error("frames of " + std::to_string(cell_count) + " cells, expected " + std::to_string(fcn()->inputs()) + " (the FCN's inputs)");
+      throw Error("frames of " + std::to_string(cell_count) + " cells, expected " + std::to_string(fcn()->inputs()) +
+                  " (the FCN's inputs)");
     std::vector<float> results(static_cast<std::size_t>(frames) * hand::kDofCount);
     fcn()->forward_batch(cells, results.data(), frames, threads);
     for (long f = 0; f < frames; ++f)
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) out[static_cast<std::size_t>(f)][d] = results[static_cast<std::size_t>(f) * hand::kDofCount + d];
+      for (std::size_t d = 0; d < hand::kDofCount; ++d)
+        out[static_cast<std::size_t>(f)][d] = results[static_cast<std::size_t>(f) * hand::kDofCount + d];
     return out;
   }
 

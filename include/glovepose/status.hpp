@@ -26,22 +26,29 @@ enum class Status : std::uint8_t {
 /// @brief A short, stable, human-readable name of a status (for logs and error strings).
 constexpr const char* to_string(Status status) noexcept {
   switch (status) {
-    case Status::Ok: return "ok";
-    case Status::Solved: return "solved";
-    case Status::NotReady: return "not ready";
-    case Status::NonFinite: return "non-finite value";
-    case Status::Negative: return "negative value";
-    case Status::UnknownIndex: return "unknown index";
-    case Status::TimestampBackwards: return "timestamp went backwards";
-    case Status::SizeMismatch: return "size mismatch";
-    case Status::Uncalibrated: return "uncalibrated";
+    case Status::Ok:
+      return "ok";
+    case Status::Solved:
+      return "solved";
+    case Status::NotReady:
+      return "not ready";
+    case Status::NonFinite:
+      return "non-finite value";
+    case Status::Negative:
+      return "negative value";
+    case Status::UnknownIndex:
+      return "unknown index";
+    case Status::TimestampBackwards:
+      return "timestamp went backwards";
+    case Status::SizeMismatch:
+      return "size mismatch";
+    case Status::Uncalibrated:
+      return "uncalibrated";
   }
   return "unknown status";
 }
 
 /// @brief True when the status means the offered input was taken into the state.
-constexpr bool accepted(Status status) noexcept {
-  return status == Status::Ok || status == Status::Solved || status == Status::NotReady;
-}
+constexpr bool accepted(Status status) noexcept { return status == Status::Ok || status == Status::Solved || status == Status::NotReady; }
 
 }  // namespace glovepose

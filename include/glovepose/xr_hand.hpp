@@ -23,13 +23,13 @@ namespace glovepose {
 /// @brief One hand's joints at one time, laid out for OpenXR (positions and velocities in the
 /// wrist joint's frame; hand/openxr_joints.hpp).
 struct XrHandJoints {
-  hand::XrJointLocations locations{};                                ///< XrHandJointLocationEXT-compatible.
+  hand::XrJointLocations locations{};                                   ///< XrHandJointLocationEXT-compatible.
   std::array<hand::XrJointVelocity, hand::kXrJointCount> velocities{};  ///< XrHandJointVelocityEXT-compatible.
-  double time = 0.0;        ///< The time located (the glove stream's clock, s).
-  double horizon = 0.0;     ///< time minus the newest pose's timestamp: > 0 predicted ahead, < 0 from the recent poses.
-  bool predicted = false;   ///< Extrapolated past the newest pose.
-  bool clamped = false;     ///< Asked further ahead than the prediction bound: located at the bound.
-  bool active = false;      ///< Like XrHandJointLocationsEXT::isActive: a pose exists.
+  double time = 0.0;                                                    ///< The time located (the glove stream's clock, s).
+  double horizon = 0.0;    ///< time minus the newest pose's timestamp: > 0 predicted ahead, < 0 from the recent poses.
+  bool predicted = false;  ///< Extrapolated past the newest pose.
+  bool clamped = false;    ///< Asked further ahead than the prediction bound: located at the bound.
+  bool active = false;     ///< Like XrHandJointLocationsEXT::isActive: a pose exists.
   hand::Handedness side = hand::Handedness::Right;  ///< The hand located.
 };
 
@@ -85,7 +85,8 @@ class XrHandLocator {
           const auto d = static_cast<std::size_t>(dofs[static_cast<std::size_t>(n)]);
           const Eigen::Vector3d turn = (*rate)[d] * axes[d];
           angular += turn;
-          for (std::size_t j = phalanx_joint + k + 1; j <= phalanx_joint + 3; ++j) add(out.velocities[j].linear_velocity, turn.cross(joints.position[j] - origin));
+          for (std::size_t j = phalanx_joint + k + 1; j <= phalanx_joint + 3; ++j)
+            add(out.velocities[j].linear_velocity, turn.cross(joints.position[j] - origin));
         }
         set(out.velocities[phalanx_joint + k].angular_velocity, angular);
       }

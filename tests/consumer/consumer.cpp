@@ -13,7 +13,6 @@ int main() {
   sensor::Readout readout(solver);
   if (readout.push_frame(measured, 0.0) != Status::Solved) return 1;
   if ((readout.frame().cells - truth).cwiseAbs().maxCoeff() > 1e-9) return 2;
-  std::printf("glovepose %s: solved %d cells, cond(M) = %.2f\n", kVersion, layout.cell_count(),
-              solver->condition_number());
+  std::printf("glovepose %s: solved %d cells, cond(M) = %.2f\n", kVersion, layout.cell_count(), solver->condition_number());
   return 0;
 }

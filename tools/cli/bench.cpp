@@ -131,8 +131,10 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   std::array<float, grid::kStretchValues> maps{};
   std::array<float, grid::kMapSlots> pose_map{};
   std::vector<std::string> names = {"solve", "calibration"};
-  if (unet) names.insert(names.end(), {"stretch maps", "network", "pose map"});
-  else names.push_back("network");
+  if (unet)
+    names.insert(names.end(), {"stretch maps", "network", "pose map"});
+  else
+    names.push_back("network");
   names.insert(names.end(), {"angles", "1-euro", "joint list", "OpenXR joints"});
   std::vector<std::vector<double>> times(names.size());
   std::vector<double> whole;
@@ -159,7 +161,8 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
       times[s++].push_back(time_us([&] { (void)net.forward(maps, pose_map, w); }));
       times[s++].push_back(time_us([&] { model->glove().map().from_pose_map(pose_map, unit); }));
     } else {
-      times[s++].push_back(time_us([&] { (void)model->network().normalized_dofs(model->glove().map(), normalized.data(), unit, workspace); }));
+      times[s++].push_back(
+          time_us([&] { (void)model->network().normalized_dofs(model->glove().map(), normalized.data(), unit, workspace); }));
     }
     times[s++].push_back(time_us([&] { angles = model->joint_limits().denormalize(unit); }));
     times[s++].push_back(time_us([&] { (void)smoothing.filter(angles, t, smoothed); }));
@@ -182,7 +185,8 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
     const std::size_t source = session.first_session_frame + static_cast<std::size_t>(f) % session_frames;
     for (std::size_t c = 0; c < d.cell_count; ++c) cells(static_cast<Eigen::Index>(c)) = d.cells[source * d.cell_count + c];
     (void)range.normalize(cells, normalized);
-    for (Eigen::Index c = 0; c < normalized.size(); ++c) batch[static_cast<std::size_t>(f * normalized.size() + c)] = static_cast<float>(normalized(c));
+    for (Eigen::Index c = 0; c < normalized.size(); ++c)
+      batch[static_cast<std::size_t>(f * normalized.size() + c)] = static_cast<float>(normalized(c));
   }
   const auto frames_per_second = [&](int threads) {
     const double us = time_us([&] {
@@ -258,8 +262,9 @@ int bench(BenchOptions o) {
 Command add_bench(CLI::App& tool) {
   auto o = std::make_shared<BenchOptions>();
   CLI::App* command = tool.add_subcommand(
-      "bench", "The latency of one pose on this machine, stage by stage (p50 / p99 / max), for every weight storage of each model, against "
-               "the paper's 5 ms inference budget; the frames per second of batched inference; the machine it ran on.");
+      "bench",
+      "The latency of one pose on this machine, stage by stage (p50 / p99 / max), for every weight storage of each model, against "
+      "the paper's 5 ms inference budget; the frames per second of batched inference; the machine it ran on.");
   add_model_file(*command, o->models, "a model to time (repeatable; default: the shipped FCN and U-Net)")->allow_extra_args(false);
   add_number(*command, "--poses", "N", o->poses, "poses timed per model and weight storage (default 2000, at least 10)")
       ->check(at_least(10));

@@ -59,7 +59,8 @@ inline std::string shipped_model_path(const std::string& name) {
   if (error) throw Error("cannot find this executable (/proc/self/exe: " + error.message() + "), expected --model FILE");
   const fs::path candidate = (executable.parent_path() / GLOVEPOSE_MODELS_FROM_BIN / name).lexically_normal();
   if (!fs::is_regular_file(candidate, error))
-    throw Error("the shipped file '" + candidate.string() + "' is missing (install glovepose with cmake --install), expected it or --model FILE");
+    throw Error("the shipped file '" + candidate.string() +
+                "' is missing (install glovepose with cmake --install), expected it or --model FILE");
   return candidate.string();
 }
 
@@ -77,8 +78,10 @@ inline train::Dataset read_dataset(const std::string& path) {
       return c == '\n' || c == '\r' || c == '\t' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f);
     });
     if (!text || start.find(',') == std::string::npos) throw;
-    throw Error(std::string(e.what()) + "; the file is CSV text, not a dataset file: import it first with "
-                "glovepose import --rate HZ [--glove FILE] --out DATA.safetensors " + path + " (see glovepose import --help)");
+    throw Error(std::string(e.what()) +
+                "; the file is CSV text, not a dataset file: import it first with "
+                "glovepose import --rate HZ [--glove FILE] --out DATA.safetensors " +
+                path + " (see glovepose import --help)");
   }
 }
 
@@ -102,7 +105,9 @@ CLI::Option* add_parsed_option(CLI::App& command, const std::string& name, const
                                const std::string& expected, const std::string& description) {
   const CLI::Validator parses(
       [parse, expected](std::string& text) { return parse(text) ? std::string() : "'" + text + "', expected " + expected; }, "", "");
-  return command.add_option_function<std::string>(name, [parse, store](const std::string& text) { store(*parse(text)); }, description)
+  return command
+      .add_option_function<std::string>(
+          name, [parse, store](const std::string& text) { store(*parse(text)); }, description)
       ->check(parses)
       ->type_name(value_name);
 }
@@ -111,18 +116,22 @@ CLI::Option* add_parsed_option(CLI::App& command, const std::string& name, const
 template <typename T>
 CLI::Option* add_number_option(CLI::App& command, const std::string& name, const std::string& value_name, std::function<void(T)> store,
                                const std::string& description) {
-  return add_parsed_option<T>(command, name, value_name, number_from_text<T>, std::move(store), "a number such as 2026 or 1.5", description);
+  return add_parsed_option<T>(command, name, value_name, number_from_text<T>, std::move(store), "a number such as 2026 or 1.5",
+                              description);
 }
 
 /// Adds option `name` reading a number into `target` (a T or a std::optional<T>).
 template <typename T>
-CLI::Option* add_number(CLI::App& command, const std::string& name, const std::string& value_name, T& target, const std::string& description) {
-  return add_number_option<T>(command, name, value_name, [&target](T value) { target = value; }, description);
+CLI::Option* add_number(CLI::App& command, const std::string& name, const std::string& value_name, T& target,
+                        const std::string& description) {
+  return add_number_option<T>(
+      command, name, value_name, [&target](T value) { target = value; }, description);
 }
 template <typename T>
 CLI::Option* add_number(CLI::App& command, const std::string& name, const std::string& value_name, std::optional<T>& target,
                         const std::string& description) {
-  return add_number_option<T>(command, name, value_name, [&target](T value) { target = value; }, description);
+  return add_number_option<T>(
+      command, name, value_name, [&target](T value) { target = value; }, description);
 }
 
 /// Accepts finite numbers in [least, most], or (least, most] when `least_excluded`, for bounds
@@ -160,13 +169,14 @@ inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) {
     nn::WeightStorage storage;
     const char* description;
   };
-  const Flag flags[] = {
-      {"--fixed16", nn::WeightStorage::Fixed16, "keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)"},
-      {"--f16", nn::WeightStorage::F16, "keep the weights as F16 in memory"},
-      {"--bf16", nn::WeightStorage::BF16, "keep the weights as BF16 in memory (the fastest)"}};
+  const Flag flags[] = {{"--fixed16", nn::WeightStorage::Fixed16,
+                         "keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)"},
+                        {"--f16", nn::WeightStorage::F16, "keep the weights as F16 in memory"},
+                        {"--bf16", nn::WeightStorage::BF16, "keep the weights as BF16 in memory (the fastest)"}};
   std::vector<CLI::Option*> added;
   for (const Flag& flag : flags)
-    added.push_back(command.add_flag_callback(flag.name, [&storage, chosen = flag.storage] { storage = chosen; }, flag.description));
+    added.push_back(command.add_flag_callback(
+        flag.name, [&storage, chosen = flag.storage] { storage = chosen; }, flag.description));
   for (CLI::Option* flag : added)
     for (CLI::Option* other : added)
       if (flag != other) flag->excludes(other);

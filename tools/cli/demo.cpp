@@ -53,11 +53,11 @@ struct DemoOptions {
 
 // What streaming the session produced.
 struct SessionRun {
-  std::vector<std::size_t> compared_frames;  // dataset frames compared with the truth (collision outliers left out)
-  std::vector<hand::Angles> predicted;       // latest pose at each compared frame's cycle end
-  std::vector<double> compute_seconds;       // Pose::compute_seconds of every pose
-  std::vector<double> oldest_age;            // Pose::oldest_age of every pose
-  std::vector<std::size_t> skeleton_frames;  // dataset frames of the skeleton picture
+  std::vector<std::size_t> compared_frames;      // dataset frames compared with the truth (collision outliers left out)
+  std::vector<hand::Angles> predicted;           // latest pose at each compared frame's cycle end
+  std::vector<double> compute_seconds;           // Pose::compute_seconds of every pose
+  std::vector<double> oldest_age;                // Pose::oldest_age of every pose
+  std::vector<std::size_t> skeleton_frames;      // dataset frames of the skeleton picture
   std::vector<hand::JointList> skeleton_joints;  // the estimator's joint list at those frames
   std::vector<hand::Angles> skeleton_angles;     // and its angles
   // Per horizon, per session frame: the newest pose and pose_at(cycle end) when the newest reading
@@ -80,8 +80,10 @@ std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std
     const double time = row_time(user, f, static_cast<std::size_t>(r));
     before_row(time);
     const Status status = estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], time);
-    if (status == Status::Solved) on_pose();
-    else if (status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated) ++rejected;
+    if (status == Status::Solved)
+      on_pose();
+    else if (status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated)
+      ++rejected;
   }
   return rejected;
 }
@@ -95,7 +97,9 @@ struct CalibrationResult {
 
 CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) {
   estimator.start_calibration();
-  for (std::size_t f = 0; f < user.first_session_frame; ++f) stream_frame(estimator, user, f, [] {}, [](double) {});
+  for (std::size_t f = 0; f < user.first_session_frame; ++f)
+    stream_frame(
+        estimator, user, f, [] {}, [](double) {});
   CalibrationResult result;
   result.frames = estimator.calibration_progress().frames;
   result.seconds = static_cast<double>(user.first_session_frame) / user.cycle_rate;
@@ -142,14 +146,16 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
   };
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t f = user.first_session_frame; f < d.frames(); ++f) {
-    run.rejected_rows += stream_frame(estimator, user, f, [&] {
-      run.compute_seconds.push_back(estimator.pose().compute_seconds);
-      run.oldest_age.push_back(estimator.pose().oldest_age);
-    }, query);
+    run.rejected_rows += stream_frame(
+        estimator, user, f,
+        [&] {
+          run.compute_seconds.push_back(estimator.pose().compute_seconds);
+          run.oldest_age.push_back(estimator.pose().oldest_age);
+        },
+        query);
     run.rows += d.row_count;
     if (!estimator.pose().valid) continue;
-    if (std::find(run.skeleton_frames.begin(), run.skeleton_frames.end(), f) != run.skeleton_frames.end())
-    {
+    if (std::find(run.skeleton_frames.begin(), run.skeleton_frames.end(), f) != run.skeleton_frames.end()) {
       run.skeleton_joints.push_back(estimator.joints());
       run.skeleton_angles.push_back(estimator.pose().angles);
     }
@@ -183,7 +189,8 @@ double mean_error(const NewUser& user, const std::vector<hand::Angles>& per_fram
 train::AngleErrorReport measure_errors(const NewUser& user, const SessionRun& run) {
   train::AngleErrorAccumulator errors;
   hand::Angles truth{};
-  for (std::size_t i = 0; i < run.predicted.size(); ++i) errors.add(run.predicted[i].data(), true_angles(user.data, run.compared_frames[i], truth));
+  for (std::size_t i = 0; i < run.predicted.size(); ++i)
+    errors.add(run.predicted[i].data(), true_angles(user.data, run.compared_frames[i], truth));
   return errors.report();
 }
 
@@ -213,8 +220,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   std::string flat;
   for (const std::string& name : calibration.flat_sensors) flat += (flat.empty() ? "" : ", ") + name;
 
-  add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n",
-      static_cast<unsigned long long>(o.seed), model_path.c_str(), nn::storage_name(o.storage));
+  add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n", static_cast<unsigned long long>(o.seed),
+      model_path.c_str(), nn::storage_name(o.storage));
   add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s; %s\n", calibration.seconds, calibration.frames,
       flat.empty() ? "none" : flat.c_str(), calibration.guided ? "pose-guided" : "min-max");
   add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
@@ -222,7 +229,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   add("             %zu cycle ends compared with the truth (%zu with a self-colliding true pose left out, as the paper does)\n\n",
       report.frames, user.data.frames() - user.first_session_frame - report.frames);
   add("%-22s %8s %8s %8s\n", "angle error (degrees)", "mean", "rms", "max");
-  for (const train::FingerError& f : report.fingers) add("  %-20s %8.2f %8.2f %8.2f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
+  for (const train::FingerError& f : report.fingers)
+    add("  %-20s %8.2f %8.2f %8.2f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
   add("  %-20s %8.2f %8.2f %8.2f\n", "all 25 angles", report.overall.mean_deg, report.overall.rms_deg, report.overall.max_deg);
   add("  median %.2f, p95 %.2f; angles under 15 degrees: %.1f%%\n\n", report.median_deg, report.p95_deg, 100.0 * report.share_under_15deg);
   add("speed and latency\n");
@@ -230,7 +238,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   add("  the stream's pose rate        %10.0f  per second of glove time\n", static_cast<double>(poses) / session_seconds);
   add("  compute per pose              p50 %7.1f us   p99 %7.1f us\n", 1e6 * percentile(run.compute_seconds, 0.5),
       1e6 * percentile(run.compute_seconds, 0.99));
-  add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * percentile(run.oldest_age, 0.5), 1e3 * percentile(run.oldest_age, 0.99));
+  add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * percentile(run.oldest_age, 0.5),
+      1e3 * percentile(run.oldest_age, 0.99));
   add("  whole stream                  %.1f s of glove time in %.2f s wall (%.1fx real time)\n", session_seconds, run.wall_seconds,
       session_seconds / run.wall_seconds);
   add("\npose at a requested time: the pose at each cycle end asked for when the newest reading is the horizon before it\n");
@@ -268,8 +277,9 @@ void draw_angles_over_time(const NewUser& user, const SessionRun& run, const std
       predicted.push_back(run.predicted[i][dof] * train::kDegreesPerRadian);
       truth.push_back(user.data.angles[f * hand::kDofCount + dof] * train::kDegreesPerRadian);
     }
-    const auto [lo, hi] = std::minmax({*std::min_element(predicted.begin(), predicted.end()), *std::min_element(truth.begin(), truth.end()),
-                                       *std::max_element(predicted.begin(), predicted.end()), *std::max_element(truth.begin(), truth.end())});
+    const auto [lo, hi] =
+        std::minmax({*std::min_element(predicted.begin(), predicted.end()), *std::min_element(truth.begin(), truth.end()),
+                     *std::max_element(predicted.begin(), predicted.end()), *std::max_element(truth.begin(), truth.end())});
     const double step = hi - lo > 90 ? 30 : (hi - lo > 40 ? 20 : 10);
     const auto [y_min, y_max] = padded_range(lo, hi, step);
     svg::Axes axes(doc, left, top + p * (panel_height + gap), panel_width, panel_height, 0.0, std::max(times.back(), 1.0), y_min, y_max);
@@ -348,7 +358,8 @@ void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::Hand
     double error = 0.0;
     hand::Angles truth{};
     true_angles(user.data, f, truth);
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) error += std::abs(run.skeleton_angles[k][d] - truth[d]) * train::kDegreesPerRadian / hand::kDofCount;
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      error += std::abs(run.skeleton_angles[k][d] - truth[d]) * train::kDegreesPerRadian / hand::kDofCount;
     char caption[96];
     std::snprintf(caption, sizeof caption, "t = %.1f s, mean error %.1f deg", user.data.timestamps[f] - session_start, error);
     const double x0 = 10 + 2 * cell * static_cast<double>(k);
@@ -415,9 +426,10 @@ int demo(const DemoOptions& o) {
 Command add_demo(CLI::App& tool) {
   auto o = std::make_shared<DemoOptions>();
   CLI::App* command = tool.add_subcommand(
-      "demo", "The product's main job, end to end: a simulated new user puts the glove on, performs the calibration sequence, then a "
-              "session of poses, streamed row by row through the estimator; prints a table (angle errors, speed, latency, calibration) "
-              "and writes it and three SVG pictures (angles over time, cumulative error, skeletons) to --out.");
+      "demo",
+      "The product's main job, end to end: a simulated new user puts the glove on, performs the calibration sequence, then a "
+      "session of poses, streamed row by row through the estimator; prints a table (angle errors, speed, latency, calibration) "
+      "and writes it and three SVG pictures (angles over time, cumulative error, skeletons) to --out.");
   add_model_file(*command, o->model, std::string("weights (default: models/") + kShippedModelName + ", shipped with glovepose)");
   command->add_option("--out", o->out, "where the table and pictures go (default: demo-out)")->type_name("DIR");
   add_number(*command, "--seed", "S", o->seed, "simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)");

@@ -137,7 +137,8 @@ int info(const std::string& model_path) {
     if (!glove.map().cell_slots()[static_cast<std::size_t>(c)].on_maps())
       extra += (extra.empty() ? "" : ", ") + glove.cell_names()[static_cast<std::size_t>(c)];
   std::printf("inputs: %d (%d stretch cells", glove.cell_count(), glove.cell_count() - glove.map().extra_input_count());
-  if (!extra.empty()) std::printf(", %d extra input%s (%s)", glove.map().extra_input_count(), glove.map().extra_input_count() > 1 ? "s" : "", extra.c_str());
+  if (!extra.empty())
+    std::printf(", %d extra input%s (%s)", glove.map().extra_input_count(), glove.map().extra_input_count() > 1 ? "s" : "", extra.c_str());
   std::printf(")\n");
   if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
   if (!model.info().labelled_dofs.empty())
@@ -149,7 +150,8 @@ int info(const std::string& model_path) {
   } else {
     const calibration::PoseOffsetModel& offsets = *model.pose_offset();
     std::printf("pose-guided calibration: sequence '%s' (%zu steps, %.1f s), %td features\n", offsets.sequence().id().c_str(),
-                offsets.sequence().steps().size(), offsets.sequence().total_seconds(), static_cast<std::ptrdiff_t>(offsets.feature_count()));
+                offsets.sequence().steps().size(), offsets.sequence().total_seconds(),
+                static_cast<std::ptrdiff_t>(offsets.feature_count()));
   }
   return 0;
 }
@@ -157,10 +159,13 @@ int info(const std::string& model_path) {
 cli::Command add_predict(CLI::App& tool) {
   auto o = std::make_shared<PredictOptions>();
   CLI::App* command = tool.add_subcommand(
-      "predict", "Rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in radians "
-                 "out (theta 9..33 of the hand model), one row per input row.");
+      "predict",
+      "Rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in radians "
+      "out (theta 9..33 of the hand model), one row per input row.");
   cli::add_model_file(*command, o->model, "the model file")->required();
-  command->add_option("--in", o->input, "the rows, a CSV file without a header (default: stdin)")->check(cli::kExistingFile)->type_name("CSV");
+  command->add_option("--in", o->input, "the rows, a CSV file without a header (default: stdin)")
+      ->check(cli::kExistingFile)
+      ->type_name("CSV");
   cli::add_storage_flags(*command, o->storage);
   command->add_flag("--no-header", o->no_header, "leave out the first output line (the DoF names)");
   return {command, [o] { return predict(*o); }};
@@ -185,9 +190,10 @@ std::string usage_error(const CLI::App* tool, const CLI::Error& e) {
 // Exit codes: 0 done (or --help), 1 a runtime failure (or a failed check: soak), 2 a usage error,
 // 130 training interrupted by Ctrl-C.
 int main(int argc, char** argv) {
-  CLI::App tool("The glovepose tool: hand poses from a stretch-sensing glove's readings, and the models, data and "
-                "measurements behind them. 'glovepose COMMAND --help' describes a command.",
-                "glovepose");
+  CLI::App tool(
+      "The glovepose tool: hand poses from a stretch-sensing glove's readings, and the models, data and "
+      "measurements behind them. 'glovepose COMMAND --help' describes a command.",
+      "glovepose");
   tool.require_subcommand(0, 1);  // an unknown command is then named as unexpected; none is refused below
   tool.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // an option given twice: the last counts
   tool.failure_message(usage_error);
@@ -206,8 +212,10 @@ int main(int argc, char** argv) {
     // CLI11 checks the required options before the unknown ones; an unknown one is named first,
     // as it may be the required one misspelt.
     const std::vector<std::string> unknown = tool.remaining(true);
-    if (!unknown.empty()) tool.exit(CLI::ExtrasError({unknown.rbegin(), unknown.rend()}));  // it lists them backwards
-    else tool.exit(e);
+    if (!unknown.empty())
+      tool.exit(CLI::ExtrasError({unknown.rbegin(), unknown.rend()}));  // it lists them backwards
+    else
+      tool.exit(e);
     return 2;
   } catch (const Error& e) {
     std::cerr << "glovepose " << tool.get_subcommands().front()->get_name() << ": " << e.what() << "\n";

@@ -30,8 +30,10 @@ struct ImportOptions {
     std::vector<train::CsvTake> takes;
     std::size_t next_recording = 0, next_calibration = 0;
     for (const CLI::Option* given : command->parse_order()) {
-      if (given == recordings_option) takes.push_back({recordings[next_recording++], subject, session, train::kKindRecording});
-      else if (given == calibrations_option) takes.push_back({calibrations[next_calibration++], subject, session, train::kKindCalibration});
+      if (given == recordings_option)
+        takes.push_back({recordings[next_recording++], subject, session, train::kKindRecording});
+      else if (given == calibrations_option)
+        takes.push_back({calibrations[next_calibration++], subject, session, train::kKindCalibration});
     }
     return takes;
   }
@@ -72,8 +74,10 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
     take.subject = io::parse_csv_id(field(1), where(1));
     if (column[2] >= 0) take.session = io::parse_csv_id(field(2), where(2));
     take.kind = train::kKindRecording;
-    if (column[3] >= 0 && field(3) == "calibration") take.kind = train::kKindCalibration;
-    else if (column[3] >= 0 && field(3) != "recording") throw Error(where(3) + " is not a kind, expected recording or calibration");
+    if (column[3] >= 0 && field(3) == "calibration")
+      take.kind = train::kKindCalibration;
+    else if (column[3] >= 0 && field(3) != "recording")
+      throw Error(where(3) + " is not a kind, expected recording or calibration");
     takes.push_back(take);
   }
   if (takes.empty()) throw Error(at + ": no takes after the header, expected one line per CSV file");
@@ -84,7 +88,8 @@ std::string angles_text(const train::Dataset& data) {
   if (!data.has_angles()) return "without angles";
   const hand::DofSet labelled = data.labelled_dofs();
   const auto count = std::count(labelled.begin(), labelled.end(), true);
-  return count == static_cast<long>(hand::kDofCount) ? "with the 25 DoF angles" : "with angles for " + std::to_string(count) + " of the 25 DoFs";
+  return count == static_cast<long>(hand::kDofCount) ? "with the 25 DoF angles"
+                                                     : "with angles for " + std::to_string(count) + " of the 25 DoFs";
 }
 
 int import_recordings(const ImportOptions& o) {
@@ -105,9 +110,9 @@ int import_recordings(const ImportOptions& o) {
     sessions.insert({data.subject[i], data.session[i]});
     calibration += data.kind[i] == train::kKindCalibration;
   }
-  std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n",
-              takes.size(), data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(),
-              data.cell_count, angles_text(data).c_str());
+  std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n", takes.size(),
+              data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(), data.cell_count,
+              angles_text(data).c_str());
   for (const train::FlatSensor& flat : importer.flat_sensors())
     std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
                 flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
@@ -123,24 +128,34 @@ Command add_import(CLI::App& tool) {
       "import", "Recordings of any glove as CSV files with named columns into one dataset file for train, eval and finetune.");
   o->command = command;
   o->recordings_option =
-      command->add_option("CSV", o->recordings, "recording takes: CSV files whose first line names the columns: every cell of the glove, "
-                                                "optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
+      command
+          ->add_option("CSV", o->recordings,
+                       "recording takes: CSV files whose first line names the columns: every cell of the glove, "
+                       "optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
           ->check(kExistingFile)
           ->type_name("CSV");
-  o->calibrations_option = command->add_option("--calibration", o->calibrations, "a calibration take (its rows are calibration frames); repeatable")
-                               ->check(kExistingFile)
-                               ->type_name("FILE")
-                               ->allow_extra_args(false);
-  command->add_option("--takes", o->takes_list, "a CSV list of takes with the header file,subject,session,kind (kind: recording or "
-                                                "calibration; session and kind may be left out); files relative to the list")
+  o->calibrations_option =
+      command->add_option("--calibration", o->calibrations, "a calibration take (its rows are calibration frames); repeatable")
+          ->check(kExistingFile)
+          ->type_name("FILE")
+          ->allow_extra_args(false);
+  command
+      ->add_option("--takes", o->takes_list,
+                   "a CSV list of takes with the header file,subject,session,kind (kind: recording or "
+                   "calibration; session and kind may be left out); files relative to the list")
       ->check(kExistingFile)
       ->type_name("LIST");
-  add_number(*command, "--subject", "N", o->subject, "subject id of the CSV and --calibration takes whose columns do not have one")->check(at_least(0));
-  add_number(*command, "--session", "N", o->session, "session id of the CSV and --calibration takes whose columns do not have one")->check(at_least(0));
-  add_number(*command, "--rate", "HZ", o->import.frame_rate, "the glove's frames per second (frames are 1/HZ apart in takes without "
-                                                             "timestamps); required unless the glove description gives rate_hz")
+  add_number(*command, "--subject", "N", o->subject, "subject id of the CSV and --calibration takes whose columns do not have one")
+      ->check(at_least(0));
+  add_number(*command, "--session", "N", o->session, "session id of the CSV and --calibration takes whose columns do not have one")
+      ->check(at_least(0));
+  add_number(*command, "--rate", "HZ", o->import.frame_rate,
+             "the glove's frames per second (frames are 1/HZ apart in takes without "
+             "timestamps); required unless the glove description gives rate_hz")
       ->check(above(0.0));
-  command->add_option("--glove", o->glove, "the glove description (JSON) (default: the built-in 44-cell glove)")->check(kExistingFile)->type_name("FILE");
+  command->add_option("--glove", o->glove, "the glove description (JSON) (default: the built-in 44-cell glove)")
+      ->check(kExistingFile)
+      ->type_name("FILE");
   command->add_flag("--degrees", o->import.degrees, "angle columns are in degrees");
   command->add_option("--ignore", o->import.ignored_columns, "a column to skip; repeatable")->type_name("COLUMN")->allow_extra_args(false);
   command->add_flag("--allow-flat", o->import.allow_flat, "keep calibration takes where a sensor does not move (it then reads 0); listed");

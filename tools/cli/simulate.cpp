@@ -56,14 +56,17 @@ Command add_simulate(CLI::App& tool) {
   auto o = std::make_shared<SimulateOptions>();
   sim::CorpusConfig& config = o->config;
   CLI::App* command = tool.add_subcommand(
-      "simulate", "Simulates the paper's capture protocol and writes one dataset file (--out), or prints the realism report (--report) "
-                  "or the built-in guided calibration sequence as JSON (--print-calibration-sequence).");
+      "simulate",
+      "Simulates the paper's capture protocol and writes one dataset file (--out), or prints the realism report (--report) "
+      "or the built-in guided calibration sequence as JSON (--print-calibration-sequence).");
   add_number(*command, "--seed", "S", config.seed, "everything simulated derives from it (default 1)");
   add_number(*command, "--subjects", "N", config.subjects, "people (default 10)")->check(at_least(1));
-  add_number(*command, "--sessions", "K", config.sessions, "sessions per person with the first glove, the first 3 without taking it off (default 5)")
+  add_number(*command, "--sessions", "K", config.sessions,
+             "sessions per person with the first glove, the first 3 without taking it off (default 5)")
       ->check(at_least(1));
   add_number(*command, "--minutes", "M", config.minutes, "per session (default 5)")->check(above(0.0, 600.0));
-  add_number(*command, "--gloves", "G", config.gloves, "gloves; each further one records 2 sessions per person (default 2)")->check(CLI::Range(1, 16));
+  add_number(*command, "--gloves", "G", config.gloves, "gloves; each further one records 2 sessions per person (default 2)")
+      ->check(CLI::Range(1, 16));
   CLI::Option* seconds = add_number(*command, "--calibration-seconds", "T", config.calibration_seconds,
                                     "calibration sequence before every session, visiting the extreme poses (default 30; 0: none)")
                              ->check(at_least(0.0));
@@ -71,7 +74,8 @@ Command add_simulate(CLI::App& tool) {
       ->check(kExistingFile)
       ->type_name("FILE")
       ->excludes(seconds);
-  command->add_flag("--raw-rows", config.recording.raw_rows, "also write every raw row reading (for replaying rows: eval --replay-rows, view --replay)");
+  command->add_flag("--raw-rows", config.recording.raw_rows,
+                    "also write every raw row reading (for replaying rows: eval --replay-rows, view --replay)");
   add_number(*command, "--mean-window", "N", config.recording.readout.mean_window, "readings per row averaged before solving (default 5)")
       ->check(at_least(1));
   add_number(*command, "--threads", "T", config.threads, "threads (default 0: all cores)");

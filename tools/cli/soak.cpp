@@ -52,11 +52,13 @@ Command add_soak(CLI::App& tool) {
   auto o = std::make_shared<SoakOptions>();
   o->soak.stream_minutes = 30.0;
   CLI::App* command = tool.add_subcommand(
-      "soak", "Estimators on threads sharing one model stream simulated 60 Hz rows with random faults of every kind, after calibrating on "
-              "the fly; prints frames, faults by kind, recoveries, memory and allocations. Exits 0 when every check held, 1 when one failed.");
+      "soak",
+      "Estimators on threads sharing one model stream simulated 60 Hz rows with random faults of every kind, after calibrating on "
+      "the fly; prints frames, faults by kind, recoveries, memory and allocations. Exits 0 when every check held, 1 when one failed.");
   add_number(*command, "--minutes", "M", o->soak.stream_minutes, "stream per estimator, minutes of 60 Hz rows (default 30)")
       ->check(above(0.0));
-  add_number(*command, "--estimators", "N", o->soak.estimators, "estimators on threads sharing the model (default 3)")->check(CLI::Range(1, 64));
+  add_number(*command, "--estimators", "N", o->soak.estimators, "estimators on threads sharing the model (default 3)")
+      ->check(CLI::Range(1, 64));
   add_number(*command, "--seed", "S", o->soak.seed, "seed of the faults and the simulated user (default 1)");
   add_number(*command, "--source-minutes", "X", o->source_minutes, "simulated motion looped, minutes (default 3; ~6 s of CPU per minute)")
       ->check(CLI::Range(0.1, 600.0));

@@ -20,9 +20,7 @@ using Point = std::pair<double, double>;
 /// @brief One SVG picture, built element by element and written with save().
 class Document {
  public:
-  Document(double width, double height) : width_(width), height_(height) {
-    rect(0, 0, width, height, "white");
-  }
+  Document(double width, double height) : width_(width), height_(height) { rect(0, 0, width, height, "white"); }
 
   void line(double x1, double y1, double x2, double y2, const std::string& stroke, double width = 1.0, const std::string& dash = "") {
     body_ += "<line x1=\"" + num(x1) + "\" y1=\"" + num(y1) + "\" x2=\"" + num(x2) + "\" y2=\"" + num(y2) + "\"" +
@@ -79,10 +77,14 @@ class Document {
   static std::string escape(const std::string& text) {
     std::string out;
     for (char c : text) {
-      if (c == '&') out += "&amp;";
-      else if (c == '<') out += "&lt;";
-      else if (c == '>') out += "&gt;";
-      else out += c;
+      if (c == '&')
+        out += "&amp;";
+      else if (c == '<')
+        out += "&lt;";
+      else if (c == '>')
+        out += "&gt;";
+      else
+        out += c;
     }
     return out;
   }

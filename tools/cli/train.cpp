@@ -89,7 +89,7 @@ struct Options {
   std::string command, command_line, data, model, out, glove_file, sequence_file, predictions_file;
   Architecture architecture;  // train: the network to train (--model)
   bool replay = false;
-  int mean_window = 0;  // --replay-rows: the readout's mean window; 0: the estimator's default
+  int mean_window = 0;      // --replay-rows: the readout's mean window; 0: the estimator's default
   std::string calibration;  // empty: the default of the command
   train::FrameFilter filter;
   std::vector<int> exclude_subjects;
@@ -118,7 +118,10 @@ void add_choice(CLI::App& command, const std::string& name, const std::vector<st
 
 // The options every command has: --data, --threads, the selection (--stride too: `with_stride`).
 void add_data_options(CLI::App& command, Options& o, bool with_stride) {
-  command.add_option("--data", o.data, "the dataset file (glovepose simulate or import)")->required()->check(kExistingFile)->type_name("FILE");
+  command.add_option("--data", o.data, "the dataset file (glovepose simulate or import)")
+      ->required()
+      ->check(kExistingFile)
+      ->type_name("FILE");
   add_number(command, "--threads", "T", o.threads, "threads (default 0: all cores)");
   const std::tuple<const char*, std::vector<int>*, const char*> lists[] = {
       {"--subjects", &o.filter.subjects, "only these subjects (default: all)"},
@@ -126,10 +129,12 @@ void add_data_options(CLI::App& command, Options& o, bool with_stride) {
       {"--sessions", &o.filter.sessions, "only these sessions (default: all)"},
       {"--gloves", &o.filter.gloves, "only these gloves (default: all)"}};
   for (const auto& [name, target, description] : lists)
-    add_parsed_option<std::vector<int>>(command, name, "LIST", id_list, [target = target](std::vector<int> ids) { *target = std::move(ids); },
-                                        "ids like 0-3,7", std::string(description) + "; LIST: ids like 0-3,7")
+    add_parsed_option<std::vector<int>>(
+        command, name, "LIST", id_list, [target = target](std::vector<int> ids) { *target = std::move(ids); }, "ids like 0-3,7",
+        std::string(description) + "; LIST: ids like 0-3,7")
         ->group("Selection");
-  if (with_stride) add_number(command, "--stride", "K", o.stride, "every K-th frame of the selection (default 1)")->check(at_least(1))->group("Selection");
+  if (with_stride)
+    add_number(command, "--stride", "K", o.stride, "every K-th frame of the selection (default 1)")->check(at_least(1))->group("Selection");
 }
 
 // The defaults train and finetune give the training options, as the help tells them.
@@ -142,21 +147,25 @@ void add_training_options(CLI::App& command, const std::shared_ptr<Options>& o, 
   command.add_option("--calibration", o->calibration, "how the inputs are calibrated (default onthefly)")
       ->check(CLI::IsMember({"none", "training", "onthefly"}))
       ->type_name("MODE");
-  add_number_option<int>(command, "--epochs", "N", [o](int v) { o->training.epochs = v, o->epochs_set = true; },
-                         "passes over the training frames (default " + defaults.epochs + ")")
+  add_number_option<int>(
+      command, "--epochs", "N", [o](int v) { o->training.epochs = v, o->epochs_set = true; },
+      "passes over the training frames (default " + defaults.epochs + ")")
       ->check(at_least(1));
-  add_number_option<int>(command, "--batch", "N", [o](int v) { o->training.batch = v, o->batch_set = true; },
-                         "frames per step (default " + defaults.batch + ")")
+  add_number_option<int>(
+      command, "--batch", "N", [o](int v) { o->training.batch = v, o->batch_set = true; },
+      "frames per step (default " + defaults.batch + ")")
       ->check(at_least(1));
-  add_number_option<double>(command, "--lr", "X", [o](double v) { o->training.optimizer.learning_rate = v, o->lr_set = true; },
-                            "learning rate (default " + defaults.lr + ")")
+  add_number_option<double>(
+      command, "--lr", "X", [o](double v) { o->training.optimizer.learning_rate = v, o->lr_set = true; },
+      "learning rate (default " + defaults.lr + ")")
       ->check(above(0.0));
   add_choice(command, "--optimizer", {{"adam", train::OptimizerKind::Adam}, {"sgd", train::OptimizerKind::Sgd}}, o->training.optimizer.kind,
              "the optimizer (default adam)");
   add_number(command, "--validation", "FRACTION", o->validation, "of the selected frames held out to pick the best epoch (default 0.1)");
   add_number(command, "--seed", "S", o->training.seed, "seed of the initial weights, the batches and the augmentation (default 1)");
-  add_number_option<double>(command, "--max-minutes", "M", [o](double v) { o->training.max_seconds = 60.0 * v; },
-                            "stop training after M minutes (default: no limit)")
+  add_number_option<double>(
+      command, "--max-minutes", "M", [o](double v) { o->training.max_seconds = 60.0 * v; },
+      "stop training after M minutes (default: no limit)")
       ->check(at_least(0.0));
   command.add_flag("--quiet", o->quiet, "no progress on stderr");
   add_choice(command, "--dtype", {{"f32", io::DType::F32}, {"f16", io::DType::F16}, {"bf16", io::DType::BF16}}, o->dtype,
@@ -171,8 +180,7 @@ void add_training_options(CLI::App& command, const std::shared_ptr<Options>& o, 
         }
         o->training.augmentation = a;
       },
-      "GAIN,OFFSET,NOISE",
-      "deviations of each training frame's cell perturbation, normalised units: (1 + g) x + o + n (default none)");
+      "GAIN,OFFSET,NOISE", "deviations of each training frame's cell perturbation, normalised units: (1 + g) x + o + n (default none)");
 }
 
 // Subjects present in the data minus the excluded ones, when --exclude-subjects is given.
@@ -192,8 +200,10 @@ void apply_exclusions(Options& o, const train::Dataset& data) {
 std::string duration(double seconds) {
   char text[32];
   const long s = static_cast<long>(seconds + 0.5);
-  if (s >= 3600) std::snprintf(text, sizeof text, "%ldh%02ldm", s / 3600, s / 60 % 60);
-  else std::snprintf(text, sizeof text, "%ldm%02lds", s / 60, s % 60);
+  if (s >= 3600)
+    std::snprintf(text, sizeof text, "%ldh%02ldm", s / 3600, s / 60 % 60);
+  else
+    std::snprintf(text, sizeof text, "%ldm%02lds", s / 60, s % 60);
   return text;
 }
 
@@ -214,8 +224,7 @@ std::function<void(const train::Progress&)> progress_bar(bool quiet) {
     char best[32] = "-";
     if (std::isfinite(p.best_validation_deg)) std::snprintf(best, sizeof best, "%.2f deg", p.best_validation_deg);
     std::fprintf(stderr, "%sepoch %d/%d [%s] %3.0f%%  %.0f samples/s  loss %.5f  best val %s  ETA %s%s", terminal ? "\r" : "", p.epoch + 1,
-                 p.epochs, bar, 100.0 * done, p.samples_per_second, p.loss, best, duration(p.eta_seconds).c_str(),
-                 terminal ? "   " : "\n");
+                 p.epochs, bar, 100.0 * done, p.samples_per_second, p.loss, best, duration(p.eta_seconds).c_str(), terminal ? "   " : "\n");
     if (terminal && epoch_end) std::fprintf(stderr, "\n");
   };
 }
@@ -232,20 +241,22 @@ void report_zeroed(const std::string& command, const train::Samples& samples, co
       list += (list.empty() ? "" : ", ") + (by_id ? glove.cell_names()[id] : n);
     }
     const std::string run = key < 0 ? "the training range"
-                                     : "subject " + std::to_string(key >> 40) + ", glove " + std::to_string((key >> 20) & 0xfffff) +
-                                           ", session " + std::to_string(key & 0xfffff);
+                                    : "subject " + std::to_string(key >> 40) + ", glove " + std::to_string((key >> 20) & 0xfffff) +
+                                          ", session " + std::to_string(key & 0xfffff);
     std::fprintf(stderr, "%s: calibration of %s: %zu flat sensor%s read 0: %s\n", command.c_str(), run.c_str(), names.size(),
                  names.size() == 1 ? "" : "s", list.c_str());
   }
 }
 
 grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
-  const grid::GloveDescription glove = o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file);
+  const grid::GloveDescription glove =
+      o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file);
   if (data.glove_layout() != glove.id())
     throw Error("the dataset was recorded with glove '" + data.glove_layout() + "' but the glove description is '" + glove.id() +
                 "'; pass its description with --glove FILE");
   if (static_cast<std::size_t>(glove.cell_count()) != data.cell_count)
-    throw Error("the glove description has " + std::to_string(glove.cell_count()) + " cells, the dataset " + std::to_string(data.cell_count));
+    throw Error("the glove description has " + std::to_string(glove.cell_count()) + " cells, the dataset " +
+                std::to_string(data.cell_count));
   // The calibration's median window is median_seconds at the data's rate, and the estimator takes
   // frames at the description's rate: the two must agree, and a described glove without a rate
   // gets the data's in the model it trains.
@@ -267,8 +278,10 @@ int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& in
     if (!o.batch_set) o.training.batch = train::default_batch(training.frames());
     if (!o.epochs_set) o.training.epochs = train::default_epochs(training.frames(), o.training.batch);
     if (!o.quiet)
-      std::fprintf(stderr, "train: %ld training frames: batch %d, %d epochs (defaults for this data size: at least %ld steps; "
-                   "--batch and --epochs override)\n", training.frames(), o.training.batch, o.training.epochs, train::kMinDefaultSteps);
+      std::fprintf(stderr,
+                   "train: %ld training frames: batch %d, %d epochs (defaults for this data size: at least %ld steps; "
+                   "--batch and --epochs override)\n",
+                   training.frames(), o.training.batch, o.training.epochs, train::kMinDefaultSteps);
   }
   const hand::JointLimits limits = train::joint_limits(info);
   train::ThreadPool pool(o.threads);
@@ -290,8 +303,8 @@ int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& in
   const train::TrainResult result = train::train_network(net, training, validation, limits, config, pool);
   std::signal(SIGINT, SIG_DFL);
   std::printf("%s: %ld steps in %s (%.0f samples/s); kept epoch %d, validation error %.3f deg; wrote %s\n",
-              result.stopped ? "stopped" : "done", result.steps, duration(result.seconds).c_str(), result.samples_per_second, result.best_epoch + 1,
-              result.best_validation_error_deg, o.out.c_str());
+              result.stopped ? "stopped" : "done", result.steps, duration(result.seconds).c_str(), result.samples_per_second,
+              result.best_epoch + 1, result.best_validation_error_deg, o.out.c_str());
   if (result.best_epoch < 0) throw Error("training stopped before the first epoch ended; no model was written");
   return interrupted.load() ? 130 : 0;
 }
@@ -314,14 +327,14 @@ int train_command(Options o) {
       std::fprintf(stderr, "%s: the data labels %zu of the 25 DoFs; the others are not trained and read the rest pose\n", o.command.c_str(),
                    static_cast<std::size_t>(std::count(all.labelled.begin(), all.labelled.end(), true)));
   }
-  std::map<std::string, std::string> provenance{{"training_command", o.command_line},
-                                                {"training_seed", std::to_string(o.training.seed)},
-                                                {"training_data", o.data}};
+  std::map<std::string, std::string> provenance{
+      {"training_command", o.command_line}, {"training_seed", std::to_string(o.training.seed)}, {"training_data", o.data}};
   if (architecture == "linear") {
     if (o.training.augmentation.active())
       throw CLI::ValidationError("--augment trains networks; a linear map is fitted by least squares on the frames as they are");
     const auto [training, validation] = train::split_validation(all, o.validation);
-    const nn::LinearMap map = train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
+    const nn::LinearMap map =
+        train::fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), train::kTargets).to_map();
     std::vector<float> predicted(static_cast<std::size_t>(validation.frames()) * train::kTargets);
     map.predict(validation.inputs.data(), predicted.data(), validation.frames());
     const double error = train::mean_error_degrees(predicted, validation.angles, limits, validation.labelled);
@@ -360,7 +373,8 @@ int finetune_command(Options o) {
   if (!o.batch_set) o.training.batch = 64;
   if (!o.epochs_set) o.training.epochs = 5;
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
-  if (!model.network) throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
+  if (!model.network)
+    throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
   train::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const train::Samples all = samples_for(o, model, data).first;
@@ -382,7 +396,8 @@ bool eval_guided(const Options& o, const train::TrainedModel& model, const train
 }
 
 // Writes one row per evaluated frame: where it comes from, the true and the predicted angles (radians).
-void write_predictions(const std::string& path, const train::Dataset& data, const train::Samples& samples, const std::vector<float>& predicted) {
+void write_predictions(const std::string& path, const train::Dataset& data, const train::Samples& samples,
+                       const std::vector<float>& predicted) {
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (!file) throw Error("--predictions: cannot open '" + path + "' for writing");
   std::fprintf(file, "frame,time,subject,session");
@@ -393,7 +408,8 @@ void write_predictions(const std::string& path, const train::Dataset& data, cons
     const auto i = static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f)]);
     std::fprintf(file, "%zu,%.9g,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i]);
     for (const std::vector<float>* v : {&samples.angles, &predicted})
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) std::fprintf(file, ",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
+      for (std::size_t d = 0; d < hand::kDofCount; ++d)
+        std::fprintf(file, ",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
     std::fprintf(file, "\n");
   }
   if (std::fclose(file) != 0) throw Error("--predictions: writing '" + path + "' failed");
@@ -411,7 +427,8 @@ int eval_command(Options o) {
   const hand::JointLimits limits = train::joint_limits(model.info);
   train::ThreadPool pool(o.threads);
   const bool guided = eval_guided(o, model, data);
-  const std::map<std::int64_t, hand::Angles> offsets = guided ? train::guided_offsets(model, data, o.filter, pool) : std::map<std::int64_t, hand::Angles>{};
+  const std::map<std::int64_t, hand::Angles> offsets =
+      guided ? train::guided_offsets(model, data, o.filter, pool) : std::map<std::int64_t, hand::Angles>{};
   const std::vector<float> normalized = model.predict(samples, pool);
   hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
   const hand::DofSet trained = model.info.labelled();
@@ -444,10 +461,12 @@ int eval_command(Options o) {
   if (o.json) {
     char lag[32];
     std::snprintf(lag, sizeof lag, "%.3f", lag_ms);
-    std::printf("%s\n", train::to_json(report, {{"calibration", "\"" + calibration + "\""}, {"mean_window", mean_window}, {"lag_ms", lag}}).c_str());
+    std::printf(
+        "%s\n",
+        train::to_json(report, {{"calibration", "\"" + calibration + "\""}, {"mean_window", mean_window}, {"lag_ms", lag}}).c_str());
   } else {
-    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(), o.data.c_str(),
-                calibration.c_str(), mean_window.c_str(), o.replay ? " (rows replayed)" : "");
+    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(),
+                o.data.c_str(), calibration.c_str(), mean_window.c_str(), o.replay ? " (rows replayed)" : "");
     std::printf("%s", train::format_table(report).c_str());
     std::printf("Motion lag: %.1f ms (the shift that best aligns the frame-to-frame changes of predicted and true angles)\n", lag_ms);
   }
@@ -468,8 +487,10 @@ int fit_guided_command(Options o) {
   file.metadata["pose_offset"] = fit.model.to_json();
   file.metadata["pose_offset_command"] = o.command_line;
   file.write(o.out, "model file");
-  std::printf("fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated); wrote %s\n",
-              fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg, o.out.c_str());
+  std::printf(
+      "fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated); wrote "
+      "%s\n",
+      fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg, o.out.c_str());
   return 0;
 }
 
@@ -490,26 +511,29 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
                         }});
   };
   {
-    auto [command, o] = add("train", "Trains a model on a dataset file on all cores, saving the best so far at every improvement "
-                                     "(Ctrl-C stops and keeps it).");
-    add_parsed_option<Architecture>(*command, "--model", "unet:W|fcn[:H]|linear", architecture,
-                                    [o = o](Architecture a) { o->architecture = std::move(a); }, "unet:W, fcn[:H] or linear",
-                                    "the network: a U-Net of width W, a fully connected network with H hidden units (default 2048) or a "
-                                    "linear map")
+    auto [command, o] = add("train",
+                            "Trains a model on a dataset file on all cores, saving the best so far at every improvement "
+                            "(Ctrl-C stops and keeps it).");
+    add_parsed_option<Architecture>(
+        *command, "--model", "unet:W|fcn[:H]|linear", architecture, [o = o](Architecture a) { o->architecture = std::move(a); },
+        "unet:W, fcn[:H] or linear",
+        "the network: a U-Net of width W, a fully connected network with H hidden units (default 2048) or a "
+        "linear map")
         ->required();
     command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
     add_data_options(*command, *o, true);
-    add_training_options(*command, o,
-                         {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100",
-                          "2e-4; 0.01 with sgd for an FCN"});
+    add_training_options(
+        *command, o,
+        {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100", "2e-4; 0.01 with sgd for an FCN"});
     command->add_option("--glove", o->glove_file, "the glove description the data was recorded with (default: the built-in glove)")
         ->check(kExistingFile)
         ->type_name("FILE");
     finish(command, o, train_command);
   }
   {
-    auto [command, o] = add("finetune", "Fine-tunes every parameter of a model on a dataset file (the paper's defaults: lr 1e-6, batch 64, "
-                                        "5 epochs).");
+    auto [command, o] = add("finetune",
+                            "Fine-tunes every parameter of a model on a dataset file (the paper's defaults: lr 1e-6, batch 64, "
+                            "5 epochs).");
     add_model_file(*command, o->model, "the model to fine-tune")->required();
     command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
     add_data_options(*command, *o, true);
@@ -520,8 +544,10 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
     auto [command, o] = add("eval", "Evaluates a model on a dataset file: angle errors per DoF and overall, and the motion lag.");
     add_model_file(*command, o->model, "the model to evaluate")->required();
     add_data_options(*command, *o, true);
-    command->add_option("--calibration", o->calibration, "how the inputs are calibrated (default: the model's; guided when the model "
-                                                         "carries a pose-guided calibration and the data followed its sequence)")
+    command
+        ->add_option("--calibration", o->calibration,
+                     "how the inputs are calibrated (default: the model's; guided when the model "
+                     "carries a pose-guided calibration and the data followed its sequence)")
         ->check(CLI::IsMember({"none", "training", "onthefly", "guided"}))
         ->type_name("MODE");
     command->add_flag("--json", o->json, "print the report as JSON");
@@ -533,8 +559,9 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
     finish(command, o, eval_command);
   }
   {
-    auto [command, o] = add("fit-guided", "Fits the model's pose-guided calibration on people it was not trained on and writes the model "
-                                          "with it.");
+    auto [command, o] = add("fit-guided",
+                            "Fits the model's pose-guided calibration on people it was not trained on and writes the model "
+                            "with it.");
     add_model_file(*command, o->model, "the model")->required();
     command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
     add_data_options(*command, *o, false);

@@ -42,11 +42,11 @@ struct ViewOptions {
   std::string replay;
   bool from_stdin = false;
   double calibration_seconds = 30.0;  // --stdin: stream time the user moves through extreme poses
-  double seconds = 0.0;  // 0: until the glove's stream ends (or Ctrl-C)
+  double seconds = 0.0;               // 0: until the glove's stream ends (or Ctrl-C)
 };
 
 const char* const kFlagNames[] = {"readings rejected", "input clamped", "training calibration", "calibrating", "stale readings",
-                                  "recovering",        "stuck rows",    "disconnected rows",     "outlier rows"};
+                                  "recovering",        "stuck rows",    "disconnected rows",    "outlier rows"};
 
 // The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
 // 0 is `start`), publishing the hand after each pose and the calibration's progress after each frame.
@@ -61,8 +61,10 @@ class GloveStream {
     estimator_.start_calibration();
     for (std::size_t f = 0; f < user.data.frames() && !stop_; ++f) {
       if (f == user.first_session_frame) estimator_.finish_calibration();
-      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
-      for (std::size_t r = 0; r < user.data.row_count; ++r) push(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
+      std::this_thread::sleep_until(
+          start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
+      for (std::size_t r = 0; r < user.data.row_count; ++r)
+        push(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
       latest_.publish(estimator_.state());
     }
   }
@@ -173,7 +175,8 @@ int view(const ViewOptions& o) {
   NewUser user;
   if (!o.replay.empty()) {
     user.data = read_dataset(o.replay);
-    if (!user.data.has_raw_rows()) throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
+    if (!user.data.has_raw_rows())
+      throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
     user.cycle_rate = user.data.frame_rate();
     while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)
       ++user.first_session_frame;
@@ -193,8 +196,10 @@ int view(const ViewOptions& o) {
   std::thread glove([&] {
     try {
       GloveStream stream(estimator, latest, stop);
-      if (o.from_stdin) stream.from_stdin(o.calibration_seconds);
-      else stream.recorded(user);
+      if (o.from_stdin)
+        stream.from_stdin(o.calibration_seconds);
+      else
+        stream.recorded(user);
     } catch (const Error& e) {
       std::cerr << "glovepose view: the glove's stream stopped: " << e.what() << "\n";
     }
@@ -207,10 +212,15 @@ int view(const ViewOptions& o) {
     if (client < 0) continue;
     char request[2048];
     const ssize_t n = ::recv(client, request, sizeof request - 1, 0);
-    const std::string line = n > 0 ? std::string(request, static_cast<std::size_t>(n)).substr(0, std::string(request, static_cast<std::size_t>(n)).find('\r')) : "";
-    if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0) respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
-    else if (line.rfind("GET /state", 0) == 0) respond(client, "200 OK", "application/json", state_json(latest, estimator, start, stream_t0).dump());
-    else respond(client, "404 Not Found", "text/plain", "not found\n");
+    const std::string line =
+        n > 0 ? std::string(request, static_cast<std::size_t>(n)).substr(0, std::string(request, static_cast<std::size_t>(n)).find('\r'))
+              : "";
+    if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0)
+      respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
+    else if (line.rfind("GET /state", 0) == 0)
+      respond(client, "200 OK", "application/json", state_json(latest, estimator, start, stream_t0).dump());
+    else
+      respond(client, "404 Not Found", "text/plain", "not found\n");
     ::close(client);
   }
   stop = true;
@@ -228,17 +238,22 @@ int view(const ViewOptions& o) {
 Command add_view(CLI::App& tool) {
   auto o = std::make_shared<ViewOptions>();
   CLI::App* command = tool.add_subcommand(
-      "view", "A live view of the hand in the browser: a local web server (loopback only) whose page draws the estimator's joints in 3D, "
-              "the 25 angles, the trust flags, the calibration step with its target pose, and the latency. The glove is a simulated new "
-              "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove's rows on stdin (--stdin).");
-  add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")->check(CLI::Range(0, 65535));
+      "view",
+      "A live view of the hand in the browser: a local web server (loopback only) whose page draws the estimator's joints in 3D, "
+      "the 25 angles, the trust flags, the calibration step with its target pose, and the latency. The glove is a simulated new "
+      "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove's rows on stdin (--stdin).");
+  add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")
+      ->check(CLI::Range(0, 65535));
   add_model_file(*command, o->model, "weights (default: the shipped model)");
   add_number(*command, "--seed", "S", o->seed, "simulation seed of the simulated user (default 2026)");
-  CLI::Option* replay = command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
-                            ->check(kExistingFile)
-                            ->type_name("FILE");
-  CLI::Option* from_stdin = command->add_flag("--stdin", o->from_stdin, "a real glove's rows on stdin, one 'row,value,timestamp' line each; "
-                                                                         "the first --calibration-seconds of stream time calibrate")
+  CLI::Option* replay =
+      command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
+          ->check(kExistingFile)
+          ->type_name("FILE");
+  CLI::Option* from_stdin = command
+                                ->add_flag("--stdin", o->from_stdin,
+                                           "a real glove's rows on stdin, one 'row,value,timestamp' line each; "
+                                           "the first --calibration-seconds of stream time calibrate")
                                 ->excludes(replay);
   add_number(*command, "--calibration-seconds", "S", o->calibration_seconds, "--stdin: stream time of the calibration (default 30)")
       ->check(above(0.0))

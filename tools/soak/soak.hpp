@@ -50,14 +50,14 @@ namespace glovepose::sim {
 
 /// @brief Settings of a soak run.
 struct SoakConfig {
-  double stream_minutes = 3.0;  ///< Simulated stream per estimator after its calibration, minutes.
-  int estimators = 3;           ///< Estimators, one thread each, sharing the model.
-  std::uint64_t seed = 1;       ///< Faults (kinds, targets, lengths, random readings) derive from it.
-  double warmup_seconds = 10.0;           ///< Stream each estimator plays after its calibration before memory is first read.
-  double clean_seconds_min = 2.0;         ///< Shortest clean stretch between two faults (longer than any recovery).
-  double clean_seconds_max = 6.0;         ///< Longest clean stretch.
-  double fault_seconds_min = 0.5;         ///< Shortest fault.
-  double fault_seconds_max = 3.0;         ///< Longest fault.
+  double stream_minutes = 3.0;     ///< Simulated stream per estimator after its calibration, minutes.
+  int estimators = 3;              ///< Estimators, one thread each, sharing the model.
+  std::uint64_t seed = 1;          ///< Faults (kinds, targets, lengths, random readings) derive from it.
+  double warmup_seconds = 10.0;    ///< Stream each estimator plays after its calibration before memory is first read.
+  double clean_seconds_min = 2.0;  ///< Shortest clean stretch between two faults (longer than any recovery).
+  double clean_seconds_max = 6.0;  ///< Longest clean stretch.
+  double fault_seconds_min = 0.5;  ///< Shortest fault.
+  double fault_seconds_max = 3.0;  ///< Longest fault.
   /// Most cycles after a fault's end before a cycle ends in a trusted pose again. A restart (gap,
   /// clock jump) needs one cycle to see every row and mean_window - 1 more to fill the rows' mean;
   /// tests/test_faults.cpp checks 6-7 frames; 12 (0.2 s) leaves room for the simulator's own rare
@@ -79,12 +79,14 @@ struct SoakConfig {
     };
     need(stream_minutes > 0.0 && std::isfinite(stream_minutes), "--minutes " + std::to_string(stream_minutes) + ", expected > 0");
     need(estimators >= 1 && estimators <= 64, "--estimators " + std::to_string(estimators) + ", expected 1..64");
-    need(warmup_seconds >= 0.0 && warmup_seconds < stream_minutes * 60.0,
-         "warm-up " + std::to_string(warmup_seconds) + " s, expected 0 <= warm-up < the stream (" + std::to_string(stream_minutes * 60.0) + " s)");
+    need(warmup_seconds >= 0.0 && warmup_seconds < stream_minutes * 60.0, "warm-up " + std::to_string(warmup_seconds) +
+                                                                              " s, expected 0 <= warm-up < the stream (" +
+                                                                              std::to_string(stream_minutes * 60.0) + " s)");
     need(clean_seconds_min > 0.0 && clean_seconds_max >= clean_seconds_min, "clean stretches of " + std::to_string(clean_seconds_min) +
-                                                                                 ".." + std::to_string(clean_seconds_max) + " s, expected 0 < min <= max");
-    need(fault_seconds_min > 0.0 && fault_seconds_max >= fault_seconds_min, "faults of " + std::to_string(fault_seconds_min) + ".." +
-                                                                                 std::to_string(fault_seconds_max) + " s, expected 0 < min <= max");
+                                                                                ".." + std::to_string(clean_seconds_max) +
+                                                                                " s, expected 0 < min <= max");
+    need(fault_seconds_min > 0.0 && fault_seconds_max >= fault_seconds_min,
+         "faults of " + std::to_string(fault_seconds_min) + ".." + std::to_string(fault_seconds_max) + " s, expected 0 < min <= max");
     need(recovery_bound_cycles >= 1, "recovery bound " + std::to_string(recovery_bound_cycles) + " cycles, expected at least 1");
     need(rss_growth_tolerance_kib >= 0, "memory tolerance " + std::to_string(rss_growth_tolerance_kib) + " KiB, expected >= 0");
   }
@@ -125,20 +127,25 @@ inline constexpr int kPoseFlagCount = 9;
 /// @brief A short name of a NoPoseReason.
 constexpr const char* to_string(NoPoseReason reason) noexcept {
   switch (reason) {
-    case NoPoseReason::Uncalibrated: return "uncalibrated";
-    case NoPoseReason::NotReady: return "not ready (restart)";
-    case NoPoseReason::Rejected: return "readings rejected";
-    case NoPoseReason::NoReadings: return "no reading arrived (unplugged)";
-    case NoPoseReason::Unexplained: return "UNEXPLAINED";
+    case NoPoseReason::Uncalibrated:
+      return "uncalibrated";
+    case NoPoseReason::NotReady:
+      return "not ready (restart)";
+    case NoPoseReason::Rejected:
+      return "readings rejected";
+    case NoPoseReason::NoReadings:
+      return "no reading arrived (unplugged)";
+    case NoPoseReason::Unexplained:
+      return "UNEXPLAINED";
   }
   return "unknown";
 }
 
 /// @brief A short name of PoseFlag bit `bit`.
 constexpr const char* pose_flag_name(int bit) noexcept {
-  constexpr const char* names[kPoseFlagCount] = {"readings rejected", "input clamped", "training calibration", "calibrating",
-                                                 "stale readings",    "recovering",    "stuck rows",           "disconnected rows",
-                                                 "outlier rows"};
+  constexpr const char* names[kPoseFlagCount] = {"readings rejected", "input clamped",     "training calibration",
+                                                 "calibrating",       "stale readings",    "recovering",
+                                                 "stuck rows",        "disconnected rows", "outlier rows"};
   return bit >= 0 && bit < kPoseFlagCount ? names[bit] : "unknown flag";
 }
 
@@ -162,20 +169,20 @@ struct SoakReport {
   double wall_seconds = 0.0;
 
   // Frames.
-  std::uint64_t cycles = 0;           ///< Readout cycles (60 Hz frames) over all estimators.
-  std::uint64_t readings = 0;         ///< Readings pushed (after the faults).
-  std::uint64_t poses = 0;            ///< New poses.
-  std::uint64_t trusted_poses = 0;    ///< Of which trusted (no fault flag).
-  std::array<std::uint64_t, kPoseFlagCount> poses_by_flag{};        ///< Poses carrying each PoseFlag bit.
-  std::uint64_t trusted_cycles = 0;   ///< Cycles that ended in a new trusted pose.
-  std::uint64_t flagged_cycles = 0;   ///< Cycles that ended in a new flagged pose.
-  std::array<std::uint64_t, kNoPoseReasonCount> no_pose_cycles{};   ///< Cycles without a new pose, by reason.
-  std::array<std::uint64_t, kStatusCount> statuses{};               ///< push_row's answers, by status.
+  std::uint64_t cycles = 0;                                        ///< Readout cycles (60 Hz frames) over all estimators.
+  std::uint64_t readings = 0;                                      ///< Readings pushed (after the faults).
+  std::uint64_t poses = 0;                                         ///< New poses.
+  std::uint64_t trusted_poses = 0;                                 ///< Of which trusted (no fault flag).
+  std::array<std::uint64_t, kPoseFlagCount> poses_by_flag{};       ///< Poses carrying each PoseFlag bit.
+  std::uint64_t trusted_cycles = 0;                                ///< Cycles that ended in a new trusted pose.
+  std::uint64_t flagged_cycles = 0;                                ///< Cycles that ended in a new flagged pose.
+  std::array<std::uint64_t, kNoPoseReasonCount> no_pose_cycles{};  ///< Cycles without a new pose, by reason.
+  std::array<std::uint64_t, kStatusCount> statuses{};              ///< push_row's answers, by status.
 
   // Faults.
-  std::array<std::uint64_t, kFaultKindCount> faults{};              ///< Faults injected, by kind.
-  std::array<std::uint64_t, kFaultKindCount> altered_readings{};    ///< Clean readings lost, repeated, delayed or changed, by kind.
-  std::array<Recoveries, kFaultKindCount> recoveries{};             ///< By kind.
+  std::array<std::uint64_t, kFaultKindCount> faults{};            ///< Faults injected, by kind.
+  std::array<std::uint64_t, kFaultKindCount> altered_readings{};  ///< Clean readings lost, repeated, delayed or changed, by kind.
+  std::array<Recoveries, kFaultKindCount> recoveries{};           ///< By kind.
 
   // Failures of the per-pose checks.
   std::uint64_t non_finite_poses = 0;  ///< New poses with a non-finite angle.
@@ -186,7 +193,7 @@ struct SoakReport {
   long rss_end_kib = 0;           ///< Resident set at the end.
   long peak_rss_kib = 0;          ///< Peak resident set of the process (getrusage).
   bool allocations_counted = false;
-  std::size_t allocations = 0;    ///< Heap allocations between the warm-up and the end (when counted).
+  std::size_t allocations = 0;  ///< Heap allocations between the warm-up and the end (when counted).
 
   std::vector<std::string> errors;  ///< Set-up errors raised on the estimators' threads.
 
@@ -224,8 +231,8 @@ struct SoakReport {
     fail(sequence_errors > 0, std::to_string(sequence_errors) + " poses whose sequence did not follow the last one");
     fail(trusted_cycles + flagged_cycles + no_pose_total() != cycles,
          "cycles accounted " + std::to_string(trusted_cycles + flagged_cycles + no_pose_total()) + ", expected " + std::to_string(cycles));
-    fail(recovery_max() > recovery_bound_cycles, "a recovery took " + std::to_string(recovery_max()) + " cycles, expected at most " +
-                                                     std::to_string(recovery_bound_cycles));
+    fail(recovery_max() > recovery_bound_cycles,
+         "a recovery took " + std::to_string(recovery_max()) + " cycles, expected at most " + std::to_string(recovery_bound_cycles));
     fail(rss_after_warmup_kib > 0 && rss_end_kib - rss_after_warmup_kib > rss_growth_tolerance_kib,
          "resident memory grew by " + std::to_string(rss_end_kib - rss_after_warmup_kib) + " KiB after the warm-up, expected at most " +
              std::to_string(rss_growth_tolerance_kib));
@@ -250,7 +257,9 @@ struct SoakReport {
       std::snprintf(line, sizeof line, format, values...);
       out << line;
     };
-    const auto share = [](std::uint64_t part, std::uint64_t whole) { return whole ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0; };
+    const auto share = [](std::uint64_t part, std::uint64_t whole) {
+      return whole ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+    };
     put("soak: %d estimators x %.1f min of 60 Hz stream (%.2f h in all), seed %llu, one shared model\n", estimators, stream_seconds / 60.0,
         estimators * stream_seconds / 3600.0, static_cast<unsigned long long>(seed));
     put("  source: %.0f s of simulated motion looped forward and backward, after a %.0f s calibration sequence\n", source_seconds,
@@ -258,16 +267,22 @@ struct SoakReport {
     put("  wall time %.1f s\n", wall_seconds);
     put("frames: %llu cycles, %llu readings pushed, %llu poses (%.1f%% trusted)\n", static_cast<unsigned long long>(cycles),
         static_cast<unsigned long long>(readings), static_cast<unsigned long long>(poses), share(trusted_poses, poses));
-    put("  cycles ending in a trusted pose  %12llu (%.2f%%)\n", static_cast<unsigned long long>(trusted_cycles), share(trusted_cycles, cycles));
-    put("  cycles ending in a flagged pose  %12llu (%.2f%%)\n", static_cast<unsigned long long>(flagged_cycles), share(flagged_cycles, cycles));
+    put("  cycles ending in a trusted pose  %12llu (%.2f%%)\n", static_cast<unsigned long long>(trusted_cycles),
+        share(trusted_cycles, cycles));
+    put("  cycles ending in a flagged pose  %12llu (%.2f%%)\n", static_cast<unsigned long long>(flagged_cycles),
+        share(flagged_cycles, cycles));
     for (int r = 0; r < kNoPoseReasonCount; ++r)
-      put("  no new pose: %-30s %8llu\n", to_string(static_cast<NoPoseReason>(r)), static_cast<unsigned long long>(no_pose_cycles[static_cast<std::size_t>(r)]));
+      put("  no new pose: %-30s %8llu\n", to_string(static_cast<NoPoseReason>(r)),
+          static_cast<unsigned long long>(no_pose_cycles[static_cast<std::size_t>(r)]));
     out << "  poses by flag:";
     for (int b = 0; b < kPoseFlagCount; ++b)
-      if (poses_by_flag[static_cast<std::size_t>(b)]) put(" %s %llu;", pose_flag_name(b), static_cast<unsigned long long>(poses_by_flag[static_cast<std::size_t>(b)]));
+      if (poses_by_flag[static_cast<std::size_t>(b)])
+        put(" %s %llu;", pose_flag_name(b), static_cast<unsigned long long>(poses_by_flag[static_cast<std::size_t>(b)]));
     out << "\n  push_row statuses:";
     for (int s = 0; s < kStatusCount; ++s)
-      if (statuses[static_cast<std::size_t>(s)]) put(" %s %llu;", glovepose::to_string(static_cast<Status>(s)), static_cast<unsigned long long>(statuses[static_cast<std::size_t>(s)]));
+      if (statuses[static_cast<std::size_t>(s)])
+        put(" %s %llu;", glovepose::to_string(static_cast<Status>(s)),
+            static_cast<unsigned long long>(statuses[static_cast<std::size_t>(s)]));
     out << "\nfaults (kind: injected, readings altered, recovery cycles p99 / max):\n";
     std::uint64_t fault_total = 0;
     for (int k = 0; k < kFaultKindCount; ++k) {
@@ -397,7 +412,9 @@ class SoakStream {
   }
 
  private:
-  std::uint64_t seconds_to_cycles(double seconds) const noexcept { return static_cast<std::uint64_t>(std::llround(seconds * cycles_per_second_)); }
+  std::uint64_t seconds_to_cycles(double seconds) const noexcept {
+    return static_cast<std::uint64_t>(std::llround(seconds * cycles_per_second_));
+  }
   std::uint64_t draw_cycles(double lo, double hi) noexcept { return std::max<std::uint64_t>(1, seconds_to_cycles(rng_.uniform(lo, hi))); }
 
   // The clean rows of the current cycle: the calibration sequence once, then the session forward
@@ -442,7 +459,8 @@ class SoakStream {
   FaultKind next_kind() noexcept {
     if (round_next_ == kFaultKindCount) {
       for (int k = 0; k < kFaultKindCount; ++k) round_[static_cast<std::size_t>(k)] = static_cast<FaultKind>(k);
-      for (int k = kFaultKindCount - 1; k > 0; --k) std::swap(round_[static_cast<std::size_t>(k)], round_[static_cast<std::size_t>(rng_.index(k + 1))]);
+      for (int k = kFaultKindCount - 1; k > 0; --k)
+        std::swap(round_[static_cast<std::size_t>(k)], round_[static_cast<std::size_t>(rng_.index(k + 1))]);
       round_next_ = 0;
     }
     return round_[static_cast<std::size_t>(round_next_++)];
@@ -490,8 +508,9 @@ class SoakStream {
     } else {
       const auto saw = [&](Status s) { return seen[static_cast<std::size_t>(s)]; };
       bool rejected = false;
-      for (int s = 0; s < kStatusCount; ++s) rejected = rejected || (seen[static_cast<std::size_t>(s)] && !accepted(static_cast<Status>(s)) &&
-                                                                      static_cast<Status>(s) != Status::Uncalibrated);
+      for (int s = 0; s < kStatusCount; ++s)
+        rejected = rejected || (seen[static_cast<std::size_t>(s)] && !accepted(static_cast<Status>(s)) &&
+                                static_cast<Status>(s) != Status::Uncalibrated);
       const NoPoseReason reason = saw(Status::Uncalibrated) ? NoPoseReason::Uncalibrated
                                   : saw(Status::NotReady)   ? NoPoseReason::NotReady
                                   : rejected                ? NoPoseReason::Rejected

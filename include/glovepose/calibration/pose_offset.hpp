@@ -42,7 +42,7 @@ namespace glovepose::calibration {
 /// @brief A pose with a user's offsets applied: the sum, kept within the joint limits (the network's
 /// tanh keeps its own angles there). The estimator and the offline evaluation both apply them so.
 GLOVEPOSE_REALTIME inline hand::Angles with_offsets(const hand::Angles& angles, const hand::Angles& offsets,
-                                                   const hand::JointLimits& limits) noexcept {
+                                                    const hand::JointLimits& limits) noexcept {
   hand::Angles out{};
   for (std::size_t d = 0; d < hand::kDofCount; ++d) out[d] = angles[d] + offsets[d];
   return limits.clamp(out);
@@ -53,7 +53,8 @@ class StepHoldMeans {
  public:
   /// @brief Empty sums for `sequence` and `cells` calibrated cells per frame.
   StepHoldMeans(const Sequence& sequence, int cells)
-      : sequence_(&sequence), cells_(cells),
+      : sequence_(&sequence),
+        cells_(cells),
         sums_(Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(sequence.steps().size()), hand::kDofCount + cells)),
         counts_(sequence.steps().size(), 0) {}
 
@@ -86,8 +87,8 @@ class StepHoldMeans {
     const std::string missing = missing_step();
     if (!missing.empty())
       throw Error("pose-guided calibration: step '" + missing + "' of sequence '" + sequence_->id() +
-                  "' has no frame held past its settle time, expected the whole sequence (" +
-                  std::to_string(sequence_->total_seconds()) + " s) to be performed");
+                  "' has no frame held past its settle time, expected the whole sequence (" + std::to_string(sequence_->total_seconds()) +
+                  " s) to be performed");
     const Eigen::Index per_step = sums_.cols();
     Eigen::VectorXd f(sums_.rows() * per_step);
     for (Eigen::Index k = 0; k < sums_.rows(); ++k) {
@@ -125,8 +126,13 @@ class PoseOffsetModel {
   /// on, `max_rms_z` the largest RMS z-score among them (> 0).
   PoseOffsetModel(Sequence sequence, int cells, Eigen::MatrixXd weight, Eigen::VectorXd bias, Eigen::VectorXd feature_mean,
                   Eigen::VectorXd feature_scale, double max_rms_z)
-      : sequence_(std::move(sequence)), cells_(cells), weight_(std::move(weight)), bias_(std::move(bias)), mean_(std::move(feature_mean)),
-        scale_(std::move(feature_scale)), max_rms_z_(max_rms_z) {
+      : sequence_(std::move(sequence)),
+        cells_(cells),
+        weight_(std::move(weight)),
+        bias_(std::move(bias)),
+        mean_(std::move(feature_mean)),
+        scale_(std::move(feature_scale)),
+        max_rms_z_(max_rms_z) {
     if (cells_ < 1) throw Error("pose offset model: " + std::to_string(cells_) + " cells, expected at least 1");
     const Eigen::Index features = feature_count();
     if (weight_.rows() != static_cast<Eigen::Index>(hand::kDofCount) || weight_.cols() != features ||
@@ -136,8 +142,9 @@ class PoseOffsetModel {
     if (!weight_.allFinite() || !bias_.allFinite()) throw Error("pose offset model: non-finite weights, expected finite numbers");
     if (mean_.size() != features || scale_.size() != features || !mean_.allFinite() || !(scale_.array() > 0.0).all() ||
         !scale_.allFinite() || !(max_rms_z_ > 0.0) || !std::isfinite(max_rms_z_))
-      throw Error("pose offset model: feature statistics of " + std::to_string(mean_.size()) + " means and " + std::to_string(scale_.size()) +
-                  " scales, expected " + std::to_string(features) + " finite means, positive finite scales and max_rms_z > 0");
+      throw Error("pose offset model: feature statistics of " + std::to_string(mean_.size()) + " means and " +
+                  std::to_string(scale_.size()) + " scales, expected " + std::to_string(features) +
+                  " finite means, positive finite scales and max_rms_z > 0");
   }
 
   /// @brief RMS over the features of (feature - mean) / scale: how far a calibration lies from the
@@ -178,10 +185,14 @@ class PoseOffsetModel {
     const auto numbers = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
     io::json::Value weight = io::json::Value::array();
     for (Eigen::Index d = 0; d < weight_.rows(); ++d) weight.push_back(numbers(weight_.row(d).transpose()));
-    const io::json::Value root = {{"format", kPoseOffsetFormat},     {"version", 1},
-                                  {"cells", cells_},                 {"sequence", io::json::parse(sequence_.to_json())},
-                                  {"feature_mean", numbers(mean_)},  {"feature_scale", numbers(scale_)},
-                                  {"max_rms_z", max_rms_z_},         {"bias", numbers(bias_)},
+    const io::json::Value root = {{"format", kPoseOffsetFormat},
+                                  {"version", 1},
+                                  {"cells", cells_},
+                                  {"sequence", io::json::parse(sequence_.to_json())},
+                                  {"feature_mean", numbers(mean_)},
+                                  {"feature_scale", numbers(scale_)},
+                                  {"max_rms_z", max_rms_z_},
+                                  {"bias", numbers(bias_)},
                                   {"weight", std::move(weight)}};
     return io::json::write(root);
   }

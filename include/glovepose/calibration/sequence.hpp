@@ -33,12 +33,12 @@ inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 
 /// @brief One step: what the user is asked to do, for how long, and what it means for the angles.
 struct Step {
-  std::string name;         ///< Short id, e.g. "flat_on_table".
-  std::string instruction;  ///< What to tell the user.
-  double seconds = 0.0;     ///< Duration of the step (> 0).
-  hand::Angles pose{};      ///< The pose to copy (radians, hand::kDofs order).
+  std::string name;                            ///< Short id, e.g. "flat_on_table".
+  std::string instruction;                     ///< What to tell the user.
+  double seconds = 0.0;                        ///< Duration of the step (> 0).
+  hand::Angles pose{};                         ///< The pose to copy (radians, hand::kDofs order).
   std::array<bool, hand::kDofCount> pinned{};  ///< Angles the step holds at `pose` whatever the person.
-  double pinned_sd = 0.0;   ///< SD (radians) with which a person holds the pinned angles.
+  double pinned_sd = 0.0;                      ///< SD (radians) with which a person holds the pinned angles.
 
   /// @brief Whether the step pins any angle.
   bool pins_any() const noexcept {
@@ -66,7 +66,8 @@ class Sequence {
     const hand::JointLimits limits;
     for (const Step& s : steps_) {
       if (!(s.seconds > 0.0) || !std::isfinite(s.seconds))
-        throw Error("calibration sequence '" + id_ + "', step '" + s.name + "': " + std::to_string(s.seconds) + " s, expected a finite duration > 0");
+        throw Error("calibration sequence '" + id_ + "', step '" + s.name + "': " + std::to_string(s.seconds) +
+                    " s, expected a finite duration > 0");
       if (!(settle_ >= 0.0) || !(settle_ < s.seconds))
         throw Error("calibration sequence '" + id_ + "', step '" + s.name + "': settle time " + std::to_string(settle_) +
                     " s, expected 0 <= settle < the step's " + std::to_string(s.seconds) + " s");

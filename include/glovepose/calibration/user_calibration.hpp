@@ -49,8 +49,8 @@ struct UserCalibration {
   }
 
   /// @brief load()'s parser over a stream; `source` names it in messages.
-  static UserCalibration load(std::istream& file, const std::string& source, const std::string& glove_id, const std::vector<std::string>& names,
-                              sensor::CalibrationConfig config = {}) {
+  static UserCalibration load(std::istream& file, const std::string& source, const std::string& glove_id,
+                              const std::vector<std::string>& names, sensor::CalibrationConfig config = {}) {
     UserCalibration out{sensor::CalibrationRange::load(file, source, glove_id, names, config), std::nullopt};
     int line_no = 3 + static_cast<int>(names.size());
     std::string line;
@@ -75,7 +75,8 @@ struct UserCalibration {
       const char* end = line.data() + line.size();
       double value = 0.0;
       const auto r = std::from_chars(begin, end, value);
-      if (r.ec != std::errc() || r.ptr != end || !std::isfinite(value)) throw fail("'" + line.substr(expected.size()) + "' is not a finite number");
+      if (r.ec != std::errc() || r.ptr != end || !std::isfinite(value))
+        throw fail("'" + line.substr(expected.size()) + "' is not a finite number");
       offsets[d] = value;
     }
     out.offsets = offsets;

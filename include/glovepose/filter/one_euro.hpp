@@ -43,9 +43,8 @@ class OneEuroFilter {
   explicit OneEuroFilter(OneEuroConfig config = {}) : config_(config) {
     const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
     if (!positive(config_.frequency) || !positive(config_.min_cutoff) || !positive(config_.d_cutoff))
-      throw Error("OneEuroFilter: frequency " + std::to_string(config_.frequency) + ", min_cutoff " +
-                  std::to_string(config_.min_cutoff) + ", d_cutoff " + std::to_string(config_.d_cutoff) +
-                  ", expected all finite and > 0");
+      throw Error("OneEuroFilter: frequency " + std::to_string(config_.frequency) + ", min_cutoff " + std::to_string(config_.min_cutoff) +
+                  ", d_cutoff " + std::to_string(config_.d_cutoff) + ", expected all finite and > 0");
     if (!std::isfinite(config_.beta) || config_.beta < 0.0)
       throw Error("OneEuroFilter: beta " + std::to_string(config_.beta) + ", expected finite and >= 0");
     reset();

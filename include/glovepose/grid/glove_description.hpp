@@ -139,8 +139,8 @@ class GloveDescription {
         throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " has an empty name, expected a name");
       for (std::size_t earlier = 0; earlier < c; ++earlier)
         if (cell_names_[earlier] == cell_names_[c])
-          throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " is named '" + cell_names_[c] +
-                      "' like cell " + std::to_string(earlier) + ", expected unique cell names");
+          throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " is named '" + cell_names_[c] + "' like cell " +
+                      std::to_string(earlier) + ", expected unique cell names");
     }
   }
 
@@ -222,9 +222,8 @@ class GloveDescription {
   /// @brief The description as JSON text (the file format above): one cell or DoF per line, DoFs in
   /// hand::kDofs order, ending with a newline.
   std::string to_json() const {
-    std::string out = "{\n  \"format\": " + io::json::quote(kGloveFormat) +
-                      ",\n  \"version\": " + std::to_string(kGloveFormatVersion) + ",\n  \"id\": " + io::json::quote(id_) +
-                      ",\n  \"cells\": [\n";
+    std::string out = "{\n  \"format\": " + io::json::quote(kGloveFormat) + ",\n  \"version\": " + std::to_string(kGloveFormatVersion) +
+                      ",\n  \"id\": " + io::json::quote(id_) + ",\n  \"cells\": [\n";
     for (std::size_t c = 0; c < cell_names_.size(); ++c) {
       const Slot& s = map_.cell_slots()[c];
       out += "    {\"name\": " + io::json::quote(cell_names_[c]);
@@ -270,15 +269,15 @@ class GloveDescription {
     if (!cells.is_array()) throw fail("'cells' is " + io::json::describe(cells) + ", expected an array of cells");
     if (cells.empty()) throw fail("'cells' is empty, expected at least one cell");
     if (cells.size() > static_cast<std::size_t>(kMaxGloveInputs))
-      throw fail("'cells' lists " + std::to_string(cells.size()) + " inputs, expected at most " +
-                 std::to_string(kMaxGloveInputs) + " (at most " + std::to_string(kStretchValues) +
-                 " stretch cells, one per slot of the maps, and extra inputs)");
+      throw fail("'cells' lists " + std::to_string(cells.size()) + " inputs, expected at most " + std::to_string(kMaxGloveInputs) +
+                 " (at most " + std::to_string(kStretchValues) + " stretch cells, one per slot of the maps, and extra inputs)");
     GloveSettings settings;
     if (root.contains("rate_hz")) settings.rate_hz = f.number(root, "rate_hz", "the top-level object");
     if (const io::json::Value* calibration = io::json::Fields::find(root, "calibration")) {
       const std::string where = "'calibration'";
       if (!calibration->is_object())
-        throw fail(where + " is " + io::json::describe(*calibration) + ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
+        throw fail(where + " is " + io::json::describe(*calibration) +
+                   ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
       f.only(*calibration, {"median_seconds", "flat_relative_range"}, where);
       if (calibration->contains("median_seconds")) settings.calibration.median_seconds = f.number(*calibration, "median_seconds", where);
       if (calibration->contains("flat_relative_range"))
@@ -308,7 +307,8 @@ class GloveDescription {
           throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
       if (const io::json::Value* extra = io::json::Fields::find(cell, "extra")) {
         if (*extra != true)
-          throw fail(where + ": 'extra' is " + io::json::describe(*extra) + ", expected true (an input that is not on the stretch maps) or no 'extra'");
+          throw fail(where + ": 'extra' is " + io::json::describe(*extra) +
+                     ", expected true (an input that is not on the stretch maps) or no 'extra'");
         for (const char* key : {"channel", "row", "col"})
           if (cell.contains(key))
             throw fail(where + " has 'extra' and '" + key + "', expected either a slot (channel, row, col) or \"extra\": true");
@@ -317,15 +317,16 @@ class GloveDescription {
         continue;
       }
       if (++stretch_cells > kStretchValues)
-        throw fail(where + " is stretch cell " + std::to_string(stretch_cells) + ", but the stretch maps (" + std::to_string(kStretchChannels) +
-                   " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) + ") have only " + std::to_string(kStretchValues) +
-                   " slots, expected at most " + std::to_string(kStretchValues) + " stretch cells (an input not on the maps is \"extra\": true)");
+        throw fail(where + " is stretch cell " + std::to_string(stretch_cells) + ", but the stretch maps (" +
+                   std::to_string(kStretchChannels) + " x " + std::to_string(kGridSize) + " x " + std::to_string(kGridSize) +
+                   ") have only " + std::to_string(kStretchValues) + " slots, expected at most " + std::to_string(kStretchValues) +
+                   " stretch cells (an input not on the maps is \"extra\": true)");
       const Slot slot{f.index(cell, "channel", kStretchChannels, where), f.index(cell, "row", kGridSize, where),
                       f.index(cell, "col", kGridSize, where)};
       int& owner = cell_owner[static_cast<std::size_t>(slot.flat())];
       if (owner >= 0)
-        throw fail(where + " is placed at " + describe(slot, true) + ", the slot of cells[" + std::to_string(owner) +
-                   "] ('" + names[static_cast<std::size_t>(owner)] + "'), expected one cell per slot");
+        throw fail(where + " is placed at " + describe(slot, true) + ", the slot of cells[" + std::to_string(owner) + "] ('" +
+                   names[static_cast<std::size_t>(owner)] + "'), expected one cell per slot");
       owner = static_cast<int>(c);
       names.push_back(name);
       cell_slots.push_back(slot);
@@ -343,8 +344,7 @@ class GloveDescription {
     for (std::size_t e = 0; e < dofs.size(); ++e) {
       const io::json::Value& entry = dofs[e];
       std::string where = "dofs[" + std::to_string(e) + "]";
-      if (!entry.is_object())
-        throw fail(where + " is " + io::json::describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
+      if (!entry.is_object()) throw fail(where + " is " + io::json::describe(entry) + ", expected an object {\"name\", \"row\", \"col\"}");
       f.only(entry, {"name", "row", "col", "min_degrees", "max_degrees"}, where);
       const std::string name = f.string(entry, "name", where);
       const std::size_t d = dof_named(name, where);
@@ -376,8 +376,7 @@ class GloveDescription {
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (dof_entry[d] < 0) missing += std::string(missing.empty() ? "" : ", ") + hand::kDofs[d].name;
     if (!missing.empty())
-      throw fail("'dofs' lacks " + missing + ", expected each of the " + std::to_string(hand::kDofCount) +
-                 " DoFs exactly once");
+      throw fail("'dofs' lacks " + missing + ", expected each of the " + std::to_string(hand::kDofCount) + " DoFs exactly once");
 
     try {
       return GloveDescription(id, std::move(names), GridMap(std::move(cell_slots), dof_slots), settings);
@@ -432,19 +431,20 @@ class GloveDescription {
       throw Error(prefix + "'rate_hz' is " + io::number_text(*s.rate_hz) + ", expected frames per second > 0 (at most 1e6)");
     if (!(s.calibration.median_seconds > 0.0 && s.calibration.median_seconds <= kMaxMedianSeconds))
       throw Error(prefix + "'calibration.median_seconds' is " + io::number_text(s.calibration.median_seconds) +
-                  ", expected a time > 0 s (at most " + io::number_text(kMaxMedianSeconds) + ": the median runs over the window every frame)");
+                  ", expected a time > 0 s (at most " + io::number_text(kMaxMedianSeconds) +
+                  ": the median runs over the window every frame)");
     if (!(s.calibration.flat_relative_range >= 0.0 && s.calibration.flat_relative_range < 1.0))
       throw Error(prefix + "'calibration.flat_relative_range' is " + io::number_text(s.calibration.flat_relative_range) +
                   ", expected a fraction >= 0 and < 1 (0.01: a range within 1% of the value is flat)");
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
-        throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + io::number_text(own->min) + ", " + io::number_text(own->max) +
-                    "] degrees, expected finite min < max");
+        throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + io::number_text(own->min) + ", " +
+                    io::number_text(own->max) + "] degrees, expected finite min < max");
   }
 
   static std::string describe(const Slot& s, bool with_channel) {
-    return std::string("(") + (with_channel ? "channel " + std::to_string(s.channel) + ", " : "") + "row " +
-           std::to_string(s.row) + ", column " + std::to_string(s.col) + ")";
+    return std::string("(") + (with_channel ? "channel " + std::to_string(s.channel) + ", " : "") + "row " + std::to_string(s.row) +
+           ", column " + std::to_string(s.col) + ")";
   }
 
   static std::size_t dof_named(const std::string& name, const std::string& where) {

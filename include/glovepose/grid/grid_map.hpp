@@ -148,8 +148,10 @@ class GridMap {
     float* extra = planes + kStretchValues;
     for (std::size_t c = 0; c < cell_slots_.size(); ++c) {
       const float value = static_cast<float>(cells[c]);
-      if (cell_slots_[c].on_maps()) planes[cell_slots_[c].flat()] = value;
-      else extra = std::fill_n(extra, kMapSlots, value);
+      if (cell_slots_[c].on_maps())
+        planes[cell_slots_[c].flat()] = value;
+      else
+        extra = std::fill_n(extra, kMapSlots, value);
     }
     return Status::Ok;
   }
@@ -170,9 +172,9 @@ class GridMap {
  private:
   static void check_slot(const Slot& s, int channels, const std::string& what) {
     if (s.channel < 0 || s.channel >= channels || s.row < 0 || s.row >= kGridSize || s.col < 0 || s.col >= kGridSize)
-      throw Error("GridMap: " + what + " is placed at (channel " + std::to_string(s.channel) + ", row " +
-                  std::to_string(s.row) + ", column " + std::to_string(s.col) + "), expected channel 0.." +
-                  std::to_string(channels - 1) + " and row, column 0.." + std::to_string(kGridSize - 1));
+      throw Error("GridMap: " + what + " is placed at (channel " + std::to_string(s.channel) + ", row " + std::to_string(s.row) +
+                  ", column " + std::to_string(s.col) + "), expected channel 0.." + std::to_string(channels - 1) + " and row, column 0.." +
+                  std::to_string(kGridSize - 1));
   }
 
   std::vector<Slot> cell_slots_;

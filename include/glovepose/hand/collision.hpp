@@ -73,8 +73,7 @@ inline double collision_energy(const Kinematics& kinematics, const Skeleton& ske
     const auto base = static_cast<std::size_t>(kFingerBase[f]);
     for (std::size_t j = 0; j < 3; ++j) {
       from[base + j] = skeleton[base + j].translation();
-      to[base + j] = j < 2 ? skeleton[base + j + 1].translation()
-                           : kinematics.fingertip(skeleton, static_cast<Finger>(f));
+      to[base + j] = j < 2 ? skeleton[base + j + 1].translation() : kinematics.fingertip(skeleton, static_cast<Finger>(f));
     }
   }
   double energy = 0.0;

@@ -139,8 +139,7 @@ inline DofSet parse_dof_set(const std::string& text, const std::string& what) {
     const std::string name = text.substr(start, comma - start);
     std::size_t d = 0;
     while (d < kDofCount && name != kDofs[d].name) ++d;
-    if (d == kDofCount)
-      throw Error(what + ": '" + name + "' is not a DoF, expected comma-separated names such as 'index_base_flexion'");
+    if (d == kDofCount) throw Error(what + ": '" + name + "' is not a DoF, expected comma-separated names such as 'index_base_flexion'");
     if (set[d]) throw Error(what + ": '" + name + "' is listed twice, expected each DoF once");
     set[d] = any = true;
     start = comma + 1;
@@ -168,9 +167,8 @@ class JointLimits {
   JointLimits(const Angles& min, const Angles& max) : min_(min), max_(max) {
     for (std::size_t i = 0; i < kDofCount; ++i) {
       if (!std::isfinite(min_[i]) || !std::isfinite(max_[i]) || !(min_[i] < max_[i]) || !std::isfinite(max_[i] - min_[i]))
-        throw Error(std::string("JointLimits: DoF ") + kDofs[i].name + " has limits [" +
-                    std::to_string(min_[i]) + ", " + std::to_string(max_[i]) +
-                    "], expected finite values with min < max and a finite range max - min");
+        throw Error(std::string("JointLimits: DoF ") + kDofs[i].name + " has limits [" + std::to_string(min_[i]) + ", " +
+                    std::to_string(max_[i]) + "], expected finite values with min < max and a finite range max - min");
     }
   }
 
@@ -183,16 +181,14 @@ class JointLimits {
   /// limits map outside [-1, 1]; nothing is clamped.
   GLOVEPOSE_REALTIME Angles normalize(const Angles& angles) const noexcept {
     Angles out{};
-    for (std::size_t i = 0; i < kDofCount; ++i)
-      out[i] = 2.0 * (angles[i] - min_[i]) / (max_[i] - min_[i]) - 1.0;
+    for (std::size_t i = 0; i < kDofCount; ++i) out[i] = 2.0 * (angles[i] - min_[i]) / (max_[i] - min_[i]) - 1.0;
     return out;
   }
 
   /// @brief Inverse of normalize(): [-1, 1] back to radians.
   GLOVEPOSE_REALTIME Angles denormalize(const Angles& normalized) const noexcept {
     Angles out{};
-    for (std::size_t i = 0; i < kDofCount; ++i)
-      out[i] = min_[i] + 0.5 * (normalized[i] + 1.0) * (max_[i] - min_[i]);
+    for (std::size_t i = 0; i < kDofCount; ++i) out[i] = min_[i] + 0.5 * (normalized[i] + 1.0) * (max_[i] - min_[i]);
     return out;
   }
 
@@ -213,8 +209,7 @@ class JointLimits {
   /// @brief Clamps angles into the limits (e.g. for a simulator's pose generator).
   GLOVEPOSE_REALTIME Angles clamp(const Angles& angles) const noexcept {
     Angles out{};
-    for (std::size_t i = 0; i < kDofCount; ++i)
-      out[i] = angles[i] < min_[i] ? min_[i] : (angles[i] > max_[i] ? max_[i] : angles[i]);
+    for (std::size_t i = 0; i < kDofCount; ++i) out[i] = angles[i] < min_[i] ? min_[i] : (angles[i] > max_[i] ? max_[i] : angles[i]);
     return out;
   }
 

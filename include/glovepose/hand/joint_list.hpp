@@ -27,25 +27,39 @@ namespace glovepose::hand {
 
 /// @brief The joints of the list, in list order.
 enum class Joint : int {
-  Palm = 0,                                                          ///< Root of the fingers (the palm frame).
-  ThumbMetacarpal, ThumbProximal, ThumbDistal, ThumbTip,             ///< Thumb: CMC, MCP, IP joints and the tip.
-  IndexProximal, IndexIntermediate, IndexDistal, IndexTip,           ///< Index: MCP, PIP, DIP joints and the tip.
-  MiddleProximal, MiddleIntermediate, MiddleDistal, MiddleTip,       ///< Middle finger.
-  RingProximal, RingIntermediate, RingDistal, RingTip,               ///< Ring finger.
-  PinkyProximal, PinkyIntermediate, PinkyDistal, PinkyTip,           ///< Pinky.
+  Palm = 0,  ///< Root of the fingers (the palm frame).
+  ThumbMetacarpal,
+  ThumbProximal,
+  ThumbDistal,
+  ThumbTip,  ///< Thumb: CMC, MCP, IP joints and the tip.
+  IndexProximal,
+  IndexIntermediate,
+  IndexDistal,
+  IndexTip,  ///< Index: MCP, PIP, DIP joints and the tip.
+  MiddleProximal,
+  MiddleIntermediate,
+  MiddleDistal,
+  MiddleTip,  ///< Middle finger.
+  RingProximal,
+  RingIntermediate,
+  RingDistal,
+  RingTip,  ///< Ring finger.
+  PinkyProximal,
+  PinkyIntermediate,
+  PinkyDistal,
+  PinkyTip,  ///< Pinky.
 };
 
 /// @brief Number of joints in the list.
 inline constexpr std::size_t kJointCount = 21;
 
 /// @brief Stable names of the joints, in list order (for logs, files and bindings).
-inline constexpr std::array<const char*, kJointCount> kJointNames{
-    "palm",
-    "thumb_metacarpal", "thumb_proximal", "thumb_distal", "thumb_tip",
-    "index_proximal", "index_intermediate", "index_distal", "index_tip",
-    "middle_proximal", "middle_intermediate", "middle_distal", "middle_tip",
-    "ring_proximal", "ring_intermediate", "ring_distal", "ring_tip",
-    "pinky_proximal", "pinky_intermediate", "pinky_distal", "pinky_tip"};
+inline constexpr std::array<const char*, kJointCount> kJointNames{"palm",       "thumb_metacarpal", "thumb_proximal",      "thumb_distal",
+                                                                  "thumb_tip",  "index_proximal",   "index_intermediate",  "index_distal",
+                                                                  "index_tip",  "middle_proximal",  "middle_intermediate", "middle_distal",
+                                                                  "middle_tip", "ring_proximal",    "ring_intermediate",   "ring_distal",
+                                                                  "ring_tip",   "pinky_proximal",   "pinky_intermediate",  "pinky_distal",
+                                                                  "pinky_tip"};
 
 /// @brief Parent of each joint in the list (-1 for the palm): the previous joint of the same finger,
 /// or the palm for a finger's first joint.
@@ -53,8 +67,8 @@ inline constexpr std::array<int, kJointCount> kJointParent{-1, 0, 1, 2, 3, 0, 5,
 
 /// @brief One joint: position and orientation in the root frame.
 struct JointTransform {
-  std::array<float, 3> position{};             ///< Metres: x, y, z.
-  std::array<float, 4> rotation{0, 0, 0, 1};   ///< Unit quaternion: x, y, z, w.
+  std::array<float, 3> position{};            ///< Metres: x, y, z.
+  std::array<float, 4> rotation{0, 0, 0, 1};  ///< Unit quaternion: x, y, z, w.
 };
 
 /// @brief All joints, indexed by Joint.
@@ -66,8 +80,7 @@ GLOVEPOSE_REALTIME inline void to_joint_list(const Kinematics& kinematics, const
     const Eigen::Quaterniond q(frame.linear());
     out[joint].position = {static_cast<float>(position.x() * 1e-3), static_cast<float>(position.y() * 1e-3),
                            static_cast<float>(position.z() * 1e-3)};
-    out[joint].rotation = {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()),
-                           static_cast<float>(q.w())};
+    out[joint].rotation = {static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()), static_cast<float>(q.w())};
   };
   const Eigen::Affine3d& palm = skeleton[static_cast<std::size_t>(Phalanx::Hand)];
   put(0, palm, palm.translation());

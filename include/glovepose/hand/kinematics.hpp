@@ -28,11 +28,21 @@ namespace glovepose::hand {
 /// @brief Phalanx ids of the reference model (also the index into a Skeleton).
 enum class Phalanx : int {
   Hand = 0,
-  Thumb1, Thumb2, Thumb3,
-  Pinky1, Pinky2, Pinky3,
-  Ring1, Ring2, Ring3,
-  Middle1, Middle2, Middle3,
-  Index1, Index2, Index3,
+  Thumb1,
+  Thumb2,
+  Thumb3,
+  Pinky1,
+  Pinky2,
+  Pinky3,
+  Ring1,
+  Ring2,
+  Ring3,
+  Middle1,
+  Middle2,
+  Middle3,
+  Index1,
+  Index2,
+  Index3,
   Wrist,
   Position,
 };
@@ -60,23 +70,28 @@ struct RestTransform {
 /// that file and the posed chain against the template's sphere centres (C.txt).
 inline constexpr std::array<RestTransform, kPhalanxCount> kReferenceRest{{
     {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 0 hand (palm)
-    {{-0.305523, 0.319439, 0.897003, -0.766703, 0.4761, -0.430691, -0.564642, -0.819321, 0.0994552}, {9.72575, 3.87206, -7.16046}},  // 1 thumb base
+    {{-0.305523, 0.319439, 0.897003, -0.766703, 0.4761, -0.430691, -0.564642, -0.819321, 0.0994552},
+     {9.72575, 3.87206, -7.16046}},                                                                                // 1 thumb base
     {{0.997074, -0.0749142, -0.0151859, 0.0764379, 0.977199, 0.198088, 0, -0.198669, 0.980067}, {0, 37.1409, 0}},  // 2 thumb middle
-    {{0.998709, 0.0497797, 0.0100908, -0.0507922, 0.978802, 0.198413, 0, -0.198669, 0.980067}, {0, 28.436, 0}},  // 3 thumb tip
-    {{-0.900232, -0.376838, 0.218117, -0.395267, 0.917393, -0.0464125, -0.182609, -0.127996, -0.974818}, {-18.1006, 44.8872, 6.8978}},  // 4 pinky base
+    {{0.998709, 0.0497797, 0.0100908, -0.0507922, 0.978802, 0.198413, 0, -0.198669, 0.980067}, {0, 28.436, 0}},    // 3 thumb tip
+    {{-0.900232, -0.376838, 0.218117, -0.395267, 0.917393, -0.0464125, -0.182609, -0.127996, -0.974818},
+     {-18.1006, 44.8872, 6.8978}},                                                  // 4 pinky base
     {{0.998521, -0.0543646, 0, 0.0543646, 0.998521, 0, 0, 0, 1}, {0, 31.9997, 0}},  // 5 pinky middle
     {{0.996917, -0.0784591, 0, 0.0784591, 0.996917, 0, 0, 0, 1}, {0, 19.1319, 0}},  // 6 pinky tip
-    {{-0.98734, -0.158012, 0.0138762, -0.15862, 0.983554, -0.0863733, 0, -0.0874808, -0.996166}, {-5.93253, 49.1046, 10.7991}},  // 7 ring base
-    {{0.999922, -0.012492, 0, 0.012492, 0.999922, 0, 0, 0, 1}, {0, 37.9263, 0}},  // 8 ring middle
+    {{-0.98734, -0.158012, 0.0138762, -0.15862, 0.983554, -0.0863733, 0, -0.0874808, -0.996166},
+     {-5.93253, 49.1046, 10.7991}},                                                 // 7 ring base
+    {{0.999922, -0.012492, 0, 0.012492, 0.999922, 0, 0, 0, 1}, {0, 37.9263, 0}},    // 8 ring middle
     {{0.996917, -0.0784591, 0, 0.0784591, 0.996917, 0, 0, 0, 1}, {0, 23.9032, 0}},  // 9 ring tip
-    {{-0.992608, -0.0159037, -0.120316, -0.0199468, 0.999274, 0.0324749, 0.119712, 0.0346348, -0.992204}, {8.13206, 52.8925, 10.5463}},  // 10 middle base
+    {{-0.992608, -0.0159037, -0.120316, -0.0199468, 0.999274, 0.0324749, 0.119712, 0.0346348, -0.992204},
+     {8.13206, 52.8925, 10.5463}},                                                  // 10 middle base
     {{0.996917, 0.0784591, 0, -0.0784591, 0.996917, 0, 0, 0, 1}, {0, 40.4944, 0}},  // 11 middle middle
     {{0.999891, -0.0147668, 0, 0.0147668, 0.999891, 0, 0, 0, 1}, {0, 23.2687, 0}},  // 12 middle tip
-    {{-0.95871, 0.151187, -0.240868, 0.13524, 0.987454, 0.081515, 0.25017, 0.0455744, -0.967129}, {25.3963, 50.8191, 5.28707}},  // 13 index base
-    {{0.99978, 0.0209711, 0, -0.0209711, 0.99978, 0, 0, 0, 1}, {0, 37.0552, 0}},  // 14 index middle
+    {{-0.95871, 0.151187, -0.240868, 0.13524, 0.987454, 0.081515, 0.25017, 0.0455744, -0.967129},
+     {25.3963, 50.8191, 5.28707}},                                                  // 13 index base
+    {{0.99978, 0.0209711, 0, -0.0209711, 0.99978, 0, 0, 0, 1}, {0, 37.0552, 0}},    // 14 index middle
     {{0.996802, 0.0799147, 0, -0.0799147, 0.996802, 0, 0, 0, 1}, {0, 20.5967, 0}},  // 15 index tip
-    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 16 wrist
-    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},  // 17 position (root)
+    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},                                       // 16 wrist
+    {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}},                                       // 17 position (root)
 }};
 
 /// @brief Length (mm) of each finger's distal phalanx, which has no child frame to end it.
@@ -84,8 +99,8 @@ inline constexpr std::array<RestTransform, kPhalanxCount> kReferenceRest{{
 inline constexpr std::array<double, kFingerCount> kReferenceTipLength{14.032, 12.833, 15.907, 13.601, 12.821};
 
 /// @brief Phalanx id of each finger's base (proximal) phalanx, fingers in pose-map order.
-inline constexpr std::array<Phalanx, kFingerCount> kFingerBase{Phalanx::Thumb1, Phalanx::Index1, Phalanx::Middle1,
-                                                              Phalanx::Ring1, Phalanx::Pinky1};
+inline constexpr std::array<Phalanx, kFingerCount> kFingerBase{Phalanx::Thumb1, Phalanx::Index1, Phalanx::Middle1, Phalanx::Ring1,
+                                                               Phalanx::Pinky1};
 
 /// @brief Global transform (root frame, mm) of every phalanx, indexed by phalanx id.
 using Skeleton = std::array<Eigen::Affine3d, kPhalanxCount>;
@@ -98,8 +113,8 @@ using DofAxes = std::array<Eigen::Vector3d, kDofCount>;
 /// @brief A hand's rest geometry: rest transform of each phalanx relative to its parent, and the
 /// distal phalanx lengths. The default is the reference template hand; the simulator scales it.
 struct HandModel {
-  std::array<Eigen::Affine3d, kPhalanxCount> rest;       ///< Per phalanx id, relative to the parent.
-  std::array<double, kFingerCount> tip_length{};         ///< Distal phalanx lengths, mm.
+  std::array<Eigen::Affine3d, kPhalanxCount> rest;  ///< Per phalanx id, relative to the parent.
+  std::array<double, kFingerCount> tip_length{};    ///< Distal phalanx lengths, mm.
 
   /// @brief The reference template hand (kReferenceRest, kReferenceTipLength).
   static HandModel reference() {
@@ -107,8 +122,8 @@ struct HandModel {
     for (std::size_t p = 0; p < kPhalanxCount; ++p) {
       const RestTransform& r = kReferenceRest[p];
       Eigen::Matrix3d rotation;
-      rotation << r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3], r.rotation[4], r.rotation[5],
-          r.rotation[6], r.rotation[7], r.rotation[8];
+      rotation << r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3], r.rotation[4], r.rotation[5], r.rotation[6], r.rotation[7],
+          r.rotation[8];
       model.rest[p] = Eigen::Affine3d::Identity();
       model.rest[p].linear() = rotation;
       model.rest[p].translation() = Eigen::Vector3d(r.translation[0], r.translation[1], r.translation[2]);

@@ -35,35 +35,73 @@ namespace glovepose::hand {
 
 /// @brief The joints in XrHandJointEXT order.
 enum class XrJoint : int {
-  Palm = 0, Wrist,
-  ThumbMetacarpal, ThumbProximal, ThumbDistal, ThumbTip,
-  IndexMetacarpal, IndexProximal, IndexIntermediate, IndexDistal, IndexTip,
-  MiddleMetacarpal, MiddleProximal, MiddleIntermediate, MiddleDistal, MiddleTip,
-  RingMetacarpal, RingProximal, RingIntermediate, RingDistal, RingTip,
-  LittleMetacarpal, LittleProximal, LittleIntermediate, LittleDistal, LittleTip,
+  Palm = 0,
+  Wrist,
+  ThumbMetacarpal,
+  ThumbProximal,
+  ThumbDistal,
+  ThumbTip,
+  IndexMetacarpal,
+  IndexProximal,
+  IndexIntermediate,
+  IndexDistal,
+  IndexTip,
+  MiddleMetacarpal,
+  MiddleProximal,
+  MiddleIntermediate,
+  MiddleDistal,
+  MiddleTip,
+  RingMetacarpal,
+  RingProximal,
+  RingIntermediate,
+  RingDistal,
+  RingTip,
+  LittleMetacarpal,
+  LittleProximal,
+  LittleIntermediate,
+  LittleDistal,
+  LittleTip,
 };
 
 /// @brief Number of joints (XR_HAND_JOINT_COUNT_EXT).
 inline constexpr std::size_t kXrJointCount = 26;
 
 /// @brief Stable names of the joints, in XrHandJointEXT order.
-inline constexpr std::array<const char*, kXrJointCount> kXrJointNames{
-    "palm", "wrist",
-    "thumb_metacarpal", "thumb_proximal", "thumb_distal", "thumb_tip",
-    "index_metacarpal", "index_proximal", "index_intermediate", "index_distal", "index_tip",
-    "middle_metacarpal", "middle_proximal", "middle_intermediate", "middle_distal", "middle_tip",
-    "ring_metacarpal", "ring_proximal", "ring_intermediate", "ring_distal", "ring_tip",
-    "little_metacarpal", "little_proximal", "little_intermediate", "little_distal", "little_tip"};
+inline constexpr std::array<const char*, kXrJointCount> kXrJointNames{"palm",
+                                                                      "wrist",
+                                                                      "thumb_metacarpal",
+                                                                      "thumb_proximal",
+                                                                      "thumb_distal",
+                                                                      "thumb_tip",
+                                                                      "index_metacarpal",
+                                                                      "index_proximal",
+                                                                      "index_intermediate",
+                                                                      "index_distal",
+                                                                      "index_tip",
+                                                                      "middle_metacarpal",
+                                                                      "middle_proximal",
+                                                                      "middle_intermediate",
+                                                                      "middle_distal",
+                                                                      "middle_tip",
+                                                                      "ring_metacarpal",
+                                                                      "ring_proximal",
+                                                                      "ring_intermediate",
+                                                                      "ring_distal",
+                                                                      "ring_tip",
+                                                                      "little_metacarpal",
+                                                                      "little_proximal",
+                                                                      "little_intermediate",
+                                                                      "little_distal",
+                                                                      "little_tip"};
 
 /// @brief Parent of each joint (-1 for the wrist): the palm and each digit's metacarpal hang off
 /// the wrist, every other joint off the previous joint of its digit.
-inline constexpr std::array<int, kXrJointCount> kXrJointParent{1,  -1, 1, 2,  3,  4,  1,  6,  7,  8,  9,  1,  11,
+inline constexpr std::array<int, kXrJointCount> kXrJointParent{1,  -1, 1,  2, 3,  4,  1,  6,  7, 8,  9,  1,  11,
                                                                12, 13, 14, 1, 16, 17, 18, 19, 1, 21, 22, 23, 24};
 
 /// @brief First joint of each digit (its metacarpal), digits in pose-map order (thumb .. little).
-inline constexpr std::array<XrJoint, kFingerCount> kXrDigitFirst{XrJoint::ThumbMetacarpal, XrJoint::IndexMetacarpal,
-                                                                 XrJoint::MiddleMetacarpal, XrJoint::RingMetacarpal,
-                                                                 XrJoint::LittleMetacarpal};
+inline constexpr std::array<XrJoint, kFingerCount> kXrDigitFirst{
+    XrJoint::ThumbMetacarpal, XrJoint::IndexMetacarpal, XrJoint::MiddleMetacarpal, XrJoint::RingMetacarpal, XrJoint::LittleMetacarpal};
 
 /// @brief Share of the wrist-to-knuckle line at which a finger's metacarpal joint lies (assumption,
 /// see the file comment).
@@ -74,13 +112,9 @@ inline constexpr double kMetacarpalStart = 0.2;
 /// carried as facts): a finger joint takes the sphere centred on it; a finger's metacarpal joint the
 /// palm sphere over its knuckle (the palm's thickness there); the palm the palm sphere over the
 /// middle finger; the wrist the mean of the template's two wrist spheres.
-inline constexpr std::array<double, kXrJointCount> kXrReferenceRadius{
-    10.726, 12.943,
-    15.683, 10.312, 7.308, 7.031,
-    9.505, 8.441, 7.553, 5.853, 5.174,
-    10.726, 7.688, 7.643, 5.676, 5.584,
-    10.217, 7.268, 6.971, 5.012, 4.850,
-    8.985, 7.846, 6.226, 4.772, 4.180};
+inline constexpr std::array<double, kXrJointCount> kXrReferenceRadius{10.726, 12.943, 15.683, 10.312, 7.308, 7.031, 9.505, 8.441,  7.553,
+                                                                      5.853,  5.174,  10.726, 7.688,  7.643, 5.676, 5.584, 10.217, 7.268,
+                                                                      6.971,  5.012,  4.850,  8.985,  7.846, 6.226, 4.772, 4.180};
 
 /// @brief Bits of XrJointLocation::location_flags (the values of XrSpaceLocationFlags).
 enum XrLocationFlag : std::uint64_t {
@@ -200,7 +234,8 @@ class XrJointMapper {
       joint.radius = radius_[j];
     }
     // Orientations: the palm's are fixed, a tip's is its distal joint's; the rest are converted.
-    for (std::size_t k = 0; k < kPalmJoints.size(); ++k) out[static_cast<std::size_t>(kPalmJoints[k])].pose.orientation = palm_.orientation[k];
+    for (std::size_t k = 0; k < kPalmJoints.size(); ++k)
+      out[static_cast<std::size_t>(kPalmJoints[k])].pose.orientation = palm_.orientation[k];
     for (std::size_t f = 0; f < kFingerCount; ++f) {
       const std::size_t joint = digit_joint(f);
       for (std::size_t k = 0; k < 3; ++k) out[joint + k].pose.orientation = quaternion(joints.rotation[joint + k]);
@@ -210,9 +245,9 @@ class XrJointMapper {
 
  private:
   // The joints on the palm, which no angle moves.
-  static constexpr std::array<XrJoint, 6> kPalmJoints{XrJoint::Palm, XrJoint::Wrist, XrJoint::IndexMetacarpal,
-                                                       XrJoint::MiddleMetacarpal, XrJoint::RingMetacarpal,
-                                                       XrJoint::LittleMetacarpal};
+  static constexpr std::array<XrJoint, 6> kPalmJoints{
+      XrJoint::Palm,           XrJoint::Wrist,           XrJoint::IndexMetacarpal, XrJoint::MiddleMetacarpal,
+      XrJoint::RingMetacarpal, XrJoint::LittleMetacarpal};
 
   // A rotation as a unit quaternion with w >= 0 (one of the two signs, the same on both hands).
   static XrQuaternion quaternion(const Eigen::Matrix3d& rotation) noexcept {
@@ -250,7 +285,9 @@ class XrJointMapper {
     kinematics.pose(Angles{}, skeleton);
     const Eigen::Vector3d wrist = skeleton[static_cast<std::size_t>(Phalanx::Wrist)].translation();
     const Eigen::Vector3d back = skeleton[static_cast<std::size_t>(Phalanx::Hand)].linear().col(2);
-    const auto knuckle = [&](Finger f) { return Eigen::Vector3d(skeleton[static_cast<std::size_t>(kFingerBase[static_cast<std::size_t>(f)])].translation()); };
+    const auto knuckle = [&](Finger f) {
+      return Eigen::Vector3d(skeleton[static_cast<std::size_t>(kFingerBase[static_cast<std::size_t>(f)])].translation());
+    };
     std::array<Eigen::Vector3d, 6> position;
     std::array<Eigen::Matrix3d, 6> rotation;
     const Finger fingers[] = {Finger::Index, Finger::Middle, Finger::Ring, Finger::Pinky};
@@ -276,8 +313,8 @@ class XrJointMapper {
   // Wrist pivot to the middle fingertip along the bones at rest (mm): the hand's size.
   static double middle_length(const HandModel& model) {
     const auto base = static_cast<std::size_t>(Phalanx::Middle1);
-    return model.rest[base].translation().norm() + model.rest[base + 1].translation().norm() +
-           model.rest[base + 2].translation().norm() + model.tip_length[static_cast<std::size_t>(Finger::Middle)];
+    return model.rest[base].translation().norm() + model.rest[base + 1].translation().norm() + model.rest[base + 2].translation().norm() +
+           model.tip_length[static_cast<std::size_t>(Finger::Middle)];
   }
 
   Kinematics kinematics_;

@@ -33,13 +33,20 @@ enum class DType : unsigned char { F64, F32, F16, BF16, I64, I32, U8 };
 /// @brief The file's name of a dtype ("F64", "F32", "F16", "BF16", "I64", "I32", "U8").
 inline const char* dtype_name(DType d) noexcept {
   switch (d) {
-    case DType::F64: return "F64";
-    case DType::F32: return "F32";
-    case DType::F16: return "F16";
-    case DType::BF16: return "BF16";
-    case DType::I64: return "I64";
-    case DType::I32: return "I32";
-    case DType::U8: return "U8";
+    case DType::F64:
+      return "F64";
+    case DType::F32:
+      return "F32";
+    case DType::F16:
+      return "F16";
+    case DType::BF16:
+      return "BF16";
+    case DType::I64:
+      return "I64";
+    case DType::I32:
+      return "I32";
+    case DType::U8:
+      return "U8";
   }
   return "?";
 }
@@ -48,12 +55,16 @@ inline const char* dtype_name(DType d) noexcept {
 inline std::size_t dtype_size(DType d) noexcept {
   switch (d) {
     case DType::F64:
-    case DType::I64: return 8;
+    case DType::I64:
+      return 8;
     case DType::F32:
-    case DType::I32: return 4;
+    case DType::I32:
+      return 4;
     case DType::F16:
-    case DType::BF16: return 2;
-    case DType::U8: return 1;
+    case DType::BF16:
+      return 2;
+    case DType::U8:
+      return 1;
   }
   return 0;
 }
@@ -75,11 +86,16 @@ constexpr DType dtype_of() noexcept {
   static_assert(std::is_same_v<T, double> || std::is_same_v<T, float> || std::is_same_v<T, std::int64_t> ||
                     std::is_same_v<T, std::int32_t> || std::is_same_v<T, std::uint8_t>,
                 "RawTensor converts to and from double, float, int64_t, int32_t and uint8_t only");
-  if constexpr (std::is_same_v<T, double>) return DType::F64;
-  else if constexpr (std::is_same_v<T, float>) return DType::F32;
-  else if constexpr (std::is_same_v<T, std::int64_t>) return DType::I64;
-  else if constexpr (std::is_same_v<T, std::int32_t>) return DType::I32;
-  else return DType::U8;
+  if constexpr (std::is_same_v<T, double>)
+    return DType::F64;
+  else if constexpr (std::is_same_v<T, float>)
+    return DType::F32;
+  else if constexpr (std::is_same_v<T, std::int64_t>)
+    return DType::I64;
+  else if constexpr (std::is_same_v<T, std::int32_t>)
+    return DType::I32;
+  else
+    return DType::U8;
 }
 
 /// @brief Largest header the reader accepts (as safetensors: 100 MB).
@@ -128,7 +144,7 @@ To convert_element(From v, std::size_t index, DType from, DType to) {
   } else if constexpr (std::is_floating_point_v<From>) {  // floating -> integer
     const double d = static_cast<double>(v);
     const double lowest = static_cast<double>(std::numeric_limits<To>::lowest());  // 0 or -2^k: exact
-    const double limit = std::ldexp(1.0, std::numeric_limits<To>::digits);       // 2^k: exact
+    const double limit = std::ldexp(1.0, std::numeric_limits<To>::digits);         // 2^k: exact
     if (!(d == std::trunc(d)) || d < lowest || d >= limit) throw inexact();
     return static_cast<To>(d);
   } else if constexpr (std::is_floating_point_v<To>) {  // integer -> floating
@@ -192,8 +208,8 @@ struct RawTensor {
   void check_size() const {
     const std::size_t expected = element_count() * dtype_size(dtype);
     if (bytes.size() != expected)
-      throw Error(std::to_string(bytes.size()) + " bytes for shape " + shape_string(shape) + " of " + dtype_name(dtype) +
-                  ", expected " + std::to_string(expected));
+      throw Error(std::to_string(bytes.size()) + " bytes for shape " + shape_string(shape) + " of " + dtype_name(dtype) + ", expected " +
+                  std::to_string(expected));
   }
 
   /// @brief A tensor of `dtype` holding `values` (row-major, product(shape) of them). Floating values
@@ -224,13 +240,27 @@ struct RawTensor {
       };
     };
     switch (dtype) {
-      case DType::F64: detail::encode_all<double>(src, dst, n, as(double{})); break;
-      case DType::F32: detail::encode_all<float>(src, dst, n, as(float{})); break;
-      case DType::I64: detail::encode_all<std::int64_t>(src, dst, n, as(std::int64_t{})); break;
-      case DType::I32: detail::encode_all<std::int32_t>(src, dst, n, as(std::int32_t{})); break;
-      case DType::U8: detail::encode_all<std::uint8_t>(src, dst, n, as(std::uint8_t{})); break;
-      case DType::F16: detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_f16, f16_to_float)); break;
-      case DType::BF16: detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_bf16, bf16_to_float)); break;
+      case DType::F64:
+        detail::encode_all<double>(src, dst, n, as(double{}));
+        break;
+      case DType::F32:
+        detail::encode_all<float>(src, dst, n, as(float{}));
+        break;
+      case DType::I64:
+        detail::encode_all<std::int64_t>(src, dst, n, as(std::int64_t{}));
+        break;
+      case DType::I32:
+        detail::encode_all<std::int32_t>(src, dst, n, as(std::int32_t{}));
+        break;
+      case DType::U8:
+        detail::encode_all<std::uint8_t>(src, dst, n, as(std::uint8_t{}));
+        break;
+      case DType::F16:
+        detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_f16, f16_to_float));
+        break;
+      case DType::BF16:
+        detail::encode_all<std::uint16_t>(src, dst, n, half(float_to_bf16, bf16_to_float));
+        break;
     }
     return t;
   }
@@ -245,13 +275,27 @@ struct RawTensor {
     const char* src = bytes.data();
     const auto same = [](auto v) { return v; };
     switch (dtype) {
-      case DType::F64: detail::decode_all<T, double>(src, out.data(), n, dtype, same); break;
-      case DType::F32: detail::decode_all<T, float>(src, out.data(), n, dtype, same); break;
-      case DType::F16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, f16_to_float); break;
-      case DType::BF16: detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, bf16_to_float); break;
-      case DType::I64: detail::decode_all<T, std::int64_t>(src, out.data(), n, dtype, same); break;
-      case DType::I32: detail::decode_all<T, std::int32_t>(src, out.data(), n, dtype, same); break;
-      case DType::U8: detail::decode_all<T, std::uint8_t>(src, out.data(), n, dtype, same); break;
+      case DType::F64:
+        detail::decode_all<T, double>(src, out.data(), n, dtype, same);
+        break;
+      case DType::F32:
+        detail::decode_all<T, float>(src, out.data(), n, dtype, same);
+        break;
+      case DType::F16:
+        detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, f16_to_float);
+        break;
+      case DType::BF16:
+        detail::decode_all<T, std::uint16_t>(src, out.data(), n, dtype, bf16_to_float);
+        break;
+      case DType::I64:
+        detail::decode_all<T, std::int64_t>(src, out.data(), n, dtype, same);
+        break;
+      case DType::I32:
+        detail::decode_all<T, std::int32_t>(src, out.data(), n, dtype, same);
+        break;
+      case DType::U8:
+        detail::decode_all<T, std::uint8_t>(src, out.data(), n, dtype, same);
+        break;
     }
     return out;
   }
@@ -362,8 +406,8 @@ struct TensorFile {
     const std::uint64_t available = file_size - 8;
     if (header_size < 2 || header_size > available || header_size > kMaxHeaderBytes)
       throw Error("byte 0: header length " + std::to_string(header_size) + ", expected 2.." +
-                  std::to_string(std::min<std::uint64_t>(available, kMaxHeaderBytes)) + " (the file has " +
-                  std::to_string(file_size) + " bytes)");
+                  std::to_string(std::min<std::uint64_t>(available, kMaxHeaderBytes)) + " (the file has " + std::to_string(file_size) +
+                  " bytes)");
     const std::string header_text = fetch(8, header_size);
     if (header_text[0] != '{') throw Error("byte 8: the header does not start with '{', expected a JSON object");
     json::Value header;
@@ -386,7 +430,8 @@ struct TensorFile {
       if (name == "__metadata__") {
         if (!entry.is_object()) throw Error("__metadata__ is " + json::describe(entry) + ", expected an object");
         for (const auto& [key, value] : entry.items()) {
-          if (!value.is_string()) throw Error("metadata '" + key + "' is not a string (" + json::describe(value) + "), expected string values");
+          if (!value.is_string())
+            throw Error("metadata '" + key + "' is not a string (" + json::describe(value) + "), expected string values");
           out.metadata[key] = value.template get<std::string>();
         }
         continue;
@@ -409,8 +454,7 @@ struct TensorFile {
       if (!shape || !shape->is_array()) throw Error(where + ": no \"shape\" list");
       std::uint64_t count = 1;
       for (const json::Value& d : *shape) {
-        if (!d.is_number_unsigned())
-          throw Error(where + ": shape entry " + json::describe(d) + " is not a non-negative integer");
+        if (!d.is_number_unsigned()) throw Error(where + ": shape entry " + json::describe(d) + " is not a non-negative integer");
         const std::uint64_t dim = d.get<std::uint64_t>();
         if (dim > (std::uint64_t{1} << 40) || (dim && count > (std::uint64_t{1} << 40) / dim)) throw Error(where + ": shape is too large");
         count *= dim;
@@ -433,7 +477,8 @@ struct TensorFile {
       out.tensors[name] = std::move(tensor);
     }
     // Tensors must tile the data buffer: no overlap, no gap (safetensors' rule).
-    std::sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) { return a.begin < b.begin || (a.begin == b.begin && a.end < b.end); });
+    std::sort(spans.begin(), spans.end(),
+              [](const Span& a, const Span& b) { return a.begin < b.begin || (a.begin == b.begin && a.end < b.end); });
     std::uint64_t covered = 0;
     for (std::size_t i = 0; i < spans.size(); ++i) {
       if (spans[i].begin < covered)

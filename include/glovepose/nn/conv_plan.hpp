@@ -25,22 +25,20 @@ struct ConvGeometry {
 
   /// @brief Throws glovepose::Error unless out_size follows from the other fields as in PyTorch.
   void validate(const std::string& layer) const {
-    const int expected = transposed ? (in_size - 1) * stride - 2 * padding + kernel
-                                    : (in_size + 2 * padding - kernel) / stride + 1;
+    const int expected = transposed ? (in_size - 1) * stride - 2 * padding + kernel : (in_size + 2 * padding - kernel) / stride + 1;
     if (in_size < 1 || kernel < 1 || stride < 1 || padding < 0 || out_size != expected)
-      throw Error("ConvGeometry: layer " + layer + " maps " + std::to_string(in_size) + " to " +
-                  std::to_string(out_size) + " with kernel " + std::to_string(kernel) + ", stride " +
-                  std::to_string(stride) + ", padding " + std::to_string(padding) + ", expected output size " +
-                  std::to_string(expected));
+      throw Error("ConvGeometry: layer " + layer + " maps " + std::to_string(in_size) + " to " + std::to_string(out_size) +
+                  " with kernel " + std::to_string(kernel) + ", stride " + std::to_string(stride) + ", padding " + std::to_string(padding) +
+                  ", expected output size " + std::to_string(expected));
   }
 };
 
 /// @brief One useful tap and the (output, input) position pairs it joins. Positions are flat
 /// (row * size + column); each output position appears at most once per tap.
 struct TapPairs {
-  int tap;                            ///< ky * kernel + kx.
-  std::vector<int> out_positions;     ///< Output positions, ascending.
-  std::vector<int> in_positions;      ///< The input position joined to each output position.
+  int tap;                         ///< ky * kernel + kx.
+  std::vector<int> out_positions;  ///< Output positions, ascending.
+  std::vector<int> in_positions;   ///< The input position joined to each output position.
 };
 
 /// @brief The useful taps of a geometry, in ascending tap order.

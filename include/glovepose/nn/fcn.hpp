@@ -72,7 +72,8 @@ class Fcn {
   std::size_t mac_count() const noexcept {
     std::size_t n = 0;
     for (int l = 0; l < kFcnLayers; ++l)
-      n += static_cast<std::size_t>(widths_[static_cast<std::size_t>(l)]) * static_cast<std::size_t>(widths_[static_cast<std::size_t>(l + 1)]);
+      n += static_cast<std::size_t>(widths_[static_cast<std::size_t>(l)]) *
+           static_cast<std::size_t>(widths_[static_cast<std::size_t>(l + 1)]);
     return n;
   }
   /// @brief Bytes of packed weights a dense forward streams (channel padding included).
@@ -91,11 +92,11 @@ class Fcn {
    private:
     friend class Fcn;
     int capacity_ = 0;
-    std::vector<int> widths_;                   // the network it was made for
-    std::vector<AlignedVector<float>> values;   // per layer boundary: [frame][stride]
+    std::vector<int> widths_;                  // the network it was made for
+    std::vector<AlignedVector<float>> values;  // per layer boundary: [frame][stride]
     std::vector<const float*> x_rows;
     std::vector<float*> y_rows;
-    std::vector<int> sparse_index;              // small batches: each frame's nonzero inputs
+    std::vector<int> sparse_index;  // small batches: each frame's nonzero inputs
     std::vector<float> sparse_value;
     std::vector<kernels::SparseRow> sparse_rows;
   };
@@ -205,8 +206,10 @@ class Fcn {
     const bool fixed = layer.weights.fixed16();
     for (int f = 0; f < frames; ++f) {
       float* row = y + f * out_stride;
-      if (fixed) std::fill(row, row + out_stride, 0.0f);
-      else std::copy(layer.bias.begin(), layer.bias.end(), row);
+      if (fixed)
+        std::fill(row, row + out_stride, 0.0f);
+      else
+        std::copy(layer.bias.begin(), layer.bias.end(), row);
       ws.y_rows[static_cast<std::size_t>(f)] = row;
     }
     const bool sparse = frames <= kSparseMaxFrames;
@@ -221,8 +224,10 @@ class Fcn {
       ws.sparse_rows[static_cast<std::size_t>(f)] = {index, value, Backend::compact(row, k, index, value)};
     }
     layer.weights.visit([&](const auto* w) {
-      if (sparse) Backend::gemm_sparse_rows(ws.sparse_rows.data(), ws.y_rows.data(), frames, w, k, static_cast<int>(out_stride));
-      else Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), frames, w, k, static_cast<int>(out_stride));
+      if (sparse)
+        Backend::gemm_sparse_rows(ws.sparse_rows.data(), ws.y_rows.data(), frames, w, k, static_cast<int>(out_stride));
+      else
+        Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), frames, w, k, static_cast<int>(out_stride));
     });
     if (fixed) {
       const float* scale = layer.weights.fixed_scale.data();

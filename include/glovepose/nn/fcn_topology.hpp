@@ -19,9 +19,7 @@ inline constexpr int kFcnOutputs = 25;
 inline constexpr int kFcnLayers = 6;
 
 /// @brief Layer widths, input first: inputs, h, h, h, h, h/2, 25.
-inline std::vector<int> fcn_widths(int inputs, int hidden) {
-  return {inputs, hidden, hidden, hidden, hidden, hidden / 2, kFcnOutputs};
-}
+inline std::vector<int> fcn_widths(int inputs, int hidden) { return {inputs, hidden, hidden, hidden, hidden, hidden / 2, kFcnOutputs}; }
 
 /// @brief Tensor names and shapes as torch.nn.Linear stores them: "fcL.weight" [out, in], "fcL.bias" [out].
 inline std::map<std::string, std::vector<std::int64_t>> fcn_tensor_shapes(int inputs, int hidden) {

@@ -30,18 +30,17 @@ class LinearMap {
                   " outputs, expected at least 1 of each");
     const std::size_t expected = static_cast<std::size_t>(inputs_) * static_cast<std::size_t>(outputs_);
     if (weight_.size() != expected)
-      throw Error("LinearMap: " + std::to_string(weight_.size()) + " weights, expected outputs x inputs = " +
-                  std::to_string(outputs_) + " x " + std::to_string(inputs_) + " = " + std::to_string(expected));
+      throw Error("LinearMap: " + std::to_string(weight_.size()) + " weights, expected outputs x inputs = " + std::to_string(outputs_) +
+                  " x " + std::to_string(inputs_) + " = " + std::to_string(expected));
     if (bias_.size() != static_cast<std::size_t>(outputs_))
-      throw Error("LinearMap: " + std::to_string(bias_.size()) + " biases, expected one per output (" +
-                  std::to_string(outputs_) + ")");
+      throw Error("LinearMap: " + std::to_string(bias_.size()) + " biases, expected one per output (" + std::to_string(outputs_) + ")");
     for (int o = 0; o < outputs_; ++o) {
       double row_sum = 0.0;
       for (int i = 0; i < inputs_; ++i) {
         const float w = weight_[static_cast<std::size_t>(o) * static_cast<std::size_t>(inputs_) + static_cast<std::size_t>(i)];
         if (!std::isfinite(w))
-          throw Error("LinearMap: weight (output " + std::to_string(o) + ", input " + std::to_string(i) + ") is " +
-                      std::to_string(w) + ", expected a finite number");
+          throw Error("LinearMap: weight (output " + std::to_string(o) + ", input " + std::to_string(i) + ") is " + std::to_string(w) +
+                      ", expected a finite number");
         row_sum += std::fabs(static_cast<double>(w));
       }
       const float b = bias_[static_cast<std::size_t>(o)];

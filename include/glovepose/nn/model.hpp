@@ -18,15 +18,15 @@ namespace glovepose::nn {
 
 /// @brief The metadata of a model file.
 struct ModelInfo {
-  std::string architecture;                            ///< "unet", "fcn" (the paper's fully connected baseline) or "linear".
-  int width = 0;                                       ///< U-Net base width, FCN hidden width; 0 for linear.
-  int inputs = 44;                                     ///< Cell values per frame the model takes.
-  std::string glove;                                   ///< Sensor layout id the model was trained for.
-  std::string glove_description;                      ///< The glove as data (grid/glove_description.hpp JSON); empty: the built-in glove `glove`.
-  std::string calibration = "onthefly";                ///< How inputs were normalised in training: none, training or onthefly.
-  double bn_eps = 1e-5;                                ///< Batch-norm epsilon.
-  std::vector<double> joint_limits_min;                ///< Per DoF, radians: what output -1 means.
-  std::vector<double> joint_limits_max;                ///< Per DoF, radians: what output +1 means.
+  std::string architecture;              ///< "unet", "fcn" (the paper's fully connected baseline) or "linear".
+  int width = 0;                         ///< U-Net base width, FCN hidden width; 0 for linear.
+  int inputs = 44;                       ///< Cell values per frame the model takes.
+  std::string glove;                     ///< Sensor layout id the model was trained for.
+  std::string glove_description;         ///< The glove as data (grid/glove_description.hpp JSON); empty: the built-in glove `glove`.
+  std::string calibration = "onthefly";  ///< How inputs were normalised in training: none, training or onthefly.
+  double bn_eps = 1e-5;                  ///< Batch-norm epsilon.
+  std::vector<double> joint_limits_min;  ///< Per DoF, radians: what output -1 means.
+  std::vector<double> joint_limits_max;  ///< Per DoF, radians: what output +1 means.
   std::optional<std::vector<double>> calibration_min;  ///< Per cell, training-set minimum (optional).
   std::optional<std::vector<double>> calibration_max;  ///< Per cell, training-set maximum (optional).
   /// The pose-guided calibration fitted for this model (calibration/pose_offset.hpp JSON, with its
@@ -37,15 +37,16 @@ struct ModelInfo {
   std::string labelled_dofs;
 
   /// @brief labelled_dofs as a set (every DoF when empty).
-  hand::DofSet labelled() const { return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'"); }
+  hand::DofSet labelled() const {
+    return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'");
+  }
 
   /// @brief Reads and checks the metadata; throws glovepose::Error naming the key that is missing or wrong.
   static ModelInfo from(const WeightFile& file) {
     ModelInfo info;
     if (file.meta("format") != "glovepose-model")
       throw Error("metadata 'format' is '" + file.meta("format") + "', expected 'glovepose-model'");
-    if (file.meta("format_version") != "1")
-      throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
+    if (file.meta("format_version") != "1") throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
     info.architecture = file.meta("architecture");
     if (info.architecture != "unet" && info.architecture != "fcn" && info.architecture != "linear")
       throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet', 'fcn' or 'linear'");
@@ -131,7 +132,8 @@ struct Model {
     try {
       ModelInfo info = ModelInfo::from(file);
       if (info.architecture != "unet")
-        throw Error("architecture '" + info.architecture + "' is not a U-Net; PoseModel::load runs U-Nets and FCNs, train::load_model every architecture");
+        throw Error("architecture '" + info.architecture +
+                    "' is not a U-Net; PoseModel::load runs U-Nets and FCNs, train::load_model every architecture");
       UNet<Backend> net = UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
       return Model{std::move(info), std::move(net)};
     } catch (const Error& e) {

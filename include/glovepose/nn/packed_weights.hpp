@@ -42,10 +42,14 @@ struct PackedWeights {
   /// @brief Calls `use(pointer)` with the filled array's data (its type picks the kernels' widening).
   template <typename Use>
   void visit(Use&& use) const noexcept {
-    if (!w32.empty()) use(w32.data());
-    else if (!w16.empty()) use(w16.data());
-    else if (!wbf16.empty()) use(wbf16.data());
-    else use(wfx16.data());
+    if (!w32.empty())
+      use(w32.data());
+    else if (!w16.empty())
+      use(w16.data());
+    else if (!wbf16.empty())
+      use(wbf16.data());
+    else
+      use(wfx16.data());
   }
 };
 

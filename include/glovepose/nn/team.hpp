@@ -21,7 +21,7 @@
 #include "../config.hpp"
 
 #if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
+#  include <immintrin.h>
 #endif
 
 namespace glovepose::nn {

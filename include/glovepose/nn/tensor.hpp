@@ -25,16 +25,20 @@ struct AlignedAllocator {
   /// @brief Allocates n elements aligned to kAlignment.
   T* allocate(std::size_t n) {
     if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_alloc();
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{kAlignment}));
+    return static_cast<T*>(::operator new (n * sizeof(T), std::align_val_t{kAlignment}));
   }
   /// @brief Frees memory from allocate().
-  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t{kAlignment}); }
+  void deallocate(T* p, std::size_t) noexcept { ::operator delete (p, std::align_val_t{kAlignment}); }
   /// @brief All instances are interchangeable.
   template <typename U>
-  bool operator==(const AlignedAllocator<U>&) const noexcept { return true; }
+  bool operator==(const AlignedAllocator<U>&) const noexcept {
+    return true;
+  }
   /// @brief All instances are interchangeable.
   template <typename U>
-  bool operator!=(const AlignedAllocator<U>&) const noexcept { return false; }
+  bool operator!=(const AlignedAllocator<U>&) const noexcept {
+    return false;
+  }
 };
 
 /// @brief A contiguous, kAlignment-aligned vector.
@@ -84,8 +88,8 @@ inline void check_tensors(const TensorMap& tensors, const std::map<std::string, 
     if (it == tensors.end())
       throw Error(who + ": tensor '" + name + "' is missing, expected shape " + io::shape_string(shape) + " (" + which + ")");
     if (it->second.shape != shape)
-      throw Error(who + ": tensor '" + name + "' has shape " + io::shape_string(it->second.shape) + ", expected " + io::shape_string(shape) +
-                  " (" + which + ")");
+      throw Error(who + ": tensor '" + name + "' has shape " + io::shape_string(it->second.shape) + ", expected " +
+                  io::shape_string(shape) + " (" + which + ")");
     if (static_cast<std::int64_t>(it->second.values.size()) != it->second.element_count())
       throw Error(who + ": tensor '" + name + "' holds " + std::to_string(it->second.values.size()) + " values for shape " +
                   io::shape_string(it->second.shape));

@@ -52,10 +52,8 @@ class UNet {
   /// @brief Builds the network of width `width` from PyTorch-named tensors (weights_format.md); the
   /// number of extra input planes is enc1.weight's input channels less 2. Throws glovepose::Error
   /// naming the tensor when one is missing, extra, of the wrong shape, or not finite.
-  static UNet from_tensors(const TensorMap& tensors, int width, double bn_eps = 1e-5,
-                           WeightStorage storage = WeightStorage::F32) {
-    if (width < 1 || width > kMaxWidth)
-      throw Error("UNet: width " + std::to_string(width) + ", expected 1.." + std::to_string(kMaxWidth));
+  static UNet from_tensors(const TensorMap& tensors, int width, double bn_eps = 1e-5, WeightStorage storage = WeightStorage::F32) {
+    if (width < 1 || width > kMaxWidth) throw Error("UNet: width " + std::to_string(width) + ", expected 1.." + std::to_string(kMaxWidth));
     if (!(bn_eps > 0.0)) throw Error("UNet: bn_eps must be > 0");
     UNet net;
     net.width_ = width;
@@ -116,8 +114,7 @@ class UNet {
   /// @brief Bytes of packed weights streamed per forward at batch 1 (channel padding included).
   std::size_t weight_bytes() const noexcept {
     std::size_t n = 0;
-    for (const PackedLayer& l : layers_)
-      n += l.weights.bytes();
+    for (const PackedLayer& l : layers_) n += l.weights.bytes();
     return n;
   }
 
@@ -135,9 +132,8 @@ class UNet {
     ws.width_ = width_;
     ws.extra_inputs_ = extra_inputs_;
     for (const BufferSpec& b : buffers_)
-      ws.buffers.emplace_back(static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(capacity) *
-                                  static_cast<std::size_t>(b.stride),
-                              0.0f);
+      ws.buffers.emplace_back(
+          static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(capacity) * static_cast<std::size_t>(b.stride), 0.0f);
     std::size_t rows = 0, columns = 0, tap_sums = 0;
     for (const PackedLayer& l : layers_) {
       const BufferSpec& out = buffers_[static_cast<std::size_t>(l.out_buffer)];
@@ -244,7 +240,6 @@ class UNet {
   }
 
  public:
-
   /// @brief Many frames for evaluation: splits them over `threads` threads, each with its own
   /// workspace, in chunks of `chunk` frames. Set-up code: allocates; throws glovepose::Error naming
   /// the first frame with a non-finite input.
@@ -274,8 +269,8 @@ class UNet {
     if (it == tensors.end() || it->second.shape.size() != 4 || it->second.shape[1] < 2) return 0;
     const std::int64_t extra = it->second.shape[1] - 2;
     if (extra > kMaxExtraInputs)
-      throw Error("UNet: tensor 'enc1.weight' reads " + std::to_string(it->second.shape[1]) + " input planes, expected 2 stretch maps and at most " +
-                  std::to_string(kMaxExtraInputs) + " extra inputs");
+      throw Error("UNet: tensor 'enc1.weight' reads " + std::to_string(it->second.shape[1]) +
+                  " input planes, expected 2 stretch maps and at most " + std::to_string(kMaxExtraInputs) + " extra inputs");
     return static_cast<int>(extra);
   }
 

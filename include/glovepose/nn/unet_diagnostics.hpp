@@ -26,7 +26,8 @@ class UNetDiagnostics {
   template <typename Backend>
   static std::array<double, kUNetBufferCount - 2> zero_fractions(const UNet<Backend>& net, const UNetWorkspace<Backend>& ws, int frames) {
     if (ws.width_ != net.width_ || ws.buffers.size() != net.buffers_.size())
-      throw Error("zero_fractions: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " + std::to_string(net.width_));
+      throw Error("zero_fractions: workspace of a width-" + std::to_string(ws.width_) + " network, expected width " +
+                  std::to_string(net.width_));
     if (frames < 1 || frames > ws.capacity_)
       throw Error("zero_fractions: " + std::to_string(frames) + " frames, expected 1.." + std::to_string(ws.capacity_));
     std::array<double, kUNetBufferCount - 2> fractions{};
@@ -35,8 +36,7 @@ class UNetDiagnostics {
       const float* values = ws.buffers[static_cast<std::size_t>(id)].data();
       const long rows = static_cast<long>(spec.positions) * frames;
       long zeros = 0;
-      for (long r = 0; r < rows; ++r)
-        zeros += std::count(values + r * spec.stride, values + r * spec.stride + spec.channels, 0.0f);
+      for (long r = 0; r < rows; ++r) zeros += std::count(values + r * spec.stride, values + r * spec.stride + spec.channels, 0.0f);
       fractions[static_cast<std::size_t>(id - 1)] = static_cast<double>(zeros) / static_cast<double>(rows * spec.channels);
     }
     return fractions;
@@ -62,8 +62,8 @@ class UNetDiagnostics {
       const float* values = ws.buffers[static_cast<std::size_t>(id)].data();
       std::size_t rows = 0;
       for (int c = 0; c < spec.channels; ++c)
-        rows += std::any_of(positions.begin(), positions.end(),
-                            [&](int p) { return values[static_cast<long>(p) * spec.stride + c] != 0.0f; });
+        rows +=
+            std::any_of(positions.begin(), positions.end(), [&](int p) { return values[static_cast<long>(p) * spec.stride + c] != 0.0f; });
       return rows;
     };
     std::size_t bytes = 0;

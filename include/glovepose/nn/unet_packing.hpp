@@ -32,7 +32,7 @@ struct UNetBuffer {
   int positions;
 };
 
-  /// @brief One useful tap: the output positions it adds into and the input position each reads.
+/// @brief One useful tap: the output positions it adds into and the input position each reads.
 struct UNetTap {
   std::vector<int> out_positions, in_positions;
 };
@@ -53,16 +53,16 @@ struct UNetPackedLayer {
   std::vector<int> sources;
   int out_buffer = 0;
   UNetMode mode = UNetMode::Taps;
-  int kernel_taps = 0;                            // kernel * kernel (Im2col row length = kernel_taps * channels)
-  std::vector<int> receptive;                     // Im2col: [out position][tap] -> input position or -1
+  int kernel_taps = 0;         // kernel * kernel (Im2col row length = kernel_taps * channels)
+  std::vector<int> receptive;  // Im2col: [out position][tap] -> input position or -1
   // Im2col, small batches: per out position (from receptive_first[p]) the rows tap * channels + c
   // of the taps that meet input, ascending, and the (input position, channel) each reads.
   std::vector<int> receptive_first, receptive_rows;
   std::vector<std::pair<int, int>> receptive_inputs;
   std::vector<std::vector<std::pair<int, int>>> terms;  // TapColumns: [out position] -> (tap, input position)
-  int tap_stride = 0;                             // TapColumns: taps padded to the SIMD width
+  int tap_stride = 0;                                   // TapColumns: taps padded to the SIMD width
   Activation activation = Activation::Relu;
-  AlignedVector<float> bias;   // padded output channels
+  AlignedVector<float> bias;  // padded output channels
   // per (tap, source): in channels x padded out channels, in column panels; Fixed16 in Taps layers only
   PackedWeights weights;
   std::vector<std::size_t> block;  // offset of (tap, source) block
@@ -88,8 +88,8 @@ std::vector<UNetBuffer> unet_buffers(int width, int extra_inputs, WeightStorage 
 /// batch norm folded with `eps`, weights encoded as `storage`. Throws glovepose::Error for a folded
 /// value the storage cannot hold or a non-finite one, naming the layer.
 template <typename Backend>
-UNetPackedLayer pack_unet_layer(const UNetLayer& spec, const TensorMap& tensors, double eps, const std::vector<UNetBuffer>& buffers, int width,
-                              int extra_inputs, WeightStorage storage) {
+UNetPackedLayer pack_unet_layer(const UNetLayer& spec, const TensorMap& tensors, double eps, const std::vector<UNetBuffer>& buffers,
+                                int width, int extra_inputs, WeightStorage storage) {
   spec.geometry.validate(spec.conv);
   const UNetBuffer& out = buffers[static_cast<std::size_t>(spec.out_buffer)];
   const int cin = spec.in_channels(width, extra_inputs), cout = spec.out_channels, k = spec.geometry.kernel;
@@ -98,7 +98,8 @@ UNetPackedLayer pack_unet_layer(const UNetLayer& spec, const TensorMap& tensors,
   layer.out_buffer = spec.out_buffer;
   layer.activation = spec.activation;
   const int first_channels = buffers[static_cast<std::size_t>(spec.sources[0])].channels;
-  layer.mode = cout == 1 ? UNetMode::TapColumns : (spec.sources.size() == 1 && first_channels * k * k <= 64 ? UNetMode::Im2col : UNetMode::Taps);
+  layer.mode =
+      cout == 1 ? UNetMode::TapColumns : (spec.sources.size() == 1 && first_channels * k * k <= 64 ? UNetMode::Im2col : UNetMode::Taps);
   layer.kernel_taps = k * k;
 
   // Fold BN (inference) into per-output-channel scale and shift, in double.
@@ -144,15 +145,14 @@ UNetPackedLayer pack_unet_layer(const UNetLayer& spec, const TensorMap& tensors,
     const int column = paired ? kernels::paired_slot(co, Backend::lanes) : co;
     return static_cast<std::size_t>(kernels::panel_index(row, column, rows, columns, Backend::panel));
   };
-  std::vector<int> column_of;  // Fixed16: the output channel of each packed slot (padding included)
+  std::vector<int> column_of;            // Fixed16: the output channel of each packed slot (padding included)
   if (layer.mode == UNetMode::Im2col) {  // one dense (taps x channels) x stride block over the whole kernel
     const int cs = first_channels, rows = layer.kernel_taps * cs;
     packed.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(out.stride), 0.0f);
     for (int tap = 0; tap < layer.kernel_taps; ++tap)
       for (int ci = 0; ci < cs; ++ci)
         for (int co = 0; co < cout; ++co)
-          packed[slot(tap * cs + ci, co, rows)] =
-              static_cast<float>(w_at(ci, co, tap) * scale[static_cast<std::size_t>(co)]);
+          packed[slot(tap * cs + ci, co, rows)] = static_cast<float>(w_at(ci, co, tap) * scale[static_cast<std::size_t>(co)]);
     layer.receptive.assign(static_cast<std::size_t>(out.positions * layer.kernel_taps), -1);
     for (const TapPairs& t : plan)
       for (std::size_t j = 0; j < t.out_positions.size(); ++j)
@@ -179,7 +179,8 @@ UNetPackedLayer pack_unet_layer(const UNetLayer& spec, const TensorMap& tensors,
       layer.block.push_back(base);
       packed.resize(base + static_cast<std::size_t>(cs) * static_cast<std::size_t>(columns), 0.0f);
       for (const TapPairs& t : plan)
-        for (int ci = 0; ci < cs; ++ci) packed[base + slot(ci, t.tap, cs)] = static_cast<float>(w_at(channel_base + ci, 0, t.tap) * scale[0]);
+        for (int ci = 0; ci < cs; ++ci)
+          packed[base + slot(ci, t.tap, cs)] = static_cast<float>(w_at(channel_base + ci, 0, t.tap) * scale[0]);
       layer.stored_weights += plan.size() * static_cast<std::size_t>(cs);
       channel_base += cs;
     }

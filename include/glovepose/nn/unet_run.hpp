@@ -50,14 +50,14 @@ class UNetWorkspace {
   std::vector<AlignedVector<float>> buffers;
   std::vector<const float*> x_rows;
   std::vector<float*> y_rows;
-  AlignedVector<float> columns;      // Im2col: receptive fields, one row per (position, frame)
-  std::vector<int> sparse_index;     // Taps, small batches: nonzero entries of the sources' rows
+  AlignedVector<float> columns;   // Im2col: receptive fields, one row per (position, frame)
+  std::vector<int> sparse_index;  // Taps, small batches: nonzero entries of the sources' rows
   std::vector<float> sparse_value;
   std::vector<kernels::SparseRow> sparse_rows;  // per (source, position, frame)
   std::vector<kernels::SparseRow> tap_rows;     // the rows one product joins
-  AlignedVector<float> tap_sums;     // TapColumns: per (source, position, frame of a chunk) one sum per tap
-  std::vector<float> input_sums;     // Fixed16: sum of each source row (per source, position, frame)
-  std::vector<float> output_sums;    // Fixed16: sum of the inputs each output row met
+  AlignedVector<float> tap_sums;                // TapColumns: per (source, position, frame of a chunk) one sum per tap
+  std::vector<float> input_sums;                // Fixed16: sum of each source row (per source, position, frame)
+  std::vector<float> output_sums;               // Fixed16: sum of the inputs each output row met
   // Team members 1.. (forward with a Team): each its own row lists for its share of a product.
   struct MemberRows {
     std::vector<const float*> x_rows;
@@ -72,11 +72,11 @@ class UNetWorkspace {
 template <typename Backend>
 class UNetRunner {
  public:
-  using BufferSpec = UNetBuffer;            ///< An activation buffer.
-  using PackedLayer = UNetPackedLayer;      ///< A packed layer.
-  using PackedTap = UNetTap;                ///< A useful tap.
-  using Mode = UNetMode;                    ///< How a layer's products are organised.
-  using Workspace = UNetWorkspace<Backend>; ///< A stream's activations and scratch.
+  using BufferSpec = UNetBuffer;             ///< An activation buffer.
+  using PackedLayer = UNetPackedLayer;       ///< A packed layer.
+  using PackedTap = UNetTap;                 ///< A useful tap.
+  using Mode = UNetMode;                     ///< How a layer's products are organised.
+  using Workspace = UNetWorkspace<Backend>;  ///< A stream's activations and scratch.
 
   /// @brief A runner over the activation buffers `buffers` (unet_buffers()), which must outlive it.
   explicit UNetRunner(const std::vector<UNetBuffer>& buffers) noexcept : buffers_(buffers) {}
@@ -86,7 +86,7 @@ class UNetRunner {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
-    if (layer.weights.fixed16()) {  // Fixed16: products of levels first, then scale, offset and bias
+    if (layer.weights.fixed16()) {                 // Fixed16: products of levels first, then scale, offset and bias
       std::fill(out, out + static_cast<long>(rows) * out_spec.stride, 0.0f);
       run_taps(layer, layer.weights.wfx16.data(), frames, ws, team);
       finish_fixed16(layer, frames, ws);
@@ -128,8 +128,8 @@ class UNetRunner {
     if (!split_columns && !sparse && share.member > 0) return;
     const bool split_rows = !split_columns && sparse;
     const int column_begin = split_columns ? std::min(out_spec.stride, panels * share.member / share.members * Backend::panel) : 0;
-    const int column_end = split_columns ? std::min(out_spec.stride, panels * (share.member + 1) / share.members * Backend::panel)
-                                         : out_spec.stride;
+    const int column_end =
+        split_columns ? std::min(out_spec.stride, panels * (share.member + 1) / share.members * Backend::panel) : out_spec.stride;
     const int position_begin = split_rows ? out_spec.positions * share.member / share.members : 0;
     const int position_end = split_rows ? out_spec.positions * (share.member + 1) / share.members : out_spec.positions;
     if (column_end <= column_begin || position_end <= position_begin) return;
@@ -148,16 +148,20 @@ class UNetRunner {
           if (tap.out_positions[j] < position_begin || tap.out_positions[j] >= position_end) continue;
           for (int f = 0; f < frames; ++f, ++rows) {
             const long in_row = static_cast<long>(tap.in_positions[j]) * frames + f;
-            if (sparse) tap_rows[rows] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
-            else x_rows[rows] = in + in_row * in_spec.stride;
+            if (sparse)
+              tap_rows[rows] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
+            else
+              x_rows[rows] = in + in_row * in_spec.stride;
             y_rows[rows] = out + (static_cast<long>(tap.out_positions[j]) * frames + f) * out_spec.stride + column_begin;
           }
         }
         // The block's column panels from column_begin on: a panel boundary, so the kernel splits
         // its columns into the same blocks as for the whole width.
         const W* block = weights + layer.block[t * sources + s] + static_cast<long>(in_spec.channels) * column_begin;
-        if (!sparse) Backend::gemm_rows(x_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
-        else Backend::gemm_sparse_rows(tap_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
+        if (!sparse)
+          Backend::gemm_rows(x_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
+        else
+          Backend::gemm_sparse_rows(tap_rows, y_rows, rows, block, in_spec.channels, column_end - column_begin);
       }
     }
   }
@@ -253,7 +257,8 @@ class UNetRunner {
         float* dst = col + r * row;
         for (int tap = 0; tap < layer.kernel_taps; ++tap) {
           const int source = layer.receptive[static_cast<std::size_t>(p * layer.kernel_taps + tap)];
-          for (int c = 0; c < cs; ++c) dst[tap * cs + c] = source < 0 ? 0.0f : in[(static_cast<long>(source) * frames + f) * in_spec.stride + c];
+          for (int c = 0; c < cs; ++c)
+            dst[tap * cs + c] = source < 0 ? 0.0f : in[(static_cast<long>(source) * frames + f) * in_spec.stride + c];
         }
         ws.x_rows[static_cast<std::size_t>(r)] = dst;
         ws.y_rows[static_cast<std::size_t>(r)] = out + r * out_spec.stride;
@@ -286,13 +291,17 @@ class UNetRunner {
         std::fill(sums[s], next, 0.0f);
         for (int r = 0; r < rows; ++r) {
           const long in_row = static_cast<long>(r / chunk) * frames + first + r % chunk;
-          if (sparse) ws.tap_rows[static_cast<std::size_t>(r)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
-          else ws.x_rows[static_cast<std::size_t>(r)] = in + in_row * in_spec.stride;
+          if (sparse)
+            ws.tap_rows[static_cast<std::size_t>(r)] = ws.sparse_rows[first_row[s] + static_cast<std::size_t>(in_row)];
+          else
+            ws.x_rows[static_cast<std::size_t>(r)] = in + in_row * in_spec.stride;
           ws.y_rows[static_cast<std::size_t>(r)] = sums[s] + r * columns;
         }
         const W* block = weights + layer.block[s];
-        if (sparse) Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
-        else Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
+        if (sparse)
+          Backend::gemm_sparse_rows(ws.tap_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
+        else
+          Backend::gemm_rows(ws.x_rows.data(), ws.y_rows.data(), rows, block, in_spec.channels, layer.tap_stride);
       }
       for (int p = 0; p < out_spec.positions; ++p)
         for (int f = 0; f < chunk; ++f) {
@@ -306,9 +315,12 @@ class UNetRunner {
 
   template <typename W>
   void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, Team* team) const noexcept {
-    if (layer.mode == Mode::Im2col) run_im2col(layer, weights, frames, ws);
-    else if (layer.mode == Mode::TapColumns) run_tap_columns(layer, weights, frames, ws);
-    else run_taps(layer, weights, frames, ws, team);
+    if (layer.mode == Mode::Im2col)
+      run_im2col(layer, weights, frames, ws);
+    else if (layer.mode == Mode::TapColumns)
+      run_tap_columns(layer, weights, frames, ws);
+    else
+      run_taps(layer, weights, frames, ws, team);
   }
 
   const std::vector<UNetBuffer>& buffers_;

@@ -82,14 +82,10 @@ struct UNetLayer {
 inline std::vector<UNetLayer> unet_layers(int w) {
   const auto R = Activation::Relu;
   return {
-      {"enc1", "", {5, 5, 5, 1, 2, false}, {0}, 1, w, R},
-      {"enc2", "bn2", {5, 3, 3, 2, 1, false}, {1}, 2, 2 * w, R},
-      {"enc3", "bn3", {3, 2, 3, 2, 1, false}, {2}, 3, 4 * w, R},
-      {"enc4", "bn4", {2, 1, 4, 2, 1, false}, {3}, 4, 8 * w, R},
-      {"dec1", "dbn1", {1, 2, 4, 2, 1, true}, {4}, 5, 4 * w, R},
-      {"dec2", "dbn2", {2, 3, 3, 2, 1, true}, {5, 3}, 6, 2 * w, R},
-      {"dec3", "dbn3", {3, 5, 3, 2, 1, true}, {6, 2}, 7, w, R},
-      {"out", "", {5, 5, 5, 1, 2, false}, {7, 1}, 8, 1, Activation::Tanh},
+      {"enc1", "", {5, 5, 5, 1, 2, false}, {0}, 1, w, R},        {"enc2", "bn2", {5, 3, 3, 2, 1, false}, {1}, 2, 2 * w, R},
+      {"enc3", "bn3", {3, 2, 3, 2, 1, false}, {2}, 3, 4 * w, R}, {"enc4", "bn4", {2, 1, 4, 2, 1, false}, {3}, 4, 8 * w, R},
+      {"dec1", "dbn1", {1, 2, 4, 2, 1, true}, {4}, 5, 4 * w, R}, {"dec2", "dbn2", {2, 3, 3, 2, 1, true}, {5, 3}, 6, 2 * w, R},
+      {"dec3", "dbn3", {3, 5, 3, 2, 1, true}, {6, 2}, 7, w, R},  {"out", "", {5, 5, 5, 1, 2, false}, {7, 1}, 8, 1, Activation::Tanh},
   };
 }
 
@@ -100,8 +96,8 @@ inline std::map<std::string, std::vector<std::int64_t>> unet_tensor_shapes(int w
   for (const UNetLayer& s : unet_layers(w)) {
     const std::int64_t in = s.in_channels(w, extra_inputs), out = s.out_channels;
     const std::int64_t k = s.geometry.kernel;
-    shapes[s.conv + ".weight"] = s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k}
-                                                       : std::vector<std::int64_t>{out, in, k, k};
+    shapes[s.conv + ".weight"] =
+        s.geometry.transposed ? std::vector<std::int64_t>{in, out, k, k} : std::vector<std::int64_t>{out, in, k, k};
     shapes[s.conv + ".bias"] = {out};
     if (!s.bn.empty())
       for (const char* part : {".weight", ".bias", ".running_mean", ".running_var"}) shapes[s.bn + part] = {out};

@@ -6,10 +6,10 @@ namespace glovepose::nn {
 
 /// @brief How the weights are kept in memory.
 enum class WeightStorage : unsigned char {
-  F32,  ///< Exact: the file's values (with BN folded) in float.
-  F16,   ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
-  BF16,  ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
-         ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
+  F32,      ///< Exact: the file's values (with BN folded) in float.
+  F16,      ///< binary16: half the bytes; outputs differ from F32 by rounding (see README for the bound).
+  BF16,     ///< bfloat16: half the bytes, widened by two integer operations (the fastest at batch 1);
+            ///< 8 mantissa bits, so outputs differ from F32 more than with F16 (docs/performance.md).
   Fixed16,  ///< 16-bit codes with one scale per output channel (fixed16.hpp): half the bytes, widened
             ///< by 1.5 integer operations per vector; rounding at most 2^-16 of the channel's largest
             ///< weight. The U-Net's first and last layer (few weights, not row products) stay F32.
@@ -20,10 +20,14 @@ static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEP
 /// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
 constexpr const char* storage_name(WeightStorage storage) noexcept {
   switch (storage) {
-    case WeightStorage::F32: return "F32";
-    case WeightStorage::F16: return "F16";
-    case WeightStorage::BF16: return "BF16";
-    case WeightStorage::Fixed16: return "Fixed16";
+    case WeightStorage::F32:
+      return "F32";
+    case WeightStorage::F16:
+      return "F16";
+    case WeightStorage::BF16:
+      return "BF16";
+    case WeightStorage::Fixed16:
+      return "Fixed16";
   }
   return "unknown";
 }

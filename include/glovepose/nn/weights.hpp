@@ -76,8 +76,8 @@ struct WeightFile {
     file.metadata = metadata;
     for (const auto& [name, t] : tensors) {
       if (static_cast<std::int64_t>(t.values.size()) != t.element_count())
-        throw Error("WeightFile::serialize: tensor '" + name + "' holds " + std::to_string(t.values.size()) +
-                    " values for shape " + io::shape_string(t.shape));
+        throw Error("WeightFile::serialize: tensor '" + name + "' holds " + std::to_string(t.values.size()) + " values for shape " +
+                    io::shape_string(t.shape));
       file.tensors[name] = io::RawTensor::from(t.shape, t.values, dtype);
     }
     return file;

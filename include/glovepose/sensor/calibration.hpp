@@ -56,12 +56,11 @@ class CalibrationRange {
   /// @brief A range from per-sensor minima and maxima with the sensors' names (for reports and
   /// files). Throws glovepose::Error naming the sensor when a value is not finite or min > max, or
   /// when the sizes differ.
-  CalibrationRange(Eigen::VectorXd min, Eigen::VectorXd max, std::vector<std::string> names,
-                   CalibrationConfig config = {})
+  CalibrationRange(Eigen::VectorXd min, Eigen::VectorXd max, std::vector<std::string> names, CalibrationConfig config = {})
       : min_(std::move(min)), max_(std::move(max)), names_(std::move(names)), config_(config) {
     if (min_.size() != max_.size() || static_cast<std::size_t>(min_.size()) != names_.size())
-      throw Error("CalibrationRange: " + std::to_string(min_.size()) + " minima, " + std::to_string(max_.size()) +
-                  " maxima and " + std::to_string(names_.size()) + " names, expected one of each per sensor");
+      throw Error("CalibrationRange: " + std::to_string(min_.size()) + " minima, " + std::to_string(max_.size()) + " maxima and " +
+                  std::to_string(names_.size()) + " names, expected one of each per sensor");
     if (min_.size() == 0) throw Error("CalibrationRange: no sensors, expected at least one");
     if (!(config_.min_relative_range >= 0.0) || !(config_.clamp_limit > 0.0))
       throw Error("CalibrationRange: min_relative_range must be >= 0 and clamp_limit > 0");
@@ -71,8 +70,8 @@ class CalibrationRange {
       if (!std::isfinite(min_(i)) || !std::isfinite(max_(i)))
         throw Error("CalibrationRange: " + name + " has a non-finite limit, expected finite min and max");
       if (min_(i) > max_(i))
-        throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " above max " +
-                    std::to_string(max_(i)) + ", expected min <= max");
+        throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " above max " + std::to_string(max_(i)) +
+                    ", expected min <= max");
       // normalize() divides by the span: one that overflows would turn finite readings into NaN.
       if (!std::isfinite(max_(i) - min_(i)))
         throw Error("CalibrationRange: " + name + " has min " + std::to_string(min_(i)) + " and max " + std::to_string(max_(i)) +
@@ -86,12 +85,10 @@ class CalibrationRange {
 
   /// @brief Min/max over frames of training data (one row per frame, one column per sensor): the
   /// paper's "without calibration" setting. Throws glovepose::Error for an empty or non-finite set.
-  static CalibrationRange from_frames(const Eigen::MatrixXd& frames, std::vector<std::string> names,
-                                      CalibrationConfig config = {}) {
+  static CalibrationRange from_frames(const Eigen::MatrixXd& frames, std::vector<std::string> names, CalibrationConfig config = {}) {
     if (frames.rows() == 0) throw Error("CalibrationRange::from_frames: no frames, expected at least one");
     if (!frames.allFinite()) throw Error("CalibrationRange::from_frames: non-finite values, expected finite frames");
-    return CalibrationRange(frames.colwise().minCoeff().transpose(), frames.colwise().maxCoeff().transpose(),
-                            std::move(names), config);
+    return CalibrationRange(frames.colwise().minCoeff().transpose(), frames.colwise().maxCoeff().transpose(), std::move(names), config);
   }
 
   /// @brief Number of sensors.
@@ -132,17 +129,18 @@ class CalibrationRange {
   void save(const std::string& path, const std::string& glove_id) const {
     std::ofstream file(path);
     if (!file) throw Error("CalibrationRange::save: cannot open '" + path + "' for writing");
-    file << kFileHeader << "\n" << "glove\t" << glove_id << "\n" << "sensors\t" << size() << "\n";
+    file << kFileHeader << "\n"
+         << "glove\t" << glove_id << "\n"
+         << "sensors\t" << size() << "\n";
     file << std::setprecision(17);
-    for (int i = 0; i < size(); ++i)
-      file << names_[static_cast<std::size_t>(i)] << "\t" << min_(i) << "\t" << max_(i) << "\n";
+    for (int i = 0; i < size(); ++i) file << names_[static_cast<std::size_t>(i)] << "\t" << min_(i) << "\t" << max_(i) << "\n";
     if (!file) throw Error("CalibrationRange::save: writing '" + path + "' failed");
   }
 
   /// @brief Reads a file written by save(). The glove id and sensor names must equal the expected
   /// ones; any mismatch or malformed line throws glovepose::Error naming the line and what was expected.
-  static CalibrationRange load(const std::string& path, const std::string& glove_id,
-                               const std::vector<std::string>& names, CalibrationConfig config = {}) {
+  static CalibrationRange load(const std::string& path, const std::string& glove_id, const std::vector<std::string>& names,
+                               CalibrationConfig config = {}) {
     std::ifstream file(path);
     if (!file) throw Error("CalibrationRange::load: cannot open '" + path + "'");
     return load(file, path, glove_id, names, config);
@@ -215,8 +213,7 @@ class OnTheFlyCalibrator {
   explicit OnTheFlyCalibrator(std::vector<std::string> names, int median_window = 20, CalibrationConfig config = {})
       : names_(std::move(names)), window_(median_window), config_(config) {
     if (names_.empty()) throw Error("OnTheFlyCalibrator: no sensors, expected at least one");
-    if (window_ < 1)
-      throw Error("OnTheFlyCalibrator: median window " + std::to_string(window_) + ", expected at least 1");
+    if (window_ < 1) throw Error("OnTheFlyCalibrator: median window " + std::to_string(window_) + ", expected at least 1");
     const auto n = static_cast<Eigen::Index>(names_.size());
     history_ = Eigen::MatrixXd::Zero(window_, n);
     scratch_.resize(static_cast<std::size_t>(window_));
@@ -262,8 +259,8 @@ class OnTheFlyCalibrator {
   /// window arrived. Flat sensors are listed by name in CalibrationRange::flat_sensors().
   CalibrationRange finish() const {
     if (!ready())
-      throw Error("OnTheFlyCalibrator::finish: " + std::to_string(frames_) + " frames, expected at least " +
-                  std::to_string(window_) + " (the median window)");
+      throw Error("OnTheFlyCalibrator::finish: " + std::to_string(frames_) + " frames, expected at least " + std::to_string(window_) +
+                  " (the median window)");
     return CalibrationRange(min_, max_, names_, config_);
   }
 

@@ -103,15 +103,14 @@ class TraceLayout {
     for (std::size_t c = 0; c < cells_.size(); ++c) {
       const Cell& cell = cells_[c];
       if (cell.bottom < 0 || cell.bottom >= bottom_traces_)
-        throw Error("TraceLayout: cell " + std::to_string(c) + " uses bottom trace " + std::to_string(cell.bottom) +
-                    ", expected 0.." + std::to_string(bottom_traces_ - 1));
+        throw Error("TraceLayout: cell " + std::to_string(c) + " uses bottom trace " + std::to_string(cell.bottom) + ", expected 0.." +
+                    std::to_string(bottom_traces_ - 1));
       if (cell.top < 0 || cell.top >= top_traces_)
-        throw Error("TraceLayout: cell " + std::to_string(c) + " uses top trace " + std::to_string(cell.top) +
-                    ", expected 0.." + std::to_string(top_traces_ - 1));
+        throw Error("TraceLayout: cell " + std::to_string(c) + " uses top trace " + std::to_string(cell.top) + ", expected 0.." +
+                    std::to_string(top_traces_ - 1));
       if (!seen.insert({cell.bottom, cell.top}).second)
-        throw Error("TraceLayout: cell " + std::to_string(c) + " reuses the trace pair (bottom " +
-                    std::to_string(cell.bottom) + ", top " + std::to_string(cell.top) +
-                    "), expected each pair of traces to overlap at most once");
+        throw Error("TraceLayout: cell " + std::to_string(c) + " reuses the trace pair (bottom " + std::to_string(cell.bottom) + ", top " +
+                    std::to_string(cell.top) + "), expected each pair of traces to overlap at most once");
     }
   }
 
@@ -149,11 +148,10 @@ class TraceLayout {
   /// @brief Readable name of a cell, e.g. "cell 21 (index proximal, along, main-joint)".
   std::string cell_name(int c) const {
     if (c < 0 || c >= cell_count())
-      throw Error("TraceLayout::cell_name: cell " + std::to_string(c) + ", expected 0.." +
-                  std::to_string(cell_count() - 1));
+      throw Error("TraceLayout::cell_name: cell " + std::to_string(c) + ", expected 0.." + std::to_string(cell_count() - 1));
     const Cell& cell = cells_[static_cast<std::size_t>(c)];
-    return "cell " + std::to_string(c) + " (" + to_string(cell.digit) + " " + to_string(cell.segment) + ", " +
-           to_string(cell.direction) + ", " + to_string(cell.category) + ")";
+    return "cell " + std::to_string(c) + " (" + to_string(cell.digit) + " " + to_string(cell.segment) + ", " + to_string(cell.direction) +
+           ", " + to_string(cell.category) + ")";
   }
 
   /// @brief cell_name() of every cell, in cell order.
@@ -181,50 +179,50 @@ inline TraceLayout TraceLayout::glauser2019() {
   // bottom and 3-4 per top trace, and gives M full rank (condition number: see tests/test_solver.cpp).
   return TraceLayout(15, 12,
                      {
-        { 0,  0, Digit::Thumb, Segment::Proximal, Direction::Along, Category::MainJoint},  // 0
-        { 1,  1, Digit::Thumb, Segment::Proximal, Direction::Across, Category::Perpendicular},  // 1
-        { 2,  2, Digit::Thumb, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 2
-        { 3,  3, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 3
-        { 4,  4, Digit::Index, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 4
-        { 5,  5, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 5
-        { 6,  6, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 6
-        { 7,  7, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 7
-        { 8,  8, Digit::Pinky, Segment::Proximal, Direction::Across, Category::Perpendicular},  // 8
-        { 9,  9, Digit::Pinky, Segment::Middle, Direction::Across, Category::Perpendicular},  // 9
-        {10, 10, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 10
-        {11, 11, Digit::Thumb, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 11
-        {12,  0, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 12
-        {13,  1, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 13
-        {14,  2, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 14
-        { 0,  8, Digit::Pinky, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},  // 15
-        { 1,  9, Digit::Thumb, Segment::Web, Direction::Across, Category::Abduction},  // 16
-        { 2, 10, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 17
-        { 3, 11, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 18
-        { 4,  0, Digit::Ring, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 19
-        { 5,  1, Digit::Thumb, Segment::Middle, Direction::Along, Category::MainJoint},  // 20
-        { 6,  2, Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint},  // 21
-        { 7,  3, Digit::Middle, Segment::Proximal, Direction::Along, Category::MainJoint},  // 22
-        { 8,  4, Digit::Ring, Segment::Proximal, Direction::Along, Category::MainJoint},  // 23
-        { 9,  5, Digit::Pinky, Segment::Proximal, Direction::Along, Category::MainJoint},  // 24
-        {10,  6, Digit::Index, Segment::Web, Direction::Across, Category::Abduction},  // 25
-        {11,  7, Digit::Middle, Segment::Web, Direction::Across, Category::Abduction},  // 26
-        {12,  8, Digit::Ring, Segment::Web, Direction::Across, Category::Abduction},  // 27
-        {13,  9, Digit::Thumb, Segment::Middle, Direction::Across, Category::Perpendicular},  // 28
-        {14, 10, Digit::Index, Segment::Proximal, Direction::Across, Category::Perpendicular},  // 29
-        { 0,  4, Digit::Middle, Segment::Proximal, Direction::Across, Category::Perpendicular},  // 30
-        { 1,  5, Digit::Ring, Segment::Proximal, Direction::Across, Category::Perpendicular},  // 31
-        { 2,  6, Digit::Pinky, Segment::Distal, Direction::Along, Category::MainJoint},  // 32
-        { 3,  7, Digit::Index, Segment::Middle, Direction::Along, Category::MainJoint},  // 33
-        { 4,  8, Digit::Middle, Segment::Middle, Direction::Along, Category::MainJoint},  // 34
-        { 5,  9, Digit::Ring, Segment::Middle, Direction::Along, Category::MainJoint},  // 35
-        { 6, 10, Digit::Pinky, Segment::Middle, Direction::Along, Category::MainJoint},  // 36
-        { 7, 11, Digit::Index, Segment::Middle, Direction::Across, Category::Perpendicular},  // 37
-        { 8,  0, Digit::Middle, Segment::Middle, Direction::Across, Category::Perpendicular},  // 38
-        { 9,  1, Digit::Ring, Segment::Middle, Direction::Across, Category::Perpendicular},  // 39
-        {10,  2, Digit::Index, Segment::Distal, Direction::Along, Category::MainJoint},  // 40
-        {11,  3, Digit::Middle, Segment::Distal, Direction::Along, Category::MainJoint},  // 41
-        {12,  4, Digit::Ring, Segment::Distal, Direction::Along, Category::MainJoint},  // 42
-        {13,  5, Digit::Index, Segment::Distal, Direction::Across, Category::Perpendicular},  // 43
+                         {0, 0, Digit::Thumb, Segment::Proximal, Direction::Along, Category::MainJoint},            // 0
+                         {1, 1, Digit::Thumb, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 1
+                         {2, 2, Digit::Thumb, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 2
+                         {3, 3, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 3
+                         {4, 4, Digit::Index, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 4
+                         {5, 5, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 5
+                         {6, 6, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},      // 6
+                         {7, 7, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 7
+                         {8, 8, Digit::Pinky, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 8
+                         {9, 9, Digit::Pinky, Segment::Middle, Direction::Across, Category::Perpendicular},         // 9
+                         {10, 10, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 10
+                         {11, 11, Digit::Thumb, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 11
+                         {12, 0, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 12
+                         {13, 1, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 13
+                         {14, 2, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 14
+                         {0, 8, Digit::Pinky, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 15
+                         {1, 9, Digit::Thumb, Segment::Web, Direction::Across, Category::Abduction},                // 16
+                         {2, 10, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 17
+                         {3, 11, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 18
+                         {4, 0, Digit::Ring, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},     // 19
+                         {5, 1, Digit::Thumb, Segment::Middle, Direction::Along, Category::MainJoint},              // 20
+                         {6, 2, Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint},            // 21
+                         {7, 3, Digit::Middle, Segment::Proximal, Direction::Along, Category::MainJoint},           // 22
+                         {8, 4, Digit::Ring, Segment::Proximal, Direction::Along, Category::MainJoint},             // 23
+                         {9, 5, Digit::Pinky, Segment::Proximal, Direction::Along, Category::MainJoint},            // 24
+                         {10, 6, Digit::Index, Segment::Web, Direction::Across, Category::Abduction},               // 25
+                         {11, 7, Digit::Middle, Segment::Web, Direction::Across, Category::Abduction},              // 26
+                         {12, 8, Digit::Ring, Segment::Web, Direction::Across, Category::Abduction},                // 27
+                         {13, 9, Digit::Thumb, Segment::Middle, Direction::Across, Category::Perpendicular},        // 28
+                         {14, 10, Digit::Index, Segment::Proximal, Direction::Across, Category::Perpendicular},     // 29
+                         {0, 4, Digit::Middle, Segment::Proximal, Direction::Across, Category::Perpendicular},      // 30
+                         {1, 5, Digit::Ring, Segment::Proximal, Direction::Across, Category::Perpendicular},        // 31
+                         {2, 6, Digit::Pinky, Segment::Distal, Direction::Along, Category::MainJoint},              // 32
+                         {3, 7, Digit::Index, Segment::Middle, Direction::Along, Category::MainJoint},              // 33
+                         {4, 8, Digit::Middle, Segment::Middle, Direction::Along, Category::MainJoint},             // 34
+                         {5, 9, Digit::Ring, Segment::Middle, Direction::Along, Category::MainJoint},               // 35
+                         {6, 10, Digit::Pinky, Segment::Middle, Direction::Along, Category::MainJoint},             // 36
+                         {7, 11, Digit::Index, Segment::Middle, Direction::Across, Category::Perpendicular},        // 37
+                         {8, 0, Digit::Middle, Segment::Middle, Direction::Across, Category::Perpendicular},        // 38
+                         {9, 1, Digit::Ring, Segment::Middle, Direction::Across, Category::Perpendicular},          // 39
+                         {10, 2, Digit::Index, Segment::Distal, Direction::Along, Category::MainJoint},             // 40
+                         {11, 3, Digit::Middle, Segment::Distal, Direction::Along, Category::MainJoint},            // 41
+                         {12, 4, Digit::Ring, Segment::Distal, Direction::Along, Category::MainJoint},              // 42
+                         {13, 5, Digit::Index, Segment::Distal, Direction::Across, Category::Perpendicular},        // 43
                      },
                      "glauser2019-44");
 }

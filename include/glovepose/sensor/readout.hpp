@@ -65,12 +65,12 @@ struct ReadoutHealth {
 
 /// @brief One solved frame of cell capacitances.
 struct CapacitanceFrame {
-  Eigen::VectorXd cells;                  ///< C_c, one value per cell.
-  double timestamp = 0.0;                 ///< Timestamp of the newest reading that went into the solve.
-  double oldest_age = 0.0;                ///< timestamp minus the timestamp of the oldest reading used.
-  std::uint32_t rejected = 0;             ///< Readings rejected since the previous solve.
-  std::uint64_t sequence = 0;             ///< Number of frames solved so far, this one included.
-  ReadoutHealth health;                   ///< What makes this frame less trustworthy.
+  Eigen::VectorXd cells;       ///< C_c, one value per cell.
+  double timestamp = 0.0;      ///< Timestamp of the newest reading that went into the solve.
+  double oldest_age = 0.0;     ///< timestamp minus the timestamp of the oldest reading used.
+  std::uint32_t rejected = 0;  ///< Readings rejected since the previous solve.
+  std::uint64_t sequence = 0;  ///< Number of frames solved so far, this one included.
+  ReadoutHealth health;        ///< What makes this frame less trustworthy.
 };
 
 /// @brief Per-stream readout state: a ring of recent readings per measurement row.
@@ -88,20 +88,18 @@ class Readout {
 
   /// @brief A readout over a shared solver. Throws glovepose::Error for a null solver or a window
   /// or solve interval below 1.
-  explicit Readout(std::shared_ptr<const Solver> solver, ReadoutConfig config = {})
-      : solver_(std::move(solver)), config_(config) {
+  explicit Readout(std::shared_ptr<const Solver> solver, ReadoutConfig config = {}) : solver_(std::move(solver)), config_(config) {
     if (!solver_) throw Error("Readout: no solver given, expected a CapacitanceSolver");
-    if (config_.mean_window < 1)
-      throw Error("Readout: mean_window " + std::to_string(config_.mean_window) + ", expected at least 1");
-    if (config_.solve_every < 1)
-      throw Error("Readout: solve_every " + std::to_string(config_.solve_every) + ", expected at least 1");
+    if (config_.mean_window < 1) throw Error("Readout: mean_window " + std::to_string(config_.mean_window) + ", expected at least 1");
+    if (config_.solve_every < 1) throw Error("Readout: solve_every " + std::to_string(config_.solve_every) + ", expected at least 1");
     if (!(config_.gap_seconds > 0.0) || config_.clock_restart_readings < 0 || config_.stuck_readings < 2 ||
         !(config_.max_reading_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below))
-      throw Error("Readout: gap_seconds " + std::to_string(config_.gap_seconds) + ", clock_restart_readings " +
-                  std::to_string(config_.clock_restart_readings) + ", stuck_readings " + std::to_string(config_.stuck_readings) +
-                  ", max_reading_residual " + std::to_string(config_.max_reading_residual) +
-                  ", stale_cycles " + std::to_string(config_.stale_cycles) +
-                  ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_reading_residual > 0, stale_cycles > 1");
+      throw Error(
+          "Readout: gap_seconds " + std::to_string(config_.gap_seconds) + ", clock_restart_readings " +
+          std::to_string(config_.clock_restart_readings) + ", stuck_readings " + std::to_string(config_.stuck_readings) +
+          ", max_reading_residual " + std::to_string(config_.max_reading_residual) + ", stale_cycles " +
+          std::to_string(config_.stale_cycles) +
+          ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_reading_residual > 0, stale_cycles > 1");
     rows_ = solver_->layout().row_count();
     if (config_.clock_restart_readings == 0) config_.clock_restart_readings = rows_;
     const auto slots = static_cast<std::size_t>(rows_) * static_cast<std::size_t>(config_.mean_window);
@@ -281,16 +279,16 @@ class Readout {
   std::shared_ptr<const Solver> solver_;
   ReadoutConfig config_;
   int rows_ = 0;
-  std::vector<double> values_;  // rows x mean_window ring buffers, row-major
-  std::vector<double> times_;   // timestamps of values_
-  std::vector<int> count_;      // readings held per row (<= mean_window)
-  std::vector<int> head_;       // next slot to write per row
-  std::vector<int> repeats_;    // consecutive identical readings per row (the latest included)
+  std::vector<double> values_;       // rows x mean_window ring buffers, row-major
+  std::vector<double> times_;        // timestamps of values_
+  std::vector<int> count_;           // readings held per row (<= mean_window)
+  std::vector<int> head_;            // next slot to write per row
+  std::vector<int> repeats_;         // consecutive identical readings per row (the latest included)
   std::vector<double> newest_age_;   // per row, age of its newest reading at the latest solve
   std::vector<double> age_scratch_;  // for the median of newest_age_
-  int backwards_run_ = 0;       // consecutive readings timestamped before the last accepted one
+  int backwards_run_ = 0;            // consecutive readings timestamped before the last accepted one
   std::uint64_t restarts_ = 0;
-  int rows_seen_ = 0;           // rows with at least one reading
+  int rows_seen_ = 0;  // rows with at least one reading
   int updates_since_solve_ = 0;
   std::uint32_t rejected_since_solve_ = 0;
   double last_timestamp_ = 0.0;

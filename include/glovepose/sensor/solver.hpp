@@ -40,9 +40,8 @@ class CapacitanceSolver {
   /// rank-deficient (naming cells that cannot be told apart).
   explicit CapacitanceSolver(const TraceLayout& layout) : layout_(layout), m_(layout.measurement_matrix()) {
     if (layout.cell_count() > layout.row_count())
-      throw Error("CapacitanceSolver: layout '" + layout.id() + "' has more cells (" +
-                  std::to_string(layout.cell_count()) + ") than measurements (" + std::to_string(layout.row_count()) +
-                  "), expected at most one cell per measurement");
+      throw Error("CapacitanceSolver: layout '" + layout.id() + "' has more cells (" + std::to_string(layout.cell_count()) +
+                  ") than measurements (" + std::to_string(layout.row_count()) + "), expected at most one cell per measurement");
 
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(m_);
     if (qr.rank() < layout.cell_count()) throw Error(rank_deficiency_message(layout, qr));
@@ -79,8 +78,7 @@ class CapacitanceSolver {
   double condition_number() const noexcept { return condition_number_; }
 
  private:
-  static std::string rank_deficiency_message(const TraceLayout& layout,
-                                             const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr) {
+  static std::string rank_deficiency_message(const TraceLayout& layout, const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr) {
     // Cells with weight in the null space of M are the ones whose capacitances trade off unseen.
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(layout.measurement_matrix(), Eigen::ComputeFullV);
     const Eigen::Index rank = qr.rank();
@@ -89,9 +87,8 @@ class CapacitanceSolver {
       const double weight = svd.matrixV().row(c).tail(layout.cell_count() - rank).norm();
       if (weight > 1e-6) cells += (cells.empty() ? "" : ", ") + std::to_string(c);
     }
-    return "CapacitanceSolver: the measurement matrix of layout '" + layout.id() + "' has rank " +
-           std::to_string(rank) + " but " + std::to_string(layout.cell_count()) +
-           " cells, expected full column rank; these cells cannot be told apart: " + cells;
+    return "CapacitanceSolver: the measurement matrix of layout '" + layout.id() + "' has rank " + std::to_string(rank) + " but " +
+           std::to_string(layout.cell_count()) + " cells, expected full column rank; these cells cannot be told apart: " + cells;
   }
 
   TraceLayout layout_;

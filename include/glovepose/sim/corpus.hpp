@@ -42,8 +42,8 @@ struct CorpusConfig {
   /// When set, every calibration sequence follows these steps (a guided calibration, its own
   /// length) instead of visiting the extreme poses in random order for calibration_seconds.
   std::optional<calibration::Sequence> guided_calibration;
-  int threads = 0;                    ///< 0: all hardware threads.
-  RecordingConfig recording{};        ///< Readout settings (raw rows, noise).
+  int threads = 0;              ///< 0: all hardware threads.
+  RecordingConfig recording{};  ///< Readout settings (raw rows, noise).
   /// The hand the glove is worn on: a left hand is the right one mirrored, wearing the right glove's
   /// sheet turned over (the same cells at the mirrored places).
   hand::Handedness handedness = hand::Handedness::Right;
@@ -68,12 +68,12 @@ enum class RecordingKind : std::uint8_t { Session = 0, Calibration = 1 };
 
 /// @brief One recorded sequence and who, with which glove and donning, recorded it.
 struct SessionRecording {
-  int subject = 0;   ///< Subject id.
-  int glove = 0;     ///< Glove id.
-  int session = 0;   ///< Session index within (subject, glove).
-  int donning = 0;   ///< Index of the donning within (subject, glove): sessions kept on share it.
+  int subject = 0;                              ///< Subject id.
+  int glove = 0;                                ///< Glove id.
+  int session = 0;                              ///< Session index within (subject, glove).
+  int donning = 0;                              ///< Index of the donning within (subject, glove): sessions kept on share it.
   RecordingKind kind = RecordingKind::Session;  ///< Session or its calibration sequence.
-  Recording recording;  ///< The frames.
+  Recording recording;                          ///< The frames.
 };
 
 /// @brief The poses a calibration sequence goes through: the extremes of every cell ("freely
@@ -160,10 +160,10 @@ inline std::vector<SessionRecording> plan_corpus(const CorpusConfig& config) {
 
 /// @brief Everything the corpus is made of that does not depend on the session.
 struct CorpusWorld {
-  std::vector<Subject> subjects;   ///< By subject id.
-  std::vector<Glove> gloves;       ///< By glove id.
-  std::vector<KeyPose> gallery;    ///< The pose gallery of the sessions.
-  std::vector<KeyPose> extremes;   ///< The poses of the calibration sequences.
+  std::vector<Subject> subjects;  ///< By subject id.
+  std::vector<Glove> gloves;      ///< By glove id.
+  std::vector<KeyPose> gallery;   ///< The pose gallery of the sessions.
+  std::vector<KeyPose> extremes;  ///< The poses of the calibration sequences.
 
   /// @brief The subjects, gloves and galleries of `config`.
   explicit CorpusWorld(const CorpusConfig& config)
@@ -175,16 +175,16 @@ struct CorpusWorld {
 /// @brief One planned recording made ready to run: the physics of its donning, its motion, the seed
 /// of its readout noise.
 struct SessionSetup {
-  GlovePhysics physics;    ///< The glove on the hand in this donning.
-  MotionSequence motion;   ///< What the hand does.
+  GlovePhysics physics;      ///< The glove on the hand in this donning.
+  MotionSequence motion;     ///< What the hand does.
   std::uint64_t noise_seed;  ///< Seed of the readout's noise and glitches.
 };
 
 /// @brief How `subject` wears glove `glove` in its donning `donning`: the same for every recording
 /// that shares the donning.
 inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, int glove, int donning) {
-  core::Rng rng(core::derive_seed(config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove),
-                                    static_cast<std::uint64_t>(donning)}));
+  core::Rng rng(core::derive_seed(
+      config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove), static_cast<std::uint64_t>(donning)}));
   return don_glove(subject, rng);
 }
 
@@ -193,7 +193,7 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
   const auto id = [&](std::uint64_t purpose, int index) {
     return core::derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
-                                     static_cast<std::uint64_t>(index)});
+                                           static_cast<std::uint64_t>(index)});
   };
   const GloveFit fit = donning_fit(config, subject, job.glove, job.donning);
   const bool calibration = job.kind == RecordingKind::Calibration;
@@ -207,7 +207,8 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   const int stream = 2 * job.session + (calibration ? 1 : 0);
   GlovePhysics physics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit, config.handedness);
   if (calibration && config.guided_calibration)
-    return SessionSetup{std::move(physics), MotionSequence(subject, *config.guided_calibration, id(4, stream), motion_config), id(5, stream)};
+    return SessionSetup{std::move(physics), MotionSequence(subject, *config.guided_calibration, id(4, stream), motion_config),
+                        id(5, stream)};
   return SessionSetup{std::move(physics),
                       MotionSequence(subject, calibration ? world.extremes : world.gallery, seconds, id(4, stream), motion_config),
                       id(5, stream)};
@@ -224,8 +225,8 @@ inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config)
   };
 
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned threads = std::min<unsigned>(config.threads > 0 ? static_cast<unsigned>(config.threads) : hardware,
-                                              static_cast<unsigned>(plan.size()));
+  const unsigned threads =
+      std::min<unsigned>(config.threads > 0 ? static_cast<unsigned>(config.threads) : hardware, static_cast<unsigned>(plan.size()));
   std::atomic<std::size_t> next{0};
   std::exception_ptr failure;
   std::mutex failure_mutex;

@@ -56,7 +56,8 @@ inline train::Dataset to_dataset(const std::vector<SessionRecording>& corpus, co
   if (config.guided_calibration) out.metadata["calibration_sequence"] = config.guided_calibration->id();
   std::string sizes = "[";
   for (const Subject& s : make_subjects(config.subjects, config.seed))
-    sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " + std::to_string(s.size.height) + "]";
+    sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " +
+             std::to_string(s.size.height) + "]";
   out.metadata["subject_sizes_mm"] = sizes + "]";
   out.validate();
   return out;

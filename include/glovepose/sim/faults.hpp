@@ -53,32 +53,43 @@ inline constexpr int kFaultKindCount = 11;
 /// @brief A short, stable name of a fault kind (for reports).
 constexpr const char* to_string(FaultKind kind) noexcept {
   switch (kind) {
-    case FaultKind::DroppedRows: return "dropped rows";
-    case FaultKind::LostTraceBurst: return "lost trace burst";
-    case FaultKind::DuplicatedRows: return "duplicated rows";
-    case FaultKind::OutOfOrderRows: return "out-of-order rows";
-    case FaultKind::StuckSensor: return "stuck sensor";
-    case FaultKind::DisconnectedTrace: return "disconnected trace";
-    case FaultKind::Spikes: return "spikes";
-    case FaultKind::NonFiniteValues: return "NaN/Inf values";
-    case FaultKind::Unplugged: return "unplugged (gap)";
-    case FaultKind::ClockJumpForward: return "clock jump forward";
-    case FaultKind::ClockJumpBack: return "clock jump back";
+    case FaultKind::DroppedRows:
+      return "dropped rows";
+    case FaultKind::LostTraceBurst:
+      return "lost trace burst";
+    case FaultKind::DuplicatedRows:
+      return "duplicated rows";
+    case FaultKind::OutOfOrderRows:
+      return "out-of-order rows";
+    case FaultKind::StuckSensor:
+      return "stuck sensor";
+    case FaultKind::DisconnectedTrace:
+      return "disconnected trace";
+    case FaultKind::Spikes:
+      return "spikes";
+    case FaultKind::NonFiniteValues:
+      return "NaN/Inf values";
+    case FaultKind::Unplugged:
+      return "unplugged (gap)";
+    case FaultKind::ClockJumpForward:
+      return "clock jump forward";
+    case FaultKind::ClockJumpBack:
+      return "clock jump back";
   }
   return "unknown fault";
 }
 
 /// @brief The size and target of a fault (only the fields of its kind are used).
 struct FaultSettings {
-  int drop_one_in = 5;                   ///< DroppedRows: one reading in this many is lost.
-  int lost_bottom_trace = 2;             ///< LostTraceBurst: the bottom trace whose rows are lost.
-  int stuck_row = 50;                    ///< StuckSensor: the row that sticks.
-  int disconnected_top_trace = 4;        ///< DisconnectedTrace: the top trace that opens.
-  double disconnected_pf = 0.05;         ///< DisconnectedTrace: what its rows read (stray capacitance), pF.
-  int spike_one_in = 500;                ///< Spikes: one reading in this many spikes.
-  double spike_pf = 30.0;                ///< Spikes: added to a spiking reading, pF.
-  int non_finite_one_in = 10;            ///< NonFiniteValues: one reading in this many is NaN or infinite.
-  double clock_jump_seconds = 100.0;     ///< ClockJump*: how far the clock is off during the fault, s.
+  int drop_one_in = 5;                ///< DroppedRows: one reading in this many is lost.
+  int lost_bottom_trace = 2;          ///< LostTraceBurst: the bottom trace whose rows are lost.
+  int stuck_row = 50;                 ///< StuckSensor: the row that sticks.
+  int disconnected_top_trace = 4;     ///< DisconnectedTrace: the top trace that opens.
+  double disconnected_pf = 0.05;      ///< DisconnectedTrace: what its rows read (stray capacitance), pF.
+  int spike_one_in = 500;             ///< Spikes: one reading in this many spikes.
+  double spike_pf = 30.0;             ///< Spikes: added to a spiking reading, pF.
+  int non_finite_one_in = 10;         ///< NonFiniteValues: one reading in this many is NaN or infinite.
+  double clock_jump_seconds = 100.0;  ///< ClockJump*: how far the clock is off during the fault, s.
 };
 
 /// @brief What one clean reading becomes: zero, one or two readings, in delivery order.

@@ -111,13 +111,13 @@ inline constexpr double kDonningShift = 1.5, kCellShift = 1.0, kPreStretchSpread
 /// @brief Where a cell is and how it couples to the hand (derived from the layout, plus the
 /// back-of-hand cells' distances from the knuckle line, our reading of Fig. 4).
 struct CellSite {
-  int digit = 0;                   ///< Pose-map digit (thumb 0 .. pinky 4).
-  sensor::Segment segment{};       ///< Place along the digit.
-  bool along = true;               ///< Cut direction: senses along the digit best.
+  int digit = 0;                     ///< Pose-map digit (thumb 0 .. pinky 4).
+  sensor::Segment segment{};         ///< Place along the digit.
+  bool along = true;                 ///< Cut direction: senses along the digit best.
   double length = kShortCellLength;  ///< mm along the digit.
-  double knuckle_distance = 0.0;   ///< Back of the hand: mm from the knuckle line (toward the wrist).
-  double thumb_distance = 0.0;     ///< Back of the hand: mm from the thumb's web.
-  int flexion_dof = -1;            ///< Finger cells: DoF index of the joint under the cell.
+  double knuckle_distance = 0.0;     ///< Back of the hand: mm from the knuckle line (toward the wrist).
+  double thumb_distance = 0.0;       ///< Back of the hand: mm from the thumb's web.
+  int flexion_dof = -1;              ///< Finger cells: DoF index of the joint under the cell.
 };
 
 /// @brief The 44 sites of the paper's glove.
@@ -152,7 +152,7 @@ inline std::array<CellSite, kCells> glauser2019_sites() {
 
 /// @brief One fabricated glove: its cells' base capacitances and cross-direction gains.
 struct Glove {
-  int id = 0;                 ///< 0-based.
+  int id = 0;                    ///< 0-based.
   CellArray base_capacitance{};  ///< C0 (pF) of each cell.
   CellArray cross_gain{};        ///< Share of the stretch across the cuts that reaches each cell.
 };
@@ -174,9 +174,9 @@ inline Glove make_glove(int id, std::uint64_t seed) {
 
 /// @brief How the glove sits on one hand for one donning.
 struct GloveFit {
-  CellArray shift{};        ///< mm along the digit (towards the fingertip positive) of each cell.
-  CellArray pre_along{};    ///< Stretch ratio along each cell before any motion.
-  CellArray pre_across{};   ///< Stretch ratio across each cell before any motion.
+  CellArray shift{};       ///< mm along the digit (towards the fingertip positive) of each cell.
+  CellArray pre_along{};   ///< Stretch ratio along each cell before any motion.
+  CellArray pre_across{};  ///< Stretch ratio across each cell before any motion.
 };
 
 /// @brief Puts the glove on a hand: the pre-stretch follows the hand's size against the glove's
@@ -191,7 +191,8 @@ inline GloveFit don_glove(const Subject& subject, core::Rng& rng) {
     const auto i = static_cast<std::size_t>(c);
     const CellSite& s = sites[i];
     const bool on_finger = s.segment != sensor::Segment::Metacarpal;
-    const double length = subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
+    const double length =
+        subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
     const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / kGloveRelaxedWidth;
     fit.shift[i] = global_shift + rng.normal(0.0, kCellShift);
     fit.pre_along[i] = length * global_pre * rng.normal(1.0, kPreStretchSpread);
@@ -323,7 +324,8 @@ class GlovePhysics {
     for (int other = dof - 1; other <= dof + 1; other += 2) {  // the digit's neighbouring flexion joints
       if (other < 0 || other >= static_cast<int>(hand::kDofCount)) continue;
       const auto& o = hand::kDofs[static_cast<std::size_t>(other)];
-      const bool flexion = o.motion == hand::Motion::BaseFlexion || o.motion == hand::Motion::MiddleFlexion || o.motion == hand::Motion::TipFlexion;
+      const bool flexion =
+          o.motion == hand::Motion::BaseFlexion || o.motion == hand::Motion::MiddleFlexion || o.motion == hand::Motion::TipFlexion;
       if (flexion && static_cast<int>(o.finger) == site.digit)
         lengthening += kNeighbourJointSpill * skin_.joint_spill * joint_radius(other) * bend(a[static_cast<std::size_t>(other)]);
     }
@@ -334,7 +336,8 @@ class GlovePhysics {
   // the cell and the palm pulls the textile.
   double slide(const CellSite& site, const hand::Angles& a) const noexcept {
     double flexion = 0.0;
-    for (int d = flexion_dof(site.digit, hand::Motion::BaseFlexion); d < site.flexion_dof; ++d) flexion += std::max(0.0, a[static_cast<std::size_t>(d)]);
+    for (int d = flexion_dof(site.digit, hand::Motion::BaseFlexion); d < site.flexion_dof; ++d)
+      flexion += std::max(0.0, a[static_cast<std::size_t>(d)]);
     return kSlidePerFlexion * skin_.slide * flexion;
   }
 
@@ -379,7 +382,8 @@ class GlovePhysics {
     const auto d = static_cast<std::size_t>(site.digit);
     const double falloff = std::exp(-std::max(0.0, site.knuckle_distance - shift) / (kKnuckleFalloff * skin_.knuckle_falloff));
     const double knuckles = site.digit == 0 ? 0.0 : (now.knuckle[d] - reference_.knuckle[d]) / kKnuckleSpan;
-    const double thumb = std::exp(-site.thumb_distance / (kThumbFalloff * skin_.thumb_falloff)) * (now.thumb_back - reference_.thumb_back) / kThumbBackSpan;
+    const double thumb =
+        std::exp(-site.thumb_distance / (kThumbFalloff * skin_.thumb_falloff)) * (now.thumb_back - reference_.thumb_back) / kThumbBackSpan;
     return falloff * knuckles + thumb;
   }
 

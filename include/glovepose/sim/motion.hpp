@@ -33,23 +33,23 @@ namespace glovepose::sim {
 
 /// @brief Settings of the motion generator.
 struct MotionConfig {
-  double visit_spread = 0.06;      ///< SD (rad) of a visit's departure from the person's pose (abduction/twist: half).
-  double explore = 0.35;           ///< Probability that a target blends two gallery poses.
-  double drift_amplitude = 0.025;  ///< Amplitude (rad) of slow wandering (0.1-0.5 Hz) while holding and moving.
-  double tremor_amplitude = 0.003; ///< Amplitude (rad) of physiological tremor (8-12 Hz).
-  double tip_spread = 0.05;        ///< SD (rad) of tip flexion around kTipCoupling x middle flexion.
-  double pace = 1.0;               ///< Multiplies the subject's speed (calibration sequences move faster).
-  double dwell = 1.0;              ///< Multiplies the subject's mean dwell time.
+  double visit_spread = 0.06;       ///< SD (rad) of a visit's departure from the person's pose (abduction/twist: half).
+  double explore = 0.35;            ///< Probability that a target blends two gallery poses.
+  double drift_amplitude = 0.025;   ///< Amplitude (rad) of slow wandering (0.1-0.5 Hz) while holding and moving.
+  double tremor_amplitude = 0.003;  ///< Amplitude (rad) of physiological tremor (8-12 Hz).
+  double tip_spread = 0.05;         ///< SD (rad) of tip flexion around kTipCoupling x middle flexion.
+  double pace = 1.0;                ///< Multiplies the subject's speed (calibration sequences move faster).
+  double dwell = 1.0;               ///< Multiplies the subject's mean dwell time.
 };
 
 /// @brief One stretch of the motion: a transition to `to`, then a hold.
 struct MotionSegment {
-  double start = 0.0;    ///< Seconds since the recording started.
-  double move = 0.0;     ///< Transition duration, s.
-  double hold = 0.0;     ///< Dwell at `to`, s.
-  hand::Angles from{};   ///< Pose at `start`.
-  hand::Angles to{};     ///< Pose reached at `start + move`.
-  int key = -1;          ///< Gallery index of the target (the first one when blended).
+  double start = 0.0;   ///< Seconds since the recording started.
+  double move = 0.0;    ///< Transition duration, s.
+  double hold = 0.0;    ///< Dwell at `to`, s.
+  hand::Angles from{};  ///< Pose at `start`.
+  hand::Angles to{};    ///< Pose reached at `start + move`.
+  int key = -1;         ///< Gallery index of the target (the first one when blended).
   /// Angles `to` holds exactly (a guided calibration step, e.g. fingers pressed flat on a table):
   /// no drift or tremor there once reached.
   std::array<bool, hand::kDofCount> pinned{};
@@ -168,7 +168,8 @@ class MotionSequence {
     for (std::size_t f = 1; f < hand::kFingerCount; ++f) {  // the tip keeps following the middle joint
       const auto finger = static_cast<hand::Finger>(f);
       const std::size_t middle = hand::dof_of(finger, hand::Motion::MiddleFlexion), tip = hand::dof_of(finger, hand::Motion::TipFlexion);
-      const double target_offset = (seg.from[tip] - kTipCoupling * seg.from[middle]) * (1.0 - w) + (seg.to[tip] - kTipCoupling * seg.to[middle]) * w;
+      const double target_offset =
+          (seg.from[tip] - kTipCoupling * seg.from[middle]) * (1.0 - w) + (seg.to[tip] - kTipCoupling * seg.to[middle]) * w;
       a[tip] = kTipCoupling * a[middle] + target_offset;
     }
     return limits_.clamp(a);

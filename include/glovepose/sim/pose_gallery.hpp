@@ -28,8 +28,8 @@ inline constexpr double kTipCoupling = 2.0 / 3.0;
 
 /// @brief A named pose.
 struct KeyPose {
-  std::string name;    ///< e.g. "fist", "pinch_index".
-  hand::Angles angles; ///< Radians, kDofs order, inside the reference joint limits.
+  std::string name;     ///< e.g. "fist", "pinch_index".
+  hand::Angles angles;  ///< Radians, kDofs order, inside the reference joint limits.
 };
 
 /// @brief One long finger's shape: abduction, base flexion, middle flexion (tip follows).
@@ -76,8 +76,8 @@ inline const hand::Kinematics& reference_kinematics() {
 /// that fingertip (contact: the two tips' radii apart). Writes the final thumb-to-target gap (mm).
 /// `fk` and `radius` give the hand (default: the reference template), `first_step` the largest
 /// change tried (rad; small for poses that are already nearly settled).
-inline hand::Angles settle_pose(const hand::Angles& design, const hand::Finger target = hand::Finger::Thumb,
-                                double* gap = nullptr, const hand::Kinematics& fk = reference_kinematics(),
+inline hand::Angles settle_pose(const hand::Angles& design, const hand::Finger target = hand::Finger::Thumb, double* gap = nullptr,
+                                const hand::Kinematics& fk = reference_kinematics(),
                                 const std::array<double, 16>& radius = hand::kReferenceDistalRadius, double first_step = 0.4) {
   const hand::JointLimits limits;
   hand::Skeleton s;
@@ -132,8 +132,8 @@ inline std::vector<KeyPose> pose_gallery() {
   const FingerShape straight{0.0, 0.0, 0.0}, half{0.0, 0.7, 0.8}, hook{0.0, 0.1, 1.6}, flat_bent{0.0, 1.3, 0.05};
   const FingerShape curled_index{0.2, 1.35, 1.5}, curled_middle{0.05, 1.35, 1.5}, curled_ring{-0.1, 1.3, 1.45},
       curled_pinky{-0.2, 1.15, 1.35};
-  const ThumbShape thumb_out{0.1, 0.0, 0.0, 0.0, 0.0}, thumb_tucked{0.8, 0.8, 0.5, 0.5, 0.2},
-      thumb_up{0.0, -0.3, -0.2, -0.3, 0.0}, thumb_across{0.9, 0.6, 0.4, 0.4, 0.3};
+  const ThumbShape thumb_out{0.1, 0.0, 0.0, 0.0, 0.0}, thumb_tucked{0.8, 0.8, 0.5, 0.5, 0.2}, thumb_up{0.0, -0.3, -0.2, -0.3, 0.0},
+      thumb_across{0.9, 0.6, 0.4, 0.4, 0.3};
   const auto spread = [](FingerShape f, double abduction) {
     f.abduction = abduction;
     return f;
@@ -154,7 +154,8 @@ inline std::vector<KeyPose> pose_gallery() {
   add("rock", make_pose(thumb_across, spread(straight, 0.1), curled_middle, curled_ring, spread(straight, -0.2)));
   add("call_me", make_pose(thumb_out, curled_index, curled_middle, curled_ring, spread(straight, -0.2)));
   add("claw", make_pose(thumb_tucked, hook, hook, hook, hook));
-  add("flat_bent", make_pose(thumb_out, spread(flat_bent, 0.15), spread(flat_bent, 0.05), spread(flat_bent, -0.1), spread(flat_bent, -0.2)));
+  add("flat_bent",
+      make_pose(thumb_out, spread(flat_bent, 0.15), spread(flat_bent, 0.05), spread(flat_bent, -0.1), spread(flat_bent, -0.2)));
   add("power_grasp", make_pose(thumb_across, {0.0, 1.0, 1.1}, {0.0, 1.05, 1.15}, {0.0, 1.1, 1.2}, {0.0, 1.15, 1.25}));
   add("cylinder_grasp", make_pose(thumb_tucked, {0.0, 0.8, 0.9}, {0.0, 0.85, 0.95}, {0.0, 0.9, 1.0}, {0.0, 0.95, 1.05}));
   add("ball_grasp", make_pose({0.7, 0.3, 0.3, 0.3, 0.2}, {0.2, 0.6, 0.6}, {0.0, 0.6, 0.6}, {-0.05, 0.65, 0.65}, {-0.15, 0.7, 0.7}));
@@ -166,9 +167,12 @@ inline std::vector<KeyPose> pose_gallery() {
   };
   opposition("pinch_index", hand::Finger::Index, make_pose(thumb_tucked, {0.0, 0.7, 0.6}, half, half, half));
   opposition("pinch_middle", hand::Finger::Middle, make_pose(thumb_tucked, half, {0.0, 0.75, 0.6}, half, half));
-  opposition("pinch_ring", hand::Finger::Ring, make_pose(thumb_tucked, spread(straight, 0.1), straight, {0.0, 0.85, 0.6}, {-0.2, 0.5, 0.4}));
-  opposition("pinch_pinky", hand::Finger::Pinky, make_pose(thumb_tucked, spread(straight, 0.1), straight, spread(straight, 0.1), {0.0, 0.95, 0.6}));
-  opposition("ok", hand::Finger::Index, make_pose(thumb_tucked, {0.0, 0.75, 0.7}, spread(straight, -0.05), spread(straight, -0.1), spread(straight, -0.15)));
+  opposition("pinch_ring", hand::Finger::Ring,
+             make_pose(thumb_tucked, spread(straight, 0.1), straight, {0.0, 0.85, 0.6}, {-0.2, 0.5, 0.4}));
+  opposition("pinch_pinky", hand::Finger::Pinky,
+             make_pose(thumb_tucked, spread(straight, 0.1), straight, spread(straight, 0.1), {0.0, 0.95, 0.6}));
+  opposition("ok", hand::Finger::Index,
+             make_pose(thumb_tucked, {0.0, 0.75, 0.7}, spread(straight, -0.05), spread(straight, -0.1), spread(straight, -0.15)));
   opposition("key_grip", hand::Finger::Index, make_pose(thumb_tucked, {0.2, 0.9, 1.2}, curled_middle, curled_ring, curled_pinky));
   return g;
 }

@@ -43,21 +43,21 @@ inline constexpr double kCreepTime = 1.0;
 
 /// @brief Measurement imperfections of the readout (see the file comment for the sources).
 struct ReadoutNoise {
-  double row_sd = 0.3;                ///< SD (pF) of one compound reading.
-  double spike_probability = 2e-5;    ///< Per reading.
-  double spike_min = 5.0;             ///< pF.
-  double spike_max = 50.0;            ///< pF.
-  double drop_probability = 1e-4;     ///< Per reading.
-  double session_gain_sd = 0.005;     ///< Relative SD of the session's common gain.
+  double row_sd = 0.3;              ///< SD (pF) of one compound reading.
+  double spike_probability = 2e-5;  ///< Per reading.
+  double spike_min = 5.0;           ///< pF.
+  double spike_max = 50.0;          ///< pF.
+  double drop_probability = 1e-4;   ///< Per reading.
+  double session_gain_sd = 0.005;   ///< Relative SD of the session's common gain.
 };
 
 /// @brief What to record.
 struct RecordingConfig {
-  double cycle_rate = 60.0;            ///< Full 180-row cycles per second (paper: about 60 Hz).
-  sensor::ReadoutConfig readout{};     ///< Mean window 5, solve every 16 (paper Sec. 3.1).
-  ReadoutNoise noise{};                ///< Imperfections.
-  bool raw_rows = false;               ///< Keep each cycle's 180 readings.
-  int warmup_cycles = 5;               ///< Cycles read before t = 0 so the mean window is full.
+  double cycle_rate = 60.0;         ///< Full 180-row cycles per second (paper: about 60 Hz).
+  sensor::ReadoutConfig readout{};  ///< Mean window 5, solve every 16 (paper Sec. 3.1).
+  ReadoutNoise noise{};             ///< Imperfections.
+  bool raw_rows = false;            ///< Keep each cycle's 180 readings.
+  int warmup_cycles = 5;            ///< Cycles read before t = 0 so the mean window is full.
   /// Poses per cycle at which the physics is evaluated; the rows between two of them take C_c
   /// linearly interpolated (12: every 1.4 ms, where a hand at human speed moves by far less than
   /// the readout noise; tests/test_sim.cpp bounds the difference to the exact evaluation). kRows
@@ -67,18 +67,18 @@ struct RecordingConfig {
 
 /// @brief One recording, frames at the ends of the readout cycles.
 struct Recording {
-  int frames = 0;                    ///< Number of frames.
-  std::vector<float> cells;          ///< frames x 44: solved C_c (pF) of the latest solve.
-  std::vector<float> raw_rows;       ///< frames x 180: the cycle's readings (NaN: dropped); empty unless asked.
-  std::vector<float> angles;         ///< frames x 25: ground truth at the frame's time (rad).
-  std::vector<double> timestamps;    ///< Seconds since the recording started (cycle ends).
-  std::vector<double> oldest_age;    ///< Age (s) at the frame's time of the oldest reading behind its C_c.
-  std::vector<std::uint8_t> outlier; ///< 1 when the true pose's collision energy exceeds hand::kCollisionOutlierThreshold.
+  int frames = 0;                     ///< Number of frames.
+  std::vector<float> cells;           ///< frames x 44: solved C_c (pF) of the latest solve.
+  std::vector<float> raw_rows;        ///< frames x 180: the cycle's readings (NaN: dropped); empty unless asked.
+  std::vector<float> angles;          ///< frames x 25: ground truth at the frame's time (rad).
+  std::vector<double> timestamps;     ///< Seconds since the recording started (cycle ends).
+  std::vector<double> oldest_age;     ///< Age (s) at the frame's time of the oldest reading behind its C_c.
+  std::vector<std::uint8_t> outlier;  ///< 1 when the true pose's collision energy exceeds hand::kCollisionOutlierThreshold.
 };
 
 /// @brief Records `motion` through the glove physics. Deterministic in `seed`.
-inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii,
-                        std::uint64_t seed, const RecordingConfig& config = {}) {
+inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii, std::uint64_t seed,
+                        const RecordingConfig& config = {}) {
   static const std::shared_ptr<const sensor::CapacitanceSolver> solver =
       std::make_shared<const sensor::CapacitanceSolver>(sensor::TraceLayout::glauser2019());
   // Cells each row sums (M's ones).

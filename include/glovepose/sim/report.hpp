@@ -35,16 +35,16 @@ struct RealismReport {
     double coverage = 0;     ///< (p99 - p1) / (limit max - limit min).
     int bins_used = 0;       ///< Of 10 equal bins over the limits, those holding >= 0.5% of frames.
   };
-  CorpusConfig config;                 ///< What was simulated.
-  long frames = 0;                     ///< Session frames (glove 0, calibration sequences excluded).
-  std::array<Cell, kCells> cells{};    ///< By cell id.
-  std::array<Dof, hand::kDofCount> dofs{};  ///< kDofs order.
-  double redonning_change = 0;  ///< Mean |C(donning 1) - C(donning 0)| at the same poses, / cell range.
-  double pose_change = 0;       ///< Mean |C(pose a) - C(pose b)| in one donning, / cell range.
+  CorpusConfig config;                              ///< What was simulated.
+  long frames = 0;                                  ///< Session frames (glove 0, calibration sequences excluded).
+  std::array<Cell, kCells> cells{};                 ///< By cell id.
+  std::array<Dof, hand::kDofCount> dofs{};          ///< kDofs order.
+  double redonning_change = 0;                      ///< Mean |C(donning 1) - C(donning 0)| at the same poses, / cell range.
+  double pose_change = 0;                           ///< Mean |C(pose a) - C(pose b)| in one donning, / cell range.
   double age_min = 0, age_median = 0, age_max = 0;  ///< Oldest reading's age (s) per frame.
-  double outlier_share = 0;     ///< Frames flagged by the collision-energy filter.
-  double linear_cross_deg = 0;  ///< Linear map, leave-one-subject-out: mean abs error (deg).
-  double linear_same_deg = 0;   ///< Linear map fitted on a session's first 2/3, tested on its last 1/3.
+  double outlier_share = 0;                         ///< Frames flagged by the collision-energy filter.
+  double linear_cross_deg = 0;                      ///< Linear map, leave-one-subject-out: mean abs error (deg).
+  double linear_same_deg = 0;                       ///< Linear map fitted on a session's first 2/3, tested on its last 1/3.
 };
 
 namespace detail {
@@ -77,7 +77,8 @@ inline void calibrated(const Recording& calibration, const Recording& session, E
     range.normalize(frame, out);
     x.row(row).head(kCells) = out.transpose();
     x(row, kCells) = 1.0;
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) y(row, static_cast<Eigen::Index>(d)) = session.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      y(row, static_cast<Eigen::Index>(d)) = session.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
     ++row;
   }
 }
@@ -95,7 +96,8 @@ inline double mean_abs_deg(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, c
 
 /// @brief Simulates `config` and measures it. Needs calibration sequences and at least 2 subjects.
 inline RealismReport make_report(const CorpusConfig& config) {
-  if (config.subjects < 2) throw Error("simulate --report: " + std::to_string(config.subjects) + " subjects, expected at least 2 (leave-one-out)");
+  if (config.subjects < 2)
+    throw Error("simulate --report: " + std::to_string(config.subjects) + " subjects, expected at least 2 (leave-one-out)");
   if (config.calibration_seconds <= 0.0) throw Error("simulate --report: needs calibration sequences, expected calibration seconds > 0");
   RealismReport report;
   report.config = config;
@@ -153,7 +155,8 @@ inline RealismReport make_report(const CorpusConfig& config) {
     for (int c = 0; c < kCells; ++c) {
       double sum = 0.0, sq = 0.0;
       for (int f = 0; f < noisy.frames; ++f) {
-        const double e = double(noisy.cells[static_cast<std::size_t>(f * kCells + c)]) - clean.cells[static_cast<std::size_t>(f * kCells + c)];
+        const double e =
+            double(noisy.cells[static_cast<std::size_t>(f * kCells + c)]) - clean.cells[static_cast<std::size_t>(f * kCells + c)];
         sum += e;
         sq += e * e;
       }
@@ -236,8 +239,8 @@ inline RealismReport make_report(const CorpusConfig& config) {
     }
     for (const Part& p : parts) {
       const Eigen::Index train = p.x.rows() * 2 / 3, test = p.x.rows() - train;
-      const Eigen::MatrixXd w = detail::fit_linear(p.x.topRows(train).transpose() * p.x.topRows(train),
-                                                   p.x.topRows(train).transpose() * p.y.topRows(train));
+      const Eigen::MatrixXd w =
+          detail::fit_linear(p.x.topRows(train).transpose() * p.x.topRows(train), p.x.topRows(train).transpose() * p.y.topRows(train));
       same += detail::mean_abs_deg(p.x.bottomRows(test), p.y.bottomRows(test), w);
     }
     report.linear_cross_deg = cross / config.subjects;
@@ -273,10 +276,11 @@ inline std::string format_report(const RealismReport& r) {
   }
   add("\nRe-donning vs pose change (gallery poses, noise-free, mean |dC| / cell range): re-donning %.3f, pose change %.3f (ratio %.2f)\n",
       r.redonning_change, r.pose_change, r.redonning_change / r.pose_change);
-  add("Oldest reading behind each frame: min %.1f ms, median %.1f ms, max %.1f ms (paper: 45-90 ms)\n", 1e3 * r.age_min,
-      1e3 * r.age_median, 1e3 * r.age_max);
+  add("Oldest reading behind each frame: min %.1f ms, median %.1f ms, max %.1f ms (paper: 45-90 ms)\n", 1e3 * r.age_min, 1e3 * r.age_median,
+      1e3 * r.age_max);
   add("Outlier frames (collision energy > 80): %.2f%% (paper: about 2%%)\n", 100.0 * r.outlier_share);
-  add("Difficulty, linear least squares on on-the-fly calibrated cells: leave-one-subject-out %.2f deg, same session %.2f deg (ratio %.2f)\n",
+  add("Difficulty, linear least squares on on-the-fly calibrated cells: leave-one-subject-out %.2f deg, same session %.2f deg (ratio "
+      "%.2f)\n",
       r.linear_cross_deg, r.linear_same_deg, r.linear_cross_deg / r.linear_same_deg);
   return out;
 }

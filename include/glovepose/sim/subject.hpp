@@ -62,15 +62,15 @@ inline constexpr std::array<HandSize, 10> kPaperHands{{{190, 110, 45},
 /// differ between people (age, body mass), so the same joint angle stretches the same cell
 /// differently: lognormal with a log-SD of kSkinSpread (assumption).
 struct SkinMechanics {
-  double bend_zone = 1.0;         ///< Width of the bend zone over a joint.
-  double joint_spill = 1.0;       ///< Neighbouring joints' lengthening reaching a joint cell.
-  double sheet_tension = 1.0;     ///< Other digits' pull through the sheet.
-  double slide = 1.0;             ///< Distal slide of the glove as the finger curls.
-  double girth_flexion = 1.0;     ///< Girth growth over a flexed joint.
-  double girth_abduction = 1.0;   ///< Girth pull of abduction.
-  double knuckle_share = 1.0;     ///< Neighbouring knuckles' stretch on the back of the hand.
-  double knuckle_falloff = 1.0;   ///< Reach of the knuckles' stretch over the back of the hand.
-  double thumb_falloff = 1.0;     ///< Reach of the thumb's pull over the back of the hand.
+  double bend_zone = 1.0;        ///< Width of the bend zone over a joint.
+  double joint_spill = 1.0;      ///< Neighbouring joints' lengthening reaching a joint cell.
+  double sheet_tension = 1.0;    ///< Other digits' pull through the sheet.
+  double slide = 1.0;            ///< Distal slide of the glove as the finger curls.
+  double girth_flexion = 1.0;    ///< Girth growth over a flexed joint.
+  double girth_abduction = 1.0;  ///< Girth pull of abduction.
+  double knuckle_share = 1.0;    ///< Neighbouring knuckles' stretch on the back of the hand.
+  double knuckle_falloff = 1.0;  ///< Reach of the knuckles' stretch over the back of the hand.
+  double thumb_falloff = 1.0;    ///< Reach of the thumb's pull over the back of the hand.
 };
 
 /// @brief Log-SD of the per-person skin multipliers (assumption: a factor of 1.4 either way is one SD).
@@ -78,14 +78,14 @@ inline constexpr double kSkinSpread = 0.35;
 
 /// @brief One simulated participant: hand geometry and movement habits.
 struct Subject {
-  int id = 0;                                          ///< 0-based.
-  HandSize size{};                                     ///< Bounding box, mm.
+  int id = 0;                                             ///< 0-based.
+  HandSize size{};                                        ///< Bounding box, mm.
   std::array<double, hand::kFingerCount> finger_scale{};  ///< Individual finger proportions (about 1).
-  hand::Angles style{};   ///< How this person forms the gallery's poses: a persistent offset per DoF (rad).
-  double speed = 1.0;     ///< Movement speed factor (1 = the population's mean).
-  double dwell = 0.7;     ///< Mean time (s) held at a pose.
-  double coupling = 0.2;  ///< Share of a finger's flexion its neighbours follow (finger enslaving).
-  SkinMechanics skin{};   ///< How this person's skin passes motion to the glove.
+  hand::Angles style{};                                   ///< How this person forms the gallery's poses: a persistent offset per DoF (rad).
+  double speed = 1.0;                                     ///< Movement speed factor (1 = the population's mean).
+  double dwell = 0.7;                                     ///< Mean time (s) held at a pose.
+  double coupling = 0.2;                                  ///< Share of a finger's flexion its neighbours follow (finger enslaving).
+  SkinMechanics skin{};                                   ///< How this person's skin passes motion to the glove.
 
   /// @brief Length scale against the template.
   double length_scale() const noexcept { return size.length / kTemplateLength; }

@@ -42,18 +42,22 @@ inline constexpr std::uint8_t kKindCalibration = 1;
 /// A frame is what the readout delivers when a solve ends: the cell capacitances solved from the
 /// compound capacitances of that readout cycle, and (for training data) the reference pose.
 struct Dataset {
-  std::size_t cell_count = 0;  ///< C, cells per frame (44 for the paper's glove).
-  std::size_t row_count = 0;   ///< R, raw readout rows per frame (180 for the paper's glove); 0: no raw rows.
+  std::size_t cell_count = 0;   ///< C, cells per frame (44 for the paper's glove).
+  std::size_t row_count = 0;    ///< R, raw readout rows per frame (180 for the paper's glove); 0: no raw rows.
   std::vector<float> cells;     ///< N x C solved cell capacitances C_c, pF; finite.
-  std::vector<float> raw_rows;  ///< N x R compound capacitances C_m of the cycle that ended at the frame, pF; NaN = dropped row. Empty when row_count is 0.
-  std::vector<float> angles;    ///< N x 25 ground-truth joint angles, radians, order hand::kDofs (theta 9..33); NaN for a DoF not labelled (labelled_dofs()); empty: no ground truth.
-  std::vector<double> timestamps;      ///< N times, seconds since the session start; strictly increasing within a run (see validate()).
-  std::vector<std::int32_t> subject;   ///< N subject ids (>= 0).
-  std::vector<std::int32_t> session;   ///< N session ids of the subject (>= 0).
-  std::vector<std::int32_t> glove;     ///< N glove ids (>= 0): which physical glove.
-  std::vector<std::int32_t> donning;   ///< N donning ids (>= 0): the how-many-th time the subject put the glove on; sessions kept on share it.
-  std::vector<std::uint8_t> kind;      ///< N kinds: kKindRecording (0) or kKindCalibration (1).
-  std::vector<std::uint8_t> outlier;   ///< N flags: 1 when the reference pose's collision energy exceeds hand::kCollisionOutlierThreshold (80), else 0.
+  std::vector<float> raw_rows;  ///< N x R compound capacitances C_m of the cycle that ended at the frame, pF; NaN = dropped row. Empty when
+                                ///< row_count is 0.
+  std::vector<float> angles;    ///< N x 25 ground-truth joint angles, radians, order hand::kDofs (theta 9..33); NaN for a DoF not labelled
+                                ///< (labelled_dofs()); empty: no ground truth.
+  std::vector<double> timestamps;     ///< N times, seconds since the session start; strictly increasing within a run (see validate()).
+  std::vector<std::int32_t> subject;  ///< N subject ids (>= 0).
+  std::vector<std::int32_t> session;  ///< N session ids of the subject (>= 0).
+  std::vector<std::int32_t> glove;    ///< N glove ids (>= 0): which physical glove.
+  std::vector<std::int32_t>
+      donning;                     ///< N donning ids (>= 0): the how-many-th time the subject put the glove on; sessions kept on share it.
+  std::vector<std::uint8_t> kind;  ///< N kinds: kKindRecording (0) or kKindCalibration (1).
+  std::vector<std::uint8_t>
+      outlier;  ///< N flags: 1 when the reference pose's collision energy exceeds hand::kCollisionOutlierThreshold (80), else 0.
   /// @brief String metadata: "format" (kDatasetFormat), "version" (kDatasetVersion), "glove_layout"
   /// (the sensor layout id, e.g. "glauser2019-44"), "frame_rate" (nominal frames per second),
   /// optionally "labelled_dofs" (the DoFs with reference angles, hand::dof_set_text(); absent: all);
@@ -64,8 +68,7 @@ struct Dataset {
   Dataset() = default;
 
   /// @brief An empty dataset for a glove with `cells` cells and `rows` raw rows (0: no raw rows).
-  Dataset(std::size_t cells, std::size_t rows, const std::string& glove_layout, double frame_rate)
-      : cell_count(cells), row_count(rows) {
+  Dataset(std::size_t cells, std::size_t rows, const std::string& glove_layout, double frame_rate) : cell_count(cells), row_count(rows) {
     metadata["glove_layout"] = glove_layout;
     metadata["frame_rate"] = io::number_text(frame_rate);
   }
@@ -98,8 +101,10 @@ struct Dataset {
 
   /// @brief Records which DoFs have reference angles (all of them: the metadata key is removed).
   void set_labelled_dofs(const hand::DofSet& labelled) {
-    if (labelled == hand::all_dofs()) metadata.erase("labelled_dofs");
-    else metadata["labelled_dofs"] = hand::dof_set_text(labelled);
+    if (labelled == hand::all_dofs())
+      metadata.erase("labelled_dofs");
+    else
+      metadata["labelled_dofs"] = hand::dof_set_text(labelled);
   }
 
   /// @brief Checks every size, value range and the metadata; throws glovepose::Error naming the
@@ -144,8 +149,8 @@ struct Dataset {
     for (const auto& [name, values] : ids)
       for (std::size_t i = 0; i < n; ++i)
         if ((*values)[i] < 0)
-          throw Error(std::string("Dataset: tensor '") + name + "': frame " + std::to_string(i) + " is " +
-                      std::to_string((*values)[i]) + ", expected an id >= 0");
+          throw Error(std::string("Dataset: tensor '") + name + "': frame " + std::to_string(i) + " is " + std::to_string((*values)[i]) +
+                      ", expected an id >= 0");
     for (std::size_t i = 0; i < n; ++i) {
       if (kind[i] > kKindCalibration)
         throw Error("Dataset: tensor 'kind': frame " + std::to_string(i) + " is " + std::to_string(kind[i]) +
@@ -158,9 +163,8 @@ struct Dataset {
       if (i > 0 && same_run(i - 1, i) && !(timestamps[i] > timestamps[i - 1]))
         throw Error("Dataset: tensor 'timestamps': frame " + std::to_string(i) + " is " + io::number_text(timestamps[i]) +
                     " s, not after frame " + std::to_string(i - 1) + " (" + io::number_text(timestamps[i - 1]) +
-                    " s) of the same run (subject " + std::to_string(subject[i]) + ", glove " + std::to_string(glove[i]) +
-                    ", session " + std::to_string(session[i]) + ", kind " + std::to_string(kind[i]) +
-                    "), expected strictly increasing times");
+                    " s) of the same run (subject " + std::to_string(subject[i]) + ", glove " + std::to_string(glove[i]) + ", session " +
+                    std::to_string(session[i]) + ", kind " + std::to_string(kind[i]) + "), expected strictly increasing times");
     }
   }
 
@@ -279,9 +283,9 @@ struct Dataset {
 
   /// @brief Writes the frames as CSV (validated first): the header
   /// `subject,session,timestamp,cell_0,...,cell_{C-1}` followed by the labelled DoFs' names (all 25
-  /// unless labelled_dofs() says otherwise), in hand::kDofs order, when the dataset has angles, then one line per frame; cells and angles with 9 significant
-  /// digits, timestamps with 17 (exact round trip), independent of the locale. glove, donning, kind,
-  /// outlier, raw_rows and the metadata are not part of the CSV.
+  /// unless labelled_dofs() says otherwise), in hand::kDofs order, when the dataset has angles, then one line per frame; cells and angles
+  /// with 9 significant digits, timestamps with 17 (exact round trip), independent of the locale. glove, donning, kind, outlier, raw_rows
+  /// and the metadata are not part of the CSV.
   void write_csv(std::ostream& out) const {
     validate();
     const hand::DofSet labelled = labelled_dofs();
@@ -318,12 +322,11 @@ struct Dataset {
   }
 
   /// @brief Reads CSV in the layout of write_csv(): the cell count comes from the header, angles
-  /// when the header lists DoF names (in hand::kDofs order; those missing are not labelled); glove = 0, donning = session, kind = 0, outlier = 0;
-  /// `glove_layout` and `frame_rate` become the metadata (CSV does not carry them). Throws
-  /// glovepose::Error naming the line (and column): unknown header, wrong column count, a value
-  /// that is not a number (or not a finite one, or a non-negative integer for subject and session),
-  /// a timestamp not after the one of the line before when both lines have the same subject and
-  /// session (validate()'s run rule, with glove and kind unknown).
+  /// when the header lists DoF names (in hand::kDofs order; those missing are not labelled); glove = 0, donning = session, kind = 0,
+  /// outlier = 0; `glove_layout` and `frame_rate` become the metadata (CSV does not carry them). Throws glovepose::Error naming the line
+  /// (and column): unknown header, wrong column count, a value that is not a number (or not a finite one, or a non-negative integer for
+  /// subject and session), a timestamp not after the one of the line before when both lines have the same subject and session (validate()'s
+  /// run rule, with glove and kind unknown).
   static Dataset read_csv(std::istream& in, const std::string& glove_layout, double frame_rate) {
     std::string line;
     std::size_t line_no = 1;
@@ -331,8 +334,8 @@ struct Dataset {
       throw Error("line 1: no header, expected subject,session,timestamp,cell_0,...,cell_{C-1} and optionally DoF names");
     const std::vector<std::string> header = io::split_csv_line(line);
     const auto expected_header = [&](std::size_t column, const std::string& expected) {
-      return Error("line 1, column " + std::to_string(column + 1) + ": unknown column '" + header[column] + "', expected " +
-                   expected + " (the header is subject,session,timestamp,cell_0,...,cell_{C-1} and optionally DoF names in the order of hand::kDofs)");
+      return Error("line 1, column " + std::to_string(column + 1) + ": unknown column '" + header[column] + "', expected " + expected +
+                   " (the header is subject,session,timestamp,cell_0,...,cell_{C-1} and optionally DoF names in the order of hand::kDofs)");
     };
     const char* fixed[] = {"subject", "session", "timestamp"};
     for (std::size_t k = 0; k < 3; ++k) {
@@ -372,7 +375,9 @@ struct Dataset {
       if (fields.size() != header.size())
         throw Error("line " + std::to_string(line_no) + ": " + std::to_string(fields.size()) + " columns, expected " +
                     std::to_string(header.size()));
-      const auto where = [&](std::size_t k) { return "line " + std::to_string(line_no) + ", column '" + header[k] + "': '" + fields[k] + "'"; };
+      const auto where = [&](std::size_t k) {
+        return "line " + std::to_string(line_no) + ", column '" + header[k] + "': '" + fields[k] + "'";
+      };
       const std::int32_t subject = io::parse_csv_id(fields[0], where(0));
       const std::int32_t session = io::parse_csv_id(fields[1], where(1));
       const double time = io::parse_csv_number<double>(fields[2], where(2));
@@ -384,7 +389,8 @@ struct Dataset {
                     std::to_string(session));
       for (std::size_t c = 0; c < cells; ++c) out.cells.push_back(io::parse_csv_number<float>(fields[3 + c], where(3 + c)));
       std::fill(pose.begin(), pose.end(), NAN);
-      for (std::size_t k = 0; k < dofs; ++k) pose[dof_of_column[k]] = io::parse_csv_number<float>(fields[3 + cells + k], where(3 + cells + k));
+      for (std::size_t k = 0; k < dofs; ++k)
+        pose[dof_of_column[k]] = io::parse_csv_number<float>(fields[3 + cells + k], where(3 + cells + k));
       out.angles.insert(out.angles.end(), pose.begin(), pose.end());
       out.timestamps.push_back(time);
       out.subject.push_back(subject);
@@ -417,8 +423,8 @@ struct Dataset {
   }
 
  private:
-  static constexpr const char* kTensorNames[] = {"cells",   "raw_rows", "angles", "timestamps", "subject",
-                                                 "session", "glove",    "donning", "kind",      "outlier"};
+  static constexpr const char* kTensorNames[] = {"cells",   "raw_rows", "angles",  "timestamps", "subject",
+                                                 "session", "glove",    "donning", "kind",       "outlier"};
 
   const std::string& meta(const std::string& key) const {
     const auto it = metadata.find(key);
@@ -465,7 +471,8 @@ struct Dataset {
     if (it == file.tensors.end())
       throw Error(std::string("tensor '") + name + "' is missing, expected " + io::dtype_name(dtype) + " " + shape);
     if (it->second.dtype != dtype)
-      throw Error(std::string("tensor '") + name + "' has dtype " + io::dtype_name(it->second.dtype) + ", expected " + io::dtype_name(dtype));
+      throw Error(std::string("tensor '") + name + "' has dtype " + io::dtype_name(it->second.dtype) + ", expected " +
+                  io::dtype_name(dtype));
     return it->second;
   }
 

@@ -69,8 +69,9 @@ inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& da
 inline void check_guided(const Dataset& data, const calibration::Sequence& sequence) {
   const auto it = data.metadata.find("calibration_sequence");
   if (it == data.metadata.end())
-    throw Error("the dataset records no guided calibration (metadata 'calibration_sequence'), expected calibrations that followed sequence '" +
-                sequence.id() + "' (glovepose simulate --calibration-sequence FILE)");
+    throw Error(
+        "the dataset records no guided calibration (metadata 'calibration_sequence'), expected calibrations that followed sequence '" +
+        sequence.id() + "' (glovepose simulate --calibration-sequence FILE)");
   if (it->second != sequence.id())
     throw Error("the dataset's calibrations followed sequence '" + it->second + "', expected '" + sequence.id() + "'");
 }
@@ -78,8 +79,8 @@ inline void check_guided(const Dataset& data, const calibration::Sequence& seque
 /// @brief The pose-guided features (calibration::StepHoldMeans) of every run of `runs`, as `model`
 /// sees them. Runs whose sequence was not performed to the end are left out and listed in `incomplete`.
 inline std::map<std::int64_t, Eigen::VectorXd> guided_features(TrainedModel& model, const calibration::Sequence& sequence,
-                                                                 const std::map<std::int64_t, CalibrationRun>& runs, ThreadPool& pool,
-                                                                 std::vector<std::int64_t>* incomplete = nullptr) {
+                                                               const std::map<std::int64_t, CalibrationRun>& runs, ThreadPool& pool,
+                                                               std::vector<std::int64_t>* incomplete = nullptr) {
   const hand::JointLimits limits = joint_limits(model.info);
   std::map<std::int64_t, Eigen::VectorXd> features;
   for (const auto& [key, run] : runs) {
@@ -108,18 +109,21 @@ inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, 
     throw Error("the model carries no pose-guided calibration (metadata 'pose_offset'), expected one fitted by glovepose fit-guided");
   const calibration::PoseOffsetModel offsets = calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'");
   if (offsets.cells() != model.info.inputs)
-    throw Error("the pose-guided calibration reads " + std::to_string(offsets.cells()) + " cells, the model " + std::to_string(model.info.inputs));
+    throw Error("the pose-guided calibration reads " + std::to_string(offsets.cells()) + " cells, the model " +
+                std::to_string(model.info.inputs));
   check_guided(data, offsets.sequence());
   std::vector<std::int64_t> incomplete;
-  const auto features = guided_features(model, offsets.sequence(), calibration_runs(data, filter, model.glove.calibration()), pool, &incomplete);
+  const auto features =
+      guided_features(model, offsets.sequence(), calibration_runs(data, filter, model.glove.calibration()), pool, &incomplete);
   if (!incomplete.empty())
     throw Error("subject " + std::to_string(incomplete.front() >> 40) + ", session " + std::to_string(incomplete.front() & 0xfffff) +
                 ": the calibration sequence was not performed to the end, expected every step of '" + offsets.sequence().id() + "'");
   std::map<std::int64_t, hand::Angles> out;
   for (const auto& [key, f] : features) {
     if (!offsets.followed(f))
-      throw Error("subject " + std::to_string(key >> 40) + ", session " + std::to_string(key & 0xfffff) + ": the calibration does not look like sequence '" +
-                  offsets.sequence().id() + "' (RMS z-score " + std::to_string(offsets.rms_z(f)) + " against at most " +
+      throw Error("subject " + std::to_string(key >> 40) + ", session " + std::to_string(key & 0xfffff) +
+                  ": the calibration does not look like sequence '" + offsets.sequence().id() + "' (RMS z-score " +
+                  std::to_string(offsets.rms_z(f)) + " against at most " +
                   std::to_string(calibration::kFollowedMargin * offsets.max_rms_z()) + " among the fitted people)");
     out.emplace(key, offsets.offsets(f));
   }
@@ -158,9 +162,9 @@ struct PoseOffsetFit {
 /// (true - predicted) angles over its session frames; ridge least squares on standardised features,
 /// the ridge strength chosen from `ridges` by `folds`-fold cross-validation over the runs. Throws
 /// glovepose::Error when fewer than 2 x folds runs are usable.
-inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const Dataset& data, const FrameFilter& filter,
-                                     ThreadPool& pool, const std::vector<double>& ridges = {0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0},
-                                     int folds = 5) {
+inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const Dataset& data,
+                                     const FrameFilter& filter, ThreadPool& pool,
+                                     const std::vector<double>& ridges = {0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0}, int folds = 5) {
   check_guided(data, sequence);
   const hand::JointLimits limits = joint_limits(model.info);
   const std::map<std::int64_t, Eigen::VectorXd> features =

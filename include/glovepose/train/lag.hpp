@@ -23,9 +23,9 @@
 namespace glovepose::train {
 
 /// @brief The lag in frames (fraction included) of `predicted` behind `truth` (frames x 25 each,
-/// radians; NaN truth for a DoF not labelled, which is left out). `source[f]` is frame f's index in its recording and `run[f]` its run: two frames are
-/// neighbours when they share a run and their sources differ by one. Throws glovepose::Error for
-/// mismatched sizes or when no shift has any pair of neighbouring changes.
+/// radians; NaN truth for a DoF not labelled, which is left out). `source[f]` is frame f's index in its recording and `run[f]` its run: two
+/// frames are neighbours when they share a run and their sources differ by one. Throws glovepose::Error for mismatched sizes or when no
+/// shift has any pair of neighbouring changes.
 inline double lag_frames(const std::vector<float>& predicted, const std::vector<float>& truth, const std::vector<std::int64_t>& source,
                          const std::vector<std::int64_t>& run, int max_shift = 20) {
   const std::size_t n = source.size();
@@ -36,11 +36,13 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
   // Position in `predicted` of recording frame (run, source), for the frames present.
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return run[a] != run[b] ? run[a] < run[b] : source[a] < source[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return run[a] != run[b] ? run[a] < run[b] : source[a] < source[b]; });
   const auto present = [&](std::int64_t r, std::int64_t s) -> long {
-    const auto it = std::lower_bound(order.begin(), order.end(), std::make_pair(r, s), [&](std::size_t i, const std::pair<std::int64_t, std::int64_t>& key) {
-      return run[i] != key.first ? run[i] < key.first : source[i] < key.second;
-    });
+    const auto it = std::lower_bound(order.begin(), order.end(), std::make_pair(r, s),
+                                     [&](std::size_t i, const std::pair<std::int64_t, std::int64_t>& key) {
+                                       return run[i] != key.first ? run[i] < key.first : source[i] < key.second;
+                                     });
     return it != order.end() && run[*it] == r && source[*it] == s ? static_cast<long>(*it) : -1;
   };
   std::vector<double> score(static_cast<std::size_t>(2 * max_shift + 1), 0.0);
@@ -55,7 +57,8 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
       for (std::size_t d = 0; d < dofs; ++d) {
         const double true_change = truth[static_cast<std::size_t>(next) * dofs + d] - truth[i * dofs + d];
         if (std::isnan(true_change)) continue;  // a DoF without reference angles (not labelled)
-        const double predicted_change = predicted[static_cast<std::size_t>(b) * dofs + d] - predicted[static_cast<std::size_t>(a) * dofs + d];
+        const double predicted_change =
+            predicted[static_cast<std::size_t>(b) * dofs + d] - predicted[static_cast<std::size_t>(a) * dofs + d];
         sum += true_change * predicted_change;
       }
       score[static_cast<std::size_t>(s + max_shift)] += sum;
@@ -63,7 +66,8 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
     }
   }
   for (std::size_t k = 0; k < score.size(); ++k) {
-    if (pairs[k] == 0) throw Error("lag_frames: no neighbouring frames at a shift of " + std::to_string(static_cast<int>(k) - max_shift) + " frames");
+    if (pairs[k] == 0)
+      throw Error("lag_frames: no neighbouring frames at a shift of " + std::to_string(static_cast<int>(k) - max_shift) + " frames");
     score[k] /= static_cast<double>(pairs[k]);
   }
   const std::size_t best = static_cast<std::size_t>(std::max_element(score.begin(), score.end()) - score.begin());

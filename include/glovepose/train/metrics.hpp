@@ -88,18 +88,18 @@ struct CurvePoint {
 
 /// @brief What AngleErrorAccumulator::report() measured. Always from at least one valid frame.
 struct AngleErrorReport {
-  std::size_t frames = 0;          ///< Valid frames evaluated.
-  std::size_t skipped_frames = 0;  ///< Frames left out because an angle (predicted or true) was not finite.
-  std::size_t angles = 0;          ///< Angle errors evaluated: frames x scored DoFs.
+  std::size_t frames = 0;                     ///< Valid frames evaluated.
+  std::size_t skipped_frames = 0;             ///< Frames left out because an angle (predicted or true) was not finite.
+  std::size_t angles = 0;                     ///< Angle errors evaluated: frames x scored DoFs.
   std::size_t scored_dofs = hand::kDofCount;  ///< DoFs scored (those with reference angles).
-  ErrorSummary overall;            ///< Over all angles; overall.mean_deg is the paper's "mean angle error".
-  double median_deg = 0;           ///< Nearest-rank median of all angle errors (see percentile_resolution_deg).
-  double p95_deg = 0;              ///< Nearest-rank 95th percentile of all angle errors.
+  ErrorSummary overall;                       ///< Over all angles; overall.mean_deg is the paper's "mean angle error".
+  double median_deg = 0;                      ///< Nearest-rank median of all angle errors (see percentile_resolution_deg).
+  double p95_deg = 0;                         ///< Nearest-rank 95th percentile of all angle errors.
   double percentile_resolution_deg = kPercentileResolutionDeg;  ///< Histogram bin width behind the percentiles.
-  double share_under_15deg = 0;    ///< Share of angles with error below 15 degrees (paper Fig. 14: 92%).
-  std::array<FingerError, hand::kFingerCount> fingers{};  ///< By hand::Finger.
-  std::array<DofError, hand::kDofCount> dofs{};           ///< In hand::kDofs order.
-  std::array<CurvePoint, kCurvePoints> curve{};           ///< Thresholds 0, 1, ..., kCurveMaxDeg degrees.
+  double share_under_15deg = 0;                                 ///< Share of angles with error below 15 degrees (paper Fig. 14: 92%).
+  std::array<FingerError, hand::kFingerCount> fingers{};        ///< By hand::Finger.
+  std::array<DofError, hand::kDofCount> dofs{};                 ///< In hand::kDofs order.
+  std::array<CurvePoint, kCurvePoints> curve{};                 ///< Thresholds 0, 1, ..., kCurveMaxDeg degrees.
 };
 
 namespace detail {
@@ -119,15 +119,11 @@ struct FixedSum {
     high += other.high;
   }
   // The sum in units of 2^-32.
-  double value() const noexcept {
-    return (static_cast<double>(high) * 0x1p64 + static_cast<double>(low)) * 0x1p-32;
-  }
+  double value() const noexcept { return (static_cast<double>(high) * 0x1p64 + static_cast<double>(low)) * 0x1p-32; }
 };
 
 // A value in [0, 2^31) in units of 2^-32, rounded to nearest; scaling by a power of two is exact.
-inline std::uint64_t to_fixed(double value) noexcept {
-  return static_cast<std::uint64_t>(std::llround(value * 0x1p32));
-}
+inline std::uint64_t to_fixed(double value) noexcept { return static_cast<std::uint64_t>(std::llround(value * 0x1p32)); }
 
 // Sum of values in ascending order: a deterministic total for a set, whatever order it was built in.
 inline double sorted_sum(std::vector<double> values, bool squares) {
@@ -145,8 +141,8 @@ inline double sorted_sum(std::vector<double> values, bool squares) {
 /// A frame is 25 angles in radians in hand::kDofs order. Only the scored DoFs (all by default; a
 /// dataset labelling a subset scores that subset) count: the others are neither read nor reported.
 /// A frame with any non-finite scored angle, predicted or true (or whose error overflows a double),
-/// is not evaluated but counted in skipped_frames(), so missing ground truth never poisons the mean. For threads, give each its own accumulator and
-/// merge() them: the result equals sequential accumulation exactly, whatever the split.
+/// is not evaluated but counted in skipped_frames(), so missing ground truth never poisons the mean. For threads, give each its own
+/// accumulator and merge() them: the result equals sequential accumulation exactly, whatever the split.
 ///
 /// Memory: a histogram of 23040 counters (about 180 KB), plus 16 bytes per angle error of 180
 /// degrees or more (kept individually; only a broken model or angles outside the joint limits make
@@ -179,14 +175,10 @@ class AngleErrorAccumulator {
   /// @brief Adds `frames` frames stored row-major (frames x 25, radians, hand::kDofs order), e.g. a
   /// network's output block against train::Dataset::angles. Returns the number of frames skipped
   /// because an angle was not finite. Throws glovepose::Error when a pointer is null and frames > 0.
-  std::size_t add_batch(const float* predicted, const float* truth, std::size_t frames) {
-    return add_rows(predicted, truth, frames);
-  }
+  std::size_t add_batch(const float* predicted, const float* truth, std::size_t frames) { return add_rows(predicted, truth, frames); }
 
   /// @brief Double-precision form of add_batch(const float*, const float*, std::size_t).
-  std::size_t add_batch(const double* predicted, const double* truth, std::size_t frames) {
-    return add_rows(predicted, truth, frames);
-  }
+  std::size_t add_batch(const double* predicted, const double* truth, std::size_t frames) { return add_rows(predicted, truth, frames); }
 
   /// @brief Adds the frames of `other` to this accumulator. The result does not depend on the order
   /// of merges and equals accumulating all frames in one accumulator.
@@ -418,9 +410,9 @@ class AngleErrorAccumulator {
   std::size_t skipped_ = 0;
   hand::DofSet scored_{};
   std::array<DofSums, hand::kDofCount> dofs_{};
-  std::vector<std::uint64_t> histogram_;  // counts of errors in [b/128, (b+1)/128) degrees
-  std::uint64_t in_histogram_ = 0;        // errors below kHistogramLimitDeg
-  std::vector<std::pair<std::size_t, double>> large_;  // (DoF, error) of errors >= kHistogramLimitDeg
+  std::vector<std::uint64_t> histogram_;                  // counts of errors in [b/128, (b+1)/128) degrees
+  std::uint64_t in_histogram_ = 0;                        // errors below kHistogramLimitDeg
+  std::vector<std::pair<std::size_t, double>> large_;     // (DoF, error) of errors >= kHistogramLimitDeg
   double min_ = std::numeric_limits<double>::infinity();  // smallest error, to clamp percentiles
 };
 

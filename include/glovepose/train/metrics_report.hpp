@@ -83,8 +83,10 @@ inline std::string format_table(const AngleErrorReport& r) {
   for (const FingerError& f : r.fingers) add("%-24s %8.3f %8.3f %8.3f\n", f.name, f.error.mean_deg, f.error.rms_deg, f.error.max_deg);
   add("\n%-24s %8s %8s %8s\n", "DoF", "mean", "rms", "max");
   for (const DofError& d : r.dofs) {
-    if (d.scored) add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
-    else add("%-24s %26s\n", d.name, "not labelled");
+    if (d.scored)
+      add("%-24s %8.3f %8.3f %8.3f\n", d.name, d.error.mean_deg, d.error.rms_deg, d.error.max_deg);
+    else
+      add("%-24s %26s\n", d.name, "not labelled");
   }
   out += "\nShare of angles with error below:";
   for (int t : {5, 10, 15, 20, 30}) {

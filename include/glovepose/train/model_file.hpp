@@ -68,16 +68,17 @@ inline std::unique_ptr<TrainableNetwork> make_network(const nn::ModelInfo& info,
 
 /// @brief A model read from a file: metadata, glove, and the network or linear map.
 struct TrainedModel {
-  nn::ModelInfo info;                             ///< Metadata.
+  nn::ModelInfo info;                                                    ///< Metadata.
   grid::GloveDescription glove = grid::GloveDescription::glauser2019();  ///< The glove it was trained for.
-  std::unique_ptr<TrainableNetwork> network;      ///< U-Net or FCN (null for linear).
-  std::optional<nn::LinearMap> linear;            ///< The linear map (linear models).
-  std::map<std::string, std::string> metadata;    ///< Every metadata entry of the file (provenance included).
+  std::unique_ptr<TrainableNetwork> network;                             ///< U-Net or FCN (null for linear).
+  std::optional<nn::LinearMap> linear;                                   ///< The linear map (linear models).
+  std::map<std::string, std::string> metadata;                           ///< Every metadata entry of the file (provenance included).
 
   /// @brief The training-set calibration range stored in the file; throws unless it has one.
   sensor::CalibrationRange training_range() const {
     if (!info.calibration_min || !info.calibration_max)
-      throw Error("the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
+      throw Error(
+          "the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
     const Eigen::Map<const Eigen::VectorXd> lo(info.calibration_min->data(), static_cast<Eigen::Index>(info.calibration_min->size()));
     const Eigen::Map<const Eigen::VectorXd> hi(info.calibration_max->data(), static_cast<Eigen::Index>(info.calibration_max->size()));
     return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()), glove.calibration().config());
@@ -135,14 +136,17 @@ inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
     model.metadata = file.metadata;
     model.glove = grid::GloveDescription::of_model(model.info.glove, model.info.glove_description);
     if (model.glove.cell_count() != model.info.inputs)
-      throw Error("metadata 'inputs' is " + std::to_string(model.info.inputs) + " but the glove has " + std::to_string(model.glove.cell_count()) + " cells");
+      throw Error("metadata 'inputs' is " + std::to_string(model.info.inputs) + " but the glove has " +
+                  std::to_string(model.glove.cell_count()) + " cells");
     if (model.info.architecture == "linear") {
       for (const char* name : {"weight", "bias"})
-        if (!file.tensors.count(name)) throw Error(std::string("tensor '") + name + "' is missing, expected a linear model's weight and bias");
+        if (!file.tensors.count(name))
+          throw Error(std::string("tensor '") + name + "' is missing, expected a linear model's weight and bias");
       if (file.tensors.size() != 2) throw Error("a linear model holds exactly the tensors 'weight' and 'bias'");
       const nn::Tensor& w = file.tensors.at("weight");
       if (w.shape != std::vector<std::int64_t>{kTargets, model.info.inputs})
-        throw Error("tensor 'weight' has shape " + io::shape_string(w.shape) + ", expected [25, " + std::to_string(model.info.inputs) + "]");
+        throw Error("tensor 'weight' has shape " + io::shape_string(w.shape) + ", expected [25, " + std::to_string(model.info.inputs) +
+                    "]");
       model.linear.emplace(model.info.inputs, kTargets, w.values, file.tensors.at("bias").values);
     } else {
       model.network = make_network(model.info, model.glove, max_batch);

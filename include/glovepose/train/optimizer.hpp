@@ -31,8 +31,8 @@ class Optimizer {
  public:
   /// @brief State (Adam moments) for the trainable tensors of `params`. Throws for bad settings.
   Optimizer(const ParameterSet& params, OptimizerConfig config) : config_(config) {
-    if (!(config.learning_rate > 0.0) || !(config.beta1 >= 0.0 && config.beta1 < 1.0) ||
-        !(config.beta2 >= 0.0 && config.beta2 < 1.0) || !(config.epsilon > 0.0))
+    if (!(config.learning_rate > 0.0) || !(config.beta1 >= 0.0 && config.beta1 < 1.0) || !(config.beta2 >= 0.0 && config.beta2 < 1.0) ||
+        !(config.epsilon > 0.0))
       throw Error("Optimizer: expected lr > 0, 0 <= beta1, beta2 < 1 and epsilon > 0");
     for (const Parameter& p : params.all()) {
       const std::size_t n = p.trainable && config.kind == OptimizerKind::Adam ? p.size() : 0;

@@ -28,12 +28,12 @@ enum class Layout : unsigned char {
 
 /// @brief One named tensor of a network.
 struct Parameter {
-  std::string name;                  ///< PyTorch state_dict name.
-  std::vector<std::int64_t> shape;   ///< PyTorch shape.
-  Layout layout = Layout::Plain;     ///< Memory order of `value` and `grad`.
-  bool trainable = true;             ///< false: a statistic (BN running mean/var), not optimised.
-  std::vector<float> value;          ///< Values.
-  std::vector<float> grad;           ///< dLoss/dvalue of the last backward pass (trainable only).
+  std::string name;                 ///< PyTorch state_dict name.
+  std::vector<std::int64_t> shape;  ///< PyTorch shape.
+  Layout layout = Layout::Plain;    ///< Memory order of `value` and `grad`.
+  bool trainable = true;            ///< false: a statistic (BN running mean/var), not optimised.
+  std::vector<float> value;         ///< Values.
+  std::vector<float> grad;          ///< dLoss/dvalue of the last backward pass (trainable only).
 
   /// @brief Number of values.
   std::size_t size() const noexcept { return value.size(); }
@@ -103,11 +103,9 @@ class ParameterSet {
   void load(const nn::TensorMap& tensors) {
     for (Parameter& p : params_) {
       const auto it = tensors.find(p.name);
-      if (it == tensors.end())
-        throw Error("tensor '" + p.name + "' is missing, expected shape " + io::shape_string(p.shape));
+      if (it == tensors.end()) throw Error("tensor '" + p.name + "' is missing, expected shape " + io::shape_string(p.shape));
       if (it->second.shape != p.shape)
-        throw Error("tensor '" + p.name + "' has shape " + io::shape_string(it->second.shape) + ", expected " +
-                    io::shape_string(p.shape));
+        throw Error("tensor '" + p.name + "' has shape " + io::shape_string(it->second.shape) + ", expected " + io::shape_string(p.shape));
       if (it->second.values.size() != p.size())
         throw Error("tensor '" + p.name + "' holds " + std::to_string(it->second.values.size()) + " values, expected " +
                     std::to_string(p.size()));

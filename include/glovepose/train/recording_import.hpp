@@ -49,15 +49,16 @@ namespace glovepose::train {
 
 /// @brief One CSV file and the ids its columns do not carry.
 struct CsvTake {
-  std::string path;                          ///< The file (named in every error).
-  std::optional<std::int32_t> subject;       ///< Subject of every row, when the file has no `subject` column.
-  std::optional<std::int32_t> session;       ///< Session of every row, when the file has no `session` column (else 0).
-  std::optional<std::uint8_t> kind;          ///< kKindRecording or kKindCalibration, when the file has no `kind` column.
+  std::string path;                     ///< The file (named in every error).
+  std::optional<std::int32_t> subject;  ///< Subject of every row, when the file has no `subject` column.
+  std::optional<std::int32_t> session;  ///< Session of every row, when the file has no `session` column (else 0).
+  std::optional<std::uint8_t> kind;     ///< kKindRecording or kKindCalibration, when the file has no `kind` column.
 };
 
 /// @brief How the takes are read.
 struct CsvImportOptions {
-  double frame_rate = 0.0;                   ///< Frames per second (> 0; 0: the glove description's rate_hz): the dataset's rate, and the spacing without timestamps.
+  double frame_rate =
+      0.0;  ///< Frames per second (> 0; 0: the glove description's rate_hz): the dataset's rate, and the spacing without timestamps.
   bool degrees = false;                      ///< Angle columns are in degrees (stored as radians).
   std::vector<std::string> ignored_columns;  ///< Columns to skip (e.g. a frame counter).
   bool allow_flat = false;                   ///< Keep a calibration take where a sensor is flat (listed in flat_sensors()).
@@ -65,10 +66,10 @@ struct CsvImportOptions {
 
 /// @brief A sensor found flat in a calibration run that was kept (CsvImportOptions::allow_flat).
 struct FlatSensor {
-  std::string path;                          ///< The take.
-  std::size_t first_line = 0, last_line = 0; ///< The run's lines in the file.
-  std::string cell;                          ///< The cell's name.
-  double min = 0.0, max = 0.0;               ///< Its readings' range over the run.
+  std::string path;                           ///< The take.
+  std::size_t first_line = 0, last_line = 0;  ///< The run's lines in the file.
+  std::string cell;                           ///< The cell's name.
+  double min = 0.0, max = 0.0;                ///< Its readings' range over the run.
 };
 
 /// @brief Reads takes into one dataset for one glove.
@@ -79,7 +80,8 @@ class RecordingImporter {
   /// else the description's rate_hz) is a positive finite number that the description does not
   /// contradict, and no ignored column is also a cell or DoF name.
   RecordingImporter(grid::GloveDescription glove, CsvImportOptions options)
-      : glove_(std::move(glove)), options_(std::move(options)),
+      : glove_(std::move(glove)),
+        options_(std::move(options)),
         data_(static_cast<std::size_t>(glove_.cell_count()), 0, glove_.id(), checked_rate(options_.frame_rate, glove_)) {
     for (const std::string& name : options_.ignored_columns)
       if (cell_of(name) >= 0 || dof_of(name) >= 0)
@@ -146,8 +148,8 @@ class RecordingImporter {
   }
 
   std::vector<Column> columns_of(const std::vector<std::string>& header, const std::string& at) const {
-    const std::pair<const char*, Role> named[] = {{"subject", Role::Subject},  {"session", Role::Session},
-                                                  {"glove", Role::Glove},      {"kind", Role::Kind},
+    const std::pair<const char*, Role> named[] = {{"subject", Role::Subject},   {"session", Role::Session},
+                                                  {"glove", Role::Glove},       {"kind", Role::Kind},
                                                   {"timestamp", Role::Seconds}, {"timestamp_ms", Role::Milliseconds}};
     std::vector<Column> columns;
     std::vector<int> cell_column(static_cast<std::size_t>(glove_.cell_count()), -1);
@@ -159,7 +161,8 @@ class RecordingImporter {
       for (std::size_t earlier = 0; earlier < k; ++earlier)
         if (header[earlier] == name)
           throw Error(where + ": named like column " + std::to_string(earlier + 1) + ", expected each column once");
-      const bool ignored = std::find(options_.ignored_columns.begin(), options_.ignored_columns.end(), name) != options_.ignored_columns.end();
+      const bool ignored =
+          std::find(options_.ignored_columns.begin(), options_.ignored_columns.end(), name) != options_.ignored_columns.end();
       std::optional<Column> column;
       if (ignored) column = Column{Role::Ignored};
       for (const auto& [text, role] : named)
@@ -173,15 +176,16 @@ class RecordingImporter {
       }
       if (!column)
         throw Error(where + ": unknown column, expected a cell of glove '" + glove_.id() + "' (e.g. '" + glove_.cell_names().front() +
-                    "'), a DoF name (e.g. '" + hand::kDofs[0].name + "'), subject, session, glove, kind, timestamp or timestamp_ms"
+                    "'), a DoF name (e.g. '" + hand::kDofs[0].name +
+                    "'), subject, session, glove, kind, timestamp or timestamp_ms"
                     " (other columns can be ignored by name)");
       times += column->role == Role::Seconds || column->role == Role::Milliseconds;
       columns.push_back(*column);
     }
     for (std::size_t c = 0; c < cell_column.size(); ++c)
       if (cell_column[c] < 0)
-        throw Error(at + ": no column '" + glove_.cell_names()[c] + "', expected one column per cell of glove '" + glove_.id() +
-                    "' (" + std::to_string(glove_.cell_count()) + " cells)");
+        throw Error(at + ": no column '" + glove_.cell_names()[c] + "', expected one column per cell of glove '" + glove_.id() + "' (" +
+                    std::to_string(glove_.cell_count()) + " cells)");
     if (times > 1) throw Error(at + ": both timestamp and timestamp_ms, expected at most one time column");
     return columns;
   }
@@ -205,7 +209,8 @@ class RecordingImporter {
       return std::any_of(columns.begin(), columns.end(), [&](const Column& c) { return c.role == role; });
     };
     if (!has(Role::Subject) && !take.subject)
-      throw Error(at + ", line " + std::to_string(header_line) + ": no 'subject' column and no subject given for the file, expected one of them");
+      throw Error(at + ", line " + std::to_string(header_line) +
+                  ": no 'subject' column and no subject given for the file, expected one of them");
     const bool angles = has(Role::Dof);
     hand::DofSet labelled{};
     for (const Column& column : columns)
@@ -214,8 +219,8 @@ class RecordingImporter {
       throw Error(at + ", line " + std::to_string(header_line) + ": " + std::string(angles ? "has" : "has no") + " DoF columns, expected " +
                   (data_.has_angles() ? "the DoFs" : "none") + " as the takes before it");
     if (angles && data_.frames() > 0 && labelled != data_.labelled_dofs())
-      throw Error(at + ", line " + std::to_string(header_line) + ": DoF columns " + hand::dof_set_text(labelled) + ", expected the DoFs of the takes before it (" +
-                  hand::dof_set_text(data_.labelled_dofs()) + ")");
+      throw Error(at + ", line " + std::to_string(header_line) + ": DoF columns " + hand::dof_set_text(labelled) +
+                  ", expected the DoFs of the takes before it (" + hand::dof_set_text(data_.labelled_dofs()) + ")");
     if (angles && data_.frames() == 0) data_.set_labelled_dofs(labelled);
     const double deg = options_.degrees ? 3.14159265358979323846 / 180.0 : 1.0;
     const std::size_t first_frame = data_.frames();
@@ -228,7 +233,8 @@ class RecordingImporter {
       const std::vector<std::string> fields = io::split_csv_line(line);
       const std::string at_line = at + ", line " + std::to_string(line_no);
       if (fields.size() != columns.size())
-        throw Error(at_line + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(columns.size()) + " (one per column of line " + std::to_string(header_line) + ")");
+        throw Error(at_line + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(columns.size()) +
+                    " (one per column of line " + std::to_string(header_line) + ")");
       std::int32_t subject = take.subject.value_or(0), session = take.session.value_or(0), glove = 0;
       std::uint8_t kind = take.kind.value_or(kKindRecording);
       std::optional<double> time;
@@ -237,23 +243,38 @@ class RecordingImporter {
         const std::string where = at_line + ", column '" + header[k] + "': '" + fields[k] + "'";
         const Column& column = columns[k];
         switch (column.role) {
-          case Role::Cell: cells[static_cast<std::size_t>(column.index)] = io::parse_csv_number<float>(fields[k], where); break;
+          case Role::Cell:
+            cells[static_cast<std::size_t>(column.index)] = io::parse_csv_number<float>(fields[k], where);
+            break;
           case Role::Dof:
             pose[static_cast<std::size_t>(column.index)] = static_cast<float>(io::parse_csv_number<double>(fields[k], where) * deg);
             if (!std::isfinite(pose[static_cast<std::size_t>(column.index)])) throw Error(where + " is not a finite angle");
             break;
-          case Role::Subject: subject = io::parse_csv_id(fields[k], where); break;
-          case Role::Session: session = io::parse_csv_id(fields[k], where); break;
-          case Role::Glove: glove = io::parse_csv_id(fields[k], where); break;
-          case Role::Kind: kind = parse_kind(fields[k], where); break;
-          case Role::Seconds: time = io::parse_csv_number<double>(fields[k], where); break;
-          case Role::Milliseconds: time = io::parse_csv_number<double>(fields[k], where) / 1000.0; break;
-          case Role::Ignored: break;
+          case Role::Subject:
+            subject = io::parse_csv_id(fields[k], where);
+            break;
+          case Role::Session:
+            session = io::parse_csv_id(fields[k], where);
+            break;
+          case Role::Glove:
+            glove = io::parse_csv_id(fields[k], where);
+            break;
+          case Role::Kind:
+            kind = parse_kind(fields[k], where);
+            break;
+          case Role::Seconds:
+            time = io::parse_csv_number<double>(fields[k], where);
+            break;
+          case Role::Milliseconds:
+            time = io::parse_csv_number<double>(fields[k], where) / 1000.0;
+            break;
+          case Role::Ignored:
+            break;
         }
       }
       const std::size_t n = data_.frames();
-      const bool continues = n > 0 && data_.subject[n - 1] == subject && data_.session[n - 1] == session &&
-                             data_.glove[n - 1] == glove && data_.kind[n - 1] == kind;
+      const bool continues = n > 0 && data_.subject[n - 1] == subject && data_.session[n - 1] == session && data_.glove[n - 1] == glove &&
+                             data_.kind[n - 1] == kind;
       if (!time) time = continues ? data_.timestamps[n - 1] + 1.0 / data_.frame_rate() : 0.0;
       if (continues && !(*time > data_.timestamps[n - 1]))
         throw Error(at_line + ": time " + io::number_text(*time) + " s is not after the frame before (" +
@@ -303,8 +324,8 @@ class RecordingImporter {
           if (!options_.allow_flat)
             throw Error("CSV file '" + path + "', lines " + std::to_string(flat.first_line) + "-" + std::to_string(flat.last_line) +
                         " (calibration of subject " + std::to_string(data_.subject[begin]) + ", session " +
-                        std::to_string(data_.session[begin]) + "), column '" + flat.cell + "': flat (" + io::number_text(lo) +
-                        " to " + io::number_text(hi) + ", a range within " + io::number_text(100.0 * flat_rule.min_relative_range) +
+                        std::to_string(data_.session[begin]) + "), column '" + flat.cell + "': flat (" + io::number_text(lo) + " to " +
+                        io::number_text(hi) + ", a range within " + io::number_text(100.0 * flat_rule.min_relative_range) +
                         "% of its value), expected a calibration that moves every sensor (calibrated, it would read 0; "
                         "allow flat sensors to keep the take, or give the glove description a smaller calibration.flat_relative_range)");
           flat_.push_back(std::move(flat));

@@ -28,8 +28,7 @@ inline void replay_rows(Dataset& data, const sensor::ReadoutConfig& config) {
   const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
   if (data.glove_layout() != layout.id() || !data.has_raw_rows() || data.row_count != static_cast<std::size_t>(layout.row_count()))
     throw Error("replay: the dataset has " + std::to_string(data.row_count) + " raw rows per frame of glove '" + data.glove_layout() +
-                "', expected the " + std::to_string(layout.row_count()) + " rows of '" + layout.id() +
-                "' (glovepose simulate --raw-rows)");
+                "', expected the " + std::to_string(layout.row_count()) + " rows of '" + layout.id() + "' (glovepose simulate --raw-rows)");
   const auto solver = std::make_shared<const sensor::CapacitanceSolver>(layout);
   const double row_period = 1.0 / (data.frame_rate() * static_cast<double>(data.row_count));
   std::optional<sensor::Readout> readout;

@@ -54,10 +54,10 @@ inline std::vector<std::string> cell_names(std::size_t n) {
 
 /// @brief Which frames of a dataset to use.
 struct FrameFilter {
-  std::vector<int> subjects;  ///< Subject ids to keep; empty: all.
-  std::vector<int> sessions;  ///< Session ids to keep; empty: all.
-  std::vector<int> gloves;    ///< Glove ids to keep; empty: all.
-  bool keep_outliers = false; ///< Keep frames flagged as collision outliers.
+  std::vector<int> subjects;   ///< Subject ids to keep; empty: all.
+  std::vector<int> sessions;   ///< Session ids to keep; empty: all.
+  std::vector<int> gloves;     ///< Glove ids to keep; empty: all.
+  bool keep_outliers = false;  ///< Keep frames flagged as collision outliers.
 
   /// @brief Whether recording frame `i` of `data` is kept (calibration frames never are).
   bool keeps(const Dataset& data, std::size_t i) const noexcept {
@@ -65,7 +65,9 @@ struct FrameFilter {
   }
   /// @brief Whether frame `i` of `data`, of any kind, belongs to a selected subject, session and glove.
   bool selects_run(const Dataset& data, std::size_t i) const noexcept {
-    const auto in = [](const std::vector<int>& list, int v) { return list.empty() || std::find(list.begin(), list.end(), v) != list.end(); };
+    const auto in = [](const std::vector<int>& list, int v) {
+      return list.empty() || std::find(list.begin(), list.end(), v) != list.end();
+    };
     return in(subjects, data.subject[i]) && in(sessions, data.session[i]) && in(gloves, data.glove[i]);
   }
 };
@@ -73,16 +75,16 @@ struct FrameFilter {
 /// @brief Frames ready for a network: inputs (frames x cells) and targets (frames x 25, normalised
 /// by the joint limits), with the true angles and the frame's origin for reports and splits.
 struct Samples {
-  int cells = 0;                      ///< Values per input row.
-  std::vector<float> inputs;          ///< frames x cells, calibrated.
-  std::vector<float> targets;         ///< frames x 25 in [-1, 1] within the joint limits; a DoF not labelled: its rest pose (JointLimits::rest()).
-  std::vector<float> angles;          ///< frames x 25 true angles, radians; NaN for a DoF not labelled.
+  int cells = 0;               ///< Values per input row.
+  std::vector<float> inputs;   ///< frames x cells, calibrated.
+  std::vector<float> targets;  ///< frames x 25 in [-1, 1] within the joint limits; a DoF not labelled: its rest pose (JointLimits::rest()).
+  std::vector<float> angles;   ///< frames x 25 true angles, radians; NaN for a DoF not labelled.
   hand::DofSet labelled = hand::all_dofs();  ///< The DoFs with reference angles: the only ones trained and scored.
   /// Sensors the calibration maps to 0 because their range was flat (CalibrationRange::flat_sensors()),
   /// per calibrated run (its run key; -1 for the training range), for the runs that have any.
   std::map<std::int64_t, std::vector<std::string>> zeroed;
-  std::vector<std::int64_t> run;      ///< Per frame: (subject, glove, session) packed, for splits.
-  std::vector<std::int64_t> source;   ///< Per frame: its index in the dataset.
+  std::vector<std::int64_t> run;     ///< Per frame: (subject, glove, session) packed, for splits.
+  std::vector<std::int64_t> source;  ///< Per frame: its index in the dataset.
 
   /// @brief Number of frames.
   long frames() const noexcept { return static_cast<long>(source.size()); }
@@ -111,7 +113,8 @@ inline std::int64_t run_key(const Dataset& data, std::size_t i) noexcept {
 
 /// @brief Per-cell min and max over the kept frames: the "training" calibration, flat sensors by
 /// the glove's rule. Throws glovepose::Error when no frame is kept.
-inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter, const grid::GloveCalibration& calibration = {}) {
+inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter,
+                                               const grid::GloveCalibration& calibration = {}) {
   const std::size_t cells = data.cell_count;
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cells), HUGE_VAL);
   Eigen::VectorXd hi = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cells), -HUGE_VAL);
@@ -133,7 +136,8 @@ inline sensor::CalibrationRange training_range(const Dataset& data, const FrameF
 /// the running-median min-max over the session's calibration sequence, the median spanning the
 /// glove's median_seconds at the dataset's frame rate (the paper's 20 frames at 60 Hz by default),
 /// flat sensors by the glove's rule.
-inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Dataset& data, const grid::GloveCalibration& calibration = {}) {
+inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Dataset& data,
+                                                                        const grid::GloveCalibration& calibration = {}) {
   const int median_window = calibration.median_frames(data.frame_rate());
   std::map<std::int64_t, sensor::OnTheFlyCalibrator> calibrators;
   const std::vector<std::string> names = cell_names(data.cell_count);
@@ -141,7 +145,8 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Da
   for (std::size_t i = 0; i < data.frames(); ++i) {
     if (data.kind[i] != kKindCalibration) continue;
     auto it = calibrators.find(run_key(data, i));
-    if (it == calibrators.end()) it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration.config())).first;
+    if (it == calibrators.end())
+      it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration.config())).first;
     for (std::size_t c = 0; c < data.cell_count; ++c) frame(static_cast<Eigen::Index>(c)) = data.cells[i * data.cell_count + c];
     it->second.add(frame);
   }
@@ -155,9 +160,8 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Da
 /// training range for CalibrationMode::Training) with targets normalised by `limits`. Throws
 /// glovepose::Error when the dataset has no angles, a run lacks its calibration sequence in
 /// on-the-fly mode, or no frame is kept. On the fly, the glove's `calibration` settings apply.
-inline Samples make_samples(const Dataset& data, const FrameFilter& filter, CalibrationMode mode,
-                            const sensor::CalibrationRange* range, const hand::JointLimits& limits, int stride = 1,
-                            const grid::GloveCalibration& calibration = {}) {
+inline Samples make_samples(const Dataset& data, const FrameFilter& filter, CalibrationMode mode, const sensor::CalibrationRange* range,
+                            const hand::JointLimits& limits, int stride = 1, const grid::GloveCalibration& calibration = {}) {
   if (!data.has_angles()) throw Error("samples: the dataset has no ground-truth angles, expected a recording with angles");
   if (stride < 1) throw Error("samples: stride " + std::to_string(stride) + ", expected >= 1");
   if (mode == CalibrationMode::Training && (range == nullptr || static_cast<std::size_t>(range->size()) != data.cell_count))
@@ -184,7 +188,8 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
         const auto it = runs.find(key);
         if (it == runs.end())
           throw Error("samples: subject " + std::to_string(data.subject[i]) + ", glove " + std::to_string(data.glove[i]) + ", session " +
-                      std::to_string(data.session[i]) + " has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration");
+                      std::to_string(data.session[i]) +
+                      " has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration");
         r = &it->second;
       }
       r->normalize(raw, normalized);

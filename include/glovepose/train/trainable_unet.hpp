@@ -33,8 +33,8 @@ namespace glovepose::train {
 
 /// @brief Batch-norm settings (PyTorch's defaults).
 struct BatchNormConfig {
-  double epsilon = 1e-5;   ///< Added to the variance.
-  double momentum = 0.1;   ///< Weight of the new batch in the running statistics.
+  double epsilon = 1e-5;  ///< Added to the variance.
+  double momentum = 0.1;  ///< Weight of the new batch in the running statistics.
 };
 
 /// @brief The trainable U-Net of base width w.
@@ -61,8 +61,9 @@ class TrainableUNet final : public TrainableNetwork {
       l.spec = spec;
       l.in = spec.in_channels(width, extra);
       l.weight = params_.add(spec.conv + ".weight",
-                             spec.geometry.transposed ? std::vector<std::int64_t>{l.in, spec.out_channels, spec.geometry.kernel, spec.geometry.kernel}
-                                                      : std::vector<std::int64_t>{spec.out_channels, l.in, spec.geometry.kernel, spec.geometry.kernel},
+                             spec.geometry.transposed
+                                 ? std::vector<std::int64_t>{l.in, spec.out_channels, spec.geometry.kernel, spec.geometry.kernel}
+                                 : std::vector<std::int64_t>{spec.out_channels, l.in, spec.geometry.kernel, spec.geometry.kernel},
                              spec.geometry.transposed ? Layout::TransposedTaps : Layout::ConvTaps);
       l.bias = params_.add(spec.conv + ".bias", {spec.out_channels});
       if (!spec.bn.empty()) {
@@ -83,7 +84,8 @@ class TrainableUNet final : public TrainableNetwork {
       layers_.push_back(std::move(l));
     }
     for (const BufferShape& b : buffers_) {
-      const std::size_t n = static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(max_batch) * static_cast<std::size_t>(b.channels);
+      const std::size_t n =
+          static_cast<std::size_t>(b.positions) * static_cast<std::size_t>(max_batch) * static_cast<std::size_t>(b.channels);
       values_.emplace_back(n, 0.0f);
       grads_.emplace_back(n, 0.0f);
     }
@@ -134,7 +136,8 @@ class TrainableUNet final : public TrainableNetwork {
     const float* out = values_.back().data();
     for (int f = 0; f < frames; ++f)
       for (int d = 0; d < kTargets; ++d)
-        output_[static_cast<std::size_t>(f * kTargets + d)] = out[static_cast<long>(map_.dof_slots()[static_cast<std::size_t>(d)].flat()) * frames + f];
+        output_[static_cast<std::size_t>(f * kTargets + d)] =
+            out[static_cast<long>(map_.dof_slots()[static_cast<std::size_t>(d)].flat()) * frames + f];
   }
 
   void backward(const float* output_grad, ThreadPool& pool) override {
@@ -179,8 +182,8 @@ class TrainableUNet final : public TrainableNetwork {
     std::size_t weight = 0, bias = 0, gamma = 0, beta = 0, running_mean = 0, running_var = 0;
     std::vector<std::vector<Pair>> pairs;  // [output position] -> the useful taps reaching it
     std::vector<int> useful_taps;
-    std::vector<float> pre;                // conv output; with batch norm, overwritten by x-hat
-    std::vector<double> mean, inv_std;     // batch norm: the statistics the forward used
+    std::vector<float> pre;             // conv output; with batch norm, overwritten by x-hat
+    std::vector<double> mean, inv_std;  // batch norm: the statistics the forward used
     bool has_bn() const noexcept { return !spec.bn.empty(); }
   };
 
@@ -219,7 +222,8 @@ class TrainableUNet final : public TrainableNetwork {
           int base = 0;
           for (int source : layer.spec.sources) {
             const int cs = buffers_[static_cast<std::size_t>(source)].channels;
-            ConstMatrixMap x(values_[static_cast<std::size_t>(source)].data() + (static_cast<long>(pr.in_position) * frames + r.begin) * cs, n, cs);
+            ConstMatrixMap x(values_[static_cast<std::size_t>(source)].data() + (static_cast<long>(pr.in_position) * frames + r.begin) * cs,
+                             n, cs);
             ConstMatrixMap wt(w + (static_cast<long>(pr.tap) * layer.in + base) * cout, cs, cout);
             z.noalias() += x * wt;
             base += cs;
@@ -248,7 +252,8 @@ class TrainableUNet final : public TrainableNetwork {
           for (int c = 0; c < cout; ++c) {
             float v = pre[row + c];
             if (gamma) {
-              const float xhat = static_cast<float>((v - layer.mean[static_cast<std::size_t>(c)]) * layer.inv_std[static_cast<std::size_t>(c)]);
+              const float xhat =
+                  static_cast<float>((v - layer.mean[static_cast<std::size_t>(c)]) * layer.inv_std[static_cast<std::size_t>(c)]);
               pre[row + c] = xhat;
               v = gamma[c] * xhat + beta[c];
             }
@@ -346,7 +351,8 @@ class TrainableUNet final : public TrainableNetwork {
       float* dgamma = params_[layer.gamma].grad.data();
       float* dbeta = params_[layer.beta].grad.data();
       const float* gamma = params_[layer.gamma].value.data();
-      std::vector<float> scale(static_cast<std::size_t>(cout)), mean_delta(static_cast<std::size_t>(cout)), mean_product(static_cast<std::size_t>(cout));
+      std::vector<float> scale(static_cast<std::size_t>(cout)), mean_delta(static_cast<std::size_t>(cout)),
+          mean_product(static_cast<std::size_t>(cout));
       const double count = static_cast<double>(frames) * positions;
       for (int c = 0; c < cout; ++c) {
         double sd = 0.0, sp = 0.0;
@@ -389,7 +395,8 @@ class TrainableUNet final : public TrainableNetwork {
           for (int source : layer.spec.sources) {
             const int cs = buffers_[static_cast<std::size_t>(source)].channels;
             if (source != 0) {  // the network input needs no gradient
-              MatrixMap dx(grads_[static_cast<std::size_t>(source)].data() + (static_cast<long>(pr.in_position) * frames + rows.begin) * cs, n, cs);
+              MatrixMap dx(grads_[static_cast<std::size_t>(source)].data() + (static_cast<long>(pr.in_position) * frames + rows.begin) * cs,
+                           n, cs);
               ConstMatrixMap wt(w + (static_cast<long>(pr.tap) * layer.in + base) * cout, cs, cout);
               dx.noalias() += dz * wt.transpose();
             }
@@ -408,7 +415,8 @@ class TrainableUNet final : public TrainableNetwork {
             int base = 0;
             for (int source : layer.spec.sources) {
               const int cs = buffers_[static_cast<std::size_t>(source)].channels;
-              ConstMatrixMap x(values_[static_cast<std::size_t>(source)].data() + static_cast<long>(pr.in_position) * frames * cs, frames, cs);
+              ConstMatrixMap x(values_[static_cast<std::size_t>(source)].data() + static_cast<long>(pr.in_position) * frames * cs, frames,
+                               cs);
               MatrixMap g(dw + (static_cast<long>(tap) * layer.in + base) * cout, cs, cout);
               g.middleCols(cols.begin, cols.size()).noalias() += x.transpose() * dz.middleCols(cols.begin, cols.size());
               base += cs;

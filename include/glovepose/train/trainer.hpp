@@ -28,14 +28,14 @@ namespace glovepose::train {
 
 /// @brief Where training is, for progress bars.
 struct Progress {
-  int epoch = 0;                    ///< Current epoch (0-based).
-  int epochs = 0;                   ///< Epochs planned.
-  long step = 0;                    ///< Steps done in this epoch.
-  long steps_per_epoch = 0;         ///< Steps per epoch.
-  double loss = 0.0;                ///< Mean training loss of this epoch so far.
-  double samples_per_second = 0.0;  ///< Training throughput so far.
-  double eta_seconds = 0.0;         ///< Estimated time to the end.
-  double best_validation_deg = 0.0; ///< Best validation error so far (NaN before the first).
+  int epoch = 0;                     ///< Current epoch (0-based).
+  int epochs = 0;                    ///< Epochs planned.
+  long step = 0;                     ///< Steps done in this epoch.
+  long steps_per_epoch = 0;          ///< Steps per epoch.
+  double loss = 0.0;                 ///< Mean training loss of this epoch so far.
+  double samples_per_second = 0.0;   ///< Training throughput so far.
+  double eta_seconds = 0.0;          ///< Estimated time to the end.
+  double best_validation_deg = 0.0;  ///< Best validation error so far (NaN before the first).
 };
 
 /// @brief One epoch's figures.
@@ -48,13 +48,13 @@ struct EpochRecord {
 
 /// @brief Training settings.
 struct TrainConfig {
-  int epochs = 10;                  ///< Passes over the training frames.
-  int batch = 1024;                 ///< Frames per step (the paper: 1024 generic, 256 personalised, 64 fine-tuning).
-  OptimizerConfig optimizer;        ///< Update rule (default: the paper's Adam).
-  std::uint64_t seed = 1;           ///< Shuffling (and augmentation) seed.
-  Augmentation augmentation;        ///< Perturbation of the training frames' inputs (default none).
-  double max_seconds = 0.0;         ///< Stop after this much wall time (0: no limit).
-  const std::atomic<bool>* stop = nullptr;  ///< Set from elsewhere (a signal handler) to stop between steps.
+  int epochs = 10;                                   ///< Passes over the training frames.
+  int batch = 1024;                                  ///< Frames per step (the paper: 1024 generic, 256 personalised, 64 fine-tuning).
+  OptimizerConfig optimizer;                         ///< Update rule (default: the paper's Adam).
+  std::uint64_t seed = 1;                            ///< Shuffling (and augmentation) seed.
+  Augmentation augmentation;                         ///< Perturbation of the training frames' inputs (default none).
+  double max_seconds = 0.0;                          ///< Stop after this much wall time (0: no limit).
+  const std::atomic<bool>* stop = nullptr;           ///< Set from elsewhere (a signal handler) to stop between steps.
   std::function<void(const Progress&)> on_progress;  ///< Called after every step.
   std::function<void(const TrainableNetwork&, const EpochRecord&)> on_best;  ///< Called when validation improves.
 };
@@ -81,14 +81,14 @@ inline int default_epochs(long frames, int batch) noexcept {
 
 /// @brief What training did.
 struct TrainResult {
-  std::vector<EpochRecord> epochs;           ///< Per finished epoch.
-  int best_epoch = -1;                       ///< Epoch of the kept model.
-  double best_validation_error_deg = NAN;    ///< Its validation error.
-  nn::TensorMap best;                        ///< The kept model's tensors (PyTorch layout).
-  long steps = 0;                            ///< Optimiser steps taken.
-  double seconds = 0.0;                      ///< Wall time.
-  double samples_per_second = 0.0;           ///< Training frames per second (forward + backward + step).
-  bool stopped = false;                      ///< Stopped early (signal or time limit).
+  std::vector<EpochRecord> epochs;         ///< Per finished epoch.
+  int best_epoch = -1;                     ///< Epoch of the kept model.
+  double best_validation_error_deg = NAN;  ///< Its validation error.
+  nn::TensorMap best;                      ///< The kept model's tensors (PyTorch layout).
+  long steps = 0;                          ///< Optimiser steps taken.
+  double seconds = 0.0;                    ///< Wall time.
+  double samples_per_second = 0.0;         ///< Training frames per second (forward + backward + step).
+  bool stopped = false;                    ///< Stopped early (signal or time limit).
 };
 
 /// @brief The network's outputs (normalised, frames x 25) for every frame of `samples`, in
@@ -126,15 +126,16 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
 inline TrainResult train_network(TrainableNetwork& net, const Samples& train, const Samples& validation, const hand::JointLimits& limits,
                                  const TrainConfig& config, ThreadPool& pool) {
   if (train.cells != net.inputs())
-    throw Error("train: the samples have " + std::to_string(train.cells) + " cells per frame, the network takes " + std::to_string(net.inputs()));
+    throw Error("train: the samples have " + std::to_string(train.cells) + " cells per frame, the network takes " +
+                std::to_string(net.inputs()));
   if (train.frames() < 1) throw Error("train: no training frames");
   if (config.epochs < 1 || config.batch < 1) throw Error("train: expected epochs >= 1 and batch >= 1");
   config.augmentation.validate();
   const int batch = static_cast<int>(std::min<long>({static_cast<long>(config.batch), train.frames(), static_cast<long>(net.max_batch())}));
   const long steps_per_epoch = train.frames() / batch;  // the remainder waits for the next shuffle
   Optimizer optimizer(net.parameters(), config.optimizer);
-  std::vector<float> x(static_cast<std::size_t>(batch) * static_cast<std::size_t>(train.cells)), t(static_cast<std::size_t>(batch) * kTargets),
-      grad(static_cast<std::size_t>(batch) * kTargets);
+  std::vector<float> x(static_cast<std::size_t>(batch) * static_cast<std::size_t>(train.cells)),
+      t(static_cast<std::size_t>(batch) * kTargets), grad(static_cast<std::size_t>(batch) * kTargets);
   std::vector<long> order(static_cast<std::size_t>(train.frames()));
   TrainResult result;
   const auto start = std::chrono::steady_clock::now();
@@ -150,7 +151,8 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
   for (int epoch = 0; epoch < config.epochs && !result.stopped; ++epoch) {
     std::iota(order.begin(), order.end(), 0L);
     core::Rng rng(core::derive_seed(config.seed, {0x5348554646ULL, static_cast<std::uint64_t>(epoch)}));
-    for (long i = train.frames() - 1; i > 0; --i) std::swap(order[static_cast<std::size_t>(i)], order[rng.next() % static_cast<std::uint64_t>(i + 1)]);
+    for (long i = train.frames() - 1; i > 0; --i)
+      std::swap(order[static_cast<std::size_t>(i)], order[rng.next() % static_cast<std::uint64_t>(i + 1)]);
     double loss_sum = 0.0;
     long step = 0;
     for (; step < steps_per_epoch; ++step) {
@@ -161,11 +163,14 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
       const auto step_start = std::chrono::steady_clock::now();
       for (int b = 0; b < batch; ++b) {
         const long i = order[static_cast<std::size_t>(step * batch + b)];
-        std::copy(train.inputs.begin() + i * train.cells, train.inputs.begin() + (i + 1) * train.cells, x.begin() + static_cast<long>(b) * train.cells);
-        std::copy(train.targets.begin() + i * kTargets, train.targets.begin() + (i + 1) * kTargets, t.begin() + static_cast<long>(b) * kTargets);
+        std::copy(train.inputs.begin() + i * train.cells, train.inputs.begin() + (i + 1) * train.cells,
+                  x.begin() + static_cast<long>(b) * train.cells);
+        std::copy(train.targets.begin() + i * kTargets, train.targets.begin() + (i + 1) * kTargets,
+                  t.begin() + static_cast<long>(b) * kTargets);
       }
       if (config.augmentation.active()) {
-        core::Rng draw(core::derive_seed(config.seed, {0x4155474dULL, static_cast<std::uint64_t>(epoch), static_cast<std::uint64_t>(step)}));
+        core::Rng draw(
+            core::derive_seed(config.seed, {0x4155474dULL, static_cast<std::uint64_t>(epoch), static_cast<std::uint64_t>(step)}));
         augment(x.data(), batch, train.cells, config.augmentation, draw);
       }
       net.forward(x.data(), batch, true, pool);
@@ -173,8 +178,8 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
                               ? mse_loss(net.output(), t.data(), static_cast<long>(batch) * kTargets, grad.data())
                               : masked_mse_loss(net.output(), t.data(), batch, train.labelled, grad.data());
       if (!std::isfinite(loss))
-        throw Error("train: the loss became " + std::to_string(loss) + " at epoch " + std::to_string(epoch) + ", step " + std::to_string(step) +
-                    "; expected a finite loss (lower the learning rate?)");
+        throw Error("train: the loss became " + std::to_string(loss) + " at epoch " + std::to_string(epoch) + ", step " +
+                    std::to_string(step) + "; expected a finite loss (lower the learning rate?)");
       net.backward(grad.data(), pool);
       optimizer.step(net.parameters(), pool);
       ++result.steps;
@@ -197,7 +202,8 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
     }
     if (step == 0) break;  // stopped before this epoch trained anything
     EpochRecord record{epoch, loss_sum / static_cast<double>(step), NAN, 0.0};
-    if (validation.frames() > 0) record.validation_error_deg = mean_error_degrees(predict(net, validation, pool), validation.angles, limits, validation.labelled);
+    if (validation.frames() > 0)
+      record.validation_error_deg = mean_error_degrees(predict(net, validation, pool), validation.angles, limits, validation.labelled);
     record.seconds = elapsed();
     result.epochs.push_back(record);
     const bool better = validation.frames() == 0 || !(record.validation_error_deg >= result.best_validation_error_deg);

@@ -33,8 +33,7 @@ struct ScalarBackend {
   /// k x n matrix W is packed in column panels of `panel` columns (the last one narrower), each
   /// panel k rows of its width, row-major (panel_index()).
   template <typename W>
-  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
-                                           int n) noexcept {
+  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k, int n) noexcept {
     for (int r = 0; r < rows; ++r)
       for (int kk = 0; kk < k; ++kk) {
         const float xv = x[r][kk];
@@ -57,8 +56,7 @@ struct ScalarBackend {
   /// @brief gemm_rows() for rows given by their nonzero entries: for every row r,
   /// y[r][0..n) += sum over i of x[r].value[i] * W(x[r].index[i], 0..n), W packed as for gemm_rows().
   template <typename W>
-  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k,
-                                                  int n) noexcept {
+  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k, int n) noexcept {
     for (int r = 0; r < rows; ++r)
       for (int i = 0; i < x[r].count; ++i) {
         const float xv = x[r].value[i];

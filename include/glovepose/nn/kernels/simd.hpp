@@ -25,7 +25,7 @@
 #include "weight_load.hpp"
 
 #if defined(__AVX512F__) || defined(__AVX2__)
-#include <immintrin.h>
+#  include <immintrin.h>
 #endif
 
 namespace glovepose::nn::kernels {
@@ -70,8 +70,7 @@ struct SimdBackend {
 
   /// @brief See ScalarBackend::gemm_rows. Requires n to be a multiple of `lanes`.
   template <typename W>
-  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k,
-                                           int n) noexcept {
+  GLOVEPOSE_REALTIME static void gemm_rows(const float* const* x, float* const* y, int rows, const W* w, int k, int n) noexcept {
     // Few rows (batch 1): wide column blocks for enough accumulators. Many rows (batches):
     // batch_block_rows, whose column blocks vectors_for() sizes.
     const int max_rows = rows <= max_block_rows ? rows : batch_block_rows;
@@ -80,8 +79,7 @@ struct SimdBackend {
       const W* wp = w + static_cast<long>(k) * p0;
       for (int j = 0; j < width;) {
         const int v = vectors_for(max_rows, (width - j) / lanes);  // the same column block for all rows
-        for (int r = 0; r < rows; r += max_rows)
-          dispatch(std::min(max_rows, rows - r), v, x + r, y + r, wp + j, k, width, p0 + j);
+        for (int r = 0; r < rows; r += max_rows) dispatch(std::min(max_rows, rows - r), v, x + r, y + r, wp + j, k, width, p0 + j);
         j += v * lanes;
       }
     }
@@ -133,8 +131,7 @@ struct SimdBackend {
   /// @brief See ScalarBackend::gemm_sparse_rows. Per column block, each row runs over its nonzero
   /// entries only, V accumulator vectors (U sets of them for narrow blocks) in registers.
   template <typename W>
-  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k,
-                                                  int n) noexcept {
+  GLOVEPOSE_REALTIME static void gemm_sparse_rows(const SparseRow* x, float* const* y, int rows, const W* w, int k, int n) noexcept {
     for (int p0 = 0; p0 < n; p0 += panel) {
       const int width = std::min(panel, n - p0);
       const W* wp = w + static_cast<long>(k) * p0;
@@ -144,10 +141,18 @@ struct SimdBackend {
           if (x[r].count == 0) continue;
           float* out = y[r] + p0 + j;
           switch (v) {
-            case 8: sparse_block<8>(x[r], out, wp + j, width, p0 + j); break;
-            case 4: sparse_block<4>(x[r], out, wp + j, width, p0 + j); break;
-            case 2: sparse_block<2>(x[r], out, wp + j, width, p0 + j); break;
-            default: sparse_block<1>(x[r], out, wp + j, width, p0 + j); break;
+            case 8:
+              sparse_block<8>(x[r], out, wp + j, width, p0 + j);
+              break;
+            case 4:
+              sparse_block<4>(x[r], out, wp + j, width, p0 + j);
+              break;
+            case 2:
+              sparse_block<2>(x[r], out, wp + j, width, p0 + j);
+              break;
+            default:
+              sparse_block<1>(x[r], out, wp + j, width, p0 + j);
+              break;
           }
         }
         j += v * lanes;
@@ -309,12 +314,24 @@ struct SimdBackend {
   template <int V, typename W>
   static void dispatch_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
     switch (rows) {
-      case 1: block<1, V>(x, y, w, k, ldw, col); break;
-      case 2: block<2, V>(x, y, w, k, ldw, col); break;
-      case 3: block<3, V>(x, y, w, k, ldw, col); break;
-      case 4: block<4, V>(x, y, w, k, ldw, col); break;
-      case 5: block<5, V>(x, y, w, k, ldw, col); break;
-      case 6: block<6, V>(x, y, w, k, ldw, col); break;
+      case 1:
+        block<1, V>(x, y, w, k, ldw, col);
+        break;
+      case 2:
+        block<2, V>(x, y, w, k, ldw, col);
+        break;
+      case 3:
+        block<3, V>(x, y, w, k, ldw, col);
+        break;
+      case 4:
+        block<4, V>(x, y, w, k, ldw, col);
+        break;
+      case 5:
+        block<5, V>(x, y, w, k, ldw, col);
+        break;
+      case 6:
+        block<6, V>(x, y, w, k, ldw, col);
+        break;
       default:
         if constexpr (V > 2) {  // 7..12 rows hold at most 2 vectors of accumulators each: two halves
           dispatch_many_rows<2>(rows, x, y, w, k, ldw, col);
@@ -329,12 +346,24 @@ struct SimdBackend {
   template <int V, typename W>
   static void dispatch_many_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
     switch (rows) {
-      case 7: block<7, V>(x, y, w, k, ldw, col); break;
-      case 8: block<8, V>(x, y, w, k, ldw, col); break;
-      case 9: block<9, V>(x, y, w, k, ldw, col); break;
-      case 10: block<10, V>(x, y, w, k, ldw, col); break;
-      case 11: block<11, V>(x, y, w, k, ldw, col); break;
-      default: block<12, V>(x, y, w, k, ldw, col); break;
+      case 7:
+        block<7, V>(x, y, w, k, ldw, col);
+        break;
+      case 8:
+        block<8, V>(x, y, w, k, ldw, col);
+        break;
+      case 9:
+        block<9, V>(x, y, w, k, ldw, col);
+        break;
+      case 10:
+        block<10, V>(x, y, w, k, ldw, col);
+        break;
+      case 11:
+        block<11, V>(x, y, w, k, ldw, col);
+        break;
+      default:
+        block<12, V>(x, y, w, k, ldw, col);
+        break;
     }
   }
 
@@ -349,9 +378,15 @@ struct SimdBackend {
           dispatch_rows<4>(rows, x, y, w + 4 * lanes, k, ldw, col + 4 * lanes);
         }
         break;
-      case 4: dispatch_rows<4>(rows, x, y, w, k, ldw, col); break;
-      case 2: dispatch_rows<2>(rows, x, y, w, k, ldw, col); break;
-      default: dispatch_rows<1>(rows, x, y, w, k, ldw, col); break;
+      case 4:
+        dispatch_rows<4>(rows, x, y, w, k, ldw, col);
+        break;
+      case 2:
+        dispatch_rows<2>(rows, x, y, w, k, ldw, col);
+        break;
+      default:
+        dispatch_rows<1>(rows, x, y, w, k, ldw, col);
+        break;
     }
   }
 };

@@ -19,7 +19,7 @@
 #include "../../io/half.hpp"
 
 #if defined(__F16C__) || defined(__AVX512F__) || defined(__SSE2__)
-#include <immintrin.h>
+#  include <immintrin.h>
 #endif
 
 namespace glovepose::nn::kernels {
@@ -73,14 +73,11 @@ template <typename Arch>
 inline xsimd::batch<float, Arch> load_weights(const std::uint16_t* p) noexcept {
   constexpr std::size_t n = xsimd::batch<float, Arch>::size;
 #if defined(__AVX512F__)
-  if constexpr (n == 16)
-    return xsimd::batch<float, Arch>(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))));
+  if constexpr (n == 16) return xsimd::batch<float, Arch>(_mm512_cvtph_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))));
 #endif
 #if defined(__F16C__)
-  if constexpr (n == 8)
-    return xsimd::batch<float, Arch>(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
-  if constexpr (n == 4)
-    return xsimd::batch<float, Arch>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+  if constexpr (n == 8) return xsimd::batch<float, Arch>(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+  if constexpr (n == 4) return xsimd::batch<float, Arch>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
 #endif
   alignas(64) float wide[n];
   for (std::size_t i = 0; i < n; ++i) wide[i] = io::f16_to_float(p[i]);
@@ -95,7 +92,8 @@ inline xsimd::batch<float, Arch> load_weights(const BFloat16* p) noexcept {
   constexpr std::size_t n = Batch::size;
 #if defined(__AVX512F__)
   if constexpr (n == 16)
-    return Batch(_mm512_castsi512_ps(_mm512_slli_epi32(_mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))), 16)));
+    return Batch(
+        _mm512_castsi512_ps(_mm512_slli_epi32(_mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p))), 16)));
 #endif
 #if defined(__AVX2__)
   if constexpr (n == 8)
@@ -141,8 +139,8 @@ inline void load_weight_pair(const Fixed16* p, xsimd::batch<float, Arch>& low, x
     // with an all-ones zeroing mask: GCC 12's _mm512_slli_epi32 trips -Wuninitialized inside its
     // own header (an undefined pass-through operand); this form compiles to the same plain vpslld.
     const __m512i shifted = _mm512_maskz_slli_epi32(static_cast<__mmask16>(0xFFFF), w, 7);
-    low = Batch(_mm512_castsi512_ps(
-        _mm512_ternarylogic_epi32(shifted, _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
+    low =
+        Batch(_mm512_castsi512_ps(_mm512_ternarylogic_epi32(shifted, _mm512_set1_epi32(0x007FFFFF), _mm512_set1_epi32(0x3F800000), 0xEA)));
     return;
   }
 #endif
