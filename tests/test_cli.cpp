@@ -93,7 +93,9 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
       {"bench", {"--model", "--poses", "--json"}},
       {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}}};
-  for (const auto& [command, options] : commands) {
+  for (const auto& entry : commands) {
+    const std::string& command = entry.first;  // not a structured binding: clang 14 cannot capture one in INFO
+    const auto& options = entry.second;
     const Run help = run_stream(command + " --help", 1);
     REQUIRE(help.status == 0);
     for (const std::string& option : options) {
@@ -132,7 +134,9 @@ TEST_CASE("cli: a bad number, a missing required option and clashing options are
       {"train --data " + kModel + " --model linear", "--out is required"},
       {"import " + kModel, "--out is required"},
       {"info --model " + temp("no_such_model.safetensors"), "--model: File does not exist"}};
-  for (const auto& [args, message] : refused) {
+  for (const auto& entry : refused) {
+    const std::string& args = entry.first;  // not a structured binding: clang 14 cannot capture one in INFO
+    const std::string& message = entry.second;
     const Run r = run_stream(args, 2);
     INFO(args, "\n", r.out);
     CHECK(r.status == 2);
