@@ -153,13 +153,15 @@ inline CLI::Validator at_least(double least) { return bounded(least, false); }
 /// Accepts finite numbers > `least` (and <= `most`).
 inline CLI::Validator above(double least, double most = std::numeric_limits<double>::infinity()) { return bounded(least, true, most); }
 
-/// CLI::ExistingFile without its description, which would repeat FILE after the value's name.
-inline const CLI::Validator kExistingFile = CLI::ExistingFile.description("");
+/// CLI::ExistingFile without its description, which would repeat FILE after the value's name. A
+/// function, not a variable: a namespace-scope copy may be initialised before CLI11's own
+/// ExistingFile (the order is unspecified; with clang it was, and the check did nothing).
+inline CLI::Validator existing_file() { return CLI::ExistingFile.description(""); }
 
 /// Adds `--model FILE`: a model file that must exist (`path` a string, or a vector when repeatable).
 template <typename Target>
 CLI::Option* add_model_file(CLI::App& command, Target& path, const std::string& description) {
-  return command.add_option("--model", path, description)->check(kExistingFile)->type_name("FILE");
+  return command.add_option("--model", path, description)->check(existing_file())->type_name("FILE");
 }
 
 /// Adds `--fixed16 | --f16 | --bf16`: how a loaded model keeps its weights in memory (default F32).

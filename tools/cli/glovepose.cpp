@@ -164,7 +164,7 @@ cli::Command add_predict(CLI::App& tool) {
       "out (theta 9..33 of the hand model), one row per input row.");
   cli::add_model_file(*command, o->model, "the model file")->required();
   command->add_option("--in", o->input, "the rows, a CSV file without a header (default: stdin)")
-      ->check(cli::kExistingFile)
+      ->check(cli::existing_file())
       ->type_name("CSV");
   cli::add_storage_flags(*command, o->storage);
   command->add_flag("--no-header", o->no_header, "leave out the first output line (the DoF names)");

@@ -132,18 +132,18 @@ Command add_import(CLI::App& tool) {
           ->add_option("CSV", o->recordings,
                        "recording takes: CSV files whose first line names the columns: every cell of the glove, "
                        "optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
-          ->check(kExistingFile)
+          ->check(existing_file())
           ->type_name("CSV");
   o->calibrations_option =
       command->add_option("--calibration", o->calibrations, "a calibration take (its rows are calibration frames); repeatable")
-          ->check(kExistingFile)
+          ->check(existing_file())
           ->type_name("FILE")
           ->allow_extra_args(false);
   command
       ->add_option("--takes", o->takes_list,
                    "a CSV list of takes with the header file,subject,session,kind (kind: recording or "
                    "calibration; session and kind may be left out); files relative to the list")
-      ->check(kExistingFile)
+      ->check(existing_file())
       ->type_name("LIST");
   add_number(*command, "--subject", "N", o->subject, "subject id of the CSV and --calibration takes whose columns do not have one")
       ->check(at_least(0));
@@ -154,7 +154,7 @@ Command add_import(CLI::App& tool) {
              "timestamps); required unless the glove description gives rate_hz")
       ->check(above(0.0));
   command->add_option("--glove", o->glove, "the glove description (JSON) (default: the built-in 44-cell glove)")
-      ->check(kExistingFile)
+      ->check(existing_file())
       ->type_name("FILE");
   command->add_flag("--degrees", o->import.degrees, "angle columns are in degrees");
   command->add_option("--ignore", o->import.ignored_columns, "a column to skip; repeatable")->type_name("COLUMN")->allow_extra_args(false);

@@ -71,7 +71,7 @@ Command add_simulate(CLI::App& tool) {
                                     "calibration sequence before every session, visiting the extreme poses (default 30; 0: none)")
                              ->check(at_least(0.0));
   command->add_option("--calibration-sequence", o->sequence_file, "a guided calibration sequence (JSON) every calibration follows instead")
-      ->check(kExistingFile)
+      ->check(existing_file())
       ->type_name("FILE")
       ->excludes(seconds);
   command->add_flag("--raw-rows", config.recording.raw_rows,

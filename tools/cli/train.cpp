@@ -120,7 +120,7 @@ void add_choice(CLI::App& command, const std::string& name, const std::vector<st
 void add_data_options(CLI::App& command, Options& o, bool with_stride) {
   command.add_option("--data", o.data, "the dataset file (glovepose simulate or import)")
       ->required()
-      ->check(kExistingFile)
+      ->check(existing_file())
       ->type_name("FILE");
   add_number(command, "--threads", "T", o.threads, "threads (default 0: all cores)");
   const std::tuple<const char*, std::vector<int>*, const char*> lists[] = {
@@ -526,7 +526,7 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
         *command, o,
         {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100", "2e-4; 0.01 with sgd for an FCN"});
     command->add_option("--glove", o->glove_file, "the glove description the data was recorded with (default: the built-in glove)")
-        ->check(kExistingFile)
+        ->check(existing_file())
         ->type_name("FILE");
     finish(command, o, train_command);
   }
@@ -566,7 +566,7 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
     command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
     add_data_options(*command, *o, false);
     command->add_option("--sequence", o->sequence_file, "the calibration sequence (default: the shipped calibration_glauser2019.json)")
-        ->check(kExistingFile)
+        ->check(existing_file())
         ->type_name("FILE");
     finish(command, o, fit_guided_command);
   }

@@ -248,7 +248,7 @@ Command add_view(CLI::App& tool) {
   add_number(*command, "--seed", "S", o->seed, "simulation seed of the simulated user (default 2026)");
   CLI::Option* replay =
       command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
-          ->check(kExistingFile)
+          ->check(existing_file())
           ->type_name("FILE");
   CLI::Option* from_stdin = command
                                 ->add_flag("--stdin", o->from_stdin,
