@@ -27,7 +27,7 @@ namespace {
 // A simulated subject's 3 s calibration sequence and 10 s session, with the raw rows; the rows of
 // the session frames as doubles, ready to push.
 struct Recording {
-  train::Dataset data;
+  io::Dataset data;
   std::size_t first_session_frame = 0;
   std::vector<double> session_rows;  // (frames - first_session_frame) x 180
 };
@@ -43,7 +43,7 @@ const Recording& recording() {
     config.recording.raw_rows = true;
     Recording out;
     out.data = sim::to_dataset(sim::simulate_corpus(config), config);
-    while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
+    while (out.data.kind[out.first_session_frame] == io::kKindCalibration) ++out.first_session_frame;
     out.session_rows.assign(out.data.raw_rows.begin() + static_cast<std::ptrdiff_t>(out.first_session_frame * out.data.row_count),
                             out.data.raw_rows.end());
     return out;
@@ -68,7 +68,7 @@ GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage, EstimatorConf
   config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
   config.joint_transforms = true;
   GlovePoseEstimator estimator(shipped_model(storage), config);
-  const train::Dataset& d = recording().data;
+  const io::Dataset& d = recording().data;
   std::vector<double> frame(d.row_count);
   estimator.start_calibration();
   for (std::size_t f = 0; f < recording().first_session_frame; ++f) {

@@ -28,7 +28,7 @@ void BM_TrainStep(benchmark::State& state) {
     f->initialize(1);
     net = std::move(f);
   }
-  train::ThreadPool pool(threads);
+  core::ThreadPool pool(threads);
   train::Optimizer adam(net->parameters(), {});
   core::Rng rng(2);
   std::vector<float> x(static_cast<std::size_t>(batch) * 44), t(static_cast<std::size_t>(batch) * train::kTargets), g(t.size());

@@ -9,6 +9,7 @@
 // activations are zero (about half after each ReLU, as with the trained model; docs/performance.md).
 #include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/nn/unet.hpp>
+#include <glovepose/core/team.hpp>
 
 #include <benchmark/benchmark.h>
 
@@ -82,7 +83,7 @@ void run_team(benchmark::State& state) {
   const int width = static_cast<int>(state.range(0));
   const int members = static_cast<int>(state.range(1));
   const UNet<>& net = network(width, realtime_storage());
-  Team team(members);
+  glovepose::core::Team team(members);
   auto ws = net.make_workspace(1, members);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);

@@ -11,7 +11,7 @@
 // usage: example_glove CORPUS.safetensors OUTDIR
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const train::Dataset corpus = train::Dataset::read(argv[1]);
+    const io::Dataset corpus = io::Dataset::read(argv[1]);
     if (!corpus.has_angles() || corpus.cell_count != 44) throw Error("the corpus needs angles and the 44 cells of the built-in glove");
     const std::filesystem::path out = argv[2];
     std::filesystem::create_directories(out);
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
       while (end < corpus.frames() && corpus.subject[end] == corpus.subject[begin] && corpus.session[end] == corpus.session[begin] &&
              corpus.glove[end] == corpus.glove[begin] && corpus.kind[end] == corpus.kind[begin])
         ++end;
-      const bool calibration = corpus.kind[begin] == train::kKindCalibration;
+      const bool calibration = corpus.kind[begin] == io::kKindCalibration;
       const std::string file = "person" + std::to_string(corpus.subject[begin]) + "_session" + std::to_string(corpus.session[begin]) +
                                (calibration ? "_calibration.csv" : "_recording.csv");
       takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording")

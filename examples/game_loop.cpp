@@ -31,11 +31,11 @@ namespace {
 // The sensor thread: owns the estimator, calibrates it on the first 2 s, then streams.
 // After each pose it publishes the estimator's state (pose, joints, calibration progress): a plain
 // copy that the game reads whenever it likes, never waiting for this thread nor making it wait.
-void stream_glove(GlovePoseEstimator& estimator, const train::Dataset& glove, Clock::time_point start, LatestHand& latest) {
+void stream_glove(GlovePoseEstimator& estimator, const io::Dataset& glove, Clock::time_point start, LatestHand& latest) {
   const std::size_t rows = glove.row_count;
   estimator.start_calibration();
   for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
-    if (glove.kind[frame] == train::kKindRecording && estimator.calibration_progress().collecting)
+    if (glove.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting)
       estimator.finish_calibration();  // set-up call: may throw (too few frames)
     for (std::size_t r = 0; r < rows; ++r) {
       const double t = glove.timestamps[frame] - static_cast<double>(rows - 1 - r) / (rows * 60.0);
@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
     simulated.calibration_seconds = 2.0;
     simulated.minutes = play_seconds / 60.0;
     simulated.recording.raw_rows = true;
-    const train::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
+    const io::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
 
     // The estimator belongs to the sensor thread from here on; the game only sees `latest`, and the
     // locator (the estimator's hand model and side), which never changes and so serves any thread.

@@ -38,13 +38,13 @@ int main(int argc, char** argv) {
     person.calibration_seconds = sequence.total_seconds();
     person.minutes = 2.0 / 60.0;
     person.recording.raw_rows = true;
-    const train::Dataset glove = sim::to_dataset(sim::simulate_corpus(person), person);
+    const io::Dataset glove = sim::to_dataset(sim::simulate_corpus(person), person);
     const std::size_t rows = glove.row_count;
 
     estimator.start_calibration();
     int shown = -1;
     for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
-      if (glove.kind[frame] == train::kKindRecording && estimator.calibration_progress().collecting) {
+      if (glove.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting) {
         estimator.finish_calibration();  // set-up call: may throw (too few frames)
         std::printf("calibrated: %s\n", estimator.calibration_method() == CalibrationMethod::PoseGuided
                                             ? "pose-guided (range and this user's angle offsets)"

@@ -29,13 +29,13 @@ int main(int argc, char** argv) {
     glove.calibration_seconds = 3.0;
     glove.minutes = 5.0 / 60.0;
     glove.recording.raw_rows = true;
-    const train::Dataset recording = sim::to_dataset(sim::simulate_corpus(glove), glove);
+    const io::Dataset recording = sim::to_dataset(sim::simulate_corpus(glove), glove);
     const std::size_t rows = recording.row_count;
 
     // The user first moves through extreme poses while the estimator collects each cell's range.
     estimator.start_calibration();
     for (std::size_t frame = 0; frame < recording.frames(); ++frame) {
-      if (recording.kind[frame] == train::kKindRecording && estimator.calibration_progress().collecting) {
+      if (recording.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting) {
         const long frames = estimator.calibration_progress().frames;
         const sensor::CalibrationRange& range = estimator.finish_calibration();
         std::printf("calibrated on %ld frames, %zu flat sensors\n", frames, range.flat_sensors().size());

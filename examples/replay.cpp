@@ -8,7 +8,7 @@
 // SESSION is a dataset file with raw rows (weights_format.md, "Dataset files"), for example
 //   glovepose simulate --subjects 1 --sessions 1 --gloves 1 --minutes 1 --raw-rows --out session.safetensors
 #include <glovepose/glovepose.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 #include <glovepose/train/metrics.hpp>
 
 #include <algorithm>
@@ -51,7 +51,7 @@ Options parse(int argc, char** argv) {
 }
 
 // Frames of one session share subject, glove and session id; a new one restarts the clock.
-bool same_session(const train::Dataset& d, std::size_t a, std::size_t b) {
+bool same_session(const io::Dataset& d, std::size_t a, std::size_t b) {
   return d.subject[a] == d.subject[b] && d.glove[a] == d.glove[b] && d.session[a] == d.session[b];
 }
 
@@ -80,7 +80,7 @@ struct CsvWriter {
 int main(int argc, char** argv) {
   try {
     const Options options = parse(argc, argv);
-    const train::Dataset data = train::Dataset::read(options.session);
+    const io::Dataset data = io::Dataset::read(options.session);
     const auto model = PoseModel::load(options.model);
     if (!data.has_raw_rows() || !data.has_angles())
       throw Error("'" + options.session + "' holds no raw rows or no angles, expected a recording made with glovepose simulate --raw-rows");
@@ -102,9 +102,9 @@ int main(int argc, char** argv) {
         session_start = Clock::now() - seconds(data.timestamps[f] - 1.0 / frame_rate);
       }
       const bool calibrating = estimator.calibration_progress().collecting;
-      if (data.kind[f] == train::kKindCalibration && !calibrating) estimator.start_calibration();
-      if (data.kind[f] == train::kKindRecording && calibrating) estimator.finish_calibration();
-      if (data.kind[f] == train::kKindRecording && !estimator.calibration())
+      if (data.kind[f] == io::kKindCalibration && !calibrating) estimator.start_calibration();
+      if (data.kind[f] == io::kKindRecording && calibrating) estimator.finish_calibration();
+      if (data.kind[f] == io::kKindRecording && !estimator.calibration())
         throw Error("frame " + std::to_string(f) +
                     " is recorded before any calibration frame, expected the session's calibration sequence (kind 1) first");
 
@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
       // Score the newest pose at the frame's end against the frame's ground truth, as the paper does:
       // recording frames only, without the frames whose reference pose is a collision outlier.
       const Pose& pose = estimator.pose();
-      if (data.kind[f] != train::kKindRecording || pose.sequence == poses_before) continue;
+      if (data.kind[f] != io::kKindRecording || pose.sequence == poses_before) continue;
       csv.write(f, pose);
       if (data.outlier[f]) {
         ++outliers;

@@ -1,7 +1,7 @@
 /// @file csv_import_fuzz.cpp
 /// @brief Fuzz target: the bytes as a text import, through both text readers (each refuses the
 /// other's format on its first line, so one corpus serves both):
-/// - train::Dataset::read_csv (the dataset CSV of `glovepose simulate --csv`), and
+/// - io::Dataset::read_csv (the dataset CSV of `glovepose simulate --csv`), and
 /// - sensor::CalibrationRange::load (a saved user calibration of the 44-cell glove), from a stream.
 ///
 /// Invariants: bad input is refused with glovepose::Error only; an accepted CSV gives a dataset that
@@ -15,17 +15,17 @@
 
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/sensor/calibration.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include "fuzz_check.hpp"
 
 namespace {
 
 void check_dataset_csv(const std::string& text) {
-  glovepose::train::Dataset dataset;
+  glovepose::io::Dataset dataset;
   try {
     std::istringstream in(text);
-    dataset = glovepose::train::Dataset::read_csv(in, "glauser2019-44", 60.0);
+    dataset = glovepose::io::Dataset::read_csv(in, "glauser2019-44", 60.0);
   } catch (const glovepose::Error&) {
     return;
   }
@@ -33,7 +33,7 @@ void check_dataset_csv(const std::string& text) {
   std::ostringstream written;
   dataset.write_csv(written);
   std::istringstream back(written.str());
-  const glovepose::train::Dataset again = glovepose::train::Dataset::read_csv(back, "glauser2019-44", 60.0);
+  const glovepose::io::Dataset again = glovepose::io::Dataset::read_csv(back, "glauser2019-44", 60.0);
   GLOVEPOSE_FUZZ_REQUIRE(again.cell_count == dataset.cell_count);
   GLOVEPOSE_FUZZ_REQUIRE(again.cells == dataset.cells);
   // Angles of DoFs not labelled are NaN on both sides: compare the bits.

@@ -39,24 +39,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   train::RecordingImporter importer(five_cells(), options);
   if (!(flags & 32)) {
     std::istringstream first("subject,timestamp,a,b,c,d,e\n0,0,1,2,3,4,5\n0,0.5,2,3,4,5,6\n");
-    importer.add(first, {"first.csv", {}, {}, train::kKindCalibration});
+    importer.add(first, {"first.csv", {}, {}, io::kKindCalibration});
   }
-  const train::Dataset before = importer.dataset();
+  const io::Dataset before = importer.dataset();
 
   train::CsvTake take{"fuzz.csv", {}, {}, {}};
-  if (flags & 4) take.kind = train::kKindCalibration;
+  if (flags & 4) take.kind = io::kKindCalibration;
   if (flags & 8) take.subject = 1;
   if (flags & 16) take.session = 2;
   std::istringstream in(text);
   try {
     importer.add(in, take);
   } catch (const Error&) {
-    const train::Dataset& after = importer.dataset();
+    const io::Dataset& after = importer.dataset();
     GLOVEPOSE_FUZZ_REQUIRE(after.cells == before.cells && after.timestamps == before.timestamps && after.kind == before.kind &&
                            after.subject == before.subject && after.angles == before.angles);
     return 0;
   }
-  const train::Dataset& after = importer.dataset();
+  const io::Dataset& after = importer.dataset();
   after.validate();  // throws (and so fails the run) if the importer let through what validate() refuses
   GLOVEPOSE_FUZZ_REQUIRE(after.frames() > before.frames());
   GLOVEPOSE_FUZZ_REQUIRE(fuzz::all_finite(after.cells) && fuzz::all_finite(after.timestamps));

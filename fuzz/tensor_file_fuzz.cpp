@@ -1,8 +1,8 @@
 /// @file tensor_file_fuzz.cpp
 /// @brief Fuzz target: the bytes as a weight or dataset file (weights_format.md). The container
 /// reader (io::TensorFile::parse), then everything that reads a container: nn::WeightFile,
-/// nn::ModelInfo::from, the network (U-Net or FCN) from_tensors, the PoseModel built from them (glove description
-/// in the metadata, joint limits, training range) and train::Dataset::from_tensor_file.
+/// model::ModelInfo::from, the network (U-Net or FCN) from_tensors, the PoseModel built from them (glove description
+/// in the metadata, joint limits, training range) and io::Dataset::from_tensor_file.
 ///
 /// Invariants: set-up code refuses bad input with glovepose::Error only (any other exception
 /// escapes and is reported); an accepted container serialises to bytes that parse to the same
@@ -14,9 +14,9 @@
 
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/tensor_file.hpp>
-#include <glovepose/nn/model.hpp>
+#include <glovepose/model/model_info.hpp>
 #include <glovepose/nn/weights.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include "fuzz_check.hpp"
 
@@ -27,7 +27,7 @@ namespace {
 std::shared_ptr<const glovepose::PoseModel> load_model(const glovepose::io::TensorFile& file) {
   try {
     const glovepose::nn::WeightFile weights = glovepose::nn::WeightFile::from(file);
-    glovepose::nn::ModelInfo info = glovepose::nn::ModelInfo::from(weights);
+    glovepose::model::ModelInfo info = glovepose::model::ModelInfo::from(weights);
     GLOVEPOSE_FUZZ_REQUIRE(info.joint_limits_min.size() == glovepose::hand::kDofCount);
     if (info.architecture == "linear") return nullptr;
     auto network = glovepose::PoseModel::Network::from_tensors(info, weights.tensors, glovepose::nn::WeightStorage::F32);
@@ -59,13 +59,13 @@ void check_model(const glovepose::PoseModel& model) {
 }
 
 void check_dataset(const glovepose::io::TensorFile& file) {
-  glovepose::train::Dataset dataset;
+  glovepose::io::Dataset dataset;
   try {
-    dataset = glovepose::train::Dataset::from_tensor_file(file);
+    dataset = glovepose::io::Dataset::from_tensor_file(file);
   } catch (const glovepose::Error&) {
     return;
   }
-  const glovepose::train::Dataset again = glovepose::train::Dataset::from_tensor_file(dataset.to_tensor_file());
+  const glovepose::io::Dataset again = glovepose::io::Dataset::from_tensor_file(dataset.to_tensor_file());
   GLOVEPOSE_FUZZ_REQUIRE(again.to_tensor_file().tensors == dataset.to_tensor_file().tensors);
   GLOVEPOSE_FUZZ_REQUIRE(again.metadata == dataset.metadata);
 }

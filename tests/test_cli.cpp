@@ -1,7 +1,7 @@
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
-#include <glovepose/nn/model.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/model/unet_model.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
@@ -166,21 +166,16 @@ TEST_CASE("cli: glovepose predict gives the library's angles for rows of 44 cali
   REQUIRE(std::getline(lines, line));
   CHECK(line.rfind("thumb_base_abduction,thumb_base_flexion,", 0) == 0);
 
-  const auto model = nn::Model<>::load(kModel);
+  const auto loaded = model::UNetModel<>::load(kModel);
   const grid::GridMap map = grid::GridMap::glauser2019();
-  hand::Angles lo{}, hi{};
-  for (std::size_t d = 0; d < 25; ++d) {
-    lo[d] = model.info.joint_limits_min[d];
-    hi[d] = model.info.joint_limits_max[d];
-  }
-  const hand::JointLimits limits(lo, hi);
-  auto ws = model.unet.make_workspace();
+  const hand::JointLimits limits = loaded.info.joint_limits();
+  auto ws = loaded.unet.make_workspace();
   for (const auto& row : rows) {
     REQUIRE(std::getline(lines, line));
     std::array<float, grid::kStretchValues> maps{};
     std::array<float, grid::kMapSlots> pose{};
     REQUIRE(map.to_stretch_maps(row.data(), maps) == Status::Ok);
-    REQUIRE(model.unet.forward(maps, pose, ws) == Status::Ok);
+    REQUIRE(loaded.unet.forward(maps, pose, ws) == Status::Ok);
     hand::Angles normalized{};
     map.from_pose_map(pose, normalized);
     const hand::Angles expected = limits.denormalize(normalized);
@@ -240,7 +235,7 @@ TEST_CASE("cli: glovepose simulate writes the protocol as one dataset file, byte
   CHECK(bytes == slurp(temp("sim_b.safetensors")));  // same seed, other thread count: same bytes
   CHECK(bytes != slurp(temp("sim_c.safetensors")));
 
-  const train::Dataset d = train::Dataset::read(temp("sim_a.safetensors"));
+  const io::Dataset d = io::Dataset::read(temp("sim_a.safetensors"));
   // Per subject: 4 sessions with glove 0 and 2 with glove 1, 3 s each at 60 Hz, each after a 1 s
   // calibration sequence.
   CHECK(d.frames() == 2u * 6u * (180u + 60u));
@@ -250,12 +245,12 @@ TEST_CASE("cli: glovepose simulate writes the protocol as one dataset file, byte
   CHECK(d.metadata.at("seed") == "3");
   std::set<std::tuple<int, int, int, int>> sessions;  // subject, glove, session, donning
   for (std::size_t f = 0; f < d.frames(); ++f)
-    if (d.kind[f] == train::kKindRecording) sessions.insert({d.subject[f], d.glove[f], d.session[f], d.donning[f]});
+    if (d.kind[f] == io::kKindRecording) sessions.insert({d.subject[f], d.glove[f], d.session[f], d.donning[f]});
   CHECK(sessions.count({0, 0, 2, 0}) == 1);  // the glove kept on for sessions 0..2
   CHECK(sessions.count({0, 0, 3, 1}) == 1);  // then taken off and on
   CHECK(sessions.count({1, 1, 1, 1}) == 1);  // glove II, a fresh donning per session
   // The CSV export holds the same frames.
-  const train::Dataset from_csv = train::Dataset::read_csv(temp("sim_a.csv"), d.glove_layout(), 60.0);
+  const io::Dataset from_csv = io::Dataset::read_csv(temp("sim_a.csv"), d.glove_layout(), 60.0);
   CHECK(from_csv.frames() == d.frames());
   CHECK(from_csv.cells == d.cells);
 
@@ -284,8 +279,8 @@ std::string small_corpus(const std::string& tag) {
   return p;
 }
 // The frames of `full` with only the cells `keep`, in that order, as glove `glove`'s dataset.
-train::Dataset cells_of(const train::Dataset& full, const std::vector<int>& keep, const std::string& glove) {
-  train::Dataset part(keep.size(), 0, glove, full.frame_rate());
+io::Dataset cells_of(const io::Dataset& full, const std::vector<int>& keep, const std::string& glove) {
+  io::Dataset part(keep.size(), 0, glove, full.frame_rate());
   part.timestamps = full.timestamps;
   part.angles = full.angles;
   part.subject = full.subject;
@@ -318,9 +313,9 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   const double unet_error = json_number(r.out, "mean_deg");
   CHECK(unet_error > 0.5);
   CHECK(unet_error < 40.0);
-  const auto model = nn::Model<>::load(unet);  // the inference path reads what training wrote
-  CHECK(model.info.width == 8);
-  CHECK(model.info.calibration == "onthefly");
+  const auto loaded = model::UNetModel<>::load(unet);  // the inference path reads what training wrote
+  CHECK(loaded.info.width == 8);
+  CHECK(loaded.info.calibration == model::CalibrationMode::OnTheFly);
   r = run("eval --model " + unet + " --data " + data + " --subjects 2");
   CHECK(r.out.find("index_base_flexion") != std::string::npos);
   CHECK(r.out.find("<15 deg") != std::string::npos);
@@ -388,8 +383,8 @@ TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
       run("train --data " + data + " --model unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
   CHECK(r.status == 130);
   CHECK(r.out.find("stopped") != std::string::npos);
-  const auto model = nn::Model<>::load(out);
-  CHECK(model.info.width == 8);
+  const auto loaded = model::UNetModel<>::load(out);
+  CHECK(loaded.info.width == 8);
 }
 
 TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and predicts") {
@@ -397,7 +392,7 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   // the 44-cell corpus and placed where the full glove has them.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42};
   const std::string corpus = small_corpus("main14");
-  const train::Dataset part = cells_of(train::Dataset::read(corpus), keep, "main14");
+  const io::Dataset part = cells_of(io::Dataset::read(corpus), keep, "main14");
   const std::string data = temp("main14.safetensors"), glove_file = temp("main14.json"), model_file = temp("t_main14.safetensors");
   part.write(data);
   const grid::GridMap paper = grid::GridMap::glauser2019();
@@ -434,7 +429,7 @@ TEST_CASE(
     "cli: a glove with an extra input (not on the stretch maps) trains, evaluates and predicts with a linear map, an FCN and a U-Net") {
   // The 14 main-joint cells on their slots and cell 2 (a back-of-thumb cell) as an extra input.
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42, 2};
-  const train::Dataset part = cells_of(train::Dataset::read(small_corpus("extra")), keep, "main14-extra");
+  const io::Dataset part = cells_of(io::Dataset::read(small_corpus("extra")), keep, "main14-extra");
   const std::string data = temp("extra15.safetensors"), glove_file = temp("extra15.json");
   part.write(data);
   const grid::GridMap paper = grid::GridMap::glauser2019();
@@ -492,7 +487,7 @@ std::string number17(double v) {
 TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the dataset they came from, which trains and evaluates alike") {
   // The reference: a simulated corpus (outlier flags cleared, as an import has none) written as one
   // CSV take per subject, session and kind, columns renamed by a glove description and shuffled.
-  train::Dataset reference = train::Dataset::read(small_corpus("import"));
+  io::Dataset reference = io::Dataset::read(small_corpus("import"));
   std::fill(reference.outlier.begin(), reference.outlier.end(), std::uint8_t{0});
   const std::string reference_file = temp("import_reference.safetensors");
   reference.write(reference_file);
@@ -516,7 +511,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
     while (end < reference.frames() && reference.subject[end] == reference.subject[begin] &&
            reference.session[end] == reference.session[begin] && reference.kind[end] == reference.kind[begin])
       ++end;
-    const bool calibration = reference.kind[begin] == train::kKindCalibration;
+    const bool calibration = reference.kind[begin] == io::kKindCalibration;
     const std::string name = "import_take_" + std::to_string(takes++) + ".csv";
     list << name << "," << reference.subject[begin] << "," << reference.session[begin] << "," << (calibration ? "calibration" : "recording")
          << "\n";
@@ -550,7 +545,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("imported 12 takes: " + std::to_string(reference.frames()) + " frames") == 0);
   CHECK(r.out.find("of 3 subjects, 6 sessions, glove 'maker-44', 44 cells, with the 25 DoF angles") != std::string::npos);
-  const train::Dataset imported = train::Dataset::read(imported_file);
+  const io::Dataset imported = io::Dataset::read(imported_file);
   CHECK(imported.glove_layout() == "maker-44");
   CHECK(imported.cells == reference.cells);
   CHECK(imported.angles == reference.angles);
@@ -575,7 +570,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   // Two DoFs not labelled: not trained (the model reads the rest pose for them), not scored; eval's
   // mean equals the mean over the 23 labelled DoFs of its own --predictions file.
   {
-    train::Dataset part = imported;
+    io::Dataset part = imported;
     hand::DofSet labelled = hand::all_dofs();
     labelled[hand::dof_from_name("ring_base_twist")] = labelled[hand::dof_from_name("thumb_tip_flexion")] = false;
     part.set_labelled_dofs(labelled);
@@ -620,9 +615,9 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
 
   // A sensor flat in one session's calibration is zeroed there, and train and eval say so.
   {
-    train::Dataset flat = imported;
+    io::Dataset flat = imported;
     for (std::size_t i = 0; i < flat.frames(); ++i)
-      if (flat.kind[i] == train::kKindCalibration && flat.subject[i] == 1 && flat.session[i] == 0) flat.cells[i * 44 + 17] = 3.0f;
+      if (flat.kind[i] == io::kKindCalibration && flat.subject[i] == 1 && flat.session[i] == 0) flat.cells[i * 44 + 17] = 3.0f;
     const std::string flat_file = temp("imported_flat.safetensors"), flat_model = temp("t_flat_lin.safetensors");
     flat.write(flat_file);
     r = run("train --data " + flat_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + flat_model);

@@ -1,5 +1,5 @@
 #include <glovepose/io/tensor_file.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include <doctest/doctest.h>
 
@@ -15,10 +15,10 @@
 #include <vector>
 
 using namespace glovepose;
+using io::Dataset;
 using io::DType;
 using io::RawTensor;
 using io::TensorFile;
-using train::Dataset;
 
 namespace {
 
@@ -44,7 +44,7 @@ Dataset make_dataset(std::size_t frames = 12, bool raw = true, bool angles = tru
     d.session.push_back(s % 2);
     d.glove.push_back(s % 2 ? 1 : 0);
     d.donning.push_back(s % 2);
-    d.kind.push_back(i % 3 == 0 ? train::kKindCalibration : train::kKindRecording);
+    d.kind.push_back(i % 3 == 0 ? io::kKindCalibration : io::kKindRecording);
     d.outlier.push_back(i % 4 == 1 ? 1 : 0);
     d.timestamps.push_back(1e-3 + static_cast<double>(i) / 59.94);
   }
@@ -389,7 +389,7 @@ TEST_CASE("dataset: CSV export then import gives the same cells, angles and time
     expected.raw_rows.clear();
     expected.glove.assign(12, 0);
     expected.donning = d.session;
-    expected.kind.assign(12, train::kKindRecording);
+    expected.kind.assign(12, io::kKindRecording);
     expected.outlier.assign(12, 0);
     check_equal(Dataset::read_csv(csv, "test-5", 59.94), expected);
   }

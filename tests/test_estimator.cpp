@@ -5,6 +5,7 @@
 
 #include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/model/unet_model.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/samples.hpp>
 
@@ -29,7 +30,7 @@ const std::string kUNetModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glov
 // No dropped rows: the readout counts accepted readings, so a drop would move the solves off the
 // cycle ends, in the stream and in the recorder at different places (fault handling has its own tests).
 struct Session {
-  train::Dataset data;
+  io::Dataset data;
   std::size_t first_session_frame = 0;
 };
 
@@ -48,7 +49,7 @@ Session simulate_session(hand::Handedness side) {
   config.recording.noise.drop_probability = 0.0;
   Session out;
   out.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  while (out.data.kind[out.first_session_frame] == train::kKindCalibration) ++out.first_session_frame;
+  while (out.data.kind[out.first_session_frame] == io::kKindCalibration) ++out.first_session_frame;
   return out;
 }
 
@@ -66,13 +67,13 @@ EstimatorConfig cycle_config() {
 }
 
 // Row r of a frame was read (179 - r) row slots before the frame's end (sim/recorder.hpp).
-double row_time(const train::Dataset& d, std::size_t frame, int row) {
+double row_time(const io::Dataset& d, std::size_t frame, int row) {
   return d.timestamps[frame] - static_cast<double>(d.row_count - 1 - static_cast<std::size_t>(row)) / (d.row_count * 60.0);
 }
 
 // Streams frames [begin, end) of `d` row by row; calls on_pose(frame) whenever a frame's rows produced a pose.
 template <typename Estimator, typename OnPose>
-void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose, const train::Dataset& d = session().data) {
+void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose, const io::Dataset& d = session().data) {
   for (std::size_t f = begin; f < end; ++f) {
     bool solved = false;
     for (int r = 0; r < static_cast<int>(d.row_count); ++r)
@@ -112,7 +113,7 @@ double max_difference(const hand::Angles& a, const hand::Angles& b) {
 
 TEST_CASE("estimator: a session streamed row by row gives the poses of the batch path") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame, end = d.frames();
   // Calibrate on the calibration sequence, from its 6th cycle on: the recorder's readout had run
   // warm-up cycles before it, the stream's ring needs its first mean_window (5) cycles to fill.
@@ -127,8 +128,8 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   // The on-the-fly range equals the training pipeline's (train::onthefly_ranges over the recorded
   // frames): the same 20-frame median over the same 60 Hz frames, from C_c solved in double here
   // and stored as float there.
-  train::Dataset recorded = d;
-  std::fill(recorded.kind.begin(), recorded.kind.begin() + kFill, train::kKindRecording);
+  io::Dataset recorded = d;
+  std::fill(recorded.kind.begin(), recorded.kind.begin() + kFill, io::kKindRecording);
   const auto ranges = train::onthefly_ranges(recorded);
   REQUIRE(ranges.size() == 1);
   const sensor::CalibrationRange& offline = ranges.begin()->second;
@@ -167,7 +168,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
 }
 
 TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 degree of F32 over a session, F16 exact, BF16 measured") {
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame, end = d.frames();
   const GlovePoseEstimator estimator = calibrated(shipped());
   const auto predict = [&](nn::WeightStorage storage) {
@@ -201,7 +202,7 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 de
 TEST_CASE("estimator: the shipped U-Net leaves about half of each hidden layer exactly zero over a session") {
   // docs/performance.md: the single-frame products skip zero activations, so this share sets how
   // much of the weights a frame reads. Measured, not assumed: the band is the claim the docs make.
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   const GlovePoseEstimator estimator = calibrated(shipped_unet());
   const PoseModel& model = *shipped_unet();
   REQUIRE(model.network().unet() != nullptr);
@@ -227,7 +228,7 @@ TEST_CASE("estimator: the shipped U-Net leaves about half of each hidden layer e
 
 TEST_CASE("estimator: rows, whole C_m frames and solved C_c frames give the same poses") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame + 10, end = begin + 60;
   GlovePoseEstimator by_rows = calibrated(model), by_frames = calibrated(model), by_cells = calibrated(model);
   by_frames.set_calibration(*by_rows.calibration());
@@ -261,7 +262,7 @@ TEST_CASE("estimator: rows, whole C_m frames and solved C_c frames give the same
 
 TEST_CASE("estimator: calibration state machine, saved calibrations, training range") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   GlovePoseEstimator estimator(model, cycle_config());
   CHECK(estimator.calibration_source() == CalibrationSource::None);
   CHECK_THROWS_WITH_AS(estimator.finish_calibration(), doctest::Contains("start_calibration"), Error);
@@ -306,7 +307,7 @@ TEST_CASE("estimator: calibration state machine, saved calibrations, training ra
 
   // The model's training range: absent in the shipped (on-the-fly) model; present when recorded.
   CHECK_THROWS_WITH_AS(other.use_training_calibration(), doctest::Contains("no training-set range"), Error);
-  nn::Model<> loaded = nn::Model<>::load(kUNetModel);
+  model::UNetModel<> loaded = model::UNetModel<>::load(kUNetModel);
   loaded.info.calibration_min = std::vector<double>(44, 10.0);
   loaded.info.calibration_max = std::vector<double>(44, 30.0);
   const auto with_range = std::make_shared<const PoseModel>(loaded.info, loaded.unet, PoseModelOptions{});
@@ -382,7 +383,7 @@ TEST_CASE("estimator: the smoothing filter restarts with reset() and equals the 
 
 TEST_CASE("estimator: no heap allocation per row, per frame, while calibrating or smoothing") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   EstimatorConfig config;  // the paper's cadence: a solve every 16 rows
   config.smoothing = filter::OneEuroConfig{};
   config.joint_transforms = true;
@@ -414,7 +415,7 @@ TEST_CASE("estimator: no heap allocation per row, per frame, while calibrating o
 
 TEST_CASE("estimator: one model shared by estimators on threads gives every stream the single-thread poses") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   const std::size_t begin = session().first_session_frame, end = std::min(d.frames(), begin + 120);
   const auto run = [&](std::vector<hand::Angles>& out) {
     GlovePoseEstimator estimator = calibrated(model);
@@ -478,7 +479,7 @@ TEST_CASE("estimator: set-up errors name what is wrong") {
 
 TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates their least-squares slope up to the bound") {
   const auto model = shipped();
-  const train::Dataset& d = session().data;
+  const io::Dataset& d = session().data;
   EstimatorConfig config;  // the paper's cadence: a pose every 16 rows
   GlovePoseEstimator estimator = calibrated(model, config);
   PredictedPose out;

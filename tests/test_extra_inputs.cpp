@@ -140,7 +140,7 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
     CAPTURE(architecture);
     // The FCN reads the inputs as a vector; the U-Net reads the extra one as a third input plane.
     const int width = architecture == "fcn" ? 32 : 8;
-    const nn::ModelInfo info = train::make_model_info(architecture, width, glove, train::CalibrationMode::OnTheFly, nullptr);
+    const model::ModelInfo info = train::make_model_info(architecture, width, glove, model::CalibrationMode::OnTheFly, nullptr);
     const std::unique_ptr<train::TrainableNetwork> trainer = train::make_network(info, glove, frames);
     if (auto* unet = dynamic_cast<train::TrainableUNet*>(trainer.get()))
       unet->initialize(21);
@@ -163,7 +163,7 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
       raw[i] = u(rng);
       normalized[i] = static_cast<float>(2.0 * raw[i] / 10.0 - 1.0);
     }
-    train::ThreadPool pool(1);
+    core::ThreadPool pool(1);
     trainer->forward(normalized.data(), frames, false, pool);
     GlovePoseEstimator estimator(model);
     estimator.set_calibration(range);
@@ -192,7 +192,7 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
 namespace {
 
 // Four simulated people (seed 808, one minute each).
-train::Dataset four_people() {
+io::Dataset four_people() {
   sim::CorpusConfig config;
   config.seed = 808;
   config.subjects = 4;
@@ -205,8 +205,8 @@ train::Dataset four_people() {
 
 // The recording with a bend sensor over `joint` as a 45th input: a resistive sensor, 120 ohm + 40
 // ohm per radian, 0.4 ohm noise (0.6 deg).
-train::Dataset with_bend_sensor(const train::Dataset& plain, std::size_t joint) {
-  train::Dataset data = plain;
+io::Dataset with_bend_sensor(const io::Dataset& plain, std::size_t joint) {
+  io::Dataset data = plain;
   data.cell_count = 45;
   data.cells.clear();
   std::mt19937 rng(3);
@@ -223,16 +223,16 @@ train::Dataset with_bend_sensor(const train::Dataset& plain, std::size_t joint) 
 }  // namespace
 
 TEST_CASE("extra inputs: on people held out, a bend sensor beside the 44 cells makes the linear map better (least squares written here)") {
-  const train::Dataset plain = four_people();
+  const io::Dataset plain = four_people();
   const hand::JointLimits limits;
   train::FrameFilter training, held_out;
   training.subjects = {0, 1, 2};
   held_out.subjects = {3};
   // Calibrated by the training people's min and max (the sensor's range over a short calibration
   // take would clamp the joint's wider range in the recording).
-  const auto samples = [&](const train::Dataset& data, const train::FrameFilter& filter) {
+  const auto samples = [&](const io::Dataset& data, const train::FrameFilter& filter) {
     const sensor::CalibrationRange range = train::training_range(data, training);
-    return train::make_samples(data, filter, train::CalibrationMode::Training, &range, limits);
+    return train::make_samples(data, filter, model::CalibrationMode::Training, &range, limits);
   };
   const auto fit = [](const train::Samples& s) {
     return train::fit_linear(s.inputs.data(), s.frames(), s.cells, s.targets.data(), train::kTargets);
@@ -247,7 +247,7 @@ TEST_CASE("extra inputs: on people held out, a bend sensor beside the 44 cells m
                             << plain_errors[worst] << " deg");
 
   // A resistive bend sensor over that joint.
-  const train::Dataset data = with_bend_sensor(plain, worst);
+  const io::Dataset data = with_bend_sensor(plain, worst);
   const train::Samples train_set = samples(data, training), test_set = samples(data, held_out);
   REQUIRE(train_set.cells == 45);
   const train::LinearFit library = fit(train_set);
@@ -278,18 +278,18 @@ TEST_CASE("extra inputs: on people held out, a bend sensor beside the 44 cells m
 TEST_CASE("extra inputs: on people held out, the U-Net reads a bend sensor as an input plane and predicts its joint better") {
   // The same people and sensor as the linear case (over middle_base_flexion, the joint the 44
   // cells predict worst there); a width-8 U-Net trained from the same seed with and without it.
-  const train::Dataset plain = four_people();
+  const io::Dataset plain = four_people();
   const std::size_t joint = hand::dof_from_name("middle_base_flexion");
-  const train::Dataset data = with_bend_sensor(plain, joint);
+  const io::Dataset data = with_bend_sensor(plain, joint);
   const hand::JointLimits limits;
   train::FrameFilter training, held_out;
   training.subjects = {0, 1, 2};
   held_out.subjects = {3};
-  train::ThreadPool pool(2);
-  const auto held_out_errors = [&](const train::Dataset& d, const grid::GridMap& map) {
+  core::ThreadPool pool(2);
+  const auto held_out_errors = [&](const io::Dataset& d, const grid::GridMap& map) {
     const sensor::CalibrationRange range = train::training_range(d, training);
-    const train::Samples fit = train::make_samples(d, training, train::CalibrationMode::Training, &range, limits);
-    const train::Samples test = train::make_samples(d, held_out, train::CalibrationMode::Training, &range, limits);
+    const train::Samples fit = train::make_samples(d, training, model::CalibrationMode::Training, &range, limits);
+    const train::Samples test = train::make_samples(d, held_out, model::CalibrationMode::Training, &range, limits);
     train::TrainableUNet net(8, map, 256);
     net.initialize(5);
     train::TrainConfig config;

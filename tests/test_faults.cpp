@@ -24,8 +24,8 @@ namespace {
 constexpr std::size_t kFaultBegin = 120, kFaultEnd = 240;  // frames of the session (60 per second)
 constexpr double kRowSlot = 1.0 / (180 * 60.0);
 
-const train::Dataset& faults_session() {
-  static const train::Dataset d = [] {
+const io::Dataset& faults_session() {
+  static const io::Dataset d = [] {
     sim::CorpusConfig config;
     config.seed = 43;
     config.subjects = 1;
@@ -43,9 +43,9 @@ const train::Dataset& faults_session() {
 }
 
 std::size_t first_session_frame() {
-  const train::Dataset& d = faults_session();
+  const io::Dataset& d = faults_session();
   std::size_t f = 0;
-  while (d.kind[f] == train::kKindCalibration) ++f;
+  while (d.kind[f] == io::kKindCalibration) ++f;
   return f;
 }
 
@@ -57,7 +57,7 @@ std::shared_ptr<const PoseModel> faults_model() {
 // The on-the-fly range of the session's calibration sequence, shared by the clean and faulty runs.
 const sensor::CalibrationRange& faults_range() {
   static const sensor::CalibrationRange range = [] {
-    const train::Dataset& d = faults_session();
+    const io::Dataset& d = faults_session();
     GlovePoseEstimator estimator(faults_model());
     estimator.start_calibration();
     for (std::size_t f = 0; f < first_session_frame(); ++f)
@@ -93,7 +93,7 @@ const int kDefaultWindow = realtime_readout().mean_window;
 // `fault`, when given, turns the readings of frames [kFaultBegin, kFaultEnd) into what the faulty
 // glove delivers.
 Run stream(std::optional<sim::FaultInjector> fault, int mean_window) {
-  const train::Dataset& d = faults_session();
+  const io::Dataset& d = faults_session();
   EstimatorConfig config;
   config.readout.mean_window = mean_window;
   GlovePoseEstimator estimator(faults_model(), config);
@@ -132,7 +132,7 @@ const Run& clean_run(int mean_window) {
 }
 
 double mean_error_degrees(const Run& run, std::size_t begin, std::size_t end) {
-  const train::Dataset& d = faults_session();
+  const io::Dataset& d = faults_session();
   const std::size_t first = first_session_frame();
   double sum = 0.0;
   for (std::size_t i = begin; i < end; ++i)
@@ -150,7 +150,7 @@ struct Expectation {
 
 // Mean error over the DoFs of one frame, degrees.
 double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
-  const train::Dataset& d = faults_session();
+  const io::Dataset& d = faults_session();
   const std::size_t row = (first_session_frame() + frame) * hand::kDofCount;
   double sum = 0.0;
   for (std::size_t k = 0; k < hand::kDofCount; ++k) sum += std::abs(r.angles[k] - d.angles[row + k]);

@@ -197,7 +197,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
   const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
   train::TrainableFcn trainer(glove.cell_count(), hidden, frames);
   trainer.initialize(12);
-  const nn::ModelInfo info = train::make_model_info("fcn", hidden, glove, train::CalibrationMode::OnTheFly, nullptr);
+  const model::ModelInfo info = train::make_model_info("fcn", hidden, glove, model::CalibrationMode::OnTheFly, nullptr);
   const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/fcn_estimator.safetensors";
   train::save_model(path, info, trainer.parameters().to_tensors());
 
@@ -211,7 +211,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
     normalized[i] = static_cast<float>(u(rng));
     cells[i] = static_cast<float>(5.0 + 2.0 * (normalized[i] + 1.0));
   }
-  train::ThreadPool pool(1);
+  core::ThreadPool pool(1);
   trainer.forward(normalized.data(), frames, false, pool);
   const hand::JointLimits limits;
   std::vector<hand::Angles> expected(static_cast<std::size_t>(frames));

@@ -5,7 +5,7 @@
 
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/tensor_file.hpp>
-#include <glovepose/nn/model.hpp>
+#include <glovepose/model/model_info.hpp>
 #include <glovepose/sensor/calibration.hpp>
 
 #include <algorithm>
@@ -30,7 +30,7 @@ std::string file_bytes(const std::string& path) {
 // The path of PoseModel::load (and of tensor_file_fuzz) from a model file's bytes.
 std::shared_ptr<const PoseModel> model_from_bytes(const std::string& bytes) {
   const nn::WeightFile weights = nn::WeightFile::parse(bytes);
-  nn::ModelInfo info = nn::ModelInfo::from(weights);
+  model::ModelInfo info = model::ModelInfo::from(weights);
   auto network = PoseModel::Network::from_tensors(info, weights.tensors, nn::WeightStorage::F32);
   return std::make_shared<const PoseModel>(std::move(info), std::move(network), PoseModelOptions{});
 }

@@ -39,8 +39,8 @@ grid::GloveSettings own_settings() {
 
 // One subject's calibration run (40 frames) then 5 recording frames, at 20 Hz. Cell "b" moves only
 // 0.5% of its value (a resistive sensor on a DC offset).
-train::Dataset twenty_hertz_session() {
-  train::Dataset data(2, 0, "two-cell", 20.0);
+io::Dataset twenty_hertz_session() {
+  io::Dataset data(2, 0, "two-cell", 20.0);
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> a(-1.0f, 3.0f), b(100.0f, 100.5f), angle(-0.5f, 1.2f);
   for (int i = 0; i < 45; ++i) {
@@ -52,7 +52,7 @@ train::Dataset twenty_hertz_session() {
     data.session.push_back(0);
     data.glove.push_back(0);
     data.donning.push_back(0);
-    data.kind.push_back(i < 40 ? train::kKindCalibration : train::kKindRecording);
+    data.kind.push_back(i < 40 ? io::kKindCalibration : io::kKindRecording);
     data.outlier.push_back(0);
   }
   data.validate();
@@ -60,10 +60,10 @@ train::Dataset twenty_hertz_session() {
 }
 
 // Min and max over the calibration frames of the median of each `window` consecutive frames.
-std::pair<double, double> median_range(const train::Dataset& data, std::size_t cell, std::size_t window) {
+std::pair<double, double> median_range(const io::Dataset& data, std::size_t cell, std::size_t window) {
   std::vector<double> values;
   for (std::size_t i = 0; i < data.frames(); ++i)
-    if (data.kind[i] == train::kKindCalibration) values.push_back(data.cells[i * 2 + cell]);
+    if (data.kind[i] == io::kKindCalibration) values.push_back(data.cells[i * 2 + cell]);
   double lo = HUGE_VAL, hi = -HUGE_VAL;
   for (std::size_t end = window; end <= values.size(); ++end) {
     std::vector<double> w(values.begin() + static_cast<long>(end - window), values.begin() + static_cast<long>(end));
@@ -78,7 +78,7 @@ std::pair<double, double> median_range(const train::Dataset& data, std::size_t c
 }  // namespace
 
 TEST_CASE("glove settings: training calibrates with the glove's median window (seconds x rate) and flat rule") {
-  const train::Dataset data = twenty_hertz_session();
+  const io::Dataset data = twenty_hertz_session();
   const grid::GloveDescription own = two_cell_glove(own_settings());
 
   const auto described = train::onthefly_ranges(data, own.calibration());
@@ -102,8 +102,8 @@ TEST_CASE("glove settings: training calibrates with the glove's median window (s
   // make_samples: the same, and Samples::zeroed reports the flat sensor only under the 1% rule.
   const hand::JointLimits limits = own.joint_limits();
   const train::Samples with_own =
-      train::make_samples(data, train::FrameFilter{}, train::CalibrationMode::OnTheFly, nullptr, limits, 1, own.calibration());
-  const train::Samples with_default = train::make_samples(data, train::FrameFilter{}, train::CalibrationMode::OnTheFly, nullptr, limits);
+      train::make_samples(data, train::FrameFilter{}, model::CalibrationMode::OnTheFly, nullptr, limits, 1, own.calibration());
+  const train::Samples with_default = train::make_samples(data, train::FrameFilter{}, model::CalibrationMode::OnTheFly, nullptr, limits);
   REQUIRE(with_own.frames() == 5);
   bool b_moves = false;
   for (long f = 0; f < with_own.frames(); ++f) {
@@ -120,7 +120,7 @@ TEST_CASE("glove settings: training calibrates with the glove's median window (s
 TEST_CASE("glove settings: a model for the glove records and normalises by the glove's joint limits") {
   const grid::GloveDescription own = two_cell_glove(own_settings());
   const std::size_t index = hand::dof_from_name("index_base_flexion");
-  const nn::ModelInfo info = train::make_model_info("linear", 0, own, train::CalibrationMode::OnTheFly, nullptr);
+  const model::ModelInfo info = train::make_model_info("linear", 0, own, model::CalibrationMode::OnTheFly, nullptr);
   const hand::JointLimits reference;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {
     INFO(hand::kDofs[d].name);
@@ -128,9 +128,9 @@ TEST_CASE("glove settings: a model for the glove records and normalises by the g
     CHECK(info.joint_limits_max[d] == (d == index ? 110.0 * kPi / 180.0 : reference.max()[d]));
   }
   // Targets: 2 (angle - min) / (max - min) - 1 with the glove's limits.
-  const train::Dataset data = twenty_hertz_session();
-  const train::Samples s = train::make_samples(data, train::FrameFilter{}, train::CalibrationMode::OnTheFly, nullptr,
-                                               train::joint_limits(info), 1, own.calibration());
+  const io::Dataset data = twenty_hertz_session();
+  const train::Samples s =
+      train::make_samples(data, train::FrameFilter{}, model::CalibrationMode::OnTheFly, nullptr, info.joint_limits(), 1, own.calibration());
   for (long f = 0; f < s.frames(); ++f) {
     const double angle = data.angles[static_cast<std::size_t>(s.source[static_cast<std::size_t>(f)]) * hand::kDofCount + index];
     const double lo = -30.0 * kPi / 180.0, hi = 110.0 * kPi / 180.0;
@@ -140,7 +140,7 @@ TEST_CASE("glove settings: a model for the glove records and normalises by the g
   // The model file carries the description (with its settings) and the limits.
   nn::WeightFile file;
   info.to(file);
-  const nn::ModelInfo back = nn::ModelInfo::from(file);
+  const model::ModelInfo back = model::ModelInfo::from(file);
   CHECK(back.joint_limits_max[index] == 110.0 * kPi / 180.0);
   CHECK(grid::GloveDescription::from_metadata(back.glove_description) == own);
 }
@@ -148,7 +148,7 @@ TEST_CASE("glove settings: a model for the glove records and normalises by the g
 TEST_CASE("glove settings: the estimator takes the glove's median window and flat rule unless told otherwise") {
   const grid::GloveDescription own = two_cell_glove(own_settings());
   const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/two_cell_linear.safetensors";
-  const nn::ModelInfo info = train::make_model_info("fcn", 16, own, train::CalibrationMode::OnTheFly, nullptr);
+  const model::ModelInfo info = train::make_model_info("fcn", 16, own, model::CalibrationMode::OnTheFly, nullptr);
   train::TrainableFcn fcn(2, 16, 1);
   fcn.initialize(3);
   train::save_model(path, info, fcn.parameters().to_tensors());
@@ -163,7 +163,7 @@ TEST_CASE("glove settings: the estimator takes the glove's median window and fla
     CHECK(estimator.config().calibration_sample_period == 1.0 / 20.0);  // frames taken at the glove's rate
     // A calibration of cells where "b" moves 0.5% of its value: not flat by the glove's rule.
     estimator.start_calibration();
-    const train::Dataset data = twenty_hertz_session();
+    const io::Dataset data = twenty_hertz_session();
     // Sized from the data: a count GCC 12 sees as the constant 2 trips -Warray-bounds in Eigen's
     // AVX-512 copy loop, a branch that only runs for 8 or more values.
     const int count = static_cast<int>(data.cell_count);

@@ -42,7 +42,7 @@ calibration::Sequence two_steps() {
 
 // `subjects` simulated new users of seed `seed` who follow the shipped calibration sequence, then
 // record one session of `minutes` (C_c frames at 60 Hz, the recorder's readout).
-train::Dataset guided_users(std::uint64_t seed, int subjects, double minutes) {
+io::Dataset guided_users(std::uint64_t seed, int subjects, double minutes) {
   sim::CorpusConfig config;
   config.seed = seed;
   config.subjects = subjects;
@@ -273,8 +273,8 @@ TEST_CASE("replay: re-solving the raw rows with the recorder's readout gives the
   config.recording.raw_rows = true;
   config.recording.readout.solve_every = sim::kRows;  // a solve at every cycle end, whatever the start
   config.recording.noise.drop_probability = 0.0;      // a drop would move the solves off the cycle ends
-  const train::Dataset recorded = sim::to_dataset(sim::simulate_corpus(config), config);
-  train::Dataset replayed = recorded;
+  const io::Dataset recorded = sim::to_dataset(sim::simulate_corpus(config), config);
+  io::Dataset replayed = recorded;
   train::replay_rows(replayed, config.recording.readout);
   // The recorder read 5 cycles before each recording (calibration, then session) started; the
   // replay reads the run through: from a recording's 5th frame on the windows are the same.
@@ -291,7 +291,7 @@ TEST_CASE("replay: re-solving the raw rows with the recorder's readout gives the
   }
   CHECK(compared > 100);
   CHECK(worst < 1e-4);  // pF, float storage
-  train::Dataset no_rows(44, 0, "glauser2019-44", 60.0);
+  io::Dataset no_rows(44, 0, "glauser2019-44", 60.0);
   CHECK_THROWS_WITH_AS(train::replay_rows(no_rows, {}), doctest::Contains("--raw-rows"), Error);
 }
 
@@ -299,9 +299,9 @@ TEST_CASE("estimator: pose-guided calibration on simulated new users: the offlin
   const auto model = PoseModel::load(kShippedModel);
   REQUIRE(model->pose_offset());
   // Seed 77: people neither the network nor its pose-guided calibration was fitted on.
-  const train::Dataset data = guided_users(77, 3, 1.0);
+  const io::Dataset data = guided_users(77, 3, 1.0);
   train::TrainedModel offline = train::load_model(kShippedModel, 256);
-  train::ThreadPool pool(1);
+  core::ThreadPool pool(1);
   const std::map<std::int64_t, hand::Angles> expected = train::guided_offsets(offline, data, train::FrameFilter{}, pool);
   REQUIRE(expected.size() == 3);
   double error[2] = {0.0, 0.0};
@@ -320,7 +320,7 @@ TEST_CASE("estimator: pose-guided calibration on simulated new users: the offlin
         calibrating = true;
         current = key;
       }
-      if (calibrating && data.kind[f] == train::kKindRecording) {
+      if (calibrating && data.kind[f] == io::kKindRecording) {
         (void)estimator->finish_calibration();
         calibrating = false;
         CHECK(estimator->calibration_method() == config.calibration_method);
@@ -365,7 +365,7 @@ TEST_CASE("estimator: a user who explores freely instead of following the sequen
   config.sessions = 1;
   config.gloves = 1;
   config.minutes = 0.05;
-  const train::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
+  const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   for (const int subject : {0, 1}) {
     for (const CalibrationMethod method : {CalibrationMethod::Auto, CalibrationMethod::PoseGuided}) {
       EstimatorConfig c;
@@ -373,7 +373,7 @@ TEST_CASE("estimator: a user who explores freely instead of following the sequen
       GlovePoseEstimator estimator(model, c);
       estimator.start_calibration();
       for (std::size_t f = 0; f < data.frames(); ++f)
-        if (data.subject[f] == subject && data.kind[f] == train::kKindCalibration) {
+        if (data.subject[f] == subject && data.kind[f] == io::kKindCalibration) {
           std::vector<double> cells(data.cells.begin() + static_cast<long>(f * 44), data.cells.begin() + static_cast<long>((f + 1) * 44));
           (void)estimator.push_cells(cells.data(), 44, data.timestamps[f]);
         }

@@ -73,7 +73,7 @@ TEST_CASE(
     "labelled DoFs: samples train toward the rest pose where there is no angle, and training leaves those outputs' weights untouched") {
   // A dataset of 6 cells labelling 22 DoFs: angles a fixed linear function of the cells.
   const std::size_t cells = 6, n = 300;
-  train::Dataset data(cells, 0, "six", 60.0);
+  io::Dataset data(cells, 0, "six", 60.0);
   data.set_labelled_dofs(kSubset);
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(1.0f, 2.0f);
@@ -89,12 +89,12 @@ TEST_CASE(
     data.session.push_back(0);
     data.glove.push_back(0);
     data.donning.push_back(0);
-    data.kind.push_back(train::kKindRecording);
+    data.kind.push_back(io::kKindRecording);
     data.outlier.push_back(0);
   }
   data.validate();
   const hand::JointLimits limits;
-  const train::Samples samples = train::make_samples(data, {}, train::CalibrationMode::None, nullptr, limits);
+  const train::Samples samples = train::make_samples(data, {}, model::CalibrationMode::None, nullptr, limits);
   CHECK(samples.labelled == kSubset);
   const hand::Angles rest = limits.normalize(limits.rest());
   for (long f = 0; f < samples.frames(); ++f)
@@ -108,7 +108,7 @@ TEST_CASE(
   train::TrainableFcn net(static_cast<int>(cells), 16, 64);
   net.initialize(3);
   const nn::TensorMap before = net.parameters().to_tensors();
-  train::ThreadPool pool(1);
+  core::ThreadPool pool(1);
   train::TrainConfig config;
   config.epochs = 3;
   config.batch = 32;
@@ -179,7 +179,7 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   for (float& v : w) v = u(rng);
   for (float& v : b) v = u(rng);
   train::TrainedModel model;
-  model.info = train::make_model_info("linear", 0, grid::GloveDescription::glauser2019(), train::CalibrationMode::None, nullptr);
+  model.info = train::make_model_info("linear", 0, grid::GloveDescription::glauser2019(), model::CalibrationMode::None, nullptr);
   model.info.labelled_dofs = hand::dof_set_text(kSubset);
   model.linear.emplace(cells, 25, w, b);
   train::Samples samples;
@@ -187,7 +187,7 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   for (int i = 0; i < 2 * cells; ++i) samples.inputs.push_back(u(rng));
   samples.source = {0, 1};
   samples.run = {0, 0};
-  train::ThreadPool pool(1);
+  core::ThreadPool pool(1);
   const std::vector<float> out = model.predict(samples, pool);
   const hand::JointLimits limits;
   const hand::Angles rest = limits.normalize(limits.rest());
@@ -204,9 +204,9 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   nn::WeightFile file;
   model.info.to(file);
   CHECK(file.metadata.at("labelled_dofs") == hand::dof_set_text(kSubset));
-  CHECK(nn::ModelInfo::from(file).labelled() == kSubset);
+  CHECK(model::ModelInfo::from(file).labelled() == kSubset);
   file.metadata["labelled_dofs"] = "index_base_flexion,elbow";
-  CHECK_THROWS_WITH_AS(nn::ModelInfo::from(file), doctest::Contains("metadata 'labelled_dofs': 'elbow' is not a DoF"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'labelled_dofs': 'elbow' is not a DoF"), Error);
 
   auto loaded = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/unet_w4.safetensors");
   CHECK(loaded->labelled_dofs() == hand::all_dofs());

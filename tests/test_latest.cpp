@@ -95,7 +95,7 @@ TEST_CASE("latest: an estimator's thread publishes every pose, two readers see w
   config.calibration_seconds = 3.0;
   config.threads = 1;
   config.recording.raw_rows = true;
-  const train::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
+  const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   EstimatorConfig estimator_config;
   estimator_config.joint_transforms = true;
   GlovePoseEstimator estimator(PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors"),
@@ -124,7 +124,7 @@ TEST_CASE("latest: an estimator's thread publishes every pose, two readers see w
   std::size_t published = 0;
   std::vector<double> rows;
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == train::kKindRecording && estimator.calibration_progress().collecting) estimator.finish_calibration();
+    if (data.kind[f] == io::kKindRecording && estimator.calibration_progress().collecting) estimator.finish_calibration();
     rows.assign(data.raw_rows.begin() + static_cast<std::ptrdiff_t>(f * data.row_count),
                 data.raw_rows.begin() + static_cast<std::ptrdiff_t>((f + 1) * data.row_count));
     const Status status = estimator.push_measurements(rows.data(), static_cast<int>(rows.size()), data.timestamps[f]);

@@ -117,7 +117,7 @@ TEST_CASE("import: named columns in any order read back to the frames written, w
   train::RecordingImporter importer(small_glove(), o);
   std::istringstream in(take);
   importer.add(in, {"take.csv", {}, {}, {}});
-  const train::Dataset& data = importer.dataset();
+  const io::Dataset& data = importer.dataset();
   data.validate();
   REQUIRE(data.frames() == 40);
   CHECK(data.cell_count == 5);
@@ -132,7 +132,7 @@ TEST_CASE("import: named columns in any order read back to the frames written, w
     CHECK(data.donning[i] == 2);
     CHECK(data.glove[i] == 0);
     CHECK(data.outlier[i] == 0);
-    CHECK(data.kind[i] == (i % 20 < 5 ? train::kKindCalibration : train::kKindRecording));
+    CHECK(data.kind[i] == (i % 20 < 5 ? io::kKindCalibration : io::kKindRecording));
     CHECK(data.timestamps[i] == doctest::Approx(1.0 + 0.0125 * static_cast<double>(i % 20)).epsilon(1e-15));
   }
   CHECK(importer.flat_sensors().empty());
@@ -146,17 +146,17 @@ TEST_CASE("import: without a time column frames are 1/rate apart per run, degree
   o.degrees = true;
   train::RecordingImporter importer(small_glove(), o);
   std::istringstream calibration(take), recording(take), again(take);
-  importer.add(calibration, {"cal.csv", 3, 1, train::kKindCalibration});
-  importer.add(recording, {"rec.csv", 3, 1, train::kKindRecording});
-  importer.add(again, {"rec2.csv", 3, 1, train::kKindRecording});  // same run: its times go on
-  const train::Dataset& data = importer.dataset();
+  importer.add(calibration, {"cal.csv", 3, 1, io::kKindCalibration});
+  importer.add(recording, {"rec.csv", 3, 1, io::kKindRecording});
+  importer.add(again, {"rec2.csv", 3, 1, io::kKindRecording});  // same run: its times go on
+  const io::Dataset& data = importer.dataset();
   data.validate();
   REQUIRE(data.frames() == 90);
   for (std::size_t i = 0; i < 90; ++i) {
     CAPTURE(i);
     CHECK(data.subject[i] == 3);
     CHECK(data.session[i] == 1);
-    CHECK(data.kind[i] == (i < 30 ? train::kKindCalibration : train::kKindRecording));
+    CHECK(data.kind[i] == (i < 30 ? io::kKindCalibration : io::kKindRecording));
     const double expected = static_cast<double>(i < 30 ? i : i - 30) / 50.0;  // 1/50 s steps, each run from 0
     CHECK(data.timestamps[i] == doctest::Approx(expected).epsilon(1e-12));
   }
@@ -172,7 +172,7 @@ TEST_CASE("import: a sensor flat over a calibration take is refused with file, l
   for (std::size_t i = 0; i < 12; ++i) f.cells[i * 5 + 2] = 2.0f + 0.001f * static_cast<float>(i % 3);  // 0.1% of its value
   const std::string take =
       "# a glove maker's calibration\n" + csv(f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); });
-  const std::string error = import_error(take, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  const std::string error = import_error(take, {"cal_s1.csv", 1, {}, io::kKindCalibration});
   CHECK(error.find("CSV file 'cal_s1.csv', lines 3-14") == 0);
   CHECK(error.find("column 'middle_bend': flat (2 to 2.002") != std::string::npos);
   CHECK(error.find("within 1% of its value") != std::string::npos);
@@ -180,14 +180,14 @@ TEST_CASE("import: a sensor flat over a calibration take is refused with file, l
   {
     train::RecordingImporter importer(small_glove(), options());
     std::istringstream in(take);
-    importer.add(in, {"rec_s1.csv", 1, {}, train::kKindRecording});
+    importer.add(in, {"rec_s1.csv", 1, {}, io::kKindRecording});
     CHECK(importer.dataset().frames() == 12);
   }
   train::CsvImportOptions o = options();
   o.allow_flat = true;
   train::RecordingImporter importer(small_glove(), o);
   std::istringstream in(take);
-  importer.add(in, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  importer.add(in, {"cal_s1.csv", 1, {}, io::kKindCalibration});
   REQUIRE(importer.flat_sensors().size() == 1);
   const train::FlatSensor& flat = importer.flat_sensors()[0];
   CHECK(flat.cell == "middle_bend");
@@ -201,14 +201,14 @@ TEST_CASE("import: a sensor flat over a calibration take is refused with file, l
   const grid::GloveDescription five = small_glove();
   train::RecordingImporter loose(grid::GloveDescription(five.id(), five.cell_names(), five.map(), settings), options());
   std::istringstream in2(take);
-  loose.add(in2, {"cal_s1.csv", 1, {}, train::kKindCalibration});
+  loose.add(in2, {"cal_s1.csv", 1, {}, io::kKindCalibration});
   CHECK(loose.flat_sensors().empty());
   // Its message names the rule in use.
   settings.calibration.flat_relative_range = 0.002;
   train::RecordingImporter strict(grid::GloveDescription(five.id(), five.cell_names(), five.map(), settings), options());
   std::istringstream in3(take);
-  CHECK_THROWS_WITH_AS(strict.add(in3, {"cal_s1.csv", 1, {}, train::kKindCalibration}),
-                       doctest::Contains("a range within 0.2% of its value"), Error);
+  CHECK_THROWS_WITH_AS(strict.add(in3, {"cal_s1.csv", 1, {}, io::kKindCalibration}), doctest::Contains("a range within 0.2% of its value"),
+                       Error);
 }
 
 TEST_CASE("import: the frame rate comes from --rate or the glove description, and the two must agree") {
@@ -220,7 +220,7 @@ TEST_CASE("import: the frame rate comes from --rate or the glove description, an
   const grid::GloveDescription described(five.id(), five.cell_names(), five.map(), settings);
   train::RecordingImporter importer(described, options(0.0));  // no rate given: the description's
   std::istringstream in(take);
-  importer.add(in, {"t.csv", 1, {}, train::kKindRecording});
+  importer.add(in, {"t.csv", 1, {}, io::kKindRecording});
   CHECK(importer.dataset().frame_rate() == 25.0);
   CHECK(importer.dataset().timestamps[1] == doctest::Approx(1.0 / 25.0).epsilon(1e-12));
   CHECK(train::RecordingImporter(described, options(25.0)).dataset().frame_rate() == 25.0);
@@ -317,7 +317,7 @@ TEST_CASE("import: a take labelling some DoFs: the others are NaN and not labell
   train::RecordingImporter importer(small_glove(), options());
   std::istringstream in(take);
   importer.add(in, {"part.csv", {}, {}, {}});
-  const train::Dataset& data = importer.dataset();
+  const io::Dataset& data = importer.dataset();
   data.validate();
   hand::DofSet expected = hand::all_dofs();
   expected[hand::dof_from_name("thumb_base_abduction")] = expected[hand::dof_from_name("pinky_base_twist")] = false;

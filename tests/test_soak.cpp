@@ -22,8 +22,8 @@ std::shared_ptr<const PoseModel> soak_model() {
 }
 
 // 30 s of simulated motion after a 3 s calibration sequence (about 4 s of CPU to simulate).
-const train::Dataset& soak_source() {
-  static const train::Dataset source = sim::simulate_soak_source(2026, 0.5, 3.0);
+const io::Dataset& soak_source() {
+  static const io::Dataset source = sim::simulate_soak_source(2026, 0.5, 3.0);
   return source;
 }
 
@@ -114,7 +114,7 @@ TEST_CASE("soak: set-up errors name what is wrong") {
   config = sim::SoakConfig{};
   config.stream_minutes = 0.1;  // 6 s: shorter than the warm-up
   CHECK_THROWS_WITH_AS(sim::run_soak(soak_model(), soak_source(), config), doctest::Contains("warm-up"), Error);
-  train::Dataset no_rows = soak_source();
+  io::Dataset no_rows = soak_source();
   no_rows.row_count = 0;
   no_rows.raw_rows.clear();
   CHECK_THROWS_WITH_AS(sim::run_soak(soak_model(), no_rows, sim::SoakConfig{}), doctest::Contains("raw rows"), Error);

@@ -1,9 +1,10 @@
-// nn::Team (nn/team.hpp) and the U-Net forward shared by a team (UNet::forward with a Team): every
+// core::Team (core/team.hpp) and the U-Net forward shared by a team (UNet::forward with a Team): every
 // member runs its share, the outputs equal the one-thread forward's bit for bit, nothing is
 // allocated per frame, and an idle team costs no CPU. tests/CMakeLists.txt also runs the
 // team tests under ThreadSanitizer (latest_under_tsan's executable).
 #include <glovepose/estimator.hpp>
-#include <glovepose/nn/team.hpp>
+#include <glovepose/core/team.hpp>
+#include <glovepose/core/thread_pool.hpp>
 #include <glovepose/nn/unet.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
@@ -25,6 +26,7 @@
 
 using namespace glovepose;
 using namespace glovepose::nn;
+using core::Team;
 
 namespace {
 #if defined(__SANITIZE_THREAD__)
@@ -66,6 +68,40 @@ TEST_CASE("team: every member runs its share of every job, the caller as member 
       for (int b = a + 1; b < size; ++b) CHECK(ids[static_cast<std::size_t>(a)] != ids[static_cast<std::size_t>(b)]);
   }
   CHECK_THROWS_AS(Team(0), Error);
+}
+
+TEST_CASE("thread pool: shares cover every index once, a member's exception reaches the caller after all have ended") {
+  for (int threads : {1, 2, 3}) {
+    CAPTURE(threads);
+    core::ThreadPool pool(threads);
+    CHECK(pool.size() == threads);
+    for (long n : {0L, 1L, 2L, 7L, 1000L}) {
+      std::vector<int> hits(static_cast<std::size_t>(n), 0);
+      std::vector<int> owner(static_cast<std::size_t>(n), -1);
+      pool.for_shares(n, [&](core::Range r, int member) {
+        for (long i = r.begin; i < r.end; ++i) ++hits[static_cast<std::size_t>(i)], owner[static_cast<std::size_t>(i)] = member;
+      });
+      for (long i = 0; i < n; ++i) {
+        CHECK(hits[static_cast<std::size_t>(i)] == 1);
+        // contiguous shares in member order, sizes differing by at most one (share())
+        const core::Range expected = core::share(n, owner[static_cast<std::size_t>(i)], threads);
+        CHECK((i >= expected.begin && i < expected.end));
+      }
+    }
+    std::atomic<int> finished{0};
+    const auto failing = [&](int member) {
+      if (member == threads - 1) throw Error("member " + std::to_string(member) + " failed");
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      ++finished;
+    };
+    const std::string message = "member " + std::to_string(threads - 1) + " failed";
+    CHECK_THROWS_WITH_AS(pool.run(failing), doctest::Contains(message.c_str()), Error);
+    CHECK(finished == threads - 1);  // the others ran to their end before run() rethrew
+    std::atomic<int> ran{0};
+    pool.run([&](int) { ++ran; });  // usable after a failure
+    CHECK(ran == threads);
+  }
+  CHECK_THROWS_WITH_AS(core::ThreadPool(0), doctest::Contains("ThreadPool: 0 threads, expected 1..1024"), Error);
 }
 
 TEST_CASE("unet: a team's forward equals the one-thread forward bit for bit, every storage, and allocates nothing") {
@@ -137,7 +173,7 @@ TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shippe
   config.calibration_seconds = 2.0;
   config.threads = 1;
   config.recording.raw_rows = true;
-  const train::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
+  const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");
   EstimatorConfig one, two;
   two.network_threads = 2;
@@ -148,7 +184,7 @@ TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shippe
   long poses = 0, differing = 0;
   std::size_t allocations = 0;
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == train::kKindRecording && alone.calibration_progress().collecting) {
+    if (data.kind[f] == io::kKindRecording && alone.calibration_progress().collecting) {
       alone.finish_calibration();
       shared.finish_calibration();
     }

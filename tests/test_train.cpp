@@ -52,7 +52,7 @@ double relative(const std::vector<float>& a, const std::vector<double>& b) {
 template <typename Net, typename Forward>
 void check_against_fixture(Net& net, const Fixture& fx, Forward&& forward_and_backward) {
   net.parameters().load(starting_tensors(fx));
-  train::ThreadPool pool(2);
+  core::ThreadPool pool(2);
   const std::vector<float> output = forward_and_backward(pool);
   const std::vector<double> expected_output = fx.get("output");
   REQUIRE(output.size() == expected_output.size());
@@ -104,7 +104,7 @@ void check_against_fixture(Net& net, const Fixture& fx, Forward&& forward_and_ba
 
 double directional_error(train::TrainableNetwork& net, const std::vector<float>& x, const std::vector<float>& t, int frames,
                          unsigned seed) {
-  train::ThreadPool pool(2);
+  core::ThreadPool pool(2);
   std::vector<float> grad(t.size());
   const auto loss = [&] {
     net.forward(x.data(), frames, true, pool);
@@ -161,7 +161,7 @@ TEST_CASE(
     std::vector<grid::Slot> slots = paper.cell_slots();
     slots.insert(slots.end(), static_cast<std::size_t>(extra), grid::kOffMaps);
     train::TrainableUNet net(4, grid::GridMap(slots, paper.dof_slots()), frames);
-    check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
+    check_against_fixture(net, fx, [&](core::ThreadPool& pool) {
       std::vector<float> y(t.size()), g(t.size());
       net.forward_maps(x.data(), frames, true, pool, y.data());
       const double loss = train::mse_loss(y.data(), t.data(), static_cast<long>(t.size()), g.data());
@@ -177,7 +177,7 @@ TEST_CASE("train: FCN training step equals PyTorch autograd (committed fixture, 
   const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
   const int frames = static_cast<int>(fx.file.tensors.at("input").shape[0]);
   train::TrainableFcn net(44, 16, frames);
-  check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
+  check_against_fixture(net, fx, [&](core::ThreadPool& pool) {
     std::vector<float> g(t.size());
     net.forward(x.data(), frames, true, pool);
     std::vector<float> y(net.output(), net.output() + t.size());
@@ -213,7 +213,7 @@ TEST_CASE("train: the evaluation-mode forward equals the inference U-Net on the 
         v += static_cast<float>(p.name.find("running_var") != std::string::npos ? rng.uniform(0.2, 1.0) : rng.uniform(-0.3, 0.3));
   std::vector<float> maps(static_cast<std::size_t>(frames) * 50), ours(static_cast<std::size_t>(frames) * 25), theirs(ours.size());
   for (float& v : maps) v = static_cast<float>(rng.uniform(-1.2, 1.2));
-  train::ThreadPool pool(2);
+  core::ThreadPool pool(2);
   net.forward_maps(maps.data(), frames, false, pool, ours.data());
   const auto inference = nn::UNet<>::from_tensors(net.parameters().to_tensors(), 8);
   inference.forward_batch(maps.data(), theirs.data(), frames);
@@ -235,7 +235,7 @@ TEST_CASE("train: a step is reproducible for a thread count and close across thr
   const auto step = [&](int threads) {
     train::TrainableUNet net(8, grid::GridMap::glauser2019(), frames);
     net.initialize(2);
-    train::ThreadPool pool(threads);
+    core::ThreadPool pool(threads);
     train::Optimizer adam(net.parameters(), {});
     for (int i = 0; i < 3; ++i) {
       net.forward(x.data(), frames, true, pool);
@@ -275,7 +275,7 @@ TEST_CASE("train: gradients equal PyTorch autograd for a wider U-Net and FCN (fi
     const Fixture fx = read_fixture(base + "unet.safetensors");
     const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
     train::TrainableUNet net(16, grid::GridMap::glauser2019(), 24);
-    check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
+    check_against_fixture(net, fx, [&](core::ThreadPool& pool) {
       std::vector<float> y(t.size()), g(t.size());
       net.forward_maps(x.data(), 24, true, pool, y.data());
       train::mse_loss(y.data(), t.data(), static_cast<long>(t.size()), g.data());
@@ -287,7 +287,7 @@ TEST_CASE("train: gradients equal PyTorch autograd for a wider U-Net and FCN (fi
     const Fixture fx = read_fixture(base + "fcn.safetensors");
     const std::vector<float> x = fx.get_f32("input"), t = fx.get_f32("target");
     train::TrainableFcn net(44, 64, 24);
-    check_against_fixture(net, fx, [&](train::ThreadPool& pool) {
+    check_against_fixture(net, fx, [&](core::ThreadPool& pool) {
       std::vector<float> g(t.size());
       net.forward(x.data(), 24, true, pool);
       std::vector<float> y(net.output(), net.output() + t.size());

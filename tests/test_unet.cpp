@@ -1,7 +1,7 @@
 #include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
-#include <glovepose/nn/model.hpp>
+#include <glovepose/model/unet_model.hpp>
 
 #include <doctest/doctest.h>
 
@@ -474,15 +474,15 @@ TEST_CASE("unet: folded weights the storage cannot hold are refused, naming the 
 
 TEST_CASE("unet: equals PyTorch on the committed fixtures (width 4)") {
   const std::string dir = std::string(GLOVEPOSE_SOURCE_DIR) + "/tests/fixtures/";
-  const auto model = Model<>::load(dir + "unet_w4.safetensors");
+  const auto loaded = model::UNetModel<>::load(dir + "unet_w4.safetensors");
   const WeightFile io = WeightFile::read(dir + "unet_w4_io.safetensors");
   const Tensor& x = io.tensors.at("input");
   const Tensor& y = io.tensors.at("output");
   const int frames = static_cast<int>(x.shape[0]);
   REQUIRE(frames > 0);
-  auto ws = model.unet.make_workspace(frames);
+  auto ws = loaded.unet.make_workspace(frames);
   std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
-  REQUIRE(model.unet.forward(x.values.data(), out.data(), frames, ws) == Status::Ok);
+  REQUIRE(loaded.unet.forward(x.values.data(), out.data(), frames, ws) == Status::Ok);
   double worst = 0.0;
   for (std::size_t i = 0; i < out.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(out[i] - y.values[i])));
   MESSAGE("fixture: " << frames << " frames, max |C++ - PyTorch| = " << worst);
@@ -503,12 +503,12 @@ TEST_CASE("unet: equals PyTorch for every preset (fixtures regenerated with PyTo
     const std::string cmd = python + " " + GLOVEPOSE_SOURCE_DIR + "/tools/python/make_fixtures.py --width " + std::to_string(p.width) +
                             " --seed 7 --batch 8 --out-model " + base + ".safetensors --out-io " + base + "_io.safetensors";
     REQUIRE(std::system(cmd.c_str()) == 0);
-    const auto model = Model<>::load(base + ".safetensors");
+    const auto loaded = model::UNetModel<>::load(base + ".safetensors");
     const WeightFile io = WeightFile::read(base + "_io.safetensors");
     const int frames = static_cast<int>(io.tensors.at("input").shape[0]);
-    auto ws = model.unet.make_workspace(frames);
+    auto ws = loaded.unet.make_workspace(frames);
     std::vector<float> out(static_cast<std::size_t>(frames * kUNetOutputs));
-    REQUIRE(model.unet.forward(io.tensors.at("input").values.data(), out.data(), frames, ws) == Status::Ok);
+    REQUIRE(loaded.unet.forward(io.tensors.at("input").values.data(), out.data(), frames, ws) == Status::Ok);
     double worst = 0.0;
     for (std::size_t i = 0; i < out.size(); ++i)
       worst = std::max(worst, static_cast<double>(std::abs(out[i] - io.tensors.at("output").values[i])));

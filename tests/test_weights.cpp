@@ -1,4 +1,6 @@
-#include <glovepose/nn/model.hpp>
+#include <glovepose/model/model_info.hpp>
+#include <glovepose/grid/glove_description.hpp>
+#include <glovepose/hand/dofs.hpp>
 #include <glovepose/nn/weights.hpp>
 
 #include <doctest/doctest.h>
@@ -170,31 +172,73 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
 
   WeightFile file;
   file.tensors = good;
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("metadata 'format' is missing"), Error);
-  ModelInfo info;
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'format' is missing"), Error);
+  model::ModelInfo info;
   info.architecture = "unet";
   info.width = width;
   info.glove = "glauser2019-44";
   info.joint_limits_min = std::vector<double>(25, -1.0);
   info.joint_limits_max = std::vector<double>(25, 1.0);
   info.to(file);
-  const ModelInfo back = ModelInfo::from(WeightFile::parse(file.serialize()));
+  const model::ModelInfo back = model::ModelInfo::from(WeightFile::parse(file.serialize()));
   CHECK(back.width == 4);
   CHECK(back.glove == "glauser2019-44");
   CHECK(back.joint_limits_max == info.joint_limits_max);
   CHECK(!back.calibration_min);
-  CHECK(back.calibration == "onthefly");
+  CHECK(back.calibration == model::CalibrationMode::OnTheFly);
   CHECK(back.inputs == 44);
   file.metadata["width"] = "four";
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("metadata 'width' is 'four', expected an integer 1..4096"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'width' is 'four', expected an integer 1..4096"), Error);
   file.metadata["width"] = "4";
   file.metadata["calibration"] = "sometimes";
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file),
-                       doctest::Contains("metadata 'calibration' is 'sometimes', expected none, training or onthefly"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file),
+                       doctest::Contains("metadata 'calibration': calibration mode 'sometimes', expected none, training or onthefly"),
+                       Error);
   file.metadata["calibration"] = "training";
   file.metadata["architecture"] = "lstm";
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("expected 'unet', 'fcn' or 'linear'"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("expected 'unet', 'fcn' or 'linear'"), Error);
   file.metadata["architecture"] = "unet";
   file.metadata["joint_limits_min"] = "[1, 2]";
-  CHECK_THROWS_WITH_AS(ModelInfo::from(file), doctest::Contains("hold 2/25 numbers, expected 25 each"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("hold 2/25 numbers, expected 25 each"), Error);
+}
+
+TEST_CASE("model info: joint limits, glove and training range come from the metadata, checked against each other") {
+  model::ModelInfo info;
+  info.architecture = "fcn";
+  info.width = 8;
+  info.glove = "glauser2019-44";
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {  // limits of its own, not the reference hand's
+    info.joint_limits_min.push_back(-0.5 - 0.01 * static_cast<double>(d));
+    info.joint_limits_max.push_back(0.75 + 0.02 * static_cast<double>(d));
+  }
+  const hand::JointLimits limits = info.joint_limits();
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    CHECK(limits.min()[d] == info.joint_limits_min[d]);
+    CHECK(limits.max()[d] == info.joint_limits_max[d]);
+  }
+
+  const grid::GloveDescription glove = info.glove_of_model();
+  CHECK(glove.id() == "glauser2019-44");
+  CHECK(glove.cell_count() == 44);
+  info.inputs = 14;
+  CHECK_THROWS_WITH_AS(info.glove_of_model(), doctest::Contains("metadata 'inputs' is 14 but glove 'glauser2019-44' has 44 cells"), Error);
+  info.inputs = 44;
+
+  CHECK(!info.training_range(glove.cell_names(), glove.calibration().config()));
+  info.calibration_min = std::vector<double>(44), info.calibration_max = std::vector<double>(44);
+  for (int c = 0; c < 44; ++c) {
+    (*info.calibration_min)[static_cast<std::size_t>(c)] = 10.0 + c;
+    (*info.calibration_max)[static_cast<std::size_t>(c)] = 20.0 + 2.0 * c;
+  }
+  const auto range = info.training_range(glove.cell_names(), glove.calibration().config());
+  REQUIRE(range);
+  CHECK(range->size() == 44);
+  CHECK(range->names() == glove.cell_names());
+  for (int c = 0; c < 44; ++c) {
+    CHECK(range->min()(c) == 10.0 + c);
+    CHECK(range->max()(c) == 20.0 + 2.0 * c);
+  }
+  info.calibration_min->pop_back(), info.calibration_max->pop_back();
+  CHECK_THROWS_WITH_AS(info.training_range(glove.cell_names(), glove.calibration().config()),
+                       doctest::Contains("metadata 'calibration_min' holds 43 numbers, expected 44 (one per cell)"), Error);
 }

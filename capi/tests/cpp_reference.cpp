@@ -17,7 +17,7 @@
 // flags rejected, 25 angles, 25 raw angles, 21 x (3 position + 4 rotation) joint floats; then a
 // last line "end" poses calibration_source.
 #include <glovepose/estimator.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include <cstdio>
 #include <exception>
@@ -49,11 +49,11 @@ void print_pose(std::size_t frame, int row, const GlovePoseEstimator& estimator)
 }
 
 int session(const std::string& model_path, const std::string& dataset_path) {
-  const train::Dataset d = train::Dataset::read(dataset_path);
+  const io::Dataset d = io::Dataset::read(dataset_path);
   if (d.row_count == 0) throw Error("dataset '" + dataset_path + "' has no raw rows, expected one simulated with --raw-rows");
   GlovePoseEstimator estimator(PoseModel::load(model_path), session_config());
   std::size_t calibration_end = 0;
-  while (calibration_end < d.frames() && d.kind[calibration_end] == train::kKindCalibration) ++calibration_end;
+  while (calibration_end < d.frames() && d.kind[calibration_end] == io::kKindCalibration) ++calibration_end;
   if (calibration_end > 0) estimator.start_calibration();
   long poses = 0;
   for (std::size_t f = 0; f < d.frames(); ++f) {

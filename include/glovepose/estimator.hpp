@@ -41,7 +41,7 @@
 #include "hand/joint_list.hpp"
 #include "hand/kinematics.hpp"
 #include "latest.hpp"
-#include "nn/model.hpp"
+#include "model/model_info.hpp"
 #include "pose.hpp"
 #include "pose_model.hpp"
 #include "pose_network.hpp"
@@ -84,7 +84,7 @@ class GlovePoseEstimator {
     if (config_.clock_restart_frames < 1)
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
-    if (config_.network_threads > 1 && model_->network().unet() != nullptr) team_ = std::make_unique<nn::Team>(config_.network_threads);
+    if (config_.network_threads > 1 && model_->network().unet() != nullptr) team_ = std::make_unique<core::Team>(config_.network_threads);
     if (model_->solver()) {
       readout_.emplace(model_->solver(), config_.readout);
       measurements_ = Eigen::VectorXd::Zero(model_->solver()->layout().row_count());
@@ -462,7 +462,7 @@ class GlovePoseEstimator {
   double sequence_now_ = 0.0;
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   typename Model::Network::Workspace workspace_;
-  std::unique_ptr<nn::Team> team_;  // network_threads > 1 with a U-Net
+  std::unique_ptr<core::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;
   XrHandLocator locator_;

@@ -80,7 +80,7 @@ struct EstimatorConfig {
   /// this bound and flagged clamped.
   double max_prediction = 0.05;
   /// Threads a U-Net's forward runs on: the calling thread plus network_threads - 1 workers of the
-  /// estimator's own (nn/team.hpp), each computing part of every large layer; the same poses as
+  /// estimator's own (core/team.hpp), each computing part of every large layer; the same poses as
   /// with 1. Worth it for wide U-Nets on an otherwise idle second core (docs/performance.md); the
   /// workers park when no frame comes, so an idle estimator costs no CPU. An FCN runs on one.
   int network_threads = 1;

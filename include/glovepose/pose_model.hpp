@@ -19,7 +19,7 @@
 #include "grid/glove_description.hpp"
 #include "grid/grid_map.hpp"
 #include "hand/dofs.hpp"
-#include "nn/model.hpp"
+#include "model/model_info.hpp"
 #include "pose_network.hpp"
 #include "sensor/calibration.hpp"
 #include "sensor/layout.hpp"
@@ -56,7 +56,7 @@ class PoseModel {
   static std::shared_ptr<const PoseModel> load(const std::string& path, PoseModelOptions options = {}) {
     const nn::WeightFile file = nn::WeightFile::read(path);
     try {
-      nn::ModelInfo info = nn::ModelInfo::from(file);
+      model::ModelInfo info = model::ModelInfo::from(file);
       Network network = Network::from_tensors(info, file.tensors, options.storage);
       return std::make_shared<const PoseModel>(std::move(info), std::move(network), std::move(options));
     } catch (const Error& e) {
@@ -66,7 +66,7 @@ class PoseModel {
 
   /// @brief A model from its parts (see load()). Throws glovepose::Error when the glove's cell count
   /// or id differs from the model's, or the wiring's cells differ from the glove's.
-  PoseModel(nn::ModelInfo info, Network network, PoseModelOptions options)
+  PoseModel(model::ModelInfo info, Network network, PoseModelOptions options)
       : info_(std::move(info)), network_(std::move(network)), glove_(choose_glove(info_, options.glove)) {
     if (glove_.cell_count() != info_.inputs)
       throw Error("glove '" + glove_.id() + "' has " + std::to_string(glove_.cell_count()) + " cells, expected " +
@@ -86,12 +86,7 @@ class PoseModel {
                     std::to_string(glove_.cell_count()) + " (the glove's)");
       solver_ = std::make_shared<const Solver>(*layout);
     }
-    hand::Angles lo{}, hi{};
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-      lo[d] = info_.joint_limits_min[d];
-      hi[d] = info_.joint_limits_max[d];
-    }
-    limits_ = hand::JointLimits(lo, hi);
+    limits_ = info_.joint_limits();
     labelled_ = info_.labelled();
     all_labelled_ = labelled_ == hand::all_dofs();
     rest_normalized_ = limits_.normalize(limits_.rest());
@@ -101,18 +96,11 @@ class PoseModel {
         throw Error("metadata 'pose_offset' reads " + std::to_string(pose_offset_->cells()) + " cells, expected " +
                     std::to_string(glove_.cell_count()) + " (the glove's)");
     }
-    if (info_.calibration_min && info_.calibration_max) {
-      if (static_cast<int>(info_.calibration_min->size()) != glove_.cell_count())
-        throw Error("metadata 'calibration_min' holds " + std::to_string(info_.calibration_min->size()) + " numbers, expected " +
-                    std::to_string(glove_.cell_count()) + " (one per cell)");
-      training_range_.emplace(Eigen::Map<const Eigen::VectorXd>(info_.calibration_min->data(), glove_.cell_count()),
-                              Eigen::Map<const Eigen::VectorXd>(info_.calibration_max->data(), glove_.cell_count()), glove_.cell_names(),
-                              glove_.calibration().config());
-    }
+    training_range_ = info_.training_range(glove_.cell_names(), glove_.calibration().config());
   }
 
   /// @brief The file's metadata.
-  const nn::ModelInfo& info() const noexcept { return info_; }
+  const model::ModelInfo& info() const noexcept { return info_; }
   /// @brief The network.
   const Network& network() const noexcept { return network_; }
   /// @brief The glove the model reads.
@@ -167,16 +155,16 @@ class PoseModel {
   }
 
  private:
-  static grid::GloveDescription choose_glove(const nn::ModelInfo& info, std::optional<grid::GloveDescription>& given) {
+  static grid::GloveDescription choose_glove(const model::ModelInfo& info, std::optional<grid::GloveDescription>& given) {
     if (given) return std::move(*given);
     try {
-      return grid::GloveDescription::of_model(info.glove, info.glove_description);
+      return info.glove_of_model();
     } catch (const Error& e) {
       throw Error(std::string(e.what()) + " (or a glove given as PoseModelOptions::glove)");
     }
   }
 
-  nn::ModelInfo info_;
+  model::ModelInfo info_;
   Network network_;
   grid::GloveDescription glove_;
   std::shared_ptr<const Solver> solver_;

@@ -17,8 +17,8 @@
 #include "grid/grid_map.hpp"
 #include "hand/dofs.hpp"
 #include "nn/fcn.hpp"
-#include "nn/model.hpp"
-#include "nn/team.hpp"
+#include "model/model_info.hpp"
+#include "core/team.hpp"
 #include "nn/unet.hpp"
 #include "status.hpp"
 
@@ -40,7 +40,7 @@ class PoseNetwork {
   /// @brief The network a model file's metadata names, built from its tensors with weights kept as
   /// `storage`. Throws glovepose::Error for an architecture the real-time path does not run (a
   /// linear map: train::load_model evaluates it) or tensors that do not make the network.
-  static PoseNetwork from_tensors(const nn::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
+  static PoseNetwork from_tensors(const model::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
     if (info.architecture == "unet") return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
     if (info.architecture == "fcn") return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
     throw Error("architecture '" + info.architecture +
@@ -100,7 +100,7 @@ class PoseNetwork {
   /// A U-Net's layers are shared by `team`'s members when one is given (UNet::forward with a
   /// Team: the same results); an FCN runs on the calling thread.
   GLOVEPOSE_REALTIME Status normalized_dofs(const grid::GridMap& map, const double* cells, hand::Angles& normalized, Workspace& ws,
-                                            nn::Team* team = nullptr) const noexcept {
+                                            core::Team* team = nullptr) const noexcept {
     if (const UNet* u = unet()) {
       auto* w = std::get_if<typename UNet::Workspace>(&ws.net);
       if (!w || map.input_plane_count() * grid::kMapSlots != u->input_values() ||

@@ -44,7 +44,7 @@ struct BenchOptions {
 
 // A simulated person's 3 s calibration sequence and a session, with every raw row.
 struct Session {
-  train::Dataset data;
+  io::Dataset data;
   std::size_t first_session_frame = 0;
 };
 
@@ -58,7 +58,7 @@ Session simulate_session() {
   config.recording.raw_rows = true;
   Session s;
   s.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  while (s.data.kind[s.first_session_frame] == train::kKindCalibration) ++s.first_session_frame;
+  while (s.data.kind[s.first_session_frame] == io::kKindCalibration) ++s.first_session_frame;
   return s;
 }
 
@@ -100,7 +100,7 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   config.joint_transforms = true;
   config.calibration_method = CalibrationMethod::MinMax;
   GlovePoseEstimator estimator(model, config);
-  const train::Dataset& d = session.data;
+  const io::Dataset& d = session.data;
   const auto rows = static_cast<int>(d.row_count);
   std::vector<double> frame(d.row_count);
   const auto load_frame = [&](std::size_t f) {

@@ -5,7 +5,7 @@
 #include <glovepose/config.hpp>
 #include <glovepose/io/number_text.hpp>
 #include <glovepose/nn/weight_storage.hpp>
-#include <glovepose/train/dataset.hpp>
+#include <glovepose/io/dataset.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -64,11 +64,11 @@ inline std::string shipped_model_path(const std::string& name) {
   return candidate.string();
 }
 
-/// A dataset file (train::Dataset::read); a CSV file given instead is refused with the command
+/// A dataset file (io::Dataset::read); a CSV file given instead is refused with the command
 /// that imports it.
-inline train::Dataset read_dataset(const std::string& path) {
+inline io::Dataset read_dataset(const std::string& path) {
   try {
-    return train::Dataset::read(path);
+    return io::Dataset::read(path);
   } catch (const Error& e) {
     std::ifstream file(path, std::ios::binary);
     std::string start(256, '\0');

@@ -73,7 +73,7 @@ struct SessionRun {
 // pose. Returns the readings rejected.
 template <typename OnPose, typename BeforeRow>
 std::size_t stream_frame(GlovePoseEstimator& estimator, const NewUser& user, std::size_t f, OnPose on_pose, BeforeRow before_row) {
-  const train::Dataset& d = user.data;
+  const io::Dataset& d = user.data;
   const auto rows = static_cast<int>(d.row_count);
   std::size_t rejected = 0;
   for (int r = 0; r < rows; ++r) {
@@ -110,7 +110,7 @@ CalibrationResult calibrate(GlovePoseEstimator& estimator, const NewUser& user) 
 
 // Evenly spaced session frames whose true pose is no collision outlier.
 std::vector<std::size_t> pick_skeleton_frames(const NewUser& user) {
-  const train::Dataset& d = user.data;
+  const io::Dataset& d = user.data;
   const std::size_t begin = user.first_session_frame, count = d.frames() - begin;
   std::vector<std::size_t> picked;
   for (int k = 0; k < kSkeletonFrames; ++k) {
@@ -122,7 +122,7 @@ std::vector<std::size_t> pick_skeleton_frames(const NewUser& user) {
 }
 
 SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
-  const train::Dataset& d = user.data;
+  const io::Dataset& d = user.data;
   SessionRun run;
   run.skeleton_frames = pick_skeleton_frames(user);
   const std::size_t frames = d.frames() - user.first_session_frame;
@@ -170,7 +170,7 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
   return run;
 }
 
-const double* true_angles(const train::Dataset& d, std::size_t f, hand::Angles& out) {
+const double* true_angles(const io::Dataset& d, std::size_t f, hand::Angles& out) {
   for (std::size_t k = 0; k < hand::kDofCount; ++k) out[k] = d.angles[f * hand::kDofCount + k];
   return out.data();
 }

@@ -31,9 +31,9 @@ struct ImportOptions {
     std::size_t next_recording = 0, next_calibration = 0;
     for (const CLI::Option* given : command->parse_order()) {
       if (given == recordings_option)
-        takes.push_back({recordings[next_recording++], subject, session, train::kKindRecording});
+        takes.push_back({recordings[next_recording++], subject, session, io::kKindRecording});
       else if (given == calibrations_option)
-        takes.push_back({calibrations[next_calibration++], subject, session, train::kKindCalibration});
+        takes.push_back({calibrations[next_calibration++], subject, session, io::kKindCalibration});
     }
     return takes;
   }
@@ -73,9 +73,9 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
     take.path = (file.is_absolute() ? file : folder / file).string();
     take.subject = io::parse_csv_id(field(1), where(1));
     if (column[2] >= 0) take.session = io::parse_csv_id(field(2), where(2));
-    take.kind = train::kKindRecording;
+    take.kind = io::kKindRecording;
     if (column[3] >= 0 && field(3) == "calibration")
-      take.kind = train::kKindCalibration;
+      take.kind = io::kKindCalibration;
     else if (column[3] >= 0 && field(3) != "recording")
       throw Error(where(3) + " is not a kind, expected recording or calibration");
     takes.push_back(take);
@@ -84,7 +84,7 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
   return takes;
 }
 
-std::string angles_text(const train::Dataset& data) {
+std::string angles_text(const io::Dataset& data) {
   if (!data.has_angles()) return "without angles";
   const hand::DofSet labelled = data.labelled_dofs();
   const auto count = std::count(labelled.begin(), labelled.end(), true);
@@ -100,7 +100,7 @@ int import_recordings(const ImportOptions& o) {
   grid::GloveDescription glove = o.glove.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove);
   train::RecordingImporter importer(std::move(glove), o.import);
   for (const train::CsvTake& take : takes) importer.add(take);
-  const train::Dataset& data = importer.dataset();
+  const io::Dataset& data = importer.dataset();
   data.write(o.out);
 
   std::set<std::int32_t> subjects(data.subject.begin(), data.subject.end());
@@ -108,7 +108,7 @@ int import_recordings(const ImportOptions& o) {
   std::size_t calibration = 0;
   for (std::size_t i = 0; i < data.frames(); ++i) {
     sessions.insert({data.subject[i], data.session[i]});
-    calibration += data.kind[i] == train::kKindCalibration;
+    calibration += data.kind[i] == io::kKindCalibration;
   }
   std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n", takes.size(),
               data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(), data.cell_count,

@@ -12,7 +12,7 @@ namespace glovepose::cli {
 
 /// The calibration sequence, then the session, with every raw reading.
 struct NewUser {
-  train::Dataset data;
+  io::Dataset data;
   std::size_t first_session_frame = 0;
   double cycle_rate = 0.0;  ///< readout cycles per second
 };
@@ -35,7 +35,7 @@ inline NewUser simulate_new_user(std::uint64_t seed, double minutes, const PoseM
   NewUser user;
   user.data = sim::to_dataset(sim::simulate_corpus(config), config);
   user.cycle_rate = config.recording.cycle_rate;
-  while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == train::kKindCalibration)
+  while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == io::kKindCalibration)
     ++user.first_session_frame;
   if (user.first_session_frame == 0 || user.first_session_frame == user.data.frames())
     throw Error("the simulated user has " + std::to_string(user.first_session_frame) + " calibration frames of " +

@@ -42,7 +42,7 @@ int simulate(SimulateOptions o) {
   }
   const std::vector<sim::SessionRecording> corpus = sim::simulate_corpus(config);
   const double simulated = seconds();
-  const train::Dataset data = sim::to_dataset(corpus, config);
+  const io::Dataset data = sim::to_dataset(corpus, config);
   data.write(o.out);
   if (!o.csv.empty()) data.write_csv(o.csv);
   std::printf("wrote %s: %zu frames (%d subjects, %zu recordings, %s raw rows); simulated in %.1f s, %.1f s in all\n", o.out.c_str(),

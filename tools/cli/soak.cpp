@@ -37,7 +37,7 @@ int soak(SoakOptions o) {
   const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
   std::cout << "simulating " << o.source_minutes << " min of motion to loop ..." << std::endl;
   // The simulated user is the fault seed's, so one seed reproduces the whole run.
-  const train::Dataset source = sim::simulate_soak_source(o.soak.seed, o.source_minutes, kCalibrationSeconds);
+  const io::Dataset source = sim::simulate_soak_source(o.soak.seed, o.source_minutes, kCalibrationSeconds);
   std::cout << "streaming " << o.soak.estimators << " x " << o.soak.stream_minutes << " min ..." << std::endl;
   const sim::SoakReport report = sim::run_soak(model, source, o.soak);
   std::cout << "command: glovepose soak --minutes " << o.soak.stream_minutes << " --estimators " << o.soak.estimators << " --seed "

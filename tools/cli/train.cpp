@@ -1,5 +1,5 @@
 // glovepose train, finetune, eval and fit-guided: train, fine-tune and evaluate models on dataset
-//   files (train/dataset.hpp), on all cores, and fit a model's pose-guided calibration on people it
+//   files (io/dataset.hpp), on all cores, and fit a model's pose-guided calibration on people it
 //   was not trained on (guided_calibration.hpp).
 #include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
@@ -184,7 +184,7 @@ void add_training_options(CLI::App& command, const std::shared_ptr<Options>& o, 
 }
 
 // Subjects present in the data minus the excluded ones, when --exclude-subjects is given.
-void apply_exclusions(Options& o, const train::Dataset& data) {
+void apply_exclusions(Options& o, const io::Dataset& data) {
   if (o.exclude_subjects.empty()) return;
   if (o.filter.subjects.empty())
     for (std::size_t i = 0; i < data.frames(); ++i)
@@ -248,7 +248,7 @@ void report_zeroed(const std::string& command, const train::Samples& samples, co
   }
 }
 
-grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
+grid::GloveDescription glove_for(const Options& o, const io::Dataset& data) {
   const grid::GloveDescription glove =
       o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file);
   if (data.glove_layout() != glove.id())
@@ -271,7 +271,7 @@ grid::GloveDescription glove_for(const Options& o, const train::Dataset& data) {
 }
 
 // Trains (or fine-tunes) a network, saving the best model so far at every improvement.
-int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& info, const train::Samples& all,
+int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo& info, const train::Samples& all,
                 std::map<std::string, std::string> provenance) {
   const auto [training, validation] = train::split_validation(all, o.validation);
   if (o.command == "train" && (!o.batch_set || !o.epochs_set)) {  // defaults from the data's size
@@ -283,8 +283,8 @@ int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& in
                    "--batch and --epochs override)\n",
                    training.frames(), o.training.batch, o.training.epochs, train::kMinDefaultSteps);
   }
-  const hand::JointLimits limits = train::joint_limits(info);
-  train::ThreadPool pool(o.threads);
+  const hand::JointLimits limits = info.joint_limits();
+  core::ThreadPool pool(o.threads);
   train::TrainConfig config = o.training;
   config.stop = &interrupted;
   config.on_progress = progress_bar(o.quiet);
@@ -310,17 +310,17 @@ int fit_network(Options o, train::TrainableNetwork& net, const nn::ModelInfo& in
 }
 
 int train_command(Options o) {
-  const train::Dataset data = read_dataset(o.data);
+  const io::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const grid::GloveDescription glove = glove_for(o, data);
-  const train::CalibrationMode mode = train::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
+  const model::CalibrationMode mode = model::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
   std::optional<sensor::CalibrationRange> range;
-  if (mode == train::CalibrationMode::Training) range = train::training_range(data, o.filter, glove.calibration());
+  if (mode == model::CalibrationMode::Training) range = train::training_range(data, o.filter, glove.calibration());
   const hand::JointLimits limits = glove.joint_limits();
   const train::Samples all = train::make_samples(data, o.filter, mode, range ? &*range : nullptr, limits, o.stride, glove.calibration());
   report_zeroed(o.command, all, glove);
   const std::string& architecture = o.architecture.name;
-  nn::ModelInfo info = train::make_model_info(architecture, o.architecture.width, glove, mode, range ? &*range : nullptr);
+  model::ModelInfo info = train::make_model_info(architecture, o.architecture.width, glove, mode, range ? &*range : nullptr);
   if (all.labelled != hand::all_dofs()) {
     info.labelled_dofs = hand::dof_set_text(all.labelled);
     if (!o.quiet)
@@ -355,15 +355,15 @@ int train_command(Options o) {
 
 // The selected frames of --data as a loaded model sees them: its glove, its joint limits, and its
 // calibration mode unless --calibration overrides it ("guided" calibrates the inputs on the fly).
-std::pair<train::Samples, train::CalibrationMode> samples_for(Options o, const train::TrainedModel& model, const train::Dataset& data) {
-  if (data.glove_layout() != model.glove.id())
-    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + model.glove.id() + "'");
+std::pair<train::Samples, model::CalibrationMode> samples_for(Options o, const train::TrainedModel& trained, const io::Dataset& data) {
+  if (data.glove_layout() != trained.glove.id())
+    throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + trained.glove.id() + "'");
   const std::string requested = o.calibration == "guided" ? "onthefly" : o.calibration;
-  const train::CalibrationMode mode = train::calibration_mode(requested.empty() ? model.info.calibration : requested);
+  const model::CalibrationMode mode = requested.empty() ? trained.info.calibration : model::calibration_mode(requested);
   std::optional<sensor::CalibrationRange> range;
-  if (mode == train::CalibrationMode::Training) range = model.training_range();
-  return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, train::joint_limits(model.info), o.stride,
-                              model.glove.calibration()),
+  if (mode == model::CalibrationMode::Training) range = trained.training_range();
+  return {train::make_samples(data, o.filter, mode, range ? &*range : nullptr, trained.info.joint_limits(), o.stride,
+                              trained.glove.calibration()),
           mode};
 }
 
@@ -375,7 +375,7 @@ int finetune_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
   if (!model.network)
     throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
-  train::Dataset data = read_dataset(o.data);
+  io::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const train::Samples all = samples_for(o, model, data).first;
   report_zeroed(o.command, all, model.glove);
@@ -387,7 +387,7 @@ int finetune_command(Options o) {
 
 // Whether eval calibrates guided: asked for, or by default when the model carries a pose-guided
 // calibration and the dataset's calibrations followed its sequence.
-bool eval_guided(const Options& o, const train::TrainedModel& model, const train::Dataset& data) {
+bool eval_guided(const Options& o, const train::TrainedModel& model, const io::Dataset& data) {
   if (o.calibration == "guided") return true;
   if (!o.calibration.empty() || model.info.pose_offset.empty()) return false;
   const auto it = data.metadata.find("calibration_sequence");
@@ -396,7 +396,7 @@ bool eval_guided(const Options& o, const train::TrainedModel& model, const train
 }
 
 // Writes one row per evaluated frame: where it comes from, the true and the predicted angles (radians).
-void write_predictions(const std::string& path, const train::Dataset& data, const train::Samples& samples,
+void write_predictions(const std::string& path, const io::Dataset& data, const train::Samples& samples,
                        const std::vector<float>& predicted) {
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (!file) throw Error("--predictions: cannot open '" + path + "' for writing");
@@ -417,15 +417,15 @@ void write_predictions(const std::string& path, const train::Dataset& data, cons
 
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  train::Dataset data = read_dataset(o.data);
+  io::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   sensor::ReadoutConfig readout = EstimatorConfig{}.readout;
   if (o.mean_window != 0) readout.mean_window = o.mean_window;
   if (o.replay) train::replay_rows(data, readout);
   const auto [samples, mode] = samples_for(o, model, data);
   report_zeroed(o.command, samples, model.glove);
-  const hand::JointLimits limits = train::joint_limits(model.info);
-  train::ThreadPool pool(o.threads);
+  const hand::JointLimits limits = model.info.joint_limits();
+  core::ThreadPool pool(o.threads);
   const bool guided = eval_guided(o, model, data);
   const std::map<std::int64_t, hand::Angles> offsets =
       guided ? train::guided_offsets(model, data, o.filter, pool) : std::map<std::int64_t, hand::Angles>{};
@@ -455,7 +455,7 @@ int eval_command(Options o) {
   const double frame_ms = 1000.0 / data.frame_rate();
   const double lag_ms = train::lag_frames(predicted, samples.angles, samples.source, samples.run) * frame_ms;
   if (!o.predictions_file.empty()) write_predictions(o.predictions_file, data, samples, predicted);
-  const std::string calibration = guided ? "guided" : train::to_string(mode);
+  const std::string calibration = guided ? "guided" : model::to_string(mode);
   const auto window = data.metadata.find("mean_window");
   const std::string mean_window = window == data.metadata.end() ? "null" : window->second;
   if (o.json) {
@@ -477,11 +477,11 @@ int eval_command(Options o) {
 // (tensors and every other metadata entry unchanged, bit for bit).
 int fit_guided_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
-  train::Dataset data = read_dataset(o.data);
+  io::Dataset data = read_dataset(o.data);
   apply_exclusions(o, data);
   const std::string sequence_file = o.sequence_file.empty() ? shipped_model_path("calibration_glauser2019.json") : o.sequence_file;
   const calibration::Sequence sequence = calibration::Sequence::read(sequence_file);
-  train::ThreadPool pool(o.threads);
+  core::ThreadPool pool(o.threads);
   const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);
   io::TensorFile file = io::TensorFile::read(o.model, "model file");
   file.metadata["pose_offset"] = fit.model.to_json();

@@ -95,7 +95,7 @@ struct SoakConfig {
 /// @brief A simulated session with raw rows to loop: one subject, `minutes` of motion after a
 /// `calibration_seconds` calibration sequence. Set-up code (CPU-heavy: about 1 s per 10 s of motion
 /// on `threads` threads, 0: all).
-inline train::Dataset simulate_soak_source(std::uint64_t seed, double minutes, double calibration_seconds = 3.0, int threads = 0) {
+inline io::Dataset simulate_soak_source(std::uint64_t seed, double minutes, double calibration_seconds = 3.0, int threads = 0) {
   CorpusConfig config;
   config.seed = seed;
   config.subjects = 1;
@@ -335,14 +335,14 @@ inline long peak_resident_kib() {
 namespace detail {
 
 // The frames of the calibration sequence at the source's start.
-inline std::size_t calibration_frames(const train::Dataset& source) noexcept {
+inline std::size_t calibration_frames(const io::Dataset& source) noexcept {
   std::size_t n = 0;
-  while (n < source.frames() && source.kind[n] == train::kKindCalibration) ++n;
+  while (n < source.frames() && source.kind[n] == io::kKindCalibration) ++n;
   return n;
 }
 
 // Readout cycles per second of the source's session (its frames are the cycles' ends).
-inline double cycle_rate(const train::Dataset& source) noexcept {
+inline double cycle_rate(const io::Dataset& source) noexcept {
   const std::size_t first = calibration_frames(source), last = source.frames() - 1;
   return static_cast<double>(last - first) / (source.timestamps[last] - source.timestamps[first]);
 }
@@ -351,7 +351,7 @@ inline double cycle_rate(const train::Dataset& source) noexcept {
 /// run_cycle() is the per-frame path and neither allocates nor throws.
 class SoakStream {
  public:
-  SoakStream(std::shared_ptr<const PoseModel> model, const train::Dataset& source, const SoakConfig& config, int index)
+  SoakStream(std::shared_ptr<const PoseModel> model, const io::Dataset& source, const SoakConfig& config, int index)
       : estimator_(std::move(model), config.estimator),
         source_(source),
         config_(config),
@@ -526,7 +526,7 @@ class SoakStream {
   }
 
   GlovePoseEstimator estimator_;
-  const train::Dataset& source_;
+  const io::Dataset& source_;
   const SoakConfig& config_;
   const sensor::TraceLayout& layout_;
   core::Rng rng_;
@@ -558,7 +558,7 @@ class SoakStream {
 /// estimator over `model`, streaming `source` (simulate_soak_source) with faults. Throws
 /// glovepose::Error for bad settings or a source without raw rows, a calibration sequence and
 /// a session; errors on the threads are reported in SoakReport::errors.
-inline SoakReport run_soak(const std::shared_ptr<const PoseModel>& model, const train::Dataset& source, const SoakConfig& config) {
+inline SoakReport run_soak(const std::shared_ptr<const PoseModel>& model, const io::Dataset& source, const SoakConfig& config) {
   config.validate();
   if (!model || !model->solver()) throw Error("soak: no model with a wiring given, expected a loaded PoseModel for the row stream");
   if (!source.has_raw_rows() || static_cast<int>(source.row_count) != model->solver()->layout().row_count())

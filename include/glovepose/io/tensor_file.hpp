@@ -3,7 +3,7 @@
 /// compatible, u64 little-endian header length, JSON header, raw little-endian row-major tensors that
 /// tile the data buffer. Set-up code: every malformed input is a glovepose::Error naming the tensor
 /// or byte offset and what was expected. Values are kept as raw bytes (NaN and infinity pass
-/// through); the users of the container (nn::WeightFile, train::Dataset) decide what they accept.
+/// through); the users of the container (nn::WeightFile, io::Dataset) decide what they accept.
 #pragma once
 
 #include <algorithm>

@@ -4,10 +4,8 @@
 #pragma once
 
 #include <algorithm>
-#include <exception>
-#include <mutex>
-#include <thread>
-#include <vector>
+
+#include "../core/thread_pool.hpp"
 
 namespace glovepose::nn {
 
@@ -23,35 +21,13 @@ inline constexpr int kMaxBatch = 1 << 16;
 /// (docs/performance.md). Larger calls keep the dense products, whose time does not depend on the input.
 inline constexpr int kSparseMaxFrames = 32;
 
-/// @brief Set-up code for evaluating many frames: calls work(begin, end) for `threads` contiguous
-/// shares of [0, frames), the calling thread taking the first, and rethrows the first exception a
-/// share threw once all have ended.
+/// @brief Set-up code for evaluating many frames: calls work(begin, end) on `threads` threads, one
+/// contiguous share of [0, frames) each (the calling thread takes the first), and rethrows the first
+/// exception a share threw once all have ended.
 template <typename Work>
 void run_frame_shares(long frames, int threads, Work&& work) {
-  std::mutex failure_mutex;
-  std::exception_ptr failure;
-  const auto guarded = [&](long begin, long end) {
-    try {
-      work(begin, end);
-    } catch (...) {
-      const std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-    }
-  };
-  std::vector<std::thread> pool;
-  const long per = (frames + threads - 1) / threads;
-  try {
-    for (int t = 1; t < threads; ++t) {
-      const long begin = t * per, end = std::min(frames, begin + per);
-      if (begin < end) pool.emplace_back(guarded, begin, end);
-    }
-  } catch (...) {
-    for (std::thread& th : pool) th.join();
-    throw;
-  }
-  guarded(0, std::min(frames, per));
-  for (std::thread& th : pool) th.join();
-  if (failure) std::rethrow_exception(failure);
+  core::ThreadPool pool(static_cast<int>(std::max<long>(1, std::min<long>(threads, frames))));
+  pool.for_shares(frames, [&](core::Range r, int) { work(r.begin, r.end); });
 }
 
 }  // namespace glovepose::nn

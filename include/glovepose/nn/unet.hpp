@@ -24,7 +24,7 @@
 #include "batching.hpp"
 #include "kernels/scalar.hpp"
 #include "kernels/simd.hpp"
-#include "team.hpp"
+#include "../core/team.hpp"
 #include "tensor.hpp"
 #include "unet_packing.hpp"
 #include "unet_run.hpp"
@@ -217,13 +217,13 @@ class UNet {
   /// or, for a layer of one panel, the rows. Each output is computed by the same kernel calls as
   /// without a team: the results are identical. Status::SizeMismatch for a workspace made for a
   /// smaller team.
-  GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws, Team& team) const noexcept {
+  GLOVEPOSE_REALTIME Status forward(const float* input, float* output, int frames, Workspace& ws, core::Team& team) const noexcept {
     if (static_cast<std::size_t>(team.size()) > ws.members.size() + 1) return Status::SizeMismatch;
     return forward(input, output, frames, ws, &team);
   }
 
  private:
-  Status forward(const float* input, float* output, int frames, Workspace& ws, Team* team) const noexcept {
+  Status forward(const float* input, float* output, int frames, Workspace& ws, core::Team* team) const noexcept {
     if (frames < 1 || frames > ws.capacity_ || ws.width_ != width_ || ws.extra_inputs_ != extra_inputs_ ||
         ws.buffers.size() != buffers_.size())
       return Status::SizeMismatch;

@@ -16,7 +16,7 @@
 #include "batching.hpp"
 #include "fixed16.hpp"
 #include "kernels/sparse_row.hpp"
-#include "team.hpp"
+#include "../core/team.hpp"
 #include "tensor.hpp"
 #include "unet_packing.hpp"
 
@@ -82,7 +82,7 @@ class UNetRunner {
   explicit UNetRunner(const std::vector<UNetBuffer>& buffers) noexcept : buffers_(buffers) {}
 
   /// @brief One layer on the `frames` frames in `ws`, its products shared by `team` when given.
-  GLOVEPOSE_REALTIME void run(const PackedLayer& layer, int frames, Workspace& ws, Team* team) const noexcept {
+  GLOVEPOSE_REALTIME void run(const PackedLayer& layer, int frames, Workspace& ws, core::Team* team) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
@@ -168,7 +168,7 @@ class UNetRunner {
 
   // A Taps layer's products, shared by the team's members when there is one.
   template <typename W>
-  void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, Team* team) const noexcept {
+  void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, core::Team* team) const noexcept {
     std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
     if (frames <= kSparseMaxFrames) compact_sources(layer, frames, ws, first_row);
     if (team == nullptr || team->size() == 1) {
@@ -314,7 +314,7 @@ class UNetRunner {
   }
 
   template <typename W>
-  void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, Team* team) const noexcept {
+  void run_products(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, core::Team* team) const noexcept {
     if (layer.mode == Mode::Im2col)
       run_im2col(layer, weights, frames, ws);
     else if (layer.mode == Mode::TapColumns)

@@ -12,8 +12,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
-#include <exception>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -21,6 +19,7 @@
 
 #include "../calibration/sequence.hpp"
 #include "../config.hpp"
+#include "../core/thread_pool.hpp"
 #include "glove.hpp"
 #include "motion.hpp"
 #include "pose_gallery.hpp"
@@ -228,22 +227,15 @@ inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config)
   const unsigned threads =
       std::min<unsigned>(config.threads > 0 ? static_cast<unsigned>(config.threads) : hardware, static_cast<unsigned>(plan.size()));
   std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  const auto worker = [&] {
+  core::ThreadPool pool(static_cast<int>(std::max(1u, threads)));
+  pool.run([&](int) {
     try {
       for (std::size_t i = next++; i < plan.size(); i = next++) run(plan[i]);
-    } catch (...) {  // hand the first failure to the caller instead of terminating
-      const std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
+    } catch (...) {  // the others stop taking sessions; the pool hands the first failure to the caller
       next = plan.size();
+      throw;
     }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  });
   return plan;
 }
 

@@ -1,20 +1,20 @@
 /// @file corpus_dataset.hpp
-/// @brief A simulated corpus as one dataset file (train::Dataset, the container of weights_format.md).
+/// @brief A simulated corpus as one dataset file (io::Dataset, the container of weights_format.md).
 #pragma once
 
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include "../train/dataset.hpp"
+#include "../io/dataset.hpp"
 #include "corpus.hpp"
 
 namespace glovepose::sim {
 
 /// @brief The recordings, in plan order, as one dataset; the metadata records how it was made.
-inline train::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const CorpusConfig& config) {
+inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const CorpusConfig& config) {
   const bool raw = config.recording.raw_rows;
-  train::Dataset out(kCells, raw ? kRows : 0, sensor::TraceLayout::glauser2019().id(), config.recording.cycle_rate);
+  io::Dataset out(kCells, raw ? kRows : 0, sensor::TraceLayout::glauser2019().id(), config.recording.cycle_rate);
   std::size_t total = 0;
   for (const SessionRecording& s : corpus) total += static_cast<std::size_t>(s.recording.frames);
   out.cells.reserve(total * kCells);
@@ -39,7 +39,7 @@ inline train::Dataset to_dataset(const std::vector<SessionRecording>& corpus, co
     out.session.insert(out.session.end(), n, s.session);
     out.glove.insert(out.glove.end(), n, s.glove);
     out.donning.insert(out.donning.end(), n, s.donning);
-    out.kind.insert(out.kind.end(), n, s.kind == RecordingKind::Calibration ? train::kKindCalibration : train::kKindRecording);
+    out.kind.insert(out.kind.end(), n, s.kind == RecordingKind::Calibration ? io::kKindCalibration : io::kKindRecording);
   }
   char minutes[32];
   std::snprintf(minutes, sizeof minutes, "%g", config.minutes);

@@ -39,7 +39,7 @@ struct CalibrationRun {
 
 /// @brief The calibration frames of every selected run (by subject, session and glove of `filter`)
 /// that has a complete on-the-fly range.
-inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& data, const FrameFilter& filter,
+inline std::map<std::int64_t, CalibrationRun> calibration_runs(const io::Dataset& data, const FrameFilter& filter,
                                                                const grid::GloveCalibration& calibration = {}) {
   const std::map<std::int64_t, sensor::CalibrationRange> ranges = onthefly_ranges(data, calibration);
   FrameFilter all_kinds = filter;
@@ -48,7 +48,7 @@ inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& da
   const auto cells = static_cast<Eigen::Index>(data.cell_count);
   Eigen::VectorXd raw(cells), normalized(cells);
   for (std::size_t i = 0; i < data.frames(); ++i) {
-    if (data.kind[i] != kKindCalibration || !all_kinds.selects_run(data, i)) continue;
+    if (data.kind[i] != io::kKindCalibration || !all_kinds.selects_run(data, i)) continue;
     const std::int64_t key = run_key(data, i);
     const auto range = ranges.find(key);
     if (range == ranges.end()) continue;
@@ -66,7 +66,7 @@ inline std::map<std::int64_t, CalibrationRun> calibration_runs(const Dataset& da
 
 /// @brief The sequence a dataset's calibrations followed must be `sequence`: throws glovepose::Error
 /// when the dataset's metadata names another one or none.
-inline void check_guided(const Dataset& data, const calibration::Sequence& sequence) {
+inline void check_guided(const io::Dataset& data, const calibration::Sequence& sequence) {
   const auto it = data.metadata.find("calibration_sequence");
   if (it == data.metadata.end())
     throw Error(
@@ -79,9 +79,9 @@ inline void check_guided(const Dataset& data, const calibration::Sequence& seque
 /// @brief The pose-guided features (calibration::StepHoldMeans) of every run of `runs`, as `model`
 /// sees them. Runs whose sequence was not performed to the end are left out and listed in `incomplete`.
 inline std::map<std::int64_t, Eigen::VectorXd> guided_features(TrainedModel& model, const calibration::Sequence& sequence,
-                                                               const std::map<std::int64_t, CalibrationRun>& runs, ThreadPool& pool,
+                                                               const std::map<std::int64_t, CalibrationRun>& runs, core::ThreadPool& pool,
                                                                std::vector<std::int64_t>* incomplete = nullptr) {
-  const hand::JointLimits limits = joint_limits(model.info);
+  const hand::JointLimits limits = model.info.joint_limits();
   std::map<std::int64_t, Eigen::VectorXd> features;
   for (const auto& [key, run] : runs) {
     const std::vector<float> normalized = model.predict(run.frames, pool);
@@ -103,8 +103,8 @@ inline std::map<std::int64_t, Eigen::VectorXd> guided_features(TrainedModel& mod
 /// @brief The pose-guided offsets (radians) of every selected run, from the PoseOffsetModel the
 /// model file carries. Throws glovepose::Error when it carries none, when the dataset's calibrations
 /// followed another sequence, or naming the first run whose sequence is incomplete.
-inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, const Dataset& data, const FrameFilter& filter,
-                                                           ThreadPool& pool) {
+inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, const io::Dataset& data, const FrameFilter& filter,
+                                                           core::ThreadPool& pool) {
   if (model.info.pose_offset.empty())
     throw Error("the model carries no pose-guided calibration (metadata 'pose_offset'), expected one fitted by glovepose fit-guided");
   const calibration::PoseOffsetModel offsets = calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'");
@@ -162,14 +162,14 @@ struct PoseOffsetFit {
 /// (true - predicted) angles over its session frames; ridge least squares on standardised features,
 /// the ridge strength chosen from `ridges` by `folds`-fold cross-validation over the runs. Throws
 /// glovepose::Error when fewer than 2 x folds runs are usable.
-inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const Dataset& data,
-                                     const FrameFilter& filter, ThreadPool& pool,
+inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const io::Dataset& data,
+                                     const FrameFilter& filter, core::ThreadPool& pool,
                                      const std::vector<double>& ridges = {0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0}, int folds = 5) {
   check_guided(data, sequence);
-  const hand::JointLimits limits = joint_limits(model.info);
+  const hand::JointLimits limits = model.info.joint_limits();
   const std::map<std::int64_t, Eigen::VectorXd> features =
       guided_features(model, sequence, calibration_runs(data, filter, model.glove.calibration()), pool);
-  const Samples session = make_samples(data, filter, CalibrationMode::OnTheFly, nullptr, limits, 1, model.glove.calibration());
+  const Samples session = make_samples(data, filter, model::CalibrationMode::OnTheFly, nullptr, limits, 1, model.glove.calibration());
   const std::vector<float> predicted = model.predict(session, pool);
   std::map<std::int64_t, Eigen::VectorXd> residual_sum;
   std::map<std::int64_t, long> residual_count;

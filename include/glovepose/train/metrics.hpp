@@ -173,7 +173,7 @@ class AngleErrorAccumulator {
   bool add(const hand::Angles& predicted, const hand::Angles& truth) { return add_frame(predicted.data(), truth.data()); }
 
   /// @brief Adds `frames` frames stored row-major (frames x 25, radians, hand::kDofs order), e.g. a
-  /// network's output block against train::Dataset::angles. Returns the number of frames skipped
+  /// network's output block against io::Dataset::angles. Returns the number of frames skipped
   /// because an angle was not finite. Throws glovepose::Error when a pointer is null and frames > 0.
   std::size_t add_batch(const float* predicted, const float* truth, std::size_t frames) { return add_rows(predicted, truth, frames); }
 

@@ -17,7 +17,7 @@
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../nn/linear.hpp"
-#include "../nn/model.hpp"
+#include "../model/model_info.hpp"
 #include "../sensor/calibration.hpp"
 #include "network.hpp"
 #include "samples.hpp"
@@ -27,32 +27,22 @@
 
 namespace glovepose::train {
 
-/// @brief The joint limits a model's outputs are normalised by.
-inline hand::JointLimits joint_limits(const nn::ModelInfo& info) {
-  hand::Angles lo{}, hi{};
-  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
-    lo[d] = info.joint_limits_min[d];
-    hi[d] = info.joint_limits_max[d];
-  }
-  return hand::JointLimits(lo, hi);
-}
-
 /// @brief Metadata for a new model of `architecture` and `width` for `glove`, normalised by the
 /// glove's joint limits (its description's, else the reference's), with inputs calibrated by `mode`
 /// (`range`: the training range).
-inline nn::ModelInfo make_model_info(const std::string& architecture, int width, const grid::GloveDescription& glove, CalibrationMode mode,
-                                     const sensor::CalibrationRange* range) {
-  nn::ModelInfo info;
+inline model::ModelInfo make_model_info(const std::string& architecture, int width, const grid::GloveDescription& glove,
+                                        model::CalibrationMode mode, const sensor::CalibrationRange* range) {
+  model::ModelInfo info;
   info.architecture = architecture;
   info.width = architecture == "linear" ? 0 : width;
   info.inputs = glove.cell_count();
   info.glove = glove.id();
   if (glove != grid::GloveDescription::glauser2019()) info.glove_description = glove.to_metadata();
-  info.calibration = to_string(mode);
+  info.calibration = mode;
   const hand::JointLimits limits = glove.joint_limits();
   info.joint_limits_min.assign(limits.min().begin(), limits.min().end());
   info.joint_limits_max.assign(limits.max().begin(), limits.max().end());
-  if (mode == CalibrationMode::Training && range) {
+  if (mode == model::CalibrationMode::Training && range) {
     info.calibration_min = std::vector<double>(range->min().data(), range->min().data() + range->size());
     info.calibration_max = std::vector<double>(range->max().data(), range->max().data() + range->size());
   }
@@ -60,7 +50,7 @@ inline nn::ModelInfo make_model_info(const std::string& architecture, int width,
 }
 
 /// @brief A network of the architecture `info` names, for `glove`, with zero tensors.
-inline std::unique_ptr<TrainableNetwork> make_network(const nn::ModelInfo& info, const grid::GloveDescription& glove, int max_batch) {
+inline std::unique_ptr<TrainableNetwork> make_network(const model::ModelInfo& info, const grid::GloveDescription& glove, int max_batch) {
   if (info.architecture == "unet") return std::make_unique<TrainableUNet>(info.width, glove.map(), max_batch);
   if (info.architecture == "fcn") return std::make_unique<TrainableFcn>(info.inputs, info.width, max_batch);
   throw Error("architecture '" + info.architecture + "' has no trainable network, expected unet or fcn");
@@ -68,7 +58,7 @@ inline std::unique_ptr<TrainableNetwork> make_network(const nn::ModelInfo& info,
 
 /// @brief A model read from a file: metadata, glove, and the network or linear map.
 struct TrainedModel {
-  nn::ModelInfo info;                                                    ///< Metadata.
+  model::ModelInfo info;                                                 ///< Metadata.
   grid::GloveDescription glove = grid::GloveDescription::glauser2019();  ///< The glove it was trained for.
   std::unique_ptr<TrainableNetwork> network;                             ///< U-Net or FCN (null for linear).
   std::optional<nn::LinearMap> linear;                                   ///< The linear map (linear models).
@@ -76,16 +66,15 @@ struct TrainedModel {
 
   /// @brief The training-set calibration range stored in the file; throws unless it has one.
   sensor::CalibrationRange training_range() const {
-    if (!info.calibration_min || !info.calibration_max)
+    std::optional<sensor::CalibrationRange> range = info.training_range(cell_names(info.inputs), glove.calibration().config());
+    if (!range)
       throw Error(
           "the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
-    const Eigen::Map<const Eigen::VectorXd> lo(info.calibration_min->data(), static_cast<Eigen::Index>(info.calibration_min->size()));
-    const Eigen::Map<const Eigen::VectorXd> hi(info.calibration_max->data(), static_cast<Eigen::Index>(info.calibration_max->size()));
-    return sensor::CalibrationRange(lo, hi, cell_names(info.calibration_min->size()), glove.calibration().config());
+    return std::move(*range);
   }
 
   /// @brief Normalised predictions (frames x 25) for prepared samples.
-  std::vector<float> predict(const Samples& samples, ThreadPool& pool) {
+  std::vector<float> predict(const Samples& samples, core::ThreadPool& pool) {
     if (samples.cells != info.inputs)
       throw Error("the samples have " + std::to_string(samples.cells) + " cells per frame, the model takes " + std::to_string(info.inputs));
     std::vector<float> out(static_cast<std::size_t>(samples.frames()) * kTargets);
@@ -98,7 +87,7 @@ struct TrainedModel {
     }
     const hand::DofSet labelled = info.labelled();
     if (labelled != hand::all_dofs()) {  // DoFs the model had no reference angles for read the rest pose
-      const hand::JointLimits limits = joint_limits(info);
+      const hand::JointLimits limits = info.joint_limits();
       for (long f = 0; f < samples.frames(); ++f) {
         hand::Angles a{};
         for (std::size_t d = 0; d < hand::kDofCount; ++d) a[d] = out[static_cast<std::size_t>(f) * kTargets + d];
@@ -112,7 +101,7 @@ struct TrainedModel {
 
 /// @brief Writes a model file: `info`, the tensors (stored as `dtype`: F32, F16 or BF16), and
 /// `provenance` (extra metadata such as the command and seed that made it).
-inline void save_model(const std::string& path, const nn::ModelInfo& info, const nn::TensorMap& tensors,
+inline void save_model(const std::string& path, const model::ModelInfo& info, const nn::TensorMap& tensors,
                        const std::map<std::string, std::string>& provenance = {}, io::DType dtype = io::DType::F32) {
   nn::WeightFile file;
   file.tensors = tensors;
@@ -131,28 +120,25 @@ inline nn::TensorMap linear_tensors(const nn::LinearMap& map) {
 inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
   const nn::WeightFile file = nn::WeightFile::read(path);
   try {
-    TrainedModel model;
-    model.info = nn::ModelInfo::from(file);
-    model.metadata = file.metadata;
-    model.glove = grid::GloveDescription::of_model(model.info.glove, model.info.glove_description);
-    if (model.glove.cell_count() != model.info.inputs)
-      throw Error("metadata 'inputs' is " + std::to_string(model.info.inputs) + " but the glove has " +
-                  std::to_string(model.glove.cell_count()) + " cells");
-    if (model.info.architecture == "linear") {
+    TrainedModel trained;
+    trained.info = model::ModelInfo::from(file);
+    trained.metadata = file.metadata;
+    trained.glove = trained.info.glove_of_model();
+    if (trained.info.architecture == "linear") {
       for (const char* name : {"weight", "bias"})
         if (!file.tensors.count(name))
           throw Error(std::string("tensor '") + name + "' is missing, expected a linear model's weight and bias");
       if (file.tensors.size() != 2) throw Error("a linear model holds exactly the tensors 'weight' and 'bias'");
       const nn::Tensor& w = file.tensors.at("weight");
-      if (w.shape != std::vector<std::int64_t>{kTargets, model.info.inputs})
-        throw Error("tensor 'weight' has shape " + io::shape_string(w.shape) + ", expected [25, " + std::to_string(model.info.inputs) +
+      if (w.shape != std::vector<std::int64_t>{kTargets, trained.info.inputs})
+        throw Error("tensor 'weight' has shape " + io::shape_string(w.shape) + ", expected [25, " + std::to_string(trained.info.inputs) +
                     "]");
-      model.linear.emplace(model.info.inputs, kTargets, w.values, file.tensors.at("bias").values);
+      trained.linear.emplace(trained.info.inputs, kTargets, w.values, file.tensors.at("bias").values);
     } else {
-      model.network = make_network(model.info, model.glove, max_batch);
-      model.network->parameters().load(file.tensors);
+      trained.network = make_network(trained.info, trained.glove, max_batch);
+      trained.network->parameters().load(file.tensors);
     }
-    return model;
+    return trained;
   } catch (const Error& e) {
     throw Error("model file '" + path + "': " + e.what());
   }

@@ -8,7 +8,7 @@
 
 #include "../hand/dofs.hpp"
 #include "parameters.hpp"
-#include "thread_pool.hpp"
+#include "../core/thread_pool.hpp"
 
 namespace glovepose::train {
 
@@ -29,12 +29,12 @@ class TrainableNetwork {
   virtual int max_batch() const = 0;
   /// @brief Forward pass of `frames` frames (cells: frames x inputs()); training mode uses batch
   /// statistics in batch norm and updates the running ones, evaluation mode uses the running ones.
-  virtual void forward(const float* cells, int frames, bool training, ThreadPool& pool) = 0;
+  virtual void forward(const float* cells, int frames, bool training, core::ThreadPool& pool) = 0;
   /// @brief The last forward's output, frames x kTargets.
   virtual const float* output() const = 0;
   /// @brief Backward pass of the last (training-mode) forward: sets every trainable tensor's grad
   /// to dLoss/dvalue given dLoss/doutput (frames x kTargets).
-  virtual void backward(const float* output_grad, ThreadPool& pool) = 0;
+  virtual void backward(const float* output_grad, core::ThreadPool& pool) = 0;
   /// @brief The tensors (PyTorch names).
   virtual ParameterSet& parameters() = 0;
   /// @brief The tensors (PyTorch names).

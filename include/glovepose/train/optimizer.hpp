@@ -10,7 +10,7 @@
 
 #include "../config.hpp"
 #include "parameters.hpp"
-#include "thread_pool.hpp"
+#include "../core/thread_pool.hpp"
 
 namespace glovepose::train {
 
@@ -48,7 +48,7 @@ class Optimizer {
 
   /// @brief One update of every trainable tensor from its gradient, split over the pool's threads
   /// by contiguous ranges (element-wise, so the result does not depend on the thread count).
-  void step(ParameterSet& params, ThreadPool& pool) {
+  void step(ParameterSet& params, core::ThreadPool& pool) {
     if (params.size() != mean_.size()) throw Error("Optimizer::step: the parameter set is not the one the optimizer was made for");
     ++steps_;
     const double t = static_cast<double>(steps_);
@@ -65,7 +65,7 @@ class Optimizer {
       float* m = mean_[k].data();
       float* v = square_[k].data();
       const bool adam = config_.kind == OptimizerKind::Adam;
-      pool.for_shares(static_cast<long>(p.size()), [&](Range r, int) {
+      pool.for_shares(static_cast<long>(p.size()), [&](core::Range r, int) {
         for (long i = r.begin; i < r.end; ++i) {
           const float g = grad[i];
           if (!adam) {

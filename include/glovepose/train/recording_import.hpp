@@ -43,7 +43,7 @@
 #include "../io/csv_fields.hpp"
 #include "../io/number_text.hpp"
 #include "../sensor/calibration.hpp"
-#include "dataset.hpp"
+#include "../io/dataset.hpp"
 
 namespace glovepose::train {
 
@@ -52,7 +52,7 @@ struct CsvTake {
   std::string path;                     ///< The file (named in every error).
   std::optional<std::int32_t> subject;  ///< Subject of every row, when the file has no `subject` column.
   std::optional<std::int32_t> session;  ///< Session of every row, when the file has no `session` column (else 0).
-  std::optional<std::uint8_t> kind;     ///< kKindRecording or kKindCalibration, when the file has no `kind` column.
+  std::optional<std::uint8_t> kind;     ///< io::kKindRecording or io::kKindCalibration, when the file has no `kind` column.
 };
 
 /// @brief How the takes are read.
@@ -112,7 +112,7 @@ class RecordingImporter {
   }
 
   /// @brief The frames read so far.
-  const Dataset& dataset() const noexcept { return data_; }
+  const io::Dataset& dataset() const noexcept { return data_; }
   /// @brief Flat sensors of calibration runs kept under allow_flat, in the order met.
   const std::vector<FlatSensor>& flat_sensors() const noexcept { return flat_; }
 
@@ -236,7 +236,7 @@ class RecordingImporter {
         throw Error(at_line + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(columns.size()) +
                     " (one per column of line " + std::to_string(header_line) + ")");
       std::int32_t subject = take.subject.value_or(0), session = take.session.value_or(0), glove = 0;
-      std::uint8_t kind = take.kind.value_or(kKindRecording);
+      std::uint8_t kind = take.kind.value_or(io::kKindRecording);
       std::optional<double> time;
       std::fill(pose.begin(), pose.end(), NAN);
       for (std::size_t k = 0; k < fields.size(); ++k) {
@@ -297,8 +297,8 @@ class RecordingImporter {
   }
 
   static std::uint8_t parse_kind(const std::string& text, const std::string& where) {
-    if (text == "recording" || text == "0") return kKindRecording;
-    if (text == "calibration" || text == "1") return kKindCalibration;
+    if (text == "recording" || text == "0") return io::kKindRecording;
+    if (text == "calibration" || text == "1") return io::kKindCalibration;
     throw Error(where + " is not a kind, expected recording, calibration, 0 or 1");
   }
 
@@ -312,7 +312,7 @@ class RecordingImporter {
     for (std::size_t begin = first; begin < data_.frames();) {
       std::size_t end = begin + 1;
       while (end < data_.frames() && data_.same_run(begin, end)) ++end;
-      if (data_.kind[begin] == kKindCalibration) {
+      if (data_.kind[begin] == io::kKindCalibration) {
         for (std::size_t c = 0; c < cells; ++c) {
           double lo = std::numeric_limits<double>::infinity(), hi = -lo;
           for (std::size_t i = begin; i < end; ++i) {
@@ -350,7 +350,7 @@ class RecordingImporter {
 
   grid::GloveDescription glove_;
   CsvImportOptions options_;
-  Dataset data_;
+  io::Dataset data_;
   std::vector<FlatSensor> flat_;
 };
 

@@ -16,7 +16,7 @@
 #include "../sensor/layout.hpp"
 #include "../sensor/readout.hpp"
 #include "../sensor/solver.hpp"
-#include "dataset.hpp"
+#include "../io/dataset.hpp"
 #include "samples.hpp"
 
 namespace glovepose::train {
@@ -24,7 +24,7 @@ namespace glovepose::train {
 /// @brief Replaces every frame's cells by the solve of its raw rows through a readout with
 /// `config`. Throws glovepose::Error when the dataset has no raw rows or is not of the built-in
 /// glove (whose wiring is known). A run's frames before its readout's first solve keep their cells.
-inline void replay_rows(Dataset& data, const sensor::ReadoutConfig& config) {
+inline void replay_rows(io::Dataset& data, const sensor::ReadoutConfig& config) {
   const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
   if (data.glove_layout() != layout.id() || !data.has_raw_rows() || data.row_count != static_cast<std::size_t>(layout.row_count()))
     throw Error("replay: the dataset has " + std::to_string(data.row_count) + " raw rows per frame of glove '" + data.glove_layout() +

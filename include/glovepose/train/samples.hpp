@@ -22,28 +22,13 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "../model/model_info.hpp"
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../sensor/calibration.hpp"
-#include "dataset.hpp"
+#include "../io/dataset.hpp"
 
 namespace glovepose::train {
-
-/// @brief How cell values are normalised before the network.
-enum class CalibrationMode : unsigned char { None, Training, OnTheFly };
-
-/// @brief "none", "training" or "onthefly".
-inline const char* to_string(CalibrationMode mode) noexcept {
-  return mode == CalibrationMode::None ? "none" : (mode == CalibrationMode::Training ? "training" : "onthefly");
-}
-
-/// @brief Parses "none", "training" or "onthefly"; throws glovepose::Error otherwise.
-inline CalibrationMode calibration_mode(const std::string& text) {
-  if (text == "none") return CalibrationMode::None;
-  if (text == "training") return CalibrationMode::Training;
-  if (text == "onthefly") return CalibrationMode::OnTheFly;
-  throw Error("calibration mode '" + text + "', expected none, training or onthefly");
-}
 
 /// @brief Names "cell_0".."cell_{n-1}" for calibration ranges.
 inline std::vector<std::string> cell_names(std::size_t n) {
@@ -60,11 +45,11 @@ struct FrameFilter {
   bool keep_outliers = false;  ///< Keep frames flagged as collision outliers.
 
   /// @brief Whether recording frame `i` of `data` is kept (calibration frames never are).
-  bool keeps(const Dataset& data, std::size_t i) const noexcept {
-    return data.kind[i] == kKindRecording && (keep_outliers || data.outlier[i] == 0) && selects_run(data, i);
+  bool keeps(const io::Dataset& data, std::size_t i) const noexcept {
+    return data.kind[i] == io::kKindRecording && (keep_outliers || data.outlier[i] == 0) && selects_run(data, i);
   }
   /// @brief Whether frame `i` of `data`, of any kind, belongs to a selected subject, session and glove.
-  bool selects_run(const Dataset& data, std::size_t i) const noexcept {
+  bool selects_run(const io::Dataset& data, std::size_t i) const noexcept {
     const auto in = [](const std::vector<int>& list, int v) {
       return list.empty() || std::find(list.begin(), list.end(), v) != list.end();
     };
@@ -106,14 +91,14 @@ struct Samples {
 };
 
 /// @brief (subject, glove, session) of frame `i`, packed in one number.
-inline std::int64_t run_key(const Dataset& data, std::size_t i) noexcept {
+inline std::int64_t run_key(const io::Dataset& data, std::size_t i) noexcept {
   return (static_cast<std::int64_t>(data.subject[i]) << 40) | (static_cast<std::int64_t>(data.glove[i]) << 20) |
          static_cast<std::int64_t>(data.session[i]);
 }
 
 /// @brief Per-cell min and max over the kept frames: the "training" calibration, flat sensors by
 /// the glove's rule. Throws glovepose::Error when no frame is kept.
-inline sensor::CalibrationRange training_range(const Dataset& data, const FrameFilter& filter,
+inline sensor::CalibrationRange training_range(const io::Dataset& data, const FrameFilter& filter,
                                                const grid::GloveCalibration& calibration = {}) {
   const std::size_t cells = data.cell_count;
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cells), HUGE_VAL);
@@ -136,14 +121,14 @@ inline sensor::CalibrationRange training_range(const Dataset& data, const FrameF
 /// the running-median min-max over the session's calibration sequence, the median spanning the
 /// glove's median_seconds at the dataset's frame rate (the paper's 20 frames at 60 Hz by default),
 /// flat sensors by the glove's rule.
-inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Dataset& data,
+inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const io::Dataset& data,
                                                                         const grid::GloveCalibration& calibration = {}) {
   const int median_window = calibration.median_frames(data.frame_rate());
   std::map<std::int64_t, sensor::OnTheFlyCalibrator> calibrators;
   const std::vector<std::string> names = cell_names(data.cell_count);
   Eigen::VectorXd frame(static_cast<Eigen::Index>(data.cell_count));
   for (std::size_t i = 0; i < data.frames(); ++i) {
-    if (data.kind[i] != kKindCalibration) continue;
+    if (data.kind[i] != io::kKindCalibration) continue;
     auto it = calibrators.find(run_key(data, i));
     if (it == calibrators.end())
       it = calibrators.emplace(run_key(data, i), sensor::OnTheFlyCalibrator(names, median_window, calibration.config())).first;
@@ -160,14 +145,15 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const Da
 /// training range for CalibrationMode::Training) with targets normalised by `limits`. Throws
 /// glovepose::Error when the dataset has no angles, a run lacks its calibration sequence in
 /// on-the-fly mode, or no frame is kept. On the fly, the glove's `calibration` settings apply.
-inline Samples make_samples(const Dataset& data, const FrameFilter& filter, CalibrationMode mode, const sensor::CalibrationRange* range,
-                            const hand::JointLimits& limits, int stride = 1, const grid::GloveCalibration& calibration = {}) {
+inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, model::CalibrationMode mode,
+                            const sensor::CalibrationRange* range, const hand::JointLimits& limits, int stride = 1,
+                            const grid::GloveCalibration& calibration = {}) {
   if (!data.has_angles()) throw Error("samples: the dataset has no ground-truth angles, expected a recording with angles");
   if (stride < 1) throw Error("samples: stride " + std::to_string(stride) + ", expected >= 1");
-  if (mode == CalibrationMode::Training && (range == nullptr || static_cast<std::size_t>(range->size()) != data.cell_count))
+  if (mode == model::CalibrationMode::Training && (range == nullptr || static_cast<std::size_t>(range->size()) != data.cell_count))
     throw Error("samples: training calibration needs a range of " + std::to_string(data.cell_count) + " cells");
   const std::map<std::int64_t, sensor::CalibrationRange> runs =
-      mode == CalibrationMode::OnTheFly ? onthefly_ranges(data, calibration) : std::map<std::int64_t, sensor::CalibrationRange>{};
+      mode == model::CalibrationMode::OnTheFly ? onthefly_ranges(data, calibration) : std::map<std::int64_t, sensor::CalibrationRange>{};
   Samples s;
   s.cells = static_cast<int>(data.cell_count);
   s.labelled = data.labelled_dofs();
@@ -180,11 +166,11 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
     const std::int64_t key = run_key(data, i);
     if (seen[key]++ % stride != 0) continue;
     for (Eigen::Index c = 0; c < cells; ++c) raw(c) = data.cells[i * data.cell_count + static_cast<std::size_t>(c)];
-    if (mode == CalibrationMode::None) {
+    if (mode == model::CalibrationMode::None) {
       normalized = raw;
     } else {
       const sensor::CalibrationRange* r = range;
-      if (mode == CalibrationMode::OnTheFly) {
+      if (mode == model::CalibrationMode::OnTheFly) {
         const auto it = runs.find(key);
         if (it == runs.end())
           throw Error("samples: subject " + std::to_string(data.subject[i]) + ", glove " + std::to_string(data.glove[i]) + ", session " +
@@ -210,7 +196,7 @@ inline Samples make_samples(const Dataset& data, const FrameFilter& filter, Cali
     s.source.push_back(static_cast<std::int64_t>(i));
   }
   if (s.frames() == 0) throw Error("samples: no recording frame of the dataset passes the selection, expected at least one");
-  if (mode == CalibrationMode::Training && !range->flat_sensors().empty()) s.zeroed[-1] = range->flat_sensors();
+  if (mode == model::CalibrationMode::Training && !range->flat_sensors().empty()) s.zeroed[-1] = range->flat_sensors();
   for (const auto& [key, count] : seen)
     if (const auto it = runs.find(key); it != runs.end() && !it->second.flat_sensors().empty()) s.zeroed[key] = it->second.flat_sensors();
   return s;

@@ -63,12 +63,12 @@ class TrainableFcn final : public TrainableNetwork {
     }
   }
 
-  void forward(const float* cells, int frames, bool /*training: no batch norm*/, ThreadPool& pool) override {
+  void forward(const float* cells, int frames, bool /*training: no batch norm*/, core::ThreadPool& pool) override {
     if (frames < 1 || frames > max_batch_)
       throw Error("TrainableFcn: " + std::to_string(frames) + " frames, expected 1.." + std::to_string(max_batch_));
     frames_ = frames;
     std::copy(cells, cells + static_cast<long>(frames) * widths_.front(), values_[0].begin());
-    pool.for_shares(frames, [&](Range r, int) {
+    pool.for_shares(frames, [&](core::Range r, int) {
       for (std::size_t l = 0; l < weights_.size(); ++l) {
         const int in = widths_[l], out = widths_[l + 1];
         ConstMatrixMap x(values_[l].data() + r.begin * in, r.size(), in);
@@ -81,7 +81,7 @@ class TrainableFcn final : public TrainableNetwork {
     });
   }
 
-  void backward(const float* output_grad, ThreadPool& pool) override {
+  void backward(const float* output_grad, core::ThreadPool& pool) override {
     const int frames = frames_, members = pool.size();
     std::copy(output_grad, output_grad + static_cast<long>(frames) * kTargets, grads_.back().begin());
     for (std::size_t l = weights_.size(); l-- > 0;) {
@@ -90,20 +90,20 @@ class TrainableFcn final : public TrainableNetwork {
       const float* y = values_[l + 1].data();
       const bool relu = l + 2 < widths_.size();
       pool.run([&](int member) {
-        const Range r = share(frames, member, members);
+        const core::Range r = core::share(frames, member, members);
         if (relu)
           for (long i = r.begin * out; i < r.end * out; ++i) delta[i] = y[i] > 0.0f ? delta[i] : 0.0f;
       });
       pool.run([&](int member) {
         // Input gradient (frames x in) for this member's frames; weight and bias rows for its share of outputs.
-        const Range r = share(frames, member, members);
+        const core::Range r = core::share(frames, member, members);
         ConstMatrixMap w(params_[weights_[l]].value.data(), out, in);
         if (l > 0 && r.size() > 0) {
           MatrixMap dx(grads_[l].data() + r.begin * in, r.size(), in);
           ConstMatrixMap d(delta + r.begin * out, r.size(), out);
           dx.noalias() = d * w;
         }
-        const Range rows = share(out, member, members);
+        const core::Range rows = core::share(out, member, members);
         if (rows.size() == 0) return;
         ConstMatrixMap d(delta, frames, out);
         ConstMatrixMap x(values_[l].data(), frames, in);

@@ -122,7 +122,7 @@ class TrainableUNet final : public TrainableNetwork {
     }
   }
 
-  void forward(const float* cells, int frames, bool training, ThreadPool& pool) override {
+  void forward(const float* cells, int frames, bool training, core::ThreadPool& pool) override {
     check_frames(frames);
     // Cells -> the network's input planes (the stretch maps, one constant plane per extra input),
     // as the estimator makes them (GridMap::to_input_planes), then into the activation layout.
@@ -140,7 +140,7 @@ class TrainableUNet final : public TrainableNetwork {
             out[static_cast<long>(map_.dof_slots()[static_cast<std::size_t>(d)].flat()) * frames + f];
   }
 
-  void backward(const float* output_grad, ThreadPool& pool) override {
+  void backward(const float* output_grad, core::ThreadPool& pool) override {
     float* g = grads_.back().data();
     for (int f = 0; f < frames_; ++f)
       for (int d = 0; d < kTargets; ++d)
@@ -150,7 +150,7 @@ class TrainableUNet final : public TrainableNetwork {
 
   /// @brief Forward pass on input planes (frames x (2 + extra inputs) x 5 x 5, PyTorch's NCHW
   /// order: the stretch maps, then the extra inputs' planes); `pose_maps` receives frames x 1 x 5 x 5.
-  void forward_maps(const float* maps, int frames, bool training, ThreadPool& pool, float* pose_maps) {
+  void forward_maps(const float* maps, int frames, bool training, core::ThreadPool& pool, float* pose_maps) {
     check_frames(frames);
     nn::to_position_major(maps, frames, map_.input_plane_count(), nn::kUNetGridPositions, values_[0].data());
     run_forward(frames, training, pool);
@@ -158,7 +158,7 @@ class TrainableUNet final : public TrainableNetwork {
   }
 
   /// @brief Backward pass given dLoss/dpose_map (frames x 1 x 5 x 5) of the last forward_maps().
-  void backward_maps(const float* pose_map_grad, ThreadPool& pool) {
+  void backward_maps(const float* pose_map_grad, core::ThreadPool& pool) {
     nn::to_position_major(pose_map_grad, frames_, 1, nn::kUNetGridPositions, grads_.back().data());
     run_backward(pool);
   }
@@ -199,12 +199,12 @@ class TrainableUNet final : public TrainableNetwork {
     return partial_;
   }
 
-  void run_forward(int frames, bool training, ThreadPool& pool) {
+  void run_forward(int frames, bool training, core::ThreadPool& pool) {
     training_ = training;
     for (Layer& layer : layers_) forward_layer(layer, frames, training, pool);
   }
 
-  void forward_layer(Layer& layer, int frames, bool training, ThreadPool& pool) {
+  void forward_layer(Layer& layer, int frames, bool training, core::ThreadPool& pool) {
     const int cout = layer.spec.out_channels;
     const int positions = buffers_[static_cast<std::size_t>(layer.spec.out_buffer)].positions;
     const float* w = params_[layer.weight].value.data();
@@ -213,7 +213,7 @@ class TrainableUNet final : public TrainableNetwork {
     const int members = pool.size();
     std::vector<double>& sums = partials(members, cout);
     // Convolution (plus, for batch norm in training, the per-channel sums of this member's frames).
-    pool.for_shares(frames, [&](Range r, int member) {
+    pool.for_shares(frames, [&](core::Range r, int member) {
       const long n = r.size();
       for (int o = 0; o < positions; ++o) {
         MatrixMap z(pre + (static_cast<long>(o) * frames + r.begin) * cout, n, cout);
@@ -245,7 +245,7 @@ class TrainableUNet final : public TrainableNetwork {
     const float* beta = layer.has_bn() ? params_[layer.beta].value.data() : nullptr;
     float* out = values_[static_cast<std::size_t>(layer.spec.out_buffer)].data();
     const bool relu = layer.spec.activation == nn::Activation::Relu;
-    pool.for_shares(frames, [&](Range r, int) {
+    pool.for_shares(frames, [&](core::Range r, int) {
       for (int o = 0; o < positions; ++o)
         for (long f = r.begin; f < r.end; ++f) {
           const long row = (static_cast<long>(o) * frames + f) * cout;
@@ -265,7 +265,7 @@ class TrainableUNet final : public TrainableNetwork {
 
   // Mean and 1/std of each channel: from the batch in training (two passes, in double; the running
   // statistics updated with the unbiased variance as torch.nn.BatchNorm2d does), else the running ones.
-  void batch_norm_statistics(Layer& layer, int frames, int positions, bool training, ThreadPool& pool) {
+  void batch_norm_statistics(Layer& layer, int frames, int positions, bool training, core::ThreadPool& pool) {
     const int cout = layer.spec.out_channels, members = pool.size();
     layer.mean.assign(static_cast<std::size_t>(cout), 0.0);
     layer.inv_std.assign(static_cast<std::size_t>(cout), 0.0);
@@ -284,7 +284,7 @@ class TrainableUNet final : public TrainableNetwork {
     for (double& m : layer.mean) m /= count;
     std::vector<double>& sums = partials(members, cout);
     const float* pre = layer.pre.data();
-    pool.for_shares(frames, [&](Range r, int member) {
+    pool.for_shares(frames, [&](core::Range r, int member) {
       double* s = sums.data() + static_cast<std::size_t>(member) * 2 * static_cast<std::size_t>(cout) + cout;
       for (int o = 0; o < positions; ++o)
         for (long f = r.begin; f < r.end; ++f) {
@@ -307,21 +307,21 @@ class TrainableUNet final : public TrainableNetwork {
     }
   }
 
-  void run_backward(ThreadPool& pool) {
+  void run_backward(core::ThreadPool& pool) {
     if (!training_) throw Error("TrainableUNet::backward: the last forward was in evaluation mode, expected training mode");
     const int frames = frames_;
     // Gradients of every buffer but the output start at zero; each consumer adds its share.
     pool.run([&](int member) {
       for (std::size_t b = 0; b + 1 < grads_.size(); ++b) {
         const long n = static_cast<long>(buffers_[b].positions) * frames * buffers_[b].channels;
-        const Range r = share(n, member, pool.size());
+        const core::Range r = core::share(n, member, pool.size());
         std::fill(grads_[b].data() + r.begin, grads_[b].data() + r.end, 0.0f);
       }
     });
     for (auto layer = layers_.rbegin(); layer != layers_.rend(); ++layer) backward_layer(*layer, frames, pool);
   }
 
-  void backward_layer(Layer& layer, int frames, ThreadPool& pool) {
+  void backward_layer(Layer& layer, int frames, core::ThreadPool& pool) {
     const int cout = layer.spec.out_channels, members = pool.size();
     const int positions = buffers_[static_cast<std::size_t>(layer.spec.out_buffer)].positions;
     const float* y = values_[static_cast<std::size_t>(layer.spec.out_buffer)].data();
@@ -331,7 +331,7 @@ class TrainableUNet final : public TrainableNetwork {
     const bool relu = layer.spec.activation == nn::Activation::Relu;
     std::vector<double>& sums = partials(members, cout);
     // Through the activation (and, for batch norm, the sums of delta and delta * x-hat).
-    pool.for_shares(frames, [&](Range r, int member) {
+    pool.for_shares(frames, [&](core::Range r, int member) {
       double* s = sums.data() + static_cast<std::size_t>(member) * 2 * static_cast<std::size_t>(cout);
       for (int o = 0; o < positions; ++o)
         for (long f = r.begin; f < r.end; ++f) {
@@ -366,7 +366,7 @@ class TrainableUNet final : public TrainableNetwork {
         mean_delta[static_cast<std::size_t>(c)] = static_cast<float>(sd / count);
         mean_product[static_cast<std::size_t>(c)] = static_cast<float>(sp / count);
       }
-      pool.for_shares(frames, [&](Range r, int) {
+      pool.for_shares(frames, [&](core::Range r, int) {
         for (int o = 0; o < positions; ++o)
           for (long f = r.begin; f < r.end; ++f) {
             const long row = (static_cast<long>(o) * frames + f) * cout;
@@ -386,7 +386,7 @@ class TrainableUNet final : public TrainableNetwork {
     const long units = static_cast<long>(layer.useful_taps.size()) * blocks;
     // Output positions and in-positions reached by each tap, for the weight gradient.
     pool.run([&](int member) {
-      const Range rows = share(frames, member, members);
+      const core::Range rows = core::share(frames, member, members);
       const long n = rows.size();
       for (int o = 0; o < positions && n > 0; ++o) {
         ConstMatrixMap dz(delta + (static_cast<long>(o) * frames + rows.begin) * cout, n, cout);
@@ -404,10 +404,10 @@ class TrainableUNet final : public TrainableNetwork {
           }
         }
       }
-      const Range mine = share(units, member, members);
+      const core::Range mine = core::share(units, member, members);
       for (long u = mine.begin; u < mine.end; ++u) {
         const int tap = layer.useful_taps[static_cast<std::size_t>(u / blocks)];
-        const Range cols = share(cout, static_cast<int>(u % blocks), blocks);
+        const core::Range cols = core::share(cout, static_cast<int>(u % blocks), blocks);
         for (int o = 0; o < positions; ++o)
           for (const Pair& pr : layer.pairs[static_cast<std::size_t>(o)]) {
             if (pr.tap != tap) continue;
@@ -423,7 +423,7 @@ class TrainableUNet final : public TrainableNetwork {
             }
           }
       }
-      const Range bias_cols = share(cout, member, members);
+      const core::Range bias_cols = core::share(cout, member, members);
       for (long c = bias_cols.begin; c < bias_cols.end; ++c) {
         double s = 0.0;
         for (long row = 0; row < static_cast<long>(positions) * frames; ++row) s += delta[row * cout + c];

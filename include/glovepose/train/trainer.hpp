@@ -22,7 +22,7 @@
 #include "network.hpp"
 #include "optimizer.hpp"
 #include "samples.hpp"
-#include "thread_pool.hpp"
+#include "../core/thread_pool.hpp"
 
 namespace glovepose::train {
 
@@ -93,7 +93,7 @@ struct TrainResult {
 
 /// @brief The network's outputs (normalised, frames x 25) for every frame of `samples`, in
 /// evaluation mode, in chunks of the network's max batch.
-inline std::vector<float> predict(TrainableNetwork& net, const Samples& samples, ThreadPool& pool) {
+inline std::vector<float> predict(TrainableNetwork& net, const Samples& samples, core::ThreadPool& pool) {
   std::vector<float> out(static_cast<std::size_t>(samples.frames()) * kTargets);
   for (long f = 0; f < samples.frames(); f += net.max_batch()) {
     const int n = static_cast<int>(std::min<long>(net.max_batch(), samples.frames() - f));
@@ -124,7 +124,7 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
 /// lowest validation error (the last ones when `validation` is empty). Throws glovepose::Error for
 /// mismatched sizes or a non-finite loss (naming the step).
 inline TrainResult train_network(TrainableNetwork& net, const Samples& train, const Samples& validation, const hand::JointLimits& limits,
-                                 const TrainConfig& config, ThreadPool& pool) {
+                                 const TrainConfig& config, core::ThreadPool& pool) {
   if (train.cells != net.inputs())
     throw Error("train: the samples have " + std::to_string(train.cells) + " cells per frame, the network takes " +
                 std::to_string(net.inputs()));

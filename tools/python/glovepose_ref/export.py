@@ -294,7 +294,7 @@ def export_model(
 
 @dataclass(frozen=True)
 class ModelInfo:
-    """The parsed metadata of a model file (nn::ModelInfo on the C++ side)."""
+    """The parsed metadata of a model file (model::ModelInfo on the C++ side)."""
 
     architecture: str                      #: 'unet', 'fcn' or 'linear'
     width: int                             #: U-Net base width, FCN hidden width; 0 for linear
@@ -327,7 +327,7 @@ class ModelInfo:
 
 
 def parse_metadata(meta: Mapping[str, str], source: str = "<model>") -> ModelInfo:
-    """Validates a model file's metadata (the rules of nn::ModelInfo::from, plus the consistency of
+    """Validates a model file's metadata (the rules of model::ModelInfo::from, plus the consistency of
     inputs with the glove and of the calibration range with inputs); returns it parsed.
     Raises ModelFileError naming the key.
     """

@@ -22,11 +22,11 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
-#include "../io/csv_fields.hpp"
-#include "../io/number_text.hpp"
-#include "../io/tensor_file.hpp"
+#include "csv_fields.hpp"
+#include "number_text.hpp"
+#include "tensor_file.hpp"
 
-namespace glovepose::train {
+namespace glovepose::io {
 
 /// @brief Metadata "format" of a dataset file.
 inline constexpr const char* kDatasetFormat = "glovepose-dataset";
@@ -500,4 +500,4 @@ struct Dataset {
   }
 };
 
-}  // namespace glovepose::train
+}  // namespace glovepose::io

@@ -24,7 +24,7 @@
 #  include <immintrin.h>
 #endif
 
-namespace glovepose::nn {
+namespace glovepose::core {
 
 /// @brief The caller plus persistent worker threads; one job at a time, from one calling thread.
 class Team {
@@ -32,7 +32,7 @@ class Team {
   /// @brief A team of `size` members (the caller and size - 1 new threads) whose workers spin for
   /// `spin` after each share before parking. Set-up: throws glovepose::Error for a size below 1.
   explicit Team(int size, std::chrono::microseconds spin = std::chrono::microseconds(200)) : spin_(spin) {
-    if (size < 1 || size > 64) throw Error("Team: " + std::to_string(size) + " members, expected 1..64");
+    if (size < 1 || size > 1024) throw Error("Team: " + std::to_string(size) + " members, expected 1..1024");
     workers_.reserve(static_cast<std::size_t>(size - 1));
     for (int m = 1; m < size; ++m) workers_.emplace_back([this, m] { work(m); });
   }
@@ -112,4 +112,4 @@ class Team {
   std::condition_variable wake_;
 };
 
-}  // namespace glovepose::nn
+}  // namespace glovepose::core

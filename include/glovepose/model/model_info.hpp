@@ -1,0 +1,184 @@
+/// @file model_info.hpp
+/// @brief The metadata of a model file (weights_format.md), read and checked in one place: the
+/// architecture, the glove it was trained for, how its inputs were calibrated, what its outputs
+/// mean (joint limits), and the training set's per-cell range. The estimator's PoseModel and the
+/// trainer's model files both read it here.
+#pragma once
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "../config.hpp"
+#include "../grid/glove_description.hpp"
+#include "../hand/dofs.hpp"
+#include "../nn/unet.hpp"
+#include "../nn/weights.hpp"
+#include "../sensor/calibration.hpp"
+
+namespace glovepose::model {
+
+/// @brief How cell values are normalised before the network.
+enum class CalibrationMode : unsigned char { None, Training, OnTheFly };
+
+/// @brief "none", "training" or "onthefly".
+constexpr const char* to_string(CalibrationMode mode) noexcept {
+  return mode == CalibrationMode::None ? "none" : (mode == CalibrationMode::Training ? "training" : "onthefly");
+}
+
+/// @brief Parses "none", "training" or "onthefly"; throws glovepose::Error otherwise.
+inline CalibrationMode calibration_mode(const std::string& text) {
+  if (text == "none") return CalibrationMode::None;
+  if (text == "training") return CalibrationMode::Training;
+  if (text == "onthefly") return CalibrationMode::OnTheFly;
+  throw Error("calibration mode '" + text + "', expected none, training or onthefly");
+}
+
+/// @brief The metadata of a model file.
+struct ModelInfo {
+  std::string architecture;       ///< "unet", "fcn" (the paper's fully connected baseline) or "linear".
+  int width = 0;                  ///< U-Net base width, FCN hidden width; 0 for linear.
+  int inputs = 44;                ///< Cell values per frame the model takes.
+  std::string glove;              ///< Sensor layout id the model was trained for.
+  std::string glove_description;  ///< The glove as data (grid/glove_description.hpp JSON); empty: the built-in glove `glove`.
+  CalibrationMode calibration = CalibrationMode::OnTheFly;  ///< How inputs were normalised in training.
+  double bn_eps = 1e-5;                                     ///< Batch-norm epsilon.
+  std::vector<double> joint_limits_min;                     ///< Per DoF, radians: what output -1 means.
+  std::vector<double> joint_limits_max;                     ///< Per DoF, radians: what output +1 means.
+  std::optional<std::vector<double>> calibration_min;       ///< Per cell, training-set minimum (optional).
+  std::optional<std::vector<double>> calibration_max;       ///< Per cell, training-set maximum (optional).
+  /// The pose-guided calibration fitted for this model (calibration/pose_offset.hpp JSON, with its
+  /// calibration sequence); empty: min-max calibration only.
+  std::string pose_offset;
+  /// The DoFs the model was trained on reference angles for (hand::dof_set_text()); empty: all 25.
+  /// The others were trained toward the rest pose and read it (PoseModel).
+  std::string labelled_dofs;
+
+  /// @brief labelled_dofs as a set (every DoF when empty).
+  hand::DofSet labelled() const {
+    return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'");
+  }
+
+  /// @brief What the network's outputs -1 and +1 mean, per DoF.
+  hand::JointLimits joint_limits() const {
+    hand::Angles lo{}, hi{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      lo[d] = joint_limits_min[d];
+      hi[d] = joint_limits_max[d];
+    }
+    return hand::JointLimits(lo, hi);
+  }
+
+  /// @brief The glove the model reads: its description in the file, else the built-in glove the id
+  /// names. Throws glovepose::Error when neither is there or its cell count differs from `inputs`.
+  grid::GloveDescription glove_of_model() const {
+    grid::GloveDescription described = grid::GloveDescription::of_model(glove, glove_description);
+    if (described.cell_count() != inputs)
+      throw Error("metadata 'inputs' is " + std::to_string(inputs) + " but glove '" + described.id() + "' has " +
+                  std::to_string(described.cell_count()) + " cells");
+    return described;
+  }
+
+  /// @brief The training set's per-cell range the file records (none when it records none), for
+  /// cells named `names` and calibrated by `config`. Throws glovepose::Error when the file's range
+  /// holds another number of cells.
+  std::optional<sensor::CalibrationRange> training_range(const std::vector<std::string>& names,
+                                                         const sensor::CalibrationConfig& config) const {
+    if (!calibration_min || !calibration_max) return std::nullopt;
+    if (calibration_min->size() != names.size())
+      throw Error("metadata 'calibration_min' holds " + std::to_string(calibration_min->size()) + " numbers, expected " +
+                  std::to_string(names.size()) + " (one per cell)");
+    const auto n = static_cast<Eigen::Index>(names.size());
+    return sensor::CalibrationRange(Eigen::Map<const Eigen::VectorXd>(calibration_min->data(), n),
+                                    Eigen::Map<const Eigen::VectorXd>(calibration_max->data(), n), names, config);
+  }
+
+  /// @brief Reads and checks the metadata; throws glovepose::Error naming the key that is missing or wrong.
+  static ModelInfo from(const nn::WeightFile& file) {
+    ModelInfo info;
+    if (file.meta("format") != "glovepose-model")
+      throw Error("metadata 'format' is '" + file.meta("format") + "', expected 'glovepose-model'");
+    if (file.meta("format_version") != "1") throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
+    info.architecture = file.meta("architecture");
+    if (info.architecture != "unet" && info.architecture != "fcn" && info.architecture != "linear")
+      throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet', 'fcn' or 'linear'");
+    if (info.architecture != "linear") info.width = parse_int(file.meta("width"), "width", nn::kMaxWidth);
+    if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs", nn::kMaxWidth);
+    if (file.metadata.count("glove_description")) info.glove_description = file.meta("glove_description");
+    if (file.metadata.count("calibration")) {
+      try {
+        info.calibration = calibration_mode(file.meta("calibration"));
+      } catch (const Error& e) {
+        throw Error(std::string("metadata 'calibration': ") + e.what());
+      }
+    }
+    info.glove = file.meta("glove");
+    info.bn_eps = parse_double(file.meta("bn_eps"), "bn_eps");
+    info.joint_limits_min = file.meta_numbers("joint_limits_min");
+    info.joint_limits_max = file.meta_numbers("joint_limits_max");
+    if (info.joint_limits_min.size() != 25 || info.joint_limits_max.size() != 25)
+      throw Error("metadata 'joint_limits_min'/'joint_limits_max' hold " + std::to_string(info.joint_limits_min.size()) + "/" +
+                  std::to_string(info.joint_limits_max.size()) + " numbers, expected 25 each");
+    if (file.metadata.count("calibration_min") || file.metadata.count("calibration_max")) {
+      info.calibration_min = file.meta_numbers("calibration_min");
+      info.calibration_max = file.meta_numbers("calibration_max");
+      if (info.calibration_min->size() != info.calibration_max->size())
+        throw Error("metadata 'calibration_min' and 'calibration_max' differ in length");
+    }
+    if (file.metadata.count("pose_offset")) info.pose_offset = file.meta("pose_offset");
+    if (file.metadata.count("labelled_dofs")) {
+      info.labelled_dofs = file.meta("labelled_dofs");
+      info.labelled();  // throws unless it names a set of DoFs
+    }
+    return info;
+  }
+
+  /// @brief Writes the metadata into a file's metadata map.
+  void to(nn::WeightFile& file) const {
+    file.metadata["format"] = "glovepose-model";
+    file.metadata["format_version"] = "1";
+    file.metadata["architecture"] = architecture;
+    if (architecture != "linear") file.metadata["width"] = std::to_string(width);
+    file.metadata["inputs"] = std::to_string(inputs);
+    file.metadata["glove"] = glove;
+    if (!glove_description.empty()) file.metadata["glove_description"] = glove_description;
+    file.metadata["calibration"] = to_string(calibration);
+    char eps[32];
+    std::snprintf(eps, sizeof eps, "%.17g", bn_eps);
+    file.metadata["bn_eps"] = eps;
+    file.metadata["joint_limits_min"] = nn::WeightFile::format_numbers(joint_limits_min);
+    file.metadata["joint_limits_max"] = nn::WeightFile::format_numbers(joint_limits_max);
+    if (calibration_min) file.metadata["calibration_min"] = nn::WeightFile::format_numbers(*calibration_min);
+    if (calibration_max) file.metadata["calibration_max"] = nn::WeightFile::format_numbers(*calibration_max);
+    if (!pose_offset.empty()) file.metadata["pose_offset"] = pose_offset;
+    if (!labelled_dofs.empty()) file.metadata["labelled_dofs"] = labelled_dofs;
+  }
+
+ private:
+  static int parse_int(const std::string& text, const char* key, int max) {
+    std::size_t used = 0;
+    int v = 0;
+    try {
+      v = std::stoi(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || v < 1 || v > max)
+      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected an integer 1.." + std::to_string(max));
+    return v;
+  }
+  static double parse_double(const std::string& text, const char* key) {
+    double v = 0;
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), v);  // locale-independent
+    if (result.ec != std::errc() || result.ptr != text.data() + text.size() || !(v > 0) || !std::isfinite(v))
+      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected a positive number");
+    return v;
+  }
+};
+
+}  // namespace glovepose::model
