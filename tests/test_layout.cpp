@@ -53,8 +53,8 @@ TEST_CASE("layout: cell categories and places follow the paper's Sec. 3.1 and Fi
     if (c.category == Category::Perpendicular || c.category == Category::Abduction) CHECK(c.direction == Direction::Across);
   }
   // The thumb group (Sec. 4.2) and the index finger's joint and girth cells (Sec. 3.1, Fig. 15).
-  CHECK(cells_where(layout, [](const Cell& c) { return c.digit == Digit::Thumb; }) == S{0, 1, 2, 11, 16, 20, 28});
-  for (int c : {21, 33, 40, 29, 37, 43}) CHECK(layout.cells()[static_cast<std::size_t>(c)].digit == Digit::Index);
+  CHECK(cells_where(layout, [](const Cell& c) { return c.digit == Finger::Thumb; }) == S{0, 1, 2, 11, 16, 20, 28});
+  for (int c : {21, 33, 40, 29, 37, 43}) CHECK(layout.cells()[static_cast<std::size_t>(c)].digit == Finger::Index);
   CHECK(layout.cell_name(21) == "cell 21 (index proximal, along, main-joint)");
 }
 
@@ -78,7 +78,7 @@ TEST_CASE("layout: M follows the source/ground model of the readout") {
 }
 
 TEST_CASE("layout: invalid descriptions are rejected with the cell named") {
-  const Cell a{0, 0, Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint};
+  const Cell a{0, 0, Finger::Index, Segment::Proximal, Direction::Along, Category::MainJoint};
   Cell out_of_range = a;
   out_of_range.bottom = 3;
   CHECK_THROWS_WITH_AS(TraceLayout(3, 2, {a, out_of_range}), doctest::Contains("cell 1 uses bottom trace 3, expected 0..2"), Error);

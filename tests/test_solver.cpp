@@ -71,7 +71,7 @@ TEST_CASE("solver: a rank-deficient layout is rejected, naming the cells that ca
   // exactly one trace with the source, so (0,0) and (1,1) see the same pair: rank 2.
   std::vector<Cell> cells;
   for (int b = 0; b < 2; ++b)
-    for (int t = 0; t < 2; ++t) cells.push_back({b, t, Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint});
+    for (int t = 0; t < 2; ++t) cells.push_back({b, t, Finger::Index, Segment::Proximal, Direction::Along, Category::MainJoint});
   const TraceLayout square(2, 2, cells, "square");
   CHECK_THROWS_WITH_AS((CapacitanceSolver(square)),
                        doctest::Contains("has rank 2 but 4 cells, expected full column rank; these cells cannot be told apart: 0, 1, 2, 3"),
@@ -81,7 +81,7 @@ TEST_CASE("solver: a rank-deficient layout is rejected, naming the cells that ca
 TEST_CASE("solver: other layouts work through dynamic sizes") {
   std::vector<Cell> cells;
   const int pairs[][2] = {{0, 0}, {0, 1}, {1, 2}, {2, 0}, {3, 1}, {3, 2}};
-  for (const auto& p : pairs) cells.push_back({p[0], p[1], Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint});
+  for (const auto& p : pairs) cells.push_back({p[0], p[1], Finger::Index, Segment::Proximal, Direction::Along, Category::MainJoint});
   const TraceLayout small(4, 3, cells, "small");
   const CapacitanceSolver solver(small);
   const Eigen::VectorXd truth = Eigen::VectorXd::LinSpaced(6, 1.0, 6.0);

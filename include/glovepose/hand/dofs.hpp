@@ -27,6 +27,11 @@ inline constexpr int kFirstTheta = 9;
 enum class Finger : unsigned char { Thumb = 0, Index, Middle, Ring, Pinky };
 /// @brief Number of digits.
 inline constexpr std::size_t kFingerCount = 5;
+/// @brief Lower-case name of a digit, e.g. "index".
+constexpr const char* to_string(Finger finger) noexcept {
+  constexpr const char* names[kFingerCount] = {"thumb", "index", "middle", "ring", "pinky"};
+  return names[static_cast<int>(finger)];
+}
 
 /// @brief The local axis a DoF rotates about (reference model: X flexion, Z abduction, Y twist).
 enum class Axis : unsigned char { X, Y, Z };

@@ -36,11 +36,11 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "../hand/dofs.hpp"
 
 namespace glovepose::sensor {
 
-/// @brief The digit a cell belongs to (back-of-hand cells: the digit whose metacarpal they cover).
-enum class Digit : unsigned char { Thumb = 0, Index, Middle, Ring, Pinky };
+using hand::Finger;
 
 /// @brief Where along the digit a cell sits.
 enum class Segment : unsigned char {
@@ -64,17 +64,12 @@ enum class Category : unsigned char { MainJoint, Abduction, Perpendicular, BackO
 struct Cell {
   int bottom;           ///< Bottom-layer trace index, 0-based.
   int top;              ///< Top-layer trace index, 0-based.
-  Digit digit;          ///< Place on the hand.
+  Finger digit;         ///< Place on the hand (back-of-hand cells: the digit whose metacarpal they cover).
   Segment segment;      ///< Place along the digit.
   Direction direction;  ///< Stretch direction it senses best.
   Category category;    ///< Design category.
 };
 
-/// @brief Lower-case name of a digit.
-constexpr const char* to_string(Digit d) noexcept {
-  constexpr const char* names[] = {"thumb", "index", "middle", "ring", "pinky"};
-  return names[static_cast<int>(d)];
-}
 /// @brief Lower-case name of a segment.
 constexpr const char* to_string(Segment s) noexcept {
   constexpr const char* names[] = {"metacarpal", "web", "proximal", "middle", "distal"};
@@ -179,50 +174,50 @@ inline TraceLayout TraceLayout::glauser2019() {
   // bottom and 3-4 per top trace, and gives M full rank (condition number: see tests/test_solver.cpp).
   return TraceLayout(15, 12,
                      {
-                         {0, 0, Digit::Thumb, Segment::Proximal, Direction::Along, Category::MainJoint},            // 0
-                         {1, 1, Digit::Thumb, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 1
-                         {2, 2, Digit::Thumb, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 2
-                         {3, 3, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 3
-                         {4, 4, Digit::Index, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 4
-                         {5, 5, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 5
-                         {6, 6, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},      // 6
-                         {7, 7, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 7
-                         {8, 8, Digit::Pinky, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 8
-                         {9, 9, Digit::Pinky, Segment::Middle, Direction::Across, Category::Perpendicular},         // 9
-                         {10, 10, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 10
-                         {11, 11, Digit::Thumb, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 11
-                         {12, 0, Digit::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 12
-                         {13, 1, Digit::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 13
-                         {14, 2, Digit::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 14
-                         {0, 8, Digit::Pinky, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 15
-                         {1, 9, Digit::Thumb, Segment::Web, Direction::Across, Category::Abduction},                // 16
-                         {2, 10, Digit::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 17
-                         {3, 11, Digit::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 18
-                         {4, 0, Digit::Ring, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},     // 19
-                         {5, 1, Digit::Thumb, Segment::Middle, Direction::Along, Category::MainJoint},              // 20
-                         {6, 2, Digit::Index, Segment::Proximal, Direction::Along, Category::MainJoint},            // 21
-                         {7, 3, Digit::Middle, Segment::Proximal, Direction::Along, Category::MainJoint},           // 22
-                         {8, 4, Digit::Ring, Segment::Proximal, Direction::Along, Category::MainJoint},             // 23
-                         {9, 5, Digit::Pinky, Segment::Proximal, Direction::Along, Category::MainJoint},            // 24
-                         {10, 6, Digit::Index, Segment::Web, Direction::Across, Category::Abduction},               // 25
-                         {11, 7, Digit::Middle, Segment::Web, Direction::Across, Category::Abduction},              // 26
-                         {12, 8, Digit::Ring, Segment::Web, Direction::Across, Category::Abduction},                // 27
-                         {13, 9, Digit::Thumb, Segment::Middle, Direction::Across, Category::Perpendicular},        // 28
-                         {14, 10, Digit::Index, Segment::Proximal, Direction::Across, Category::Perpendicular},     // 29
-                         {0, 4, Digit::Middle, Segment::Proximal, Direction::Across, Category::Perpendicular},      // 30
-                         {1, 5, Digit::Ring, Segment::Proximal, Direction::Across, Category::Perpendicular},        // 31
-                         {2, 6, Digit::Pinky, Segment::Distal, Direction::Along, Category::MainJoint},              // 32
-                         {3, 7, Digit::Index, Segment::Middle, Direction::Along, Category::MainJoint},              // 33
-                         {4, 8, Digit::Middle, Segment::Middle, Direction::Along, Category::MainJoint},             // 34
-                         {5, 9, Digit::Ring, Segment::Middle, Direction::Along, Category::MainJoint},               // 35
-                         {6, 10, Digit::Pinky, Segment::Middle, Direction::Along, Category::MainJoint},             // 36
-                         {7, 11, Digit::Index, Segment::Middle, Direction::Across, Category::Perpendicular},        // 37
-                         {8, 0, Digit::Middle, Segment::Middle, Direction::Across, Category::Perpendicular},        // 38
-                         {9, 1, Digit::Ring, Segment::Middle, Direction::Across, Category::Perpendicular},          // 39
-                         {10, 2, Digit::Index, Segment::Distal, Direction::Along, Category::MainJoint},             // 40
-                         {11, 3, Digit::Middle, Segment::Distal, Direction::Along, Category::MainJoint},            // 41
-                         {12, 4, Digit::Ring, Segment::Distal, Direction::Along, Category::MainJoint},              // 42
-                         {13, 5, Digit::Index, Segment::Distal, Direction::Across, Category::Perpendicular},        // 43
+                         {0, 0, Finger::Thumb, Segment::Proximal, Direction::Along, Category::MainJoint},            // 0
+                         {1, 1, Finger::Thumb, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 1
+                         {2, 2, Finger::Thumb, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 2
+                         {3, 3, Finger::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 3
+                         {4, 4, Finger::Index, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},    // 4
+                         {5, 5, Finger::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 5
+                         {6, 6, Finger::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},      // 6
+                         {7, 7, Finger::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 7
+                         {8, 8, Finger::Pinky, Segment::Proximal, Direction::Across, Category::Perpendicular},       // 8
+                         {9, 9, Finger::Pinky, Segment::Middle, Direction::Across, Category::Perpendicular},         // 9
+                         {10, 10, Finger::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 10
+                         {11, 11, Finger::Thumb, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 11
+                         {12, 0, Finger::Index, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},    // 12
+                         {13, 1, Finger::Middle, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},   // 13
+                         {14, 2, Finger::Ring, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 14
+                         {0, 8, Finger::Pinky, Segment::Metacarpal, Direction::Along, Category::BackOfHandGrid},     // 15
+                         {1, 9, Finger::Thumb, Segment::Web, Direction::Across, Category::Abduction},                // 16
+                         {2, 10, Finger::Middle, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},  // 17
+                         {3, 11, Finger::Pinky, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},   // 18
+                         {4, 0, Finger::Ring, Segment::Metacarpal, Direction::Across, Category::BackOfHandGrid},     // 19
+                         {5, 1, Finger::Thumb, Segment::Middle, Direction::Along, Category::MainJoint},              // 20
+                         {6, 2, Finger::Index, Segment::Proximal, Direction::Along, Category::MainJoint},            // 21
+                         {7, 3, Finger::Middle, Segment::Proximal, Direction::Along, Category::MainJoint},           // 22
+                         {8, 4, Finger::Ring, Segment::Proximal, Direction::Along, Category::MainJoint},             // 23
+                         {9, 5, Finger::Pinky, Segment::Proximal, Direction::Along, Category::MainJoint},            // 24
+                         {10, 6, Finger::Index, Segment::Web, Direction::Across, Category::Abduction},               // 25
+                         {11, 7, Finger::Middle, Segment::Web, Direction::Across, Category::Abduction},              // 26
+                         {12, 8, Finger::Ring, Segment::Web, Direction::Across, Category::Abduction},                // 27
+                         {13, 9, Finger::Thumb, Segment::Middle, Direction::Across, Category::Perpendicular},        // 28
+                         {14, 10, Finger::Index, Segment::Proximal, Direction::Across, Category::Perpendicular},     // 29
+                         {0, 4, Finger::Middle, Segment::Proximal, Direction::Across, Category::Perpendicular},      // 30
+                         {1, 5, Finger::Ring, Segment::Proximal, Direction::Across, Category::Perpendicular},        // 31
+                         {2, 6, Finger::Pinky, Segment::Distal, Direction::Along, Category::MainJoint},              // 32
+                         {3, 7, Finger::Index, Segment::Middle, Direction::Along, Category::MainJoint},              // 33
+                         {4, 8, Finger::Middle, Segment::Middle, Direction::Along, Category::MainJoint},             // 34
+                         {5, 9, Finger::Ring, Segment::Middle, Direction::Along, Category::MainJoint},               // 35
+                         {6, 10, Finger::Pinky, Segment::Middle, Direction::Along, Category::MainJoint},             // 36
+                         {7, 11, Finger::Index, Segment::Middle, Direction::Across, Category::Perpendicular},        // 37
+                         {8, 0, Finger::Middle, Segment::Middle, Direction::Across, Category::Perpendicular},        // 38
+                         {9, 1, Finger::Ring, Segment::Middle, Direction::Across, Category::Perpendicular},          // 39
+                         {10, 2, Finger::Index, Segment::Distal, Direction::Along, Category::MainJoint},             // 40
+                         {11, 3, Finger::Middle, Segment::Distal, Direction::Along, Category::MainJoint},            // 41
+                         {12, 4, Finger::Ring, Segment::Distal, Direction::Along, Category::MainJoint},              // 42
+                         {13, 5, Finger::Index, Segment::Distal, Direction::Across, Category::Perpendicular},        // 43
                      },
                      "glauser2019-44");
 }

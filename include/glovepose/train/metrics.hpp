@@ -53,12 +53,6 @@ inline constexpr std::size_t kCurvePoints = static_cast<std::size_t>(kCurveMaxDe
 /// @brief The threshold the paper quotes in Fig. 14 (92% of angles below it), degrees.
 inline constexpr int kPaperThresholdDeg = 15;
 
-/// @brief Lower-case name of a digit, e.g. "index".
-inline const char* finger_name(hand::Finger finger) noexcept {
-  constexpr const char* names[hand::kFingerCount] = {"thumb", "index", "middle", "ring", "pinky"};
-  return names[static_cast<std::size_t>(finger)];
-}
-
 /// @brief Error statistics of one group of angles (one DoF, one finger), degrees.
 struct ErrorSummary {
   double mean_deg = 0;  ///< Mean absolute error.
@@ -76,7 +70,7 @@ struct DofError {
 
 /// @brief One finger's errors, over the frames and the finger's 5 DoFs.
 struct FingerError {
-  const char* name = "";  ///< finger_name(), e.g. "thumb".
+  const char* name = "";  ///< hand::to_string(Finger), e.g. "thumb".
   ErrorSummary error;     ///< Over all valid frames and the finger's scored DoFs (NaN when it has none).
 };
 
@@ -316,7 +310,7 @@ class AngleErrorAccumulator {
                      per_dof * static_cast<double>(count));
     };
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
-      r.fingers[f].name = finger_name(static_cast<hand::Finger>(f));
+      r.fingers[f].name = hand::to_string(static_cast<hand::Finger>(f));
       r.fingers[f].error = group([f](std::size_t d) { return static_cast<std::size_t>(hand::kDofs[d].finger) == f; });
     }
     r.overall = group([](std::size_t) { return true; });
