@@ -2,6 +2,7 @@
 /// @brief Version, the real-time marker and the set-up error type shared by every module.
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -31,5 +32,13 @@ class Error : public std::runtime_error {
   /// @brief Creates an error with a message that names the problem and the expectation.
   explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
+
+/// @brief The name of an enum value numbered 0 .. N - 1 from its table of names (in the enum's
+/// order); `unknown` for a value outside it.
+template <typename Enum, std::size_t N>
+constexpr const char* name_of(Enum value, const char* const (&names)[N], const char* unknown) noexcept {
+  const auto index = static_cast<std::size_t>(value);
+  return index < N ? names[index] : unknown;
+}
 
 }  // namespace glovepose

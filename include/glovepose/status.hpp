@@ -4,6 +4,8 @@
 
 #include <cstdint>
 
+#include "config.hpp"
+
 namespace glovepose {
 
 /// @brief Outcome of a per-frame call. Per-frame calls never throw; they return one of these.
@@ -25,27 +27,16 @@ enum class Status : std::uint8_t {
 
 /// @brief A short, stable, human-readable name of a status (for logs and error strings).
 constexpr const char* to_string(Status status) noexcept {
-  switch (status) {
-    case Status::Ok:
-      return "ok";
-    case Status::Solved:
-      return "solved";
-    case Status::NotReady:
-      return "not ready";
-    case Status::NonFinite:
-      return "non-finite value";
-    case Status::Negative:
-      return "negative value";
-    case Status::UnknownIndex:
-      return "unknown index";
-    case Status::TimestampBackwards:
-      return "timestamp went backwards";
-    case Status::SizeMismatch:
-      return "size mismatch";
-    case Status::Uncalibrated:
-      return "uncalibrated";
-  }
-  return "unknown status";
+  constexpr const char* names[] = {"ok",
+                                   "solved",
+                                   "not ready",
+                                   "non-finite value",
+                                   "negative value",
+                                   "unknown index",
+                                   "timestamp went backwards",
+                                   "size mismatch",
+                                   "uncalibrated"};  // in the enum's order
+  return name_of(status, names, "unknown status");
 }
 
 /// @brief True when the status means the offered input was taken into the state.

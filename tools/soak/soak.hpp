@@ -126,19 +126,10 @@ inline constexpr int kPoseFlagCount = 9;
 
 /// @brief A short name of a NoPoseReason.
 constexpr const char* to_string(NoPoseReason reason) noexcept {
-  switch (reason) {
-    case NoPoseReason::Uncalibrated:
-      return "uncalibrated";
-    case NoPoseReason::NotReady:
-      return "not ready (restart)";
-    case NoPoseReason::Rejected:
-      return "readings rejected";
-    case NoPoseReason::NoReadings:
-      return "no reading arrived (unplugged)";
-    case NoPoseReason::Unexplained:
-      return "UNEXPLAINED";
-  }
-  return "unknown";
+  constexpr const char* names[] = {"uncalibrated", "not ready (restart)", "readings rejected", "no reading arrived (unplugged)",
+                                   "UNEXPLAINED"};  // in the enum's order
+  static_assert(sizeof names / sizeof names[0] == kNoPoseReasonCount, "one name per reason");
+  return name_of(reason, names, "unknown");
 }
 
 /// @brief A short name of PoseFlag bit `bit`.

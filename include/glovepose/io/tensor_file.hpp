@@ -32,23 +32,8 @@ enum class DType : unsigned char { F64, F32, F16, BF16, I64, I32, U8 };
 
 /// @brief The file's name of a dtype ("F64", "F32", "F16", "BF16", "I64", "I32", "U8").
 inline const char* dtype_name(DType d) noexcept {
-  switch (d) {
-    case DType::F64:
-      return "F64";
-    case DType::F32:
-      return "F32";
-    case DType::F16:
-      return "F16";
-    case DType::BF16:
-      return "BF16";
-    case DType::I64:
-      return "I64";
-    case DType::I32:
-      return "I32";
-    case DType::U8:
-      return "U8";
-  }
-  return "?";
+  constexpr const char* names[] = {"F64", "F32", "F16", "BF16", "I64", "I32", "U8"};  // in the enum's order
+  return name_of(d, names, "?");
 }
 
 /// @brief Bytes per element of a dtype.

@@ -52,31 +52,11 @@ inline constexpr int kFaultKindCount = 11;
 
 /// @brief A short, stable name of a fault kind (for reports).
 constexpr const char* to_string(FaultKind kind) noexcept {
-  switch (kind) {
-    case FaultKind::DroppedRows:
-      return "dropped rows";
-    case FaultKind::LostTraceBurst:
-      return "lost trace burst";
-    case FaultKind::DuplicatedRows:
-      return "duplicated rows";
-    case FaultKind::OutOfOrderRows:
-      return "out-of-order rows";
-    case FaultKind::StuckSensor:
-      return "stuck sensor";
-    case FaultKind::DisconnectedTrace:
-      return "disconnected trace";
-    case FaultKind::Spikes:
-      return "spikes";
-    case FaultKind::NonFiniteValues:
-      return "NaN/Inf values";
-    case FaultKind::Unplugged:
-      return "unplugged (gap)";
-    case FaultKind::ClockJumpForward:
-      return "clock jump forward";
-    case FaultKind::ClockJumpBack:
-      return "clock jump back";
-  }
-  return "unknown fault";
+  constexpr const char* names[] = {"dropped rows",    "lost trace burst",   "duplicated rows", "out-of-order rows",
+                                   "stuck sensor",    "disconnected trace", "spikes",          "NaN/Inf values",
+                                   "unplugged (gap)", "clock jump forward", "clock jump back"};  // in the enum's order
+  static_assert(sizeof names / sizeof names[0] == kFaultKindCount, "one name per fault kind");
+  return name_of(kind, names, "unknown fault");
 }
 
 /// @brief The size and target of a fault (only the fields of its kind are used).

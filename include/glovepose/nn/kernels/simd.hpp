@@ -13,6 +13,7 @@
 #pragma once
 
 #include <algorithm>
+#include <utility>
 #include <array>
 #include <bitset>
 #include <cstdint>
@@ -313,58 +314,26 @@ struct SimdBackend {
 
   template <int V, typename W>
   static void dispatch_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
-    switch (rows) {
-      case 1:
-        block<1, V>(x, y, w, k, ldw, col);
-        break;
-      case 2:
-        block<2, V>(x, y, w, k, ldw, col);
-        break;
-      case 3:
-        block<3, V>(x, y, w, k, ldw, col);
-        break;
-      case 4:
-        block<4, V>(x, y, w, k, ldw, col);
-        break;
-      case 5:
-        block<5, V>(x, y, w, k, ldw, col);
-        break;
-      case 6:
-        block<6, V>(x, y, w, k, ldw, col);
-        break;
-      default:
-        if constexpr (V > 2) {  // 7..12 rows hold at most 2 vectors of accumulators each: two halves
-          dispatch_many_rows<2>(rows, x, y, w, k, ldw, col);
-          dispatch_many_rows<2>(rows, x, y, w + 2 * lanes, k, ldw, col + 2 * lanes);
-        } else {
-          dispatch_many_rows<V>(rows, x, y, w, k, ldw, col);
-        }
-        break;
+    if (rows <= 6) {
+      block_of_rows<V>(std::integer_sequence<int, 1, 2, 3, 4, 5, 6>{}, rows, x, y, w, k, ldw, col);
+    } else if constexpr (V > 2) {  // 7..12 rows hold at most 2 vectors of accumulators each: two halves
+      dispatch_many_rows<2>(rows, x, y, w, k, ldw, col);
+      dispatch_many_rows<2>(rows, x, y, w + 2 * lanes, k, ldw, col + 2 * lanes);
+    } else {
+      dispatch_many_rows<V>(rows, x, y, w, k, ldw, col);
     }
   }
 
   template <int V, typename W>
   static void dispatch_many_rows(int rows, const float* const* x, float* const* y, const W* w, int k, int ldw, int col) noexcept {
-    switch (rows) {
-      case 7:
-        block<7, V>(x, y, w, k, ldw, col);
-        break;
-      case 8:
-        block<8, V>(x, y, w, k, ldw, col);
-        break;
-      case 9:
-        block<9, V>(x, y, w, k, ldw, col);
-        break;
-      case 10:
-        block<10, V>(x, y, w, k, ldw, col);
-        break;
-      case 11:
-        block<11, V>(x, y, w, k, ldw, col);
-        break;
-      default:
-        block<12, V>(x, y, w, k, ldw, col);
-        break;
-    }
+    block_of_rows<V>(std::integer_sequence<int, 7, 8, 9, 10, 11, 12>{}, std::min(rows, 12), x, y, w, k, ldw, col);
+  }
+
+  // block<R, V> for the R among `Rs` that equals `rows` (a compile-time row count from a run-time one).
+  template <int V, typename W, int... Rs>
+  static void block_of_rows(std::integer_sequence<int, Rs...>, int rows, const float* const* x, float* const* y, const W* w, int k, int ldw,
+                            int col) noexcept {
+    (void)((rows == Rs && (block<Rs, V>(x, y, w, k, ldw, col), true)) || ...);
   }
 
   template <typename W>
