@@ -60,16 +60,19 @@ const Fixture& fixture() {
   return loaded;
 }
 
+/// Picks 0, 1, 2 of reading() and next_time(): NaN, +infinity, -infinity.
+constexpr int kNonFiniteKinds = 3;
+double non_finite(int pick) {
+  if (pick == 0) return std::numeric_limits<double>::quiet_NaN();
+  return pick == 1 ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
+}
+
 /// A reading: mostly `plausible` times a small factor, else one of the values a broken link or
 /// firmware sends.
 double reading(FuzzedDataProvider& in, double plausible) {
-  switch (in.ConsumeIntegralInRange<int>(0, 11)) {
-    case 0:
-      return std::numeric_limits<double>::quiet_NaN();
-    case 1:
-      return std::numeric_limits<double>::infinity();
-    case 2:
-      return -std::numeric_limits<double>::infinity();
+  const int pick = in.ConsumeIntegralInRange<int>(0, 11);
+  if (pick < kNonFiniteKinds) return non_finite(pick);
+  switch (pick) {
     case 3:
       return -plausible;
     case 4:
@@ -87,13 +90,9 @@ double reading(FuzzedDataProvider& in, double plausible) {
 
 /// The next timestamp: mostly a step forward from `clock`, else backwards, a gap, or not a time.
 double next_time(FuzzedDataProvider& in, double& clock, double step) {
-  switch (in.ConsumeIntegralInRange<int>(0, 11)) {
-    case 0:
-      return std::numeric_limits<double>::quiet_NaN();
-    case 1:
-      return std::numeric_limits<double>::infinity();
-    case 2:
-      return -std::numeric_limits<double>::infinity();
+  const int pick = in.ConsumeIntegralInRange<int>(0, 11);
+  if (pick < kNonFiniteKinds) return non_finite(pick);
+  switch (pick) {
     case 3:
       return clock - in.ConsumeFloatingPointInRange<double>(0.0, 10.0);  // backwards, not kept
     case 4:

@@ -107,8 +107,8 @@ struct ModelInfo {
     info.architecture = file.meta("architecture");
     if (info.architecture != "unet" && info.architecture != "fcn" && info.architecture != "linear")
       throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet', 'fcn' or 'linear'");
-    if (info.architecture != "linear") info.width = parse_int(file.meta("width"), "width", nn::kMaxWidth);
-    if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs", nn::kMaxWidth);
+    if (info.architecture != "linear") info.width = parse_int(file.meta("width"), "width");
+    if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs");
     if (file.metadata.count("glove_description")) info.glove_description = file.meta("glove_description");
     if (file.metadata.count("calibration")) {
       try {
@@ -160,7 +160,7 @@ struct ModelInfo {
   }
 
  private:
-  static int parse_int(const std::string& text, const char* key, int max) {
+  static int parse_int(const std::string& text, const char* key) {
     std::size_t used = 0;
     int v = 0;
     try {
@@ -168,8 +168,8 @@ struct ModelInfo {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != text.size() || v < 1 || v > max)
-      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected an integer 1.." + std::to_string(max));
+    if (used != text.size() || v < 1 || v > nn::kMaxWidth)
+      throw Error(std::string("metadata '") + key + "' is '" + text + "', expected an integer 1.." + std::to_string(nn::kMaxWidth));
     return v;
   }
   static double parse_double(const std::string& text, const char* key) {
