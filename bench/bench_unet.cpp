@@ -11,6 +11,8 @@
 #include <glovepose/nn/unet.hpp>
 #include <glovepose/core/team.hpp>
 
+#include "random_unet.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -22,19 +24,6 @@
 using namespace glovepose::nn;
 
 namespace {
-TensorMap random_tensors(int width) {
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> u(-0.05f, 0.05f);
-  TensorMap out;
-  for (const auto& [name, shape] : UNet<>::expected_tensors(width)) {
-    Tensor t{shape, {}};
-    t.values.resize(static_cast<std::size_t>(t.element_count()));
-    const bool variance = name.find("running_var") != std::string::npos;
-    for (float& v : t.values) v = variance ? 1.0f + u(rng) : u(rng);
-    out[name] = std::move(t);
-  }
-  return out;
-}
 
 // Networks are built once per (width, storage) and shared by the benchmark threads.
 const UNet<>& network(int width, WeightStorage storage) {
@@ -43,7 +32,7 @@ const UNet<>& network(int width, WeightStorage storage) {
   std::lock_guard<std::mutex> lock(mutex);
   const auto key = std::make_pair(width, static_cast<int>(storage));
   auto it = cache.find(key);
-  if (it == cache.end()) it = cache.emplace(key, UNet<>::from_tensors(random_tensors(width), width, 1e-5, storage)).first;
+  if (it == cache.end()) it = cache.emplace(key, UNet<>::from_tensors(random_unet_tensors(width), width, 1e-5, storage)).first;
   return it->second;
 }
 

@@ -1,5 +1,6 @@
 /// @file config.hpp
-/// @brief Version, the real-time marker and the set-up error type shared by every module.
+/// @brief Version, the real-time marker, the set-up error type and enum names from tables (name_of),
+/// shared by every module.
 #pragma once
 
 #include <cstddef>

@@ -137,7 +137,7 @@ constexpr const char* pose_flag_name(int bit) noexcept {
   constexpr const char* names[kPoseFlagCount] = {"readings rejected", "input clamped",     "training calibration",
                                                  "calibrating",       "stale readings",    "recovering",
                                                  "stuck rows",        "disconnected rows", "outlier rows"};
-  return bit >= 0 && bit < kPoseFlagCount ? names[bit] : "unknown flag";
+  return name_of(bit, names, "unknown flag");  // a negative bit wraps to a large index: unknown
 }
 
 /// @brief The figures of a soak run, summed over the estimators.

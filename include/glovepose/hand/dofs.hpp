@@ -30,7 +30,7 @@ inline constexpr std::size_t kFingerCount = 5;
 /// @brief Lower-case name of a digit, e.g. "index".
 constexpr const char* to_string(Finger finger) noexcept {
   constexpr const char* names[kFingerCount] = {"thumb", "index", "middle", "ring", "pinky"};
-  return names[static_cast<int>(finger)];
+  return name_of(finger, names, "unknown digit");
 }
 
 /// @brief The local axis a DoF rotates about (reference model: X flexion, Z abduction, Y twist).

@@ -72,15 +72,15 @@ struct Cell {
 
 /// @brief Lower-case name of a segment.
 constexpr const char* to_string(Segment s) noexcept {
-  constexpr const char* names[] = {"metacarpal", "web", "proximal", "middle", "distal"};
-  return names[static_cast<int>(s)];
+  constexpr const char* names[] = {"metacarpal", "web", "proximal", "middle", "distal"};  // in the enum's order
+  return name_of(s, names, "unknown segment");
 }
 /// @brief Lower-case name of a direction.
 constexpr const char* to_string(Direction d) noexcept { return d == Direction::Along ? "along" : "across"; }
 /// @brief Lower-case name of a category.
 constexpr const char* to_string(Category c) noexcept {
-  constexpr const char* names[] = {"main-joint", "abduction", "perpendicular", "back-of-hand grid"};
-  return names[static_cast<int>(c)];
+  constexpr const char* names[] = {"main-joint", "abduction", "perpendicular", "back-of-hand grid"};  // in the enum's order
+  return name_of(c, names, "unknown category");
 }
 
 /// @brief A glove's trace matrix: trace counts and cells. Validated on construction.

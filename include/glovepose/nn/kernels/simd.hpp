@@ -13,11 +13,11 @@
 #pragma once
 
 #include <algorithm>
-#include <utility>
 #include <array>
 #include <bitset>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 
 #include <xsimd/xsimd.hpp>
 
