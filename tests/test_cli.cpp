@@ -762,35 +762,61 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   }
 }
 
-TEST_CASE("cli: eval --predictions writes every frame's true and predicted angles, which recompute eval's mean error") {
+TEST_CASE("cli: eval scores against the labels and the truth behind them, and --predictions recomputes both means") {
   const std::string data = temp("predictions_data.safetensors"), csv = temp("predictions.csv");
-  Run r = run("simulate --seed 6 --subjects 2 --sessions 1 --minutes 0.3 --gloves 1 --calibration-seconds 5 --raw-rows --out " + data);
+  // A world whose labels come from a simulated tracker: labels and truth differ.
+  Run r = run("simulate --seed 6 --subjects 2 --sessions 1 --minutes 0.3 --gloves 1 --calibration-seconds 5 --raw-rows --world tracked --out " +
+              data);
   REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(io::Dataset::read(data).metadata.at("world") == "tracked");
   r = run("eval --model " + kModel + " --data " + data + " --json --predictions " + csv);
   REQUIRE_MESSAGE(r.status == 0, r.out);
-  const double mean = json_number(r.out, "mean_deg");
-  const double frames = json_number(r.out, "frames");
-  CHECK(std::isfinite(json_number(r.out, "lag_ms")));
-  CHECK(r.out.find("\"calibration\": \"onthefly\"") != std::string::npos);
-  CHECK(json_number(r.out, "mean_window") == 5);  // the recorder's readout
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  const double mean = report.at("mean_deg"), frames = report.at("frames");
+  CHECK(report.at("scored_against") == "labels");
+  CHECK(report.at("vs_labels").at("mean_deg") == mean);
+  CHECK(report.at("vs_labels").at("lag_ms").get<double>() == doctest::Approx(report.at("lag_ms").get<double>()).epsilon(1e-3));
+  const double truth_mean = report.at("vs_truth").at("mean_deg");
+  CHECK(std::isfinite(report.at("vs_truth").at("lag_ms").get<double>()));
+  CHECK(report.at("calibration") == "onthefly");
+  CHECK(report.at("mean_window") == 5);  // the recorder's readout
   std::ifstream in(csv);
   std::string header, line;
   REQUIRE(std::getline(in, header));
-  CHECK(header.rfind("frame,time,subject,session,true_thumb_base_abduction,", 0) == 0);
-  CHECK(header.find(",pred_pinky_base_twist") != std::string::npos);
-  double sum = 0.0;
+  CHECK(header.rfind("frame,time,subject,session,label_thumb_base_abduction,", 0) == 0);
+  CHECK(header.find(",pred_pinky_base_twist,truth_thumb_base_abduction,") != std::string::npos);
+  double sum = 0.0, truth_sum = 0.0, label_truth = 0.0;
   long rows = 0;
   while (std::getline(in, line)) {
     std::vector<double> v;
     std::stringstream fields(line);
     std::string field;
     while (std::getline(fields, field, ',')) v.push_back(std::stod(field));
-    REQUIRE(v.size() == 4 + 50);
-    for (std::size_t d = 0; d < 25; ++d) sum += std::abs(v[4 + 25 + d] - v[4 + d]);
+    REQUIRE(v.size() == 4 + 75);
+    for (std::size_t d = 0; d < 25; ++d) {
+      sum += std::abs(v[4 + 25 + d] - v[4 + d]);
+      truth_sum += std::abs(v[4 + 25 + d] - v[4 + 50 + d]);
+      label_truth += std::abs(v[4 + d] - v[4 + 50 + d]);
+    }
     ++rows;
   }
   CHECK(rows == static_cast<long>(frames));
-  CHECK(sum / (25.0 * static_cast<double>(rows)) * 57.29577951308232 == doctest::Approx(mean).epsilon(1e-6));
+  const double to_deg = 57.29577951308232 / (25.0 * static_cast<double>(rows));
+  CHECK(sum * to_deg == doctest::Approx(mean).epsilon(1e-6));
+  CHECK(truth_sum * to_deg == doctest::Approx(truth_mean).epsilon(1e-6));
+  MESSAGE("vs labels " << mean << " deg, vs truth " << truth_mean << " deg, labels vs truth " << label_truth * to_deg << " deg");
+  CHECK(label_truth * to_deg > 1.0);  // the tracker's labels are not the truth
+  // In the clean world the labels are the truth: both scores agree.
+  const std::string clean = temp("predictions_clean.safetensors");
+  r = run("simulate --seed 6 --subjects 1 --sessions 1 --minutes 0.2 --gloves 1 --calibration-seconds 5 --out " + clean);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + kModel + " --data " + clean + " --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const nlohmann::json clean_report = nlohmann::json::parse(r.out);
+  CHECK(clean_report.at("vs_truth").at("mean_deg") == clean_report.at("mean_deg"));
+  r = run("simulate --seed 6 --subjects 1 --minutes 0.1 --world mars --out " + clean);
+  CHECK(r.status == 2);
+  CHECK(r.out.find("mars") != std::string::npos);
   // Replayed through the default readout (1 reading per row): another window, another lag.
   r = run("eval --model " + kModel + " --data " + data + " --json --replay-rows");
   REQUIRE_MESSAGE(r.status == 0, r.out);

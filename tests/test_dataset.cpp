@@ -27,8 +27,8 @@ std::string temp_path(const std::string& name) { return std::string(GLOVEPOSE_TE
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Two subjects, two sessions each, raw rows with dropped (NaN) entries, angles; values of every magnitude.
-Dataset make_dataset(std::size_t frames = 12, bool raw = true, bool angles = true) {
+// Two subjects, two sessions each, raw rows with dropped (NaN) entries, labels and the true angles behind them; values of every magnitude.
+Dataset make_dataset(std::size_t frames = 12, bool raw = true, bool angles = true, bool truth = true) {
   Dataset d(5, raw ? 7 : 0, "test-5", 59.94);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
@@ -39,6 +39,8 @@ Dataset make_dataset(std::size_t frames = 12, bool raw = true, bool angles = tru
       d.raw_rows.push_back((i + r) % 5 == 0 ? std::numeric_limits<float>::quiet_NaN() : 100.0f + unit(rng));
     if (angles)
       for (std::size_t k = 0; k < hand::kDofCount; ++k) d.angles.push_back(unit(rng) * 1.5f);
+    if (angles && truth)
+      for (std::size_t k = 0; k < hand::kDofCount; ++k) d.true_angles.push_back(unit(rng) * 1.5f);
     const auto s = static_cast<std::int32_t>(i / (frames / 4 ? frames / 4 : 1));
     d.subject.push_back(s / 2);
     d.session.push_back(s % 2);
@@ -61,6 +63,7 @@ void check_equal(const Dataset& a, const Dataset& b) {
   CHECK(same_bits(a.cells, b.cells));
   CHECK(same_bits(a.raw_rows, b.raw_rows));
   CHECK(same_bits(a.angles, b.angles));
+  CHECK(same_bits(a.true_angles, b.true_angles));
   CHECK(a.timestamps == b.timestamps);
   CHECK(a.subject == b.subject);
   CHECK(a.session == b.session);
@@ -191,9 +194,10 @@ TEST_CASE("dataset: write and read back exactly, NaN kept in raw_rows, the file 
 
   const TensorFile file = TensorFile::read(temp_path("roundtrip.dataset"));
   const std::pair<const char*, DType> expected[] = {
-      {"cells", DType::F32},   {"raw_rows", DType::F32}, {"angles", DType::F32},  {"timestamps", DType::F64}, {"subject", DType::I32},
-      {"session", DType::I32}, {"glove", DType::I32},    {"donning", DType::I32}, {"kind", DType::U8},        {"outlier", DType::U8}};
-  CHECK(file.tensors.size() == 10);
+      {"cells", DType::F32},   {"raw_rows", DType::F32}, {"angles", DType::F32},  {"true_angles", DType::F32},
+      {"timestamps", DType::F64}, {"subject", DType::I32}, {"session", DType::I32}, {"glove", DType::I32},
+      {"donning", DType::I32}, {"kind", DType::U8},        {"outlier", DType::U8}};
+  CHECK(file.tensors.size() == 11);
   for (const auto& entry : expected) {  // no structured binding: clang 14 (C++17) cannot capture one in INFO's lambda
     const char* const name = entry.first;
     const DType dtype = entry.second;
@@ -205,6 +209,7 @@ TEST_CASE("dataset: write and read back exactly, NaN kept in raw_rows, the file 
   CHECK(file.tensors.at("cells").shape == std::vector<std::int64_t>{12, 5});
   CHECK(file.tensors.at("raw_rows").shape == std::vector<std::int64_t>{12, 7});
   CHECK(file.tensors.at("angles").shape == std::vector<std::int64_t>{12, 25});
+  CHECK(file.tensors.at("true_angles").shape == std::vector<std::int64_t>{12, 25});
   CHECK(file.metadata.at("format") == "glovepose-dataset");
   CHECK(file.metadata.at("version") == "1");
   CHECK(file.metadata.at("frame_rate") == "59.94");
@@ -216,6 +221,10 @@ TEST_CASE("dataset: write and read back exactly, NaN kept in raw_rows, the file 
   check_equal(bare, bare_back);
   CHECK(!bare_back.has_raw_rows());
   CHECK(!bare_back.has_angles());
+  CHECK(!bare_back.has_true_angles());
+  const Dataset labels_only = make_dataset(8, false, true, false);
+  check_equal(labels_only, Dataset::from_tensor_file(TensorFile::parse(labels_only.to_tensor_file().serialize())));
+  CHECK(!labels_only.has_true_angles());
   const Dataset none(44, 180, "glauser2019-44", 60.0);
   const Dataset none_back = Dataset::from_tensor_file(TensorFile::parse(none.to_tensor_file().serialize()));
   CHECK(none_back.frames() == 0);
@@ -308,6 +317,18 @@ TEST_CASE("dataset: validate names the tensor, the frame and what was expected")
   CHECK_THROWS_WITH_AS(d.validate(),
                        doctest::Contains("tensor 'angles': frame 3, DoF 'index_base_flexion' is nan, expected a finite angle"), Error);
   d = good;
+  d.true_angles.pop_back();
+  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'true_angles' holds 299 values, expected 12 frames x 25 (25 DoFs) = 300"),
+                       Error);
+  d = good;
+  d.true_angles[25 * 2 + 1] = std::numeric_limits<float>::infinity();
+  CHECK_THROWS_WITH_AS(d.validate(),
+                       doctest::Contains("tensor 'true_angles': frame 2, DoF 'thumb_base_flexion' is inf, expected a finite angle (radians)"),
+                       Error);
+  d = good;
+  d.angles.clear();
+  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'true_angles' without 'angles', expected the labels beside"), Error);
+  d = good;
   d.raw_rows[8] = -std::numeric_limits<float>::infinity();
   CHECK_THROWS_WITH_AS(
       d.validate(), doctest::Contains("tensor 'raw_rows': frame 1, row 1 is infinite, expected a finite capacitance (pF) or NaN"), Error);
@@ -360,6 +381,7 @@ TEST_CASE("dataset: append and select keep every array in step") {
   CHECK(odd.timestamps[2] == a.timestamps[5]);
   CHECK(odd.cells[2 * 5 + 4] == a.cells[5 * 5 + 4]);
   CHECK(odd.angles[2 * 25 + 24] == a.angles[5 * 25 + 24]);
+  CHECK(odd.true_angles[2 * 25 + 3] == a.true_angles[5 * 25 + 3]);
   CHECK(odd.outlier[2] == a.outlier[5]);
   CHECK_NOTHROW(odd.validate());
   CHECK(a.select([](std::size_t) { return false; }).frames() == 0);
@@ -368,6 +390,8 @@ TEST_CASE("dataset: append and select keep every array in step") {
   CHECK_THROWS_WITH_AS(all.append(other), doctest::Contains("the appended dataset has row_count 0, expected 7 as this one"), Error);
   other = make_dataset(4, true, false);
   CHECK_THROWS_WITH_AS(all.append(other), doctest::Contains("has angles absent, expected present"), Error);
+  other = make_dataset(4, true, true, false);
+  CHECK_THROWS_WITH_AS(all.append(other), doctest::Contains("has true_angles absent, expected present"), Error);
   other = make_dataset(4);
   other.metadata["glove_layout"] = "glauser2019-44";
   CHECK_THROWS_WITH_AS(all.append(other), doctest::Contains("metadata 'glove_layout' 'glauser2019-44', expected 'test-5'"), Error);
@@ -391,6 +415,7 @@ TEST_CASE("dataset: CSV export then import gives the same cells, angles and time
     expected.donning = d.session;
     expected.kind.assign(12, io::kKindRecording);
     expected.outlier.assign(12, 0);
+    expected.true_angles.clear();  // not part of the CSV
     check_equal(Dataset::read_csv(csv, "test-5", 59.94), expected);
   }
   const Dataset d = make_dataset();

@@ -1,6 +1,8 @@
 // The simulator: subjects, glove physics, motion, timed readout, the corpus protocol.
 #include <glovepose/sim/corpus.hpp>
 #include <glovepose/sim/report.hpp>
+#include <glovepose/sim/tracker.hpp>
+#include <glovepose/train/lag.hpp>
 
 #include <doctest/doctest.h>
 
@@ -19,6 +21,32 @@ std::size_t dof(int theta) { return hand::dof_from_theta(theta); }
 GlovePhysics physics_of(const Subject& s, std::uint64_t fit_seed = 3) {
   core::Rng rng(fit_seed);
   return GlovePhysics(s, make_glove(0, 1), don_glove(s, rng));
+}
+
+// The true angles of `m` at 60 Hz frames, without the glove: what the reference tracker labels.
+Recording true_motion(const MotionSequence& m, double seconds) {
+  Recording r;
+  r.frames = static_cast<int>(seconds * 60.0);
+  for (int f = 0; f < r.frames; ++f) {
+    const double t = (f + 1) / 60.0;
+    r.timestamps.push_back(t);
+    for (double a : m.at(t)) r.angles.push_back(static_cast<float>(a));
+  }
+  r.outlier.assign(static_cast<std::size_t>(r.frames), 0);
+  return r;
+}
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// Label error (degrees) of frame f, DoF d.
+double label_error(const Recording& r, std::size_t f, std::size_t d) {
+  return (double(r.labels[f * hand::kDofCount + d]) - r.angles[f * hand::kDofCount + d]) / kDeg;
+}
+
+// Whether DoF d's truth at frame f is at least `margin` degrees inside its joint limits (no clamping of the label there).
+bool inside(const Recording& r, std::size_t f, std::size_t d, double margin) {
+  const double a = r.angles[f * hand::kDofCount + d];
+  return a - hand::kDofs[d].min > margin * kDeg && hand::kDofs[d].max - a > margin * kDeg;
 }
 
 CellArray cells_at(const GlovePhysics& p, const hand::Angles& a) {
@@ -242,6 +270,7 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   for (const SessionRecording& r : plan)
     if (r.subject == 0 && r.glove == 0 && r.kind == RecordingKind::Session) donnings.push_back(r.donning);
   CHECK(donnings == std::vector<int>{0, 0, 0, 1, 2});
+  config.world = world_named("tracked");  // every stream, the reference tracker's included
   config.threads = 1;
   const auto one = simulate_corpus(config);
   config.threads = 2;
@@ -250,7 +279,19 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   for (std::size_t i = 0; i < one.size(); ++i) {
     CHECK(one[i].recording.cells == two[i].recording.cells);
     CHECK(one[i].recording.angles == two[i].recording.angles);
+    CHECK(one[i].recording.labels == two[i].recording.labels);
+    CHECK(one[i].recording.outlier == two[i].recording.outlier);
+    CHECK(one[i].recording.labels != one[i].recording.angles);
   }
+  // The world changes the labels only: the glove's readings and the truth are the clean world's.
+  config.world = world_named("clean");
+  const auto clean = simulate_corpus(config);
+  for (std::size_t i = 0; i < one.size(); ++i) {
+    CHECK(clean[i].recording.cells == one[i].recording.cells);
+    CHECK(clean[i].recording.angles == one[i].recording.angles);
+    CHECK(clean[i].recording.labels == clean[i].recording.angles);
+  }
+  CHECK_THROWS_WITH_AS(world_named("mars"), doctest::Contains("unknown world 'mars', expected one of clean, tracked"), Error);
   CHECK(one[1].recording.frames == 180);  // 3 s at 60 Hz
   CHECK(one[0].recording.frames == 60);   // the 1 s calibration sequence
   config.minutes = 0.0;
@@ -279,4 +320,167 @@ TEST_CASE("sim report: realistic readout age, outliers and signal, re-donning be
   // fitting within the session.
   CHECK(r.linear_cross_deg > 1.4 * r.linear_same_deg);
   CHECK(r.linear_same_deg > 1.0);  // nor is one session linear
+}
+
+TEST_CASE("sim tracker: a perfect tracker copies the truth; the wandering error has the stated SD and time correlation") {
+  const Subject s = make_subjects(1, 3)[0];
+  const hand::Kinematics fk(s.hand_model());
+  const MotionSequence m(s, pose_gallery(), 240.0, 4);
+  Recording r = true_motion(m, 240.0);
+  label_recording(r, m, fk, s.distal_radius(), TrackerConfig{}, {1, 2, 3});
+  CHECK(r.labels == r.angles);
+
+  TrackerConfig c;
+  c.flexion_sd = 4.0;
+  c.abduction_sd = 2.0;
+  c.twist_sd = 1.0;
+  c.thumb_factor = 1.5;
+  c.correlation_time = 0.5;
+  label_recording(r, m, fk, s.distal_radius(), c, {1, 2, 3});
+  const std::size_t n = static_cast<std::size_t>(r.frames), lag = 30;  // 0.5 s
+  double sq[4] = {}, count[4] = {}, product = 0.0, lag_sq = 0.0;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    const hand::Dof& dof = hand::kDofs[d];
+    const int group = dof.motion == hand::Motion::Abduction ? 1 : dof.motion == hand::Motion::Twist ? 2 : 0;
+    const double sd = group == 0 ? 4.0 : group == 1 ? 2.0 : 1.0;
+    const int g = dof.finger == hand::Finger::Thumb ? 3 : group;  // thumb: each of its DoFs over its own SD
+    const double scale = dof.finger == hand::Finger::Thumb ? sd * 1.5 : sd;
+    for (std::size_t f = 0; f < n; ++f) {
+      if (!inside(r, f, d, 4.0 * scale)) continue;
+      const double e = label_error(r, f, d) / scale;
+      sq[g] += e * e;
+      count[g] += 1.0;
+      if (f >= lag && inside(r, f - lag, d, 4.0 * scale)) {
+        product += e * label_error(r, f - lag, d) / scale;
+        lag_sq += e * e;
+      }
+    }
+  }
+  for (int g = 0; g < 4; ++g) {
+    INFO("group " << g << ", frames " << count[g]);
+    CHECK(std::sqrt(sq[g] / count[g]) == doctest::Approx(1.0).epsilon(0.08));
+  }
+  MESSAGE("autocorrelation at 0.5 s: " << product / lag_sq << " (stated exp(-1) = 0.368)");
+  CHECK(product / lag_sq == doctest::Approx(std::exp(-1.0)).epsilon(0.1));
+
+  // Occlusion: the SD grows with the finger's flexion as stated.
+  c.occlusion_gain = 1.0;
+  label_recording(r, m, fk, s.distal_radius(), c, {1, 2, 3});
+  double normalised = 0.0, frames = 0.0;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    const hand::Dof& dof = hand::kDofs[d];
+    if (dof.motion != hand::Motion::MiddleFlexion || dof.finger == hand::Finger::Thumb) continue;
+    for (std::size_t f = 0; f < n; ++f) {
+      const double flexion = r.angles[f * hand::kDofCount + hand::dof_of(dof.finger, hand::Motion::BaseFlexion)] +
+                             r.angles[f * hand::kDofCount + d];
+      const double sd = 4.0 * (1.0 + std::clamp(flexion / (180.0 * kDeg), 0.0, 1.0));
+      if (!inside(r, f, d, 4.0 * sd)) continue;
+      normalised += std::pow(label_error(r, f, d) / sd, 2);
+      frames += 1.0;
+    }
+  }
+  CHECK(std::sqrt(normalised / frames) == doctest::Approx(1.0).epsilon(0.1));
+
+  // The tracker's collision term: outside failures a label overlaps no more than allowed (or than the truth does).
+  c.collision_allowance = 20.0;
+  label_recording(r, m, fk, s.distal_radius(), c, {1, 2, 3});
+  hand::Skeleton skeleton;
+  const auto energy_of = [&](const std::vector<float>& v, std::size_t f) {
+    hand::Angles q{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) q[d] = v[f * hand::kDofCount + d];
+    fk.pose(q, skeleton);
+    return hand::collision_energy(fk, skeleton, s.distal_radius());
+  };
+  double worst = 0.0;
+  long shortened = 0;
+  for (std::size_t f = 0; f < n; f += 3) {
+    const double over = energy_of(r.labels, f) - std::max(20.0, energy_of(r.angles, f));
+    worst = std::max(worst, over);
+    shortened += over > -1.0 ? 1 : 0;
+  }
+  MESSAGE("largest overlap beyond the allowance " << worst << " mm^2; frames at the limit " << shortened);
+  CHECK(worst < 1.0);  // float labels
+}
+
+TEST_CASE("sim tracker: biases per person and per session, latency as motion lag, failures as stated") {
+  const Subject s = make_subjects(1, 3)[0];
+  const hand::Kinematics fk(s.hand_model());
+  const MotionSequence m(s, pose_gallery(), 120.0, 4);
+  const Recording truth = true_motion(m, 120.0);
+
+  // Constant biases: the same person shares one, each session adds its own; SD sqrt(2^2 + 1.5^2) = 2.5 degrees.
+  TrackerConfig c;
+  c.subject_bias_sd = 2.0;
+  c.session_bias_sd = 1.5;
+  Recording a = truth, b = truth, other = truth;
+  label_recording(a, m, fk, s.distal_radius(), c, {10, 20, 30});
+  label_recording(b, m, fk, s.distal_radius(), c, {10, 20, 31});  // same session, another recording (its calibration)
+  CHECK(a.labels == b.labels);
+  double sq = 0.0, count = 0.0;
+  for (std::uint64_t person = 0; person < 40; ++person) {
+    label_recording(other, m, fk, s.distal_radius(), c, {100 + person, 200 + person, 1});
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const std::size_t f = 600;
+      if (!inside(other, f, d, 12.0)) continue;
+      sq += std::pow(label_error(other, f, d), 2);
+      count += 1.0;
+    }
+  }
+  MESSAGE("bias SD " << std::sqrt(sq / count) << " deg over " << count << " DoFs");
+  CHECK(std::sqrt(sq / count) == doctest::Approx(2.5).epsilon(0.12));
+
+  // Latency: the labels trail the truth by it (measured by the lag of their frame-to-frame changes).
+  TrackerConfig late;
+  late.latency = 3.0 / 60.0;
+  Recording l = truth;
+  label_recording(l, m, fk, s.distal_radius(), late, {1, 2, 3});
+  std::vector<std::int64_t> source, run(truth.angles.size() / hand::kDofCount, 0);
+  for (std::size_t f = 0; f < run.size(); ++f) source.push_back(static_cast<std::int64_t>(f));
+  CHECK(train::lag_frames(l.labels, l.angles, source, run) == doctest::Approx(3.0).epsilon(0.05));
+
+  // Failures: a frozen finger repeats its labels while the truth moves; a snapped finger collides
+  // with its neighbour (collision energy over the paper's threshold: an outlier). The share of
+  // frames in a failure of mean length T at rate R per second is R T / (1 + R T).
+  // Ten recordings (about 60 failures of each kind) keep the count's own spread near 15%.
+  TrackerConfig freeze;
+  freeze.freeze_rate = 6.0;
+  freeze.failure_seconds = 0.5;
+  TrackerConfig snap;
+  snap.snap_rate = 6.0;
+  snap.failure_seconds = 0.5;
+  double held = 0.0, outliers = 0.0, frames = 0.0;
+  for (std::uint64_t seed = 0; seed < 10; ++seed) {
+    Recording z = truth, p = truth;
+    label_recording(z, m, fk, s.distal_radius(), freeze, {1, 2, seed});
+    label_recording(p, m, fk, s.distal_radius(), snap, {1, 2, seed});
+    for (std::size_t f = 1; f < run.size(); ++f)
+      for (std::size_t finger = 0; finger < hand::kFingerCount; ++finger) {
+        bool same = true;
+        for (hand::Motion motion :
+             {hand::Motion::Abduction, hand::Motion::BaseFlexion, hand::Motion::MiddleFlexion, hand::Motion::TipFlexion}) {
+          const std::size_t d = hand::dof_of(static_cast<hand::Finger>(finger), motion);
+          same = same && z.labels[f * hand::kDofCount + d] == z.labels[(f - 1) * hand::kDofCount + d] &&
+                 z.angles[f * hand::kDofCount + d] != z.angles[(f - 1) * hand::kDofCount + d];
+        }
+        held += same ? 1.0 : 0.0;
+      }
+    for (std::uint8_t o : p.outlier) outliers += o;
+    frames += static_cast<double>(run.size());
+  }
+  const double expected = 0.1 * 0.5 / (1.0 + 0.1 * 0.5);
+  MESSAGE("frames with a frozen finger: " << held / frames << " (stated " << expected << ")");
+  CHECK(held / frames == doctest::Approx(expected).epsilon(0.2));
+  std::size_t truth_outliers = 0;  // the true poses' own collisions
+  hand::Skeleton skeleton;
+  for (std::size_t f = 0; f < run.size(); ++f) {
+    hand::Angles q{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) q[d] = truth.angles[f * hand::kDofCount + d];
+    fk.pose(q, skeleton);
+    truth_outliers += hand::collision_energy(fk, skeleton, s.distal_radius()) > hand::kCollisionOutlierThreshold ? 1 : 0;
+  }
+  const double share = outliers / frames;
+  MESSAGE("outlier share with snaps: " << share << " (frames in a snap: " << expected << "; truth alone: "
+                                       << static_cast<double>(truth_outliers) / run.size() << ")");
+  CHECK(share > 0.5 * expected);
+  CHECK(share < 1.3 * expected + static_cast<double>(truth_outliers) / run.size());
 }

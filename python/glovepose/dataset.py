@@ -11,7 +11,7 @@ _DTYPES = {"F64": np.float64, "F32": np.float32, "F16": np.float16, "I64": np.in
 
 def load_dataset(path: str) -> dict:
     """The tensors of a dataset (or any safetensors) file as numpy arrays by name ("cells" (N, C),
-    "angles" (N, 25) with NaN for DoFs not labelled, "timestamps", "subject", "session", "glove",
+    "angles" (N, 25) with NaN for DoFs not labelled, "true_angles" (N, 25) for simulated data, "timestamps", "subject", "session", "glove",
     "donning", "kind", "outlier", "raw_rows" when recorded), plus "metadata" (a dict of strings).
     Raises ValueError naming what is malformed."""
     with open(path, "rb") as f:

@@ -45,6 +45,7 @@ def main() -> int:
         "cells": ("F32", (n, 5)),
         "raw_rows": ("F32", (n, 7)),
         "angles": ("F32", (n, 25)),
+        "true_angles": ("F32", (n, 25)),
         "timestamps": ("F64", (n,)),
         "subject": ("I32", (n,)),
         "session": ("I32", (n,)),
@@ -73,6 +74,7 @@ def main() -> int:
     c = np.arange(5)[None, :]
     assert np.all(np.abs(cells - 20.0 * c) <= 2.0 ** (7 * c - 14) * 1.001 + 1e-3)
     assert np.all(np.abs(t["angles"][1]) <= 1.5)
+    assert np.all(np.abs(t["true_angles"][1]) <= 1.5) and not np.array_equal(t["true_angles"][1], t["angles"][1])
     print("dataset file OK:", ", ".join(f"{k} {v[0]} {list(v[1].shape)}" for k, v in sorted(t.items())))
     return 0
 

@@ -171,7 +171,8 @@ SessionRun stream_session(GlovePoseEstimator& estimator, const NewUser& user) {
 }
 
 const double* true_angles(const io::Dataset& d, std::size_t f, hand::Angles& out) {
-  for (std::size_t k = 0; k < hand::kDofCount; ++k) out[k] = d.angles[f * hand::kDofCount + k];
+  const std::vector<float>& truth = d.has_true_angles() ? d.true_angles : d.angles;
+  for (std::size_t k = 0; k < hand::kDofCount; ++k) out[k] = truth[f * hand::kDofCount + k];
   return out.data();
 }
 
@@ -275,7 +276,8 @@ void draw_angles_over_time(const NewUser& user, const SessionRun& run, const std
       if (t > kPlottedSeconds) break;
       times.push_back(t);
       predicted.push_back(run.predicted[i][dof] * train::kDegreesPerRadian);
-      truth.push_back(user.data.angles[f * hand::kDofCount + dof] * train::kDegreesPerRadian);
+      hand::Angles true_pose{};
+      truth.push_back(true_angles(user.data, f, true_pose)[dof] * train::kDegreesPerRadian);
     }
     const auto [lo, hi] =
         std::minmax({*std::min_element(predicted.begin(), predicted.end()), *std::min_element(truth.begin(), truth.end()),

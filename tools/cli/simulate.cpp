@@ -17,13 +17,14 @@ namespace {
 
 struct SimulateOptions {
   sim::CorpusConfig config;
-  std::string out, csv, sequence_file;
+  std::string out, csv, sequence_file, world = sim::worlds().front().name;
   bool report = false, print_sequence = false;
 };
 
 int simulate(SimulateOptions o) {
   sim::CorpusConfig& config = o.config;
   if (config.intra_sessions > config.sessions) config.intra_sessions = config.sessions;
+  config.world = sim::world_named(o.world);
   if (o.print_sequence) {
     std::cout << sim::guided_calibration_sequence(sim::pose_gallery()).to_json();
     return 0;
@@ -79,6 +80,13 @@ Command add_simulate(CLI::App& tool) {
   add_number(*command, "--mean-window", "N", config.recording.readout.mean_window, "readings per row averaged before solving (default 5)")
       ->check(at_least(1));
   add_number(*command, "--threads", "T", config.threads, "threads (default 0: all cores)");
+  std::string worlds;
+  for (const sim::World& w : sim::worlds()) worlds += std::string(worlds.empty() ? "" : "; ") + w.name + ": " + w.summary;
+  std::vector<std::string> names;
+  for (const sim::World& w : sim::worlds()) names.emplace_back(w.name);
+  command->add_option("--world", o->world, "the simulated world (default " + o->world + "; " + worlds + ")")
+      ->check(CLI::IsMember(names))
+      ->type_name("NAME");
   CLI::Option* out = command->add_option("--out", o->out, "the dataset file written")->type_name("FILE");
   command->add_option("--csv", o->csv, "also write the frames as CSV text")->type_name("FILE")->needs(out);
   CLI::Option* report = command->add_flag("--report", o->report, "print the realism report of the simulated people instead")->excludes(out);

@@ -401,8 +401,9 @@ void write_predictions(const std::string& path, const io::Dataset& data, const t
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (!file) throw Error("--predictions: cannot open '" + path + "' for writing");
   std::fprintf(file, "frame,time,subject,session");
-  for (const char* prefix : {"true_", "pred_"})
-    for (const hand::Dof& d : hand::kDofs) std::fprintf(file, ",%s%s", prefix, d.name);
+  for (const char* prefix : {"label_", "pred_", "truth_"})
+    if (prefix[0] != 't' || data.has_true_angles())
+      for (const hand::Dof& d : hand::kDofs) std::fprintf(file, ",%s%s", prefix, d.name);
   std::fprintf(file, "\n");
   for (long f = 0; f < samples.frames(); ++f) {
     const auto i = static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f)]);
@@ -410,6 +411,8 @@ void write_predictions(const std::string& path, const io::Dataset& data, const t
     for (const std::vector<float>* v : {&samples.angles, &predicted})
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         std::fprintf(file, ",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
+    if (data.has_true_angles())
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) std::fprintf(file, ",%.9g", static_cast<double>(data.true_angles[i * hand::kDofCount + d]));
     std::fprintf(file, "\n");
   }
   if (std::fclose(file) != 0) throw Error("--predictions: writing '" + path + "' failed");
@@ -437,23 +440,33 @@ int eval_command(Options o) {
     throw Error("the model was trained on " + hand::dof_set_text(trained) + " and the data labels " + hand::dof_set_text(samples.labelled) +
                 ": no DoF to score, expected data labelling a DoF the model was trained on");
   train::AngleErrorAccumulator errors(scored);
-  std::vector<float> predicted(normalized.size());
+  // Simulated data also holds the true angles behind its labels: the same scores against them.
+  const bool with_truth = data.has_true_angles();
+  train::AngleErrorAccumulator truth_errors(scored);
+  std::vector<float> predicted(normalized.size()), truth(with_truth ? normalized.size() : 0);
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
     hand::Angles radians = limits.denormalize(n);
     if (guided) radians = calibration::with_offsets(radians, offsets.at(samples.run[static_cast<std::size_t>(f)]), limits);
-    double p[hand::kDofCount], t[hand::kDofCount];
+    double p[hand::kDofCount], t[hand::kDofCount], q[hand::kDofCount];
+    const auto source = static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f)]);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const std::size_t i = static_cast<std::size_t>(f) * hand::kDofCount + d;
       p[d] = radians[d];
-      t[d] = samples.angles[static_cast<std::size_t>(f) * hand::kDofCount + d];
-      predicted[static_cast<std::size_t>(f) * hand::kDofCount + d] = static_cast<float>(p[d]);
+      t[d] = samples.angles[i];
+      predicted[i] = static_cast<float>(p[d]);
+      if (with_truth) q[d] = truth[i] = data.true_angles[source * hand::kDofCount + d];
     }
     errors.add(p, t);
+    if (with_truth) truth_errors.add(p, q);
   }
   const train::AngleErrorReport report = errors.report();
   const double frame_ms = 1000.0 / data.frame_rate();
   const double lag_ms = train::lag_frames(predicted, samples.angles, samples.source, samples.run) * frame_ms;
+  const std::optional<train::AngleErrorReport> truth_report =
+      with_truth ? std::optional(truth_errors.report()) : std::nullopt;
+  const double truth_lag_ms = with_truth ? train::lag_frames(predicted, truth, samples.source, samples.run) * frame_ms : 0.0;
   if (!o.predictions_file.empty()) write_predictions(o.predictions_file, data, samples, predicted);
   const std::string calibration = guided ? "guided" : model::to_string(mode);
   const auto window = data.metadata.find("mean_window");
@@ -461,14 +474,21 @@ int eval_command(Options o) {
   if (o.json) {
     char lag[32];
     std::snprintf(lag, sizeof lag, "%.3f", lag_ms);
-    std::printf(
-        "%s\n",
-        train::to_json(report, {{"calibration", "\"" + calibration + "\""}, {"mean_window", mean_window}, {"lag_ms", lag}}).c_str());
+    std::printf("%s\n", train::to_json(report, {{"calibration", "\"" + calibration + "\""},
+                                                {"mean_window", mean_window},
+                                                {"lag_ms", lag},
+                                                {"scored_against", "\"labels\""},
+                                                {"vs_labels", train::summary_json(report, lag_ms)},
+                                                {"vs_truth", truth_report ? train::summary_json(*truth_report, truth_lag_ms) : "null"}})
+                             .c_str());
   } else {
     std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(),
                 o.data.c_str(), calibration.c_str(), mean_window.c_str(), o.replay ? " (rows replayed)" : "");
     std::printf("%s", train::format_table(report).c_str());
-    std::printf("Motion lag: %.1f ms (the shift that best aligns the frame-to-frame changes of predicted and true angles)\n", lag_ms);
+    std::printf("Motion lag: %.1f ms (the shift that best aligns the frame-to-frame changes of predicted and reference angles)\n", lag_ms);
+    if (truth_report)
+      std::printf("Against the true angles behind the labels (simulated data): mean %.2f deg, p95 %.1f deg, %.1f%% under 15 deg, lag %.1f ms\n",
+                  truth_report->overall.mean_deg, truth_report->p95_deg, 100.0 * truth_report->share_under_15deg, truth_lag_ms);
   }
   return 0;
 }

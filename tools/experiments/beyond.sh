@@ -50,7 +50,7 @@ sums, counts = {}, {}
 with open(sys.argv[1]) as f:
     rows = csv.reader(f)
     header = next(rows)
-    n = (len(header) - 4) // 2
+    n = sum(1 for h in header if h.startswith("label_"))
     for r in rows:
         sums[r[2]] = sums.get(r[2], 0.0) + sum(abs(float(r[4 + k]) - float(r[4 + n + k])) for k in range(n))
         counts[r[2]] = counts.get(r[2], 0) + n

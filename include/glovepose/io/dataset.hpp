@@ -1,6 +1,7 @@
 /// @file dataset.hpp
 /// @brief A glove recording as training / evaluation data: per frame the solved cell capacitances,
-/// optionally the raw compound capacitances, the ground-truth joint angles and the ids of who wore
+/// optionally the raw compound capacitances, the reference joint angles (the labels a hand tracker
+/// reported; for simulated data also the true angles behind them) and the ids of who wore
 /// which glove when. Stored in the container of io/tensor_file.hpp (weights_format.md, "Dataset
 /// files") and imported from / exported to CSV. Set-up code: errors are glovepose::Error naming the
 /// tensor, frame or CSV line and what was expected.
@@ -47,8 +48,10 @@ struct Dataset {
   std::vector<float> cells;     ///< N x C solved cell capacitances C_c, pF; finite.
   std::vector<float> raw_rows;  ///< N x R compound capacitances C_m of the cycle that ended at the frame, pF; NaN = dropped row. Empty when
                                 ///< row_count is 0.
-  std::vector<float> angles;    ///< N x 25 ground-truth joint angles, radians, order hand::kDofs (theta 9..33); NaN for a DoF not labelled
-                                ///< (labelled_dofs()); empty: no ground truth.
+  std::vector<float> angles;    ///< N x 25 reference joint angles (the labels trained on and scored against), radians, order hand::kDofs
+                                ///< (theta 9..33); NaN for a DoF not labelled (labelled_dofs()); empty: no reference.
+  std::vector<float> true_angles;  ///< N x 25 true joint angles behind the labels, radians, all finite; only simulated data has them (the
+                                   ///< labels are a simulated tracker's); empty: unknown.
   std::vector<double> timestamps;     ///< N times, seconds since the session start; strictly increasing within a run (see validate()).
   std::vector<std::int32_t> subject;  ///< N subject ids (>= 0).
   std::vector<std::int32_t> session;  ///< N session ids of the subject (>= 0).
@@ -77,6 +80,8 @@ struct Dataset {
   std::size_t frames() const noexcept { return timestamps.size(); }
   /// @brief Whether the frames carry ground-truth angles.
   bool has_angles() const noexcept { return !angles.empty(); }
+  /// @brief Whether the frames carry the true angles behind their labels (simulated data).
+  bool has_true_angles() const noexcept { return !true_angles.empty(); }
   /// @brief Whether the frames carry raw readout rows.
   bool has_raw_rows() const noexcept { return row_count > 0; }
 
@@ -122,6 +127,14 @@ struct Dataset {
     check_count("cells", cells.size(), n, cell_count, "cell_count");
     check_count("raw_rows", raw_rows.size(), n, row_count, "row_count");
     if (has_angles()) check_count("angles", angles.size(), n, hand::kDofCount, "25 DoFs");
+    if (has_true_angles()) {
+      if (!has_angles()) throw Error("Dataset: tensor 'true_angles' without 'angles', expected the labels beside the true angles");
+      check_count("true_angles", true_angles.size(), n, hand::kDofCount, "25 DoFs");
+      for (std::size_t i = 0; i < true_angles.size(); ++i)
+        if (!std::isfinite(true_angles[i]))
+          throw Error("Dataset: tensor 'true_angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
+                      hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(true_angles[i]) + ", expected a finite angle (radians)");
+    }
     check_count("subject", subject.size(), n, 1, "");
     check_count("session", session.size(), n, 1, "");
     check_count("glove", glove.size(), n, 1, "");
@@ -191,6 +204,8 @@ struct Dataset {
     }
     if (frames() > 0 && other.frames() > 0 && has_angles() != other.has_angles())
       throw disagree("angles", has_angles() ? "present" : "absent", other.has_angles() ? "present" : "absent");
+    if (frames() > 0 && other.frames() > 0 && has_true_angles() != other.has_true_angles())
+      throw disagree("true_angles", has_true_angles() ? "present" : "absent", other.has_true_angles() ? "present" : "absent");
     append_range(other, 0, other.frames());
   }
 
@@ -213,7 +228,7 @@ struct Dataset {
   }
 
   /// @brief The container of this dataset (validated first): tensors "cells", "raw_rows" (when
-  /// row_count > 0), "angles" (when present), "timestamps", "subject", "session", "glove", "donning",
+  /// row_count > 0), "angles" and "true_angles" (when present), "timestamps", "subject", "session", "glove", "donning",
   /// "kind", "outlier" and the metadata.
   io::TensorFile to_tensor_file() const {
     validate();
@@ -223,6 +238,8 @@ struct Dataset {
     file.tensors["cells"] = io::RawTensor::from({n, static_cast<std::int64_t>(cell_count)}, cells);
     if (has_raw_rows()) file.tensors["raw_rows"] = io::RawTensor::from({n, static_cast<std::int64_t>(row_count)}, raw_rows);
     if (has_angles()) file.tensors["angles"] = io::RawTensor::from({n, static_cast<std::int64_t>(hand::kDofCount)}, angles);
+    if (has_true_angles())
+      file.tensors["true_angles"] = io::RawTensor::from({n, static_cast<std::int64_t>(hand::kDofCount)}, true_angles);
     file.tensors["timestamps"] = io::RawTensor::from({n}, timestamps);
     file.tensors["subject"] = io::RawTensor::from({n}, subject);
     file.tensors["session"] = io::RawTensor::from({n}, session);
@@ -251,7 +268,7 @@ struct Dataset {
       for (const char* name : kTensorNames) known = known || entry.first == name;
       if (!known)
         throw Error("unknown tensor '" + entry.first +
-                    "', expected only cells, raw_rows, angles, timestamps, subject, session, glove, donning, kind, outlier");
+                    "', expected only cells, raw_rows, angles, true_angles, timestamps, subject, session, glove, donning, kind, outlier");
     }
     const io::RawTensor& times = tensor(file, "timestamps", io::DType::F64, "[N]");
     if (times.shape.size() != 1) throw Error("tensor 'timestamps' has shape " + io::shape_string(times.shape) + ", expected [N] (frames)");
@@ -265,6 +282,8 @@ struct Dataset {
     }
     if (file.tensors.count("angles"))
       out.angles = take<float>(file, "angles", io::DType::F32, {n, static_cast<std::int64_t>(hand::kDofCount)}, "frames x 25 DoFs");
+    if (file.tensors.count("true_angles"))
+      out.true_angles = take<float>(file, "true_angles", io::DType::F32, {n, static_cast<std::int64_t>(hand::kDofCount)}, "frames x 25 DoFs");
     out.subject = take<std::int32_t>(file, "subject", io::DType::I32, {n}, "frames");
     out.session = take<std::int32_t>(file, "session", io::DType::I32, {n}, "frames");
     out.glove = take<std::int32_t>(file, "glove", io::DType::I32, {n}, "frames");
@@ -284,8 +303,8 @@ struct Dataset {
   /// @brief Writes the frames as CSV (validated first): the header
   /// `subject,session,timestamp,cell_0,...,cell_{C-1}` followed by the labelled DoFs' names (all 25
   /// unless labelled_dofs() says otherwise), in hand::kDofs order, when the dataset has angles, then one line per frame; cells and angles
-  /// with 9 significant digits, timestamps with 17 (exact round trip), independent of the locale. glove, donning, kind, outlier, raw_rows
-  /// and the metadata are not part of the CSV.
+  /// with 9 significant digits, timestamps with 17 (exact round trip), independent of the locale. glove, donning, kind, outlier, raw_rows,
+  /// true_angles and the metadata are not part of the CSV.
   void write_csv(std::ostream& out) const {
     validate();
     const hand::DofSet labelled = labelled_dofs();
@@ -423,8 +442,8 @@ struct Dataset {
   }
 
  private:
-  static constexpr const char* kTensorNames[] = {"cells",   "raw_rows", "angles",  "timestamps", "subject",
-                                                 "session", "glove",    "donning", "kind",       "outlier"};
+  static constexpr const char* kTensorNames[] = {"cells",   "raw_rows", "angles",  "true_angles", "timestamps", "subject",
+                                                 "session", "glove",    "donning", "kind",        "outlier"};
 
   const std::string& meta(const std::string& key) const {
     const auto it = metadata.find(key);
@@ -457,6 +476,7 @@ struct Dataset {
     rows(cells, src.cells, cell_count);
     rows(raw_rows, src.raw_rows, row_count);
     if (src.has_angles()) rows(angles, src.angles, hand::kDofCount);
+    if (src.has_true_angles()) rows(true_angles, src.true_angles, hand::kDofCount);
     rows(timestamps, src.timestamps, 1);
     rows(subject, src.subject, 1);
     rows(session, src.session, 1);

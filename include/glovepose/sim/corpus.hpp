@@ -25,6 +25,8 @@
 #include "pose_gallery.hpp"
 #include "recorder.hpp"
 #include "subject.hpp"
+#include "tracker.hpp"
+#include "world.hpp"
 
 namespace glovepose::sim {
 
@@ -43,6 +45,7 @@ struct CorpusConfig {
   std::optional<calibration::Sequence> guided_calibration;
   int threads = 0;              ///< 0: all hardware threads.
   RecordingConfig recording{};  ///< Readout settings (raw rows, noise).
+  World world = worlds().front();  ///< The world's effects (the reference tracker).
   /// The hand the glove is worn on: a left hand is the right one mirrored, wearing the right glove's
   /// sheet turned over (the same cells at the mirrored places).
   hand::Handedness handedness = hand::Handedness::Right;
@@ -213,14 +216,24 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
                       id(5, stream)};
 }
 
+/// @brief The reference tracker's streams for a planned recording: the person's (every glove and
+/// session), the session's (shared by a session and its calibration sequence) and the recording's.
+inline TrackerSeeds tracker_seeds(const CorpusConfig& config, const SessionRecording& job) {
+  const auto subject = static_cast<std::uint64_t>(job.subject), glove = static_cast<std::uint64_t>(job.glove);
+  const auto session = static_cast<std::uint64_t>(job.session);
+  return TrackerSeeds{core::derive_seed(config.seed, {7, subject}), core::derive_seed(config.seed, {8, subject, glove, session}),
+                      core::derive_seed(config.seed, {6, subject, glove, 2 * session + (job.kind == RecordingKind::Calibration ? 1 : 0)})};
+}
+
 /// @brief Simulates the corpus. Deterministic in config.seed for any thread count.
 inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config) {
   std::vector<SessionRecording> plan = plan_corpus(config);
   const CorpusWorld world(config);
   const auto run = [&](SessionRecording& job) {
     const SessionSetup setup = setup_session(config, world, job);
-    job.recording = record(setup.physics, setup.motion, world.subjects[static_cast<std::size_t>(job.subject)].distal_radius(),
-                           setup.noise_seed, config.recording);
+    const std::array<double, 16> radii = world.subjects[static_cast<std::size_t>(job.subject)].distal_radius();
+    job.recording = record(setup.physics, setup.motion, radii, setup.noise_seed, config.recording);
+    label_recording(job.recording, setup.motion, setup.physics.kinematics(), radii, config.world.tracker, tracker_seeds(config, job));
   };
 
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());

@@ -11,7 +11,8 @@
 
 namespace glovepose::sim {
 
-/// @brief The recordings, in plan order, as one dataset; the metadata records how it was made.
+/// @brief The recordings, in plan order, as one dataset: "angles" are the reference tracker's labels,
+/// "true_angles" the truth behind them; the metadata records how it was made.
 inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const CorpusConfig& config) {
   const bool raw = config.recording.raw_rows;
   io::Dataset out(kCells, raw ? kRows : 0, sensor::TraceLayout::glauser2019().id(), config.recording.cycle_rate);
@@ -19,6 +20,7 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   for (const SessionRecording& s : corpus) total += static_cast<std::size_t>(s.recording.frames);
   out.cells.reserve(total * kCells);
   out.angles.reserve(total * hand::kDofCount);
+  out.true_angles.reserve(total * hand::kDofCount);
   if (raw) out.raw_rows.reserve(total * kRows);
   // A session's clock starts with its calibration sequence: the recording that follows continues it.
   double offset = 0.0;
@@ -30,7 +32,9 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
     offset = continues && !previous->recording.timestamps.empty() ? previous->recording.timestamps.back() : 0.0;
     previous = &s;
     out.cells.insert(out.cells.end(), r.cells.begin(), r.cells.end());
-    out.angles.insert(out.angles.end(), r.angles.begin(), r.angles.end());
+    const std::vector<float>& labels = r.labels.empty() ? r.angles : r.labels;  // unlabelled: a perfect tracker
+    out.angles.insert(out.angles.end(), labels.begin(), labels.end());
+    out.true_angles.insert(out.true_angles.end(), r.angles.begin(), r.angles.end());
     if (raw) out.raw_rows.insert(out.raw_rows.end(), r.raw_rows.begin(), r.raw_rows.end());
     for (double t : r.timestamps) out.timestamps.push_back(offset + t);
     out.outlier.insert(out.outlier.end(), r.outlier.begin(), r.outlier.end());
@@ -44,6 +48,7 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   char minutes[32];
   std::snprintf(minutes, sizeof minutes, "%g", config.minutes);
   out.metadata["generator"] = "glovepose simulate";
+  out.metadata["world"] = config.world.name;
   out.metadata["seed"] = std::to_string(config.seed);
   out.metadata["subjects"] = std::to_string(config.subjects);
   out.metadata["sessions"] = std::to_string(config.sessions);

@@ -71,9 +71,12 @@ struct Recording {
   std::vector<float> cells;           ///< frames x 44: solved C_c (pF) of the latest solve.
   std::vector<float> raw_rows;        ///< frames x 180: the cycle's readings (NaN: dropped); empty unless asked.
   std::vector<float> angles;          ///< frames x 25: ground truth at the frame's time (rad).
+  std::vector<float> labels;          ///< frames x 25: the reference tracker's angles (rad, sim/tracker.hpp); empty until labelled.
   std::vector<double> timestamps;     ///< Seconds since the recording started (cycle ends).
   std::vector<double> oldest_age;     ///< Age (s) at the frame's time of the oldest reading behind its C_c.
-  std::vector<std::uint8_t> outlier;  ///< 1 when the true pose's collision energy exceeds hand::kCollisionOutlierThreshold.
+  /// 1 when the pose's collision energy exceeds hand::kCollisionOutlierThreshold: the true pose's from
+  /// record(), the labels' once label_recording() has run.
+  std::vector<std::uint8_t> outlier;
 };
 
 /// @brief Records `motion` through the glove physics. Deterministic in `seed`.

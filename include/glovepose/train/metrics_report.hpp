@@ -62,6 +62,15 @@ inline std::string to_json(const AngleErrorReport& r, const std::vector<std::pai
   return out;
 }
 
+/// @brief The headline figures of a report as one JSON object: mean, RMS, median, p95, share under
+/// 15 degrees and the motion lag (ms) measured beside it.
+inline std::string summary_json(const AngleErrorReport& r, double lag_ms) {
+  const auto number = detail::json_number;
+  return "{\"mean_deg\": " + number(r.overall.mean_deg) + ", \"rms_deg\": " + number(r.overall.rms_deg) + ", \"median_deg\": " +
+         number(r.median_deg) + ", \"p95_deg\": " + number(r.p95_deg) + ", \"share_under_15deg\": " + number(r.share_under_15deg) +
+         ", \"lag_ms\": " + number(lag_ms) + "}";
+}
+
 /// @brief The report as a plain-text table: frames (and skipped frames), the overall line, one line
 /// per finger, one per DoF, and the cumulative curve at 5, 10, 15, 20 and 30 degrees.
 inline std::string format_table(const AngleErrorReport& r) {
