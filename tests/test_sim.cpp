@@ -322,7 +322,7 @@ TEST_CASE("sim report: realistic readout age, outliers and signal, re-donning be
   CHECK(r.linear_same_deg > 1.0);  // nor is one session linear
 }
 
-TEST_CASE("sim tracker: a perfect tracker copies the truth; the wandering error has the stated SD and time correlation") {
+TEST_CASE("sim tracker: a perfect tracker copies the truth, the wandering error has the stated SD and time correlation") {
   const Subject s = make_subjects(1, 3)[0];
   const hand::Kinematics fk(s.hand_model());
   const MotionSequence m(s, pose_gallery(), 240.0, 4);
