@@ -817,6 +817,19 @@ TEST_CASE("cli: eval scores against the labels and the truth behind them, and --
   r = run("simulate --seed 6 --subjects 1 --minutes 0.1 --world mars --out " + clean);
   CHECK(r.status == 2);
   CHECK(r.out.find("mars") != std::string::npos);
+  // An ablation is recorded in the file; an unknown effect is refused with the known ones named.
+  const std::string ablated = temp("predictions_ablated.safetensors");
+  r = run("simulate --seed 6 --subjects 1 --sessions 1 --minutes 0.1 --gloves 1 --calibration-seconds 5 --world worn --without slip,drift "
+          "--without tracker --out " + ablated);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const io::Dataset worn = io::Dataset::read(ablated);
+  CHECK(worn.metadata.at("world") == "worn");
+  CHECK(worn.metadata.at("world_without") == "slip,drift,tracker");
+  CHECK(worn.true_angles == worn.angles);  // without its tracker the labels are the truth
+  r = run("simulate --seed 6 --subjects 1 --minutes 0.1 --world worn --without gravity --out " + ablated);
+  CHECK(r.status == 2);
+  CHECK(r.out.find("gravity") != std::string::npos);
+  CHECK(r.out.find("hysteresis") != std::string::npos);
   // Replayed through the default readout (1 reading per row): another window, another lag.
   r = run("eval --model " + kModel + " --data " + data + " --json --replay-rows");
   REQUIRE_MESSAGE(r.status == 0, r.out);

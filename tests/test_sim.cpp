@@ -20,7 +20,8 @@ std::size_t dof(int theta) { return hand::dof_from_theta(theta); }
 // Noise-free physics of subject `s` wearing glove 0 in a donning drawn from `fit_seed`.
 GlovePhysics physics_of(const Subject& s, std::uint64_t fit_seed = 3) {
   core::Rng rng(fit_seed);
-  return GlovePhysics(s, make_glove(0, 1), don_glove(s, rng));
+  const Glove glove = make_glove(0, 1);
+  return GlovePhysics(s, glove, don_glove(s, glove, rng));
 }
 
 // The true angles of `m` at 60 Hz frames, without the glove: what the reference tracker labels.
@@ -268,7 +269,7 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   for (const SessionRecording& r : plan)
     if (r.subject == 0 && r.glove == 0 && r.kind == RecordingKind::Session) donnings.push_back(r.donning);
   CHECK(donnings == std::vector<int>{0, 0, 0, 1, 2});
-  config.world = world_named("tracked");  // every stream, the reference tracker's included
+  config.world = world_named("worn");  // every stream, the reference tracker's and the glove's drift included
   config.threads = 1;
   const auto one = simulate_corpus(config);
   config.threads = 2;
@@ -281,15 +282,20 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
     CHECK(one[i].recording.outlier == two[i].recording.outlier);
     CHECK(one[i].recording.labels != one[i].recording.angles);
   }
-  // The world changes the labels only: the glove's readings and the truth are the clean world's.
+  // The tracker changes the labels only: the glove's readings and the truth are the clean world's;
+  // the wear and material effects change the readings only.
   config.world = world_named("clean");
   const auto clean = simulate_corpus(config);
+  config.world = world_named("tracked");
+  const auto tracked = simulate_corpus(config);
   for (std::size_t i = 0; i < one.size(); ++i) {
-    CHECK(clean[i].recording.cells == one[i].recording.cells);
-    CHECK(clean[i].recording.angles == one[i].recording.angles);
+    CHECK(clean[i].recording.cells == tracked[i].recording.cells);
+    CHECK(clean[i].recording.angles == tracked[i].recording.angles);
     CHECK(clean[i].recording.labels == clean[i].recording.angles);
+    CHECK(tracked[i].recording.labels == one[i].recording.labels);
+    CHECK(tracked[i].recording.cells != one[i].recording.cells);
   }
-  CHECK_THROWS_WITH_AS(world_named("mars"), doctest::Contains("unknown world 'mars', expected one of clean, tracked"), Error);
+  CHECK_THROWS_WITH_AS(world_named("mars"), doctest::Contains("unknown world 'mars', expected one of clean, tracked, worn"), Error);
   CHECK(one[1].recording.frames == 180);  // 3 s at 60 Hz
   CHECK(one[0].recording.frames == 60);   // the 1 s calibration sequence
   config.minutes = 0.0;
@@ -481,4 +487,184 @@ TEST_CASE("sim tracker: biases per person and per session, latency as motion lag
                                        << static_cast<double>(truth_outliers) / run.size() << ")");
   CHECK(share > 0.5 * expected);
   CHECK(share < 1.3 * expected + static_cast<double>(truth_outliers) / run.size());
+}
+
+TEST_CASE("sim wear: donning shifts with their stated SDs, more on a loose fit, each glove's cells placed apart") {
+  const std::vector<Subject> subjects = make_subjects(10, 1);
+  const Subject& full = subjects[5];   // 20.5 x 10 cm: fills the glove, no slack
+  const Subject& small = subjects[9];  // 17 x 9 cm
+  CHECK(glove_slack(full) == 0.0);
+  CHECK(glove_slack(small) == doctest::Approx((1.0 - 170.0 / 175.0) + (1.0 - 90.0 / 95.0)));
+  WearConfig wear;
+  wear.donning_shift = 3.0;
+  wear.cell_shift = 2.0;
+  wear.loose_gain = 1.0;
+  wear.placement_sd = 1.0;
+  const Glove glove = make_glove(0, 1, wear.placement_sd), bare = make_glove(0, 1);
+  CHECK(glove.base_capacitance == bare.base_capacitance);  // placement does not disturb the other fabrication draws
+  CHECK(glove.cross_gain == bare.cross_gain);
+  // Each cell's shift = its placement + the glove's shift + its own; over 2000 donnings the glove's
+  // part has SD donning_shift x loose, the rest cell_shift x loose.
+  for (const Subject* who : {&full, &small}) {
+    const double loose = loose_fit_factor(*who, wear);
+    double global_sq = 0.0, cell_sq = 0.0, cells = 0.0;
+    const int donnings = 2000;
+    for (int k = 0; k < donnings; ++k) {
+      core::Rng rng(core::derive_seed(5, {static_cast<std::uint64_t>(k)}));
+      const GloveFit fit = don_glove(*who, glove, rng, wear);
+      double mean = 0.0;
+      for (std::size_t c = 0; c < kCells; ++c) mean += (fit.shift[c] - glove.placement[c]) / kCells;
+      global_sq += mean * mean;
+      for (std::size_t c = 0; c < kCells; ++c) {
+        cell_sq += std::pow(fit.shift[c] - glove.placement[c] - mean, 2);
+        cells += 1.0;
+      }
+    }
+    const double global_sd = std::sqrt(global_sq / donnings), cell_sd = std::sqrt(cell_sq / cells * kCells / (kCells - 1));
+    MESSAGE("loose factor " << loose << ": glove shift SD " << global_sd << ", cell shift SD " << cell_sd << " mm");
+    // 2000 donnings: the glove's SD has a sampling error of 1.6%, the cells' (88,000 draws) 0.24%.
+    CHECK(std::abs(global_sd / std::hypot(3.0 * loose, 2.0 * loose / std::sqrt(double(kCells))) - 1.0) < 0.05);
+    CHECK(std::abs(cell_sd / (2.0 * loose) - 1.0) < 0.01);
+  }
+  CHECK(loose_fit_factor(small, wear) == doctest::Approx(1.0 + glove_slack(small) / 0.1));
+  // Two gloves of the design: their cells sit placement_sd apart from the design, independently.
+  const Glove second = make_glove(1, 1, wear.placement_sd);
+  double sq = 0.0, cross = 0.0;
+  for (std::size_t c = 0; c < kCells; ++c) {
+    sq += glove.placement[c] * glove.placement[c] + second.placement[c] * second.placement[c];
+    cross += glove.placement[c] * second.placement[c];
+  }
+  CHECK(std::abs(std::sqrt(sq / (2 * kCells)) - 1.0) < 0.23);  // 88 draws: sampling error 7.5%
+  CHECK(std::abs(cross / kCells) < 0.35);  // correlation of the two gloves' placements: sampling error 0.15
+  // Without shifts a fit puts every cell at its placement.
+  WearConfig still;
+  still.donning_shift = still.cell_shift = 0.0;
+  core::Rng rng(3);
+  CHECK(don_glove(full, glove, rng, still).shift == glove.placement);
+}
+
+TEST_CASE("sim wear: slip and gain drift follow their processes, continuous across a donning's recordings") {
+  GloveMaterial material;
+  material.drift_rate = 0.01;  // 1% per sqrt(minute)
+  const double slip_sd = 2.0, slip_time = 100.0;
+  // Ornstein-Uhlenbeck from 0: SD slip_sd sqrt(1 - exp(-2 t / tau)); correlation exp(-lag / tau) once
+  // stationary. Random walk gain: SD drift_rate sqrt(minutes). 2000 paths: the SDs' sampling error is
+  // about 1.6% (the gain's 0.4%), the correlation's 0.02; the bounds are about 3 of them.
+  const int paths = 2000;
+  double sq_early = 0.0, sq_late = 0.0, late_lag = 0.0, gain_sq = 0.0;
+  for (int k = 0; k < paths; ++k) {
+    const WearDrift d(slip_sd, slip_time, material, 1000.0, 0.0, core::derive_seed(9, {static_cast<std::uint64_t>(k)}));
+    sq_early += std::pow(d.slip(50.0), 2);
+    sq_late += std::pow(d.slip(800.0), 2);
+    late_lag += d.slip(800.0) * d.slip(900.0);
+    for (std::size_t c = 0; c < kCells; ++c) gain_sq += std::pow(d.gain(c, 900.0) - 1.0, 2);
+  }
+  const double early_sd = std::sqrt(sq_early / paths), late_sd = std::sqrt(sq_late / paths);
+  const double correlation = late_lag / sq_late, gain_sd = std::sqrt(gain_sq / (paths * kCells));
+  MESSAGE("slip SD at 50 s " << early_sd << ", at 800 s " << late_sd << " mm; correlation over 100 s " << correlation << "; gain SD at 15 min "
+                              << gain_sd);
+  const auto near = [](double value, double expected, double relative) { return std::abs(value - expected) <= relative * std::abs(expected); };
+  CHECK(near(early_sd, slip_sd * std::sqrt(1.0 - std::exp(-2.0 * 50.0 / slip_time)), 0.05));
+  CHECK(near(late_sd, slip_sd, 0.05));
+  CHECK(std::abs(correlation - std::exp(-1.0)) < 0.06);
+  CHECK(near(gain_sd, 0.01 * std::sqrt(15.0), 0.015));
+  // A recording that starts 400 s into the donning sees the donning's path from there.
+  const WearDrift whole(slip_sd, slip_time, material, 1000.0, 0.0, 77), later(slip_sd, slip_time, material, 1000.0, 400.0, 77);
+  for (double t : {0.0, 12.3, 250.7}) {
+    CHECK(later.slip(t) == doctest::Approx(whole.slip(400.0 + t)).epsilon(1e-12));
+    CHECK(later.gain(7, t) == doctest::Approx(whole.gain(7, 400.0 + t)).epsilon(1e-12));
+  }
+  // Warm-up: the common gain rises to 1 + warmup_gain with its time constant from the donning.
+  GloveMaterial warm;
+  warm.warmup_gain = 0.03;
+  warm.warmup_time = 200.0;
+  const WearDrift w(0.0, slip_time, warm, 1000.0, 100.0, 5);
+  CHECK(w.gain(3, 100.0) == doctest::Approx(1.0 + 0.03 * (1.0 - std::exp(-1.0))));
+  CHECK(w.slip(100.0) == 0.0);
+  const WearDrift none;
+  CHECK(none.slip(5.0) == 0.0);
+  CHECK(none.gain(0, 5.0) == 1.0);
+
+  // The corpus: the recordings of one donning follow each other, each after its calibration sequence.
+  CorpusConfig config;
+  config.minutes = 0.05;  // 3 s
+  config.calibration_seconds = 1.0;
+  std::vector<std::pair<double, double>> times;
+  for (const SessionRecording& r : plan_corpus(config))
+    if (r.subject == 0 && r.glove == 0) times.push_back(wear_times(config, r));
+  // calibration 0, session 0, calibration 1, session 1, calibration 2, session 2 (one donning, 12 s), then two donnings of 4 s.
+  const std::vector<std::pair<double, double>> expected{{0, 12}, {1, 12}, {4, 12}, {5, 12}, {8, 12}, {9, 12}, {0, 4}, {1, 4}, {0, 4}, {1, 4}};
+  CHECK(times == expected);
+}
+
+TEST_CASE("sim material: a play operator's loop has its stated area, and the recorder applies it within its width") {
+  // Driven between a and b the play's loop encloses 2 w (b - a - 2 w) (shoelace over one period).
+  const double a = 1.0, b = 1.6, w = 0.05;
+  double out = a, area = 0.0, px = a, py = a;
+  for (int i = 1; i <= 4000; ++i) {
+    const double x = a + (b - a) * 0.5 * (1.0 - std::cos(2.0 * 3.14159265358979323846 * i / 2000.0));
+    out = play(out, x, w);
+    if (i > 2000) area += px * out - x * py;  // second period: the loop is established
+    px = x;
+    py = out;
+  }
+  CHECK(std::abs(area) / 2.0 == doctest::Approx(2.0 * w * (b - a - 2.0 * w)).epsilon(1e-3));
+  CHECK(play(0.5, 0.52, 0.05) == 0.5);
+  CHECK(play(0.5, 0.60, 0.05) == doctest::Approx(0.55));
+
+  // In a noise-free recording without creep, the hysteretic share moves each cell's contribution to a
+  // row reading by at most share x width x C0, so a row by at most that summed over its cells; on the
+  // moving hand the largest change comes close to it.
+  const Subject s = make_subjects(1, 3)[0];
+  const GlovePhysics p = physics_of(s);
+  const MotionSequence m(s, pose_gallery(), 10.0, 4);
+  RecordingConfig quiet;
+  quiet.noise = ReadoutNoise{0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  quiet.raw_rows = true;
+  GloveMaterial plain;
+  plain.creep_share = 0.0;
+  GloveMaterial hysteretic = plain;
+  hysteretic.hysteresis_share = 0.5;
+  hysteretic.hysteresis_width = 0.02;
+  const Recording r0 = record(p, m, s.distal_radius(), 5, quiet, plain), r1 = record(p, m, s.distal_radius(), 5, quiet, hysteretic);
+  const Eigen::MatrixXd matrix = sensor::TraceLayout::glauser2019().measurement_matrix();
+  std::vector<double> bound(kRows, 0.0);
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCells; ++c) bound[static_cast<std::size_t>(r)] += matrix(r, c) * 0.5 * 0.02 * p.glove().base_capacitance[static_cast<std::size_t>(c)];
+  double worst_ratio = 0.0;
+  for (int f = 0; f < r0.frames; ++f)
+    for (int r = 0; r < kRows; ++r) {
+      const auto i = static_cast<std::size_t>(f * kRows + r);
+      worst_ratio = std::max(worst_ratio, std::abs(double(r1.raw_rows[i]) - r0.raw_rows[i]) / bound[static_cast<std::size_t>(r)]);
+    }
+  MESSAGE("largest hysteretic change of a row / (share x width x its cells' C0): " << worst_ratio);
+  CHECK(worst_ratio <= 1.0 + 1e-4);  // float rows
+  CHECK(worst_ratio > 0.5);
+}
+
+TEST_CASE("sim worlds: every effect can be switched back to the clean world's, by name") {
+  const World& worn = world_named("worn");
+  for (std::size_t i = 0; i < kEffectNames.size(); ++i) CHECK(effect_named(kEffectNames[i]) == static_cast<Effect>(i));
+  CHECK_THROWS_WITH_AS(effect_named("gravity"), doctest::Contains("unknown effect 'gravity', expected one of tracker, donning, slip"), Error);
+  World w = without(without(worn, Effect::Slip), Effect::Slip);
+  CHECK(w.ablated == "slip");
+  CHECK(w.wear.slip_sd == 0.0);
+  CHECK(w.wear.donning_shift == worn.wear.donning_shift);
+  w = without(w, Effect::Drift);
+  CHECK(w.ablated == "slip,drift");
+  CHECK(w.material.drift_rate == 0.0);
+  CHECK(w.material.warmup_gain == 0.0);
+  CHECK(w.material.hysteresis_share == worn.material.hysteresis_share);
+  // Every effect off: the tracked world without its tracker, i.e. the clean world's settings.
+  World all = worn;
+  for (std::size_t i = 0; i < kEffectNames.size(); ++i) all = without(all, static_cast<Effect>(i));
+  const World& clean = world_named("clean");
+  CHECK(all.tracker.flexion_sd == clean.tracker.flexion_sd);
+  CHECK(all.wear.donning_shift == clean.wear.donning_shift);
+  CHECK(all.wear.cell_shift == clean.wear.cell_shift);
+  CHECK(all.wear.slip_sd == clean.wear.slip_sd);
+  CHECK(all.wear.loose_gain == clean.wear.loose_gain);
+  CHECK(all.wear.placement_sd == clean.wear.placement_sd);
+  CHECK(all.material.hysteresis_share == clean.material.hysteresis_share);
+  CHECK(all.material.drift_rate == clean.material.drift_rate);
 }

@@ -18,6 +18,7 @@ namespace {
 struct SimulateOptions {
   sim::CorpusConfig config;
   std::string out, csv, sequence_file, world = sim::worlds().front().name;
+  std::vector<std::string> without;
   bool report = false, print_sequence = false;
 };
 
@@ -25,6 +26,7 @@ int simulate(SimulateOptions o) {
   sim::CorpusConfig& config = o.config;
   if (config.intra_sessions > config.sessions) config.intra_sessions = config.sessions;
   config.world = sim::world_named(o.world);
+  for (const std::string& effect : o.without) config.world = sim::without(config.world, sim::effect_named(effect));
   if (o.print_sequence) {
     std::cout << sim::guided_calibration_sequence(sim::pose_gallery()).to_json();
     return 0;
@@ -87,6 +89,12 @@ Command add_simulate(CLI::App& tool) {
   command->add_option("--world", o->world, "the simulated world (default " + o->world + "; " + worlds + ")")
       ->check(CLI::IsMember(names))
       ->type_name("NAME");
+  std::string effects;
+  for (const char* e : sim::kEffectNames) effects += std::string(effects.empty() ? "" : ", ") + e;
+  command->add_option("--without", o->without, "switch these effects of the world back to the clean world's, for ablations (" + effects + ")")
+      ->check(CLI::IsMember(std::vector<std::string>(sim::kEffectNames.begin(), sim::kEffectNames.end())))
+      ->delimiter(',')
+      ->type_name("EFFECT[,EFFECT...]");
   CLI::Option* out = command->add_option("--out", o->out, "the dataset file written")->type_name("FILE");
   command->add_option("--csv", o->csv, "also write the frames as CSV text")->type_name("FILE")->needs(out);
   CLI::Option* report = command->add_flag("--report", o->report, "print the realism report of the simulated people instead")->excludes(out);

@@ -35,6 +35,7 @@ Environment knobs [default; --quick default]:
   CORPUS             dataset file [\$OUT/corpus.safetensors, simulated if missing]
   CORPUS_SEED        seed of the simulated corpus [1]
   WORLD              simulated world of that corpus (glovepose simulate --world) [clean]
+  WITHOUT            effects of that world switched off, e.g. slip,drift (glovepose simulate --without) [none]
   WIDTH              U-Net width of table1/table2/fig12/fig14 [64; 8]
   EPOCHS             training epochs [6; 1]
   FINETUNE_EPOCHS    fine-tuning epochs of Table 1 (5) [5; 1]
@@ -100,6 +101,7 @@ GLOVEPOSE=$(abspath "${GLOVEPOSE:-$ROOT/build/tools/glovepose}")
 CORPUS=$(abspath "${CORPUS:-$OUT/corpus.safetensors}")
 CORPUS_SEED=${CORPUS_SEED:-1}
 WORLD=${WORLD:-clean}
+WITHOUT=${WITHOUT:-}
 STRIDE=${STRIDE:-5}
 THREADS=${THREADS:-$(nproc)}
 SEED=${SEED:-1}
@@ -163,11 +165,9 @@ say() { printf '[%s] %s\n' "$CURRENT" "$*" >&2; }
 
 CURRENT=setup
 if [[ ! -s $CORPUS ]]; then
-  if ((QUICK)); then
-    sim=("$GLOVEPOSE" simulate --seed "$CORPUS_SEED" --world "$WORLD" --subjects 3 --sessions 5 --minutes 0.5 --threads "$THREADS" --out "$CORPUS.partial")
-  else
-    sim=("$GLOVEPOSE" simulate --seed "$CORPUS_SEED" --world "$WORLD" --threads "$THREADS" --out "$CORPUS.partial")
-  fi
+  sim=("$GLOVEPOSE" simulate --seed "$CORPUS_SEED" --world "$WORLD" --threads "$THREADS" --out "$CORPUS.partial")
+  [[ -n $WITHOUT ]] && sim+=(--without "$WITHOUT")
+  ((QUICK)) && sim+=(--subjects 3 --sessions 5 --minutes 0.5)
   mkdir -p "$(dirname "$CORPUS")"
   say "simulating the corpus: $(quote "${sim[@]}")"
   log "$(quote "${sim[@]}") && mv $(quote "$CORPUS.partial" "$CORPUS")"

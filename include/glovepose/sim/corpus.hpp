@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "../calibration/sequence.hpp"
@@ -170,7 +171,7 @@ struct CorpusWorld {
   /// @brief The subjects, gloves and galleries of `config`.
   explicit CorpusWorld(const CorpusConfig& config)
       : subjects(make_subjects(config.subjects, config.seed)), gallery(pose_gallery()), extremes(calibration_gallery(gallery)) {
-    for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed));
+    for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed, config.world.wear.placement_sd));
   }
 };
 
@@ -180,14 +181,36 @@ struct SessionSetup {
   GlovePhysics physics;      ///< The glove on the hand in this donning.
   MotionSequence motion;     ///< What the hand does.
   std::uint64_t noise_seed;  ///< Seed of the readout's noise and glitches.
+  WearDrift drift;           ///< The donning's slip and gain drift, from this recording's start.
+
+  /// @brief The recording: the world's glove material, this donning's drift, `config`'s readout.
+  Recording record(const std::array<double, 16>& radii, const CorpusConfig& corpus, const RecordingConfig& config) const {
+    return sim::record(physics, motion, radii, noise_seed, config, corpus.world.material, drift);
+  }
 };
 
-/// @brief How `subject` wears glove `glove` in its donning `donning`: the same for every recording
-/// that shares the donning.
-inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, int glove, int donning) {
+/// @brief How `subject` wears `glove` in its donning `donning`: the same for every recording that
+/// shares the donning.
+inline GloveFit donning_fit(const CorpusConfig& config, const Subject& subject, const Glove& glove, int donning) {
   core::Rng rng(core::derive_seed(
-      config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove), static_cast<std::uint64_t>(donning)}));
-  return don_glove(subject, rng);
+      config.seed, {3, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove.id), static_cast<std::uint64_t>(donning)}));
+  return don_glove(subject, glove, rng, config.world.wear);
+}
+
+/// @brief Seconds of one calibration sequence.
+inline double calibration_length(const CorpusConfig& config) {
+  if (config.calibration_seconds <= 0.0) return 0.0;  // no calibration sequences are recorded
+  return config.guided_calibration ? config.guided_calibration->total_seconds() : config.calibration_seconds;
+}
+
+/// @brief When a planned recording starts (s after its donning) and how long its donning is worn
+/// (s): the sessions of a donning follow each other, each after its calibration sequence.
+inline std::pair<double, double> wear_times(const CorpusConfig& config, const SessionRecording& job) {
+  const double calibration = calibration_length(config), session = config.minutes * 60.0;
+  const int first = job.glove == 0 ? (job.donning == 0 ? 0 : config.intra_sessions - 1 + job.donning) : job.donning;
+  const int sessions = job.glove == 0 && job.donning == 0 ? std::min(config.intra_sessions, config.sessions) : 1;
+  const double start = (job.session - first) * (calibration + session) + (job.kind == RecordingKind::Session ? calibration : 0.0);
+  return {start, sessions * (calibration + session)};
 }
 
 /// @brief The setup of a planned recording; depends only on (seed, subject, glove, donning/session).
@@ -197,7 +220,13 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
     return core::derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
                                            static_cast<std::uint64_t>(index)});
   };
-  const GloveFit fit = donning_fit(config, subject, job.glove, job.donning);
+  const Glove& glove = world.gloves[static_cast<std::size_t>(job.glove)];
+  const GloveFit fit = donning_fit(config, subject, glove, job.donning);
+  const auto [start, worn] = wear_times(config, job);
+  const double loose = loose_fit_factor(subject, config.world.wear);
+  WearDrift drift(config.world.wear.slip_sd * loose, config.world.wear.slip_time, config.world.material, worn + 1.0, start,
+                  core::derive_seed(config.seed, {9, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
+                                                  static_cast<std::uint64_t>(job.donning)}));
   const bool calibration = job.kind == RecordingKind::Calibration;
   MotionConfig motion_config;
   if (calibration) {  // quick, wide movements between extremes, no blends
@@ -207,13 +236,13 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   }
   const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
   const int stream = 2 * job.session + (calibration ? 1 : 0);
-  GlovePhysics physics(subject, world.gloves[static_cast<std::size_t>(job.glove)], fit, config.handedness);
+  GlovePhysics physics(subject, glove, fit, config.handedness);
   if (calibration && config.guided_calibration)
     return SessionSetup{std::move(physics), MotionSequence(subject, *config.guided_calibration, id(4, stream), motion_config),
-                        id(5, stream)};
+                        id(5, stream), std::move(drift)};
   return SessionSetup{std::move(physics),
                       MotionSequence(subject, calibration ? world.extremes : world.gallery, seconds, id(4, stream), motion_config),
-                      id(5, stream)};
+                      id(5, stream), std::move(drift)};
 }
 
 /// @brief The reference tracker's streams for a planned recording: the person's (every glove and
@@ -232,7 +261,7 @@ inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config)
   const auto run = [&](SessionRecording& job) {
     const SessionSetup setup = setup_session(config, world, job);
     const std::array<double, 16> radii = world.subjects[static_cast<std::size_t>(job.subject)].distal_radius();
-    job.recording = record(setup.physics, setup.motion, radii, setup.noise_seed, config.recording);
+    job.recording = setup.record(radii, config, config.recording);
     label_recording(job.recording, setup.motion, setup.physics.kinematics(), radii, config.world.tracker, tracker_seeds(config, job));
   };
 

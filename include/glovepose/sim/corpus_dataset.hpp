@@ -49,6 +49,7 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   std::snprintf(minutes, sizeof minutes, "%g", config.minutes);
   out.metadata["generator"] = "glovepose simulate";
   out.metadata["world"] = config.world.name;
+  if (!config.world.ablated.empty()) out.metadata["world_without"] = config.world.ablated;
   out.metadata["seed"] = std::to_string(config.seed);
   out.metadata["subjects"] = std::to_string(config.subjects);
   out.metadata["sessions"] = std::to_string(config.sessions);

@@ -108,6 +108,33 @@ inline constexpr double kSaturation = 0.6;
 /// strap of Sec. 3.2 bounds them).
 inline constexpr double kDonningShift = 1.5, kCellShift = 1.0, kPreStretchSpread = 0.02;
 
+/// @brief How the glove sits on and moves over a hand, and how two gloves of the design differ: the
+/// wear effects of a simulated world (sim/world.hpp). The defaults are the clean world's.
+struct WearConfig {
+  double donning_shift = kDonningShift;           ///< SD (mm) of the whole glove's shift along the fingers at a donning.
+  double cell_shift = kCellShift;                 ///< SD (mm) of each cell's own shift at a donning.
+  double pre_stretch_spread = kPreStretchSpread;  ///< Relative SD of each cell's pre-stretch at a donning.
+  /// Stationary SD (mm) of the glove's slip along the fingers while it is worn: an Ornstein-Uhlenbeck
+  /// process from the donning's fit, pulled back by the wrist strap with time constant slip_time (s).
+  double slip_sd = 0.0;
+  double slip_time = 600.0;  ///< Time constant (s) of the slip.
+  /// A glove too big for the hand sits loosely: donning shifts and slip x (1 + loose_gain x slack /
+  /// 10%), slack = the hand's shortfall against the glove's relaxed length plus that of its width.
+  double loose_gain = 0.0;
+  double placement_sd = 0.0;  ///< SD (mm) of each cell's place on a fabricated glove (hand-made steps).
+};
+
+/// @brief How loosely the glove sits on `subject`: the shortfall of the hand's length and width
+/// against the hand the sheet is relaxed on (0 for a hand that fills the glove).
+inline double glove_slack(const Subject& subject) noexcept {
+  return std::max(0.0, 1.0 - subject.size.length / kGloveRelaxedLength) + std::max(0.0, 1.0 - subject.size.width / kGloveRelaxedWidth);
+}
+
+/// @brief The factor by which a loose fit multiplies the donning shifts and the slip.
+inline double loose_fit_factor(const Subject& subject, const WearConfig& wear) noexcept {
+  return 1.0 + wear.loose_gain * glove_slack(subject) / 0.1;
+}
+
 /// @brief Where a cell is and how it couples to the hand (derived from the layout, plus the
 /// back-of-hand cells' distances from the knuckle line, our reading of Fig. 4).
 struct CellSite {
@@ -155,10 +182,12 @@ struct Glove {
   int id = 0;                    ///< 0-based.
   CellArray base_capacitance{};  ///< C0 (pF) of each cell.
   CellArray cross_gain{};        ///< Share of the stretch across the cuts that reaches each cell.
+  CellArray placement{};         ///< mm along the digit each cell sits from its design place (WearConfig::placement_sd).
 };
 
-/// @brief Glove `id` from `seed`: nominal C0 = eps_r eps_0 A0 / d with the fabrication spread.
-inline Glove make_glove(int id, std::uint64_t seed) {
+/// @brief Glove `id` from `seed`: nominal C0 = eps_r eps_0 A0 / d with the fabrication spread, and its
+/// cells' places off the design by placement_sd (mm).
+inline Glove make_glove(int id, std::uint64_t seed, double placement_sd = 0.0) {
   core::Rng rng(core::derive_seed(seed, {2, static_cast<std::uint64_t>(id)}));
   const auto sites = glauser2019_sites();
   Glove g;
@@ -169,6 +198,7 @@ inline Glove make_glove(int id, std::uint64_t seed) {
     g.base_capacitance[i] = nominal * std::max(0.8, rng.normal(1.0, kBaseCapacitanceSpread));
     g.cross_gain[i] = std::clamp(rng.normal(kCrossGain, kCrossGainSpread), 0.05, 0.4);
   }
+  for (double& p : g.placement) p = rng.normal(0.0, placement_sd);  // after C0 and gains: those stay as they were
   return g;
 }
 
@@ -179,13 +209,15 @@ struct GloveFit {
   CellArray pre_across{};  ///< Stretch ratio across each cell before any motion.
 };
 
-/// @brief Puts the glove on a hand: the pre-stretch follows the hand's size against the glove's
-/// relaxed size, and every donning shifts the cells and varies their pre-stretch a little.
-inline GloveFit don_glove(const Subject& subject, core::Rng& rng) {
+/// @brief Puts `glove` on a hand: the pre-stretch follows the hand's size against the glove's
+/// relaxed size, and every donning shifts the cells (more on a loose fit) and varies their
+/// pre-stretch a little; the cells sit where the glove's fabrication put them.
+inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng& rng, const WearConfig& wear = {}) {
   const auto sites = glauser2019_sites();
   GloveFit fit;
-  const double global_shift = rng.normal(0.0, kDonningShift);
-  const double global_pre = rng.normal(1.0, kPreStretchSpread / 2.0);
+  const double loose = loose_fit_factor(subject, wear);
+  const double global_shift = rng.normal(0.0, wear.donning_shift * loose);
+  const double global_pre = rng.normal(1.0, wear.pre_stretch_spread / 2.0);
   const double girth = std::sqrt(subject.size.width / kGloveRelaxedWidth * subject.size.height / kGloveRelaxedHeight);
   for (int c = 0; c < kCells; ++c) {
     const auto i = static_cast<std::size_t>(c);
@@ -194,9 +226,9 @@ inline GloveFit don_glove(const Subject& subject, core::Rng& rng) {
     const double length =
         subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
     const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / kGloveRelaxedWidth;
-    fit.shift[i] = global_shift + rng.normal(0.0, kCellShift);
-    fit.pre_along[i] = length * global_pre * rng.normal(1.0, kPreStretchSpread);
-    fit.pre_across[i] = across * global_pre * rng.normal(1.0, kPreStretchSpread);
+    fit.shift[i] = glove.placement[i] + global_shift + rng.normal(0.0, wear.cell_shift * loose);
+    fit.pre_along[i] = length * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_across[i] = across * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
   }
   return fit;
 }
@@ -222,26 +254,30 @@ class GlovePhysics {
 
   /// @brief The hand's kinematic chain.
   const hand::Kinematics& kinematics() const noexcept { return kinematics_; }
+  /// @brief The glove worn.
+  const Glove& glove() const noexcept { return glove_; }
 
   /// @brief Stretch ratios (along, across) of every cell in the pose, after pre-stretch, slack,
-  /// saturation and the cuts' direction selectivity.
-  GLOVEPOSE_REALTIME void stretch(const hand::Angles& a, CellArray& along, CellArray& across) const noexcept {
+  /// saturation and the cuts' direction selectivity; `slip` (mm) moves the whole glove along the
+  /// fingers from its fit.
+  GLOVEPOSE_REALTIME void stretch(const hand::Angles& a, CellArray& along, CellArray& across, double slip = 0.0) const noexcept {
     hand::Skeleton s;
     kinematics_.pose(a, s);
     const Distances now = distances(s);
     for (int c = 0; c < kCells; ++c) {
       const auto i = static_cast<std::size_t>(c);
       const CellSite& site = sites_[i];
+      const double shift = fit_.shift[i] + slip;
       double strain_along = 0.0, strain_across = 0.0;
       if (site.segment == sensor::Segment::Metacarpal) {
-        strain_along = back_along(site, a, fit_.shift[i]);
-        strain_across = back_across(site, now, fit_.shift[i]);
+        strain_along = back_along(site, a, shift);
+        strain_across = back_across(site, now, shift);
       } else if (site.segment == sensor::Segment::Web) {
         strain_across = (now.web[static_cast<std::size_t>(site.digit)] - reference_.web[static_cast<std::size_t>(site.digit)]) /
                         (site.digit == 0 ? kThumbWebSpan : kFingerWebSpan);
         strain_along = 0.3 * knuckle_lengthening(site.digit, a) / site.length;
       } else {
-        strain_along = (joint_lengthening(site, a, fit_.shift[i] + slide(site, a)) + sheet_tension(site.digit, a)) / site.length;
+        strain_along = (joint_lengthening(site, a, shift + slide(site, a)) + sheet_tension(site.digit, a)) / site.length;
         strain_across = girth_strain(site, a);
       }
       const double s_along = textile(fit_.pre_along[i] * (1.0 + strain_along) - 1.0);
@@ -251,10 +287,11 @@ class GlovePhysics {
     }
   }
 
-  /// @brief Cell capacitances C_c (pF) in the pose: C0 (A/A0)^2 with A/A0 = along * across.
-  GLOVEPOSE_REALTIME void capacitances(const hand::Angles& a, CellArray& out) const noexcept {
+  /// @brief Cell capacitances C_c (pF) in the pose: C0 (A/A0)^2 with A/A0 = along * across; `slip` as
+  /// in stretch().
+  GLOVEPOSE_REALTIME void capacitances(const hand::Angles& a, CellArray& out, double slip = 0.0) const noexcept {
     CellArray along, across;
-    stretch(a, along, across);
+    stretch(a, along, across, slip);
     for (std::size_t i = 0; i < out.size(); ++i) {
       const double area = along[i] * across[i];
       out[i] = glove_.base_capacitance[i] * area * area;

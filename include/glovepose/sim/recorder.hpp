@@ -41,6 +41,77 @@ inline constexpr double kCreepShare = 0.15;
 /// @brief Time constant (s) of the textile's relaxation.
 inline constexpr double kCreepTime = 1.0;
 
+/// @brief How the sensor material answers beyond its physics: relaxation, rate-independent hysteresis
+/// and slow drift of its gain. The material effects of a simulated world (sim/world.hpp); the
+/// defaults are the clean world's.
+struct GloveMaterial {
+  double creep_share = kCreepShare;  ///< Share of a reading that follows the relaxing stretch.
+  double creep_time = kCreepTime;    ///< Its time constant (s).
+  /// Share of a reading that goes through a play (backlash) operator of half-width hysteresis_width
+  /// in C / C0: the textile composite's friction between its layers, a loop whatever the speed.
+  double hysteresis_share = 0.0;
+  double hysteresis_width = 0.0;  ///< Half-width of the play, in units of C0.
+  double drift_rate = 0.0;        ///< Each cell's gain: a random walk, relative SD per square root of a minute worn.
+  double warmup_gain = 0.0;       ///< Common gain reached as the skin warms the silicone (relative).
+  double warmup_time = 300.0;     ///< Its time constant (s) from the donning.
+};
+
+/// @brief A play (backlash) operator: the output stays put until the input is more than `width` away,
+/// then is dragged along at that distance. Its loop, driven between a and b, encloses
+/// 2 width (b - a - 2 width).
+GLOVEPOSE_REALTIME inline double play(double output, double input, double width) noexcept {
+  return std::clamp(output, input - width, input + width);
+}
+
+/// @brief The slow changes of one worn glove, as functions of the time since it was put on: the
+/// slip of the whole glove along the fingers (mm, an Ornstein-Uhlenbeck process) and every cell's
+/// gain (a random walk times the warm-up). Sampled once a second from its seed and interpolated, so
+/// that the recordings of one donning see one continuous path whichever thread records them.
+class WearDrift {
+ public:
+  /// @brief No drift: slip 0, gains 1.
+  WearDrift() = default;
+  /// @brief The path of a donning up to `seconds` after it (slip SD and time constant already scaled
+  /// for the hand's fit), its recordings starting `start` seconds after the donning.
+  WearDrift(double slip_sd, double slip_time, const GloveMaterial& material, double seconds, double start, std::uint64_t seed)
+      : start_(start), warmup_gain_(material.warmup_gain), warmup_time_(material.warmup_time) {
+    const int knots = static_cast<int>(std::ceil(std::max(0.0, seconds))) + 2;
+    core::Rng rng(seed);
+    const double keep = std::exp(-kStep / std::max(1e-9, slip_time));
+    const double kick = slip_sd * std::sqrt(1.0 - keep * keep);
+    const double step = material.drift_rate * std::sqrt(kStep / 60.0);
+    slip_.assign(static_cast<std::size_t>(knots), 0.0);
+    gain_.assign(static_cast<std::size_t>(knots) * kCells, 0.0);
+    for (int k = 1; k < knots; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      slip_[i] = keep * slip_[i - 1] + kick * rng.normal();
+      for (std::size_t c = 0; c < kCells; ++c) gain_[i * kCells + c] = gain_[(i - 1) * kCells + c] + step * rng.normal();
+    }
+  }
+
+  /// @brief Slip (mm) at `t` seconds into the recording.
+  GLOVEPOSE_REALTIME double slip(double t) const noexcept { return sample(slip_, 1, 0, t); }
+  /// @brief Cell `c`'s gain at `t` seconds into the recording.
+  GLOVEPOSE_REALTIME double gain(std::size_t c, double t) const noexcept {
+    const double worn = std::max(0.0, start_ + t);
+    return (1.0 + warmup_gain_ * (1.0 - std::exp(-worn / std::max(1e-9, warmup_time_)))) * (1.0 + sample(gain_, kCells, c, t));
+  }
+
+ private:
+  static constexpr double kStep = 1.0;  // s between samples
+  double sample(const std::vector<double>& v, std::size_t stride, std::size_t offset, double t) const noexcept {
+    const std::size_t knots = v.size() / stride;
+    if (knots == 0) return 0.0;
+    const double x = std::clamp((start_ + t) / kStep, 0.0, static_cast<double>(knots - 1));
+    const auto k = std::min(knots - 1, static_cast<std::size_t>(x));
+    const std::size_t next = std::min(knots - 1, k + 1);
+    const double w = x - static_cast<double>(k);
+    return v[k * stride + offset] + w * (v[next * stride + offset] - v[k * stride + offset]);
+  }
+  double start_ = 0.0, warmup_gain_ = 0.0, warmup_time_ = 300.0;
+  std::vector<double> slip_, gain_;
+};
+
 /// @brief Measurement imperfections of the readout (see the file comment for the sources).
 struct ReadoutNoise {
   double row_sd = 0.3;              ///< SD (pF) of one compound reading.
@@ -79,9 +150,10 @@ struct Recording {
   std::vector<std::uint8_t> outlier;
 };
 
-/// @brief Records `motion` through the glove physics. Deterministic in `seed`.
+/// @brief Records `motion` through the glove physics, the glove's material and its slow drift.
+/// Deterministic in `seed`.
 inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii, std::uint64_t seed,
-                        const RecordingConfig& config = {}) {
+                        const RecordingConfig& config = {}, const GloveMaterial& material = {}, const WearDrift& drift = {}) {
   static const std::shared_ptr<const sensor::CapacitanceSolver> solver =
       std::make_shared<const sensor::CapacitanceSolver>(sensor::TraceLayout::glauser2019());
   // Cells each row sums (M's ones).
@@ -108,19 +180,26 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   const int steps = std::clamp(config.physics_steps, 1, kRows);
   std::vector<CellArray> knots(static_cast<std::size_t>(steps) + 1);  // C_c at the cycle's step boundaries
   const auto cycle_time = [&](int k, double fraction) { return (static_cast<double>(k) + fraction) / config.cycle_rate; };
-  physics.capacitances(motion.at(cycle_time(-config.warmup_cycles, 0.0)), knots[0]);
+  const double t0 = cycle_time(-config.warmup_cycles, 0.0);
+  physics.capacitances(motion.at(t0), knots[0], drift.slip(t0));
   CellArray relaxed = knots[0];  // the lagging part of each cell's reading
-  const double relax = 1.0 - std::exp(-1.0 / (config.cycle_rate * steps * kCreepTime));
+  CellArray played = knots[0];   // the hysteretic part
+  const CellArray& c0 = physics.glove().base_capacitance;
+  const double relax = 1.0 - std::exp(-1.0 / (config.cycle_rate * steps * material.creep_time));
   hand::Skeleton skeleton;
   bool solved = false;
   for (int k = -config.warmup_cycles; k < cycles; ++k) {
     if (k > -config.warmup_cycles) knots[0] = knots[static_cast<std::size_t>(steps)];
     for (int j = 1; j <= steps; ++j) {
       CellArray& knot = knots[static_cast<std::size_t>(j)];
-      physics.capacitances(motion.at(cycle_time(k, static_cast<double>(j) / steps)), knot);
+      const double t = cycle_time(k, static_cast<double>(j) / steps);
+      physics.capacitances(motion.at(t), knot, drift.slip(t));
       for (std::size_t c = 0; c < knot.size(); ++c) {
         relaxed[c] += relax * (knot[c] - relaxed[c]);
-        knot[c] += kCreepShare * (relaxed[c] - knot[c]);
+        played[c] = play(played[c], knot[c], material.hysteresis_width * c0[c]);
+        const double physical = knot[c];
+        knot[c] += material.creep_share * (relaxed[c] - physical) + material.hysteresis_share * (played[c] - physical);
+        knot[c] *= drift.gain(c, t);
       }
     }
     for (int r = 0; r < kRows; ++r) {
