@@ -275,7 +275,11 @@ begin_experiment() {
 }
 
 # The exact command, with every knob that changes the results.
-COMMAND_LINE="CORPUS=$(rel "$CORPUS") WIDTH=$WIDTH EPOCHS=$EPOCHS FINETUNE_EPOCHS=$FINETUNE_EPOCHS STRIDE=$STRIDE SEED=$SEED"
+# The corpus's world matters only when the run simulates it; it is named whenever it is not the default.
+WORLD_KNOBS=""
+[[ $WORLD != clean ]] && WORLD_KNOBS+=" WORLD=$WORLD"
+[[ -n $WITHOUT ]] && WORLD_KNOBS+=" WITHOUT=$WITHOUT"
+COMMAND_LINE="CORPUS=$(rel "$CORPUS")$WORLD_KNOBS WIDTH=$WIDTH EPOCHS=$EPOCHS FINETUNE_EPOCHS=$FINETUNE_EPOCHS STRIDE=$STRIDE SEED=$SEED"
 experiment_command() {  # EXPERIMENT "EXTRA KNOBS"
   local quick=""
   ((QUICK)) && quick=" --quick"
