@@ -92,13 +92,18 @@ class WearDrift {
   /// @brief Slip (mm) at `t` seconds into the recording.
   GLOVEPOSE_REALTIME double slip(double t) const noexcept { return sample(slip_, 1, 0, t); }
   /// @brief Cell `c`'s gain at `t` seconds into the recording.
-  GLOVEPOSE_REALTIME double gain(std::size_t c, double t) const noexcept {
-    const double worn = std::max(0.0, start_ + t);
-    return (1.0 + warmup_gain_ * (1.0 - std::exp(-worn / std::max(1e-9, warmup_time_)))) * (1.0 + sample(gain_, kCells, c, t));
+  GLOVEPOSE_REALTIME double gain(std::size_t c, double t) const noexcept { return warmup(t) * (1.0 + sample(gain_, kCells, c, t)); }
+  /// @brief Every cell's gain at `t` (the warm-up computed once).
+  GLOVEPOSE_REALTIME void gains(double t, CellArray& out) const noexcept {
+    const double common = warmup(t);
+    for (std::size_t c = 0; c < out.size(); ++c) out[c] = common * (1.0 + sample(gain_, kCells, c, t));
   }
 
  private:
   static constexpr double kStep = 1.0;  // s between samples
+  double warmup(double t) const noexcept {
+    return 1.0 + warmup_gain_ * (1.0 - std::exp(-std::max(0.0, start_ + t) / std::max(1e-9, warmup_time_)));
+  }
   double sample(const std::vector<double>& v, std::size_t stride, std::size_t offset, double t) const noexcept {
     const std::size_t knots = v.size() / stride;
     if (knots == 0) return 0.0;
@@ -184,6 +189,7 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   physics.capacitances(motion.at(t0), knots[0], drift.slip(t0));
   CellArray relaxed = knots[0];  // the lagging part of each cell's reading
   CellArray played = knots[0];   // the hysteretic part
+  CellArray drift_gain{};        // the drift's gains at the step
   const CellArray& c0 = physics.glove().base_capacitance;
   const double relax = 1.0 - std::exp(-1.0 / (config.cycle_rate * steps * material.creep_time));
   hand::Skeleton skeleton;
@@ -194,12 +200,13 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
       CellArray& knot = knots[static_cast<std::size_t>(j)];
       const double t = cycle_time(k, static_cast<double>(j) / steps);
       physics.capacitances(motion.at(t), knot, drift.slip(t));
+      drift.gains(t, drift_gain);
       for (std::size_t c = 0; c < knot.size(); ++c) {
         relaxed[c] += relax * (knot[c] - relaxed[c]);
         played[c] = play(played[c], knot[c], material.hysteresis_width * c0[c]);
         const double physical = knot[c];
         knot[c] += material.creep_share * (relaxed[c] - physical) + material.hysteresis_share * (played[c] - physical);
-        knot[c] *= drift.gain(c, t);
+        knot[c] *= drift_gain[c];
       }
     }
     for (int r = 0; r < kRows; ++r) {
