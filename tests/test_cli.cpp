@@ -830,6 +830,17 @@ TEST_CASE("cli: eval scores against the labels and the truth behind them, and --
   CHECK(r.status == 2);
   CHECK(r.out.find("gravity") != std::string::npos);
   CHECK(r.out.find("hysteresis") != std::string::npos);
+  // A world's parameters set by name are recorded; an unknown name or a malformed setting is refused.
+  r = run("simulate --seed 6 --subjects 1 --sessions 1 --minutes 0.1 --gloves 1 --calibration-seconds 5 --world worn --without tracker "
+          "--set people.skin_spread=0.5,wear.slip_sd=2 --out " + ablated);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(io::Dataset::read(ablated).metadata.at("world_set") == "people.skin_spread=0.5,wear.slip_sd=2");
+  r = run("simulate --seed 6 --subjects 1 --minutes 0.1 --world worn --set wear.gravity=1 --out " + ablated);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("unknown world parameter 'wear.gravity', expected one of tracker.flexion_sd") != std::string::npos);
+  r = run("simulate --seed 6 --subjects 1 --minutes 0.1 --world worn --set wear.slip_sd --out " + ablated);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("expected NAME=NUMBER") != std::string::npos);
   // Replayed through the default readout (1 reading per row): another window, another lag.
   r = run("eval --model " + kModel + " --data " + data + " --json --replay-rows");
   REQUIRE_MESSAGE(r.status == 0, r.out);

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <set>
+#include <utility>
 
 using namespace glovepose;
 using namespace glovepose::sim;
@@ -324,6 +326,8 @@ TEST_CASE("sim report: realistic readout age, outliers and signal, re-donning be
   // fitting within the session.
   CHECK(r.linear_cross_deg > 1.4 * r.linear_same_deg);
   CHECK(r.linear_same_deg > 1.0);  // nor is one session linear
+  // Across people, calibration helps (the paper's generic model: 8.3 without, 7.6 with).
+  CHECK(r.linear_uncalibrated_deg > r.linear_cross_deg);
 }
 
 TEST_CASE("sim tracker: a perfect tracker copies the truth, the wandering error has the stated SD and time correlation") {
@@ -667,4 +671,131 @@ TEST_CASE("sim worlds: every effect can be switched back to the clean world's, b
   CHECK(all.wear.placement_sd == clean.wear.placement_sd);
   CHECK(all.material.hysteresis_share == clean.material.hysteresis_share);
   CHECK(all.material.drift_rate == clean.material.drift_rate);
+  CHECK(all.people.skin_spread == clean.people.skin_spread);
+  CHECK(all.people.calibration_shortfall == clean.people.calibration_shortfall);
+  CHECK(all.people.independent_fingers == clean.people.independent_fingers);
+}
+
+TEST_CASE("sim worlds: every parameter can be set by name, and the settings are recorded") {
+  World worn = world_named("worn");
+  std::set<std::string> names;
+  for (const WorldParameter& p : world_parameters()) {
+    names.insert(p.name);
+    World w = with(worn, p.name, 0.125);  // a value no world uses
+    CHECK_MESSAGE(p.field(w) == 0.125, p.name);
+    CHECK(w.settings == std::string(p.name) + "=0.125");
+    // Only that parameter changed: the others read as in the world it came from.
+    for (const WorldParameter& q : world_parameters())
+      if (std::string(q.name) != p.name) CHECK_MESSAGE(q.field(w) == q.field(worn), q.name);
+  }
+  CHECK(names.size() == world_parameters().size());  // unique names
+  World w = with(with(worn, "people.skin_spread=0.7"), "wear.slip_sd", 2.0);
+  CHECK(w.people.skin_spread == 0.7);
+  CHECK(w.wear.slip_sd == 2.0);
+  CHECK(w.settings == "people.skin_spread=0.7,wear.slip_sd=2");
+  CHECK_THROWS_WITH_AS(with(worn, "wear.gravity", 1.0), doctest::Contains("unknown world parameter 'wear.gravity', expected one of"), Error);
+  CHECK_THROWS_WITH_AS(with(worn, "wear.slip_sd", -1.0), doctest::Contains("expected a finite value >= 0"), Error);
+  for (const char* bad : {"wear.slip_sd", "wear.slip_sd=", "wear.slip_sd=1mm", "=1"})
+    CHECK_THROWS_AS(with(worn, std::string(bad)), Error);
+}
+
+TEST_CASE("sim people: the skin spread scales every person's log skin multipliers and keeps the rest") {
+  PeopleConfig wide;
+  wide.skin_spread = 0.7;
+  const std::vector<Subject> typical = make_subjects(400, 5), spread = make_subjects(400, 5, wide);
+  double sum = 0.0, sum2 = 0.0;
+  long n = 0;
+  for (std::size_t i = 0; i < typical.size(); ++i) {
+    const SkinMechanics& a = typical[i].skin;
+    const SkinMechanics& b = spread[i].skin;
+    CHECK(spread[i].size.length == typical[i].size.length);
+    CHECK(spread[i].style == typical[i].style);
+    for (const auto& [x, y] : {std::pair{a.bend_zone, b.bend_zone}, std::pair{a.slide, b.slide}, std::pair{a.thumb_falloff, b.thumb_falloff}}) {
+      // The same draws, twice as far from 1 in the log: log(y) = 2 log(x).
+      CHECK(std::log(y) == doctest::Approx(2.0 * std::log(x)).epsilon(1e-12));
+      sum += std::log(y);
+      sum2 += std::log(y) * std::log(y);
+      ++n;
+    }
+  }
+  const double sd = std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  MESSAGE("log skin multiplier SD " << sd << " for a spread of 0.7 (" << n << " draws)");
+  CHECK(std::abs(sd - 0.7) < 3.0 * 0.7 / std::sqrt(2.0 * n));
+}
+
+namespace {
+// A person who forms every pose exactly (no style, enslaving or visit variation) moving between the
+// flat hand and flat_bent, so that a motion effect can be read off the targets: 20 minutes of it.
+MotionSequence plain_motion(MotionConfig config, std::uint64_t seed, std::vector<KeyPose>& gallery) {
+  Subject s = make_subjects(1, 3)[0];
+  s.style = {};
+  s.coupling = 0.0;
+  gallery.clear();
+  for (const KeyPose& k : pose_gallery())
+    if (k.name == "flat" || k.name == "flat_bent") gallery.push_back(k);
+  REQUIRE(gallery.size() == 2);
+  REQUIRE(gallery.front().name == "flat");
+  config.explore = 0.0;
+  config.visit_spread = 0.0;
+  config.tip_spread = 0.0;
+  return MotionSequence(s, gallery, 1200.0, seed, config);
+}
+}  // namespace
+
+TEST_CASE("sim people: with independent fingers each finger takes a gallery pose of its own") {
+  const std::size_t index = hand::dof_of(hand::Finger::Index, hand::Motion::BaseFlexion),
+                    pinky = hand::dof_of(hand::Finger::Pinky, hand::Motion::BaseFlexion);
+  // Which of the two poses a finger's base flexion came from, and the share of visits whose index
+  // and little finger came from different poses.
+  const auto mixed = [&](double independent) {
+    MotionConfig c;
+    c.independent = independent;
+    std::vector<KeyPose> gallery;
+    const MotionSequence motion = plain_motion(c, 12, gallery);
+    long n = 0, differ = 0;
+    for (const MotionSegment& seg : motion.segments()) {
+      const auto source = [&](std::size_t d) {
+        return std::abs(seg.to[d] - gallery[1].angles[d]) < std::abs(seg.to[d] - gallery[0].angles[d]) ? 1 : 0;
+      };
+      differ += source(index) != source(pinky) ? 1 : 0;
+      ++n;
+    }
+    return std::pair<double, long>{static_cast<double>(differ) / static_cast<double>(n), n};
+  };
+  CHECK(mixed(0.0).first == 0.0);
+  const auto [share, n] = mixed(0.6);  // a free visit mixes them half the time
+  MESSAGE("index and little finger from different poses in " << share << " of " << n << " visits (expected 0.3)");
+  REQUIRE(n > 300);
+  CHECK(std::abs(share - 0.3) < 3.0 * std::sqrt(0.3 * 0.7 / static_cast<double>(n)));
+}
+
+TEST_CASE("sim people: a calibration shortfall stops each visit short of its pose by a half-normal share") {
+  const std::size_t dof = hand::dof_of(hand::Finger::Middle, hand::Motion::BaseFlexion);
+  // The share of the way from flat_bent back to the flat hand each visit of flat_bent stops short.
+  const auto shares = [&](double shortfall) {
+    MotionConfig c;
+    c.shortfall = shortfall;
+    std::vector<KeyPose> gallery;
+    const MotionSequence motion = plain_motion(c, 11, gallery);
+    const double from = gallery[1].angles[dof], to = gallery[0].angles[dof];
+    REQUIRE(std::abs(from - to) > 1.0);
+    std::vector<double> out;
+    for (const MotionSegment& seg : motion.segments())
+      if (seg.key == 1) out.push_back((seg.to[dof] - from) / (to - from));
+    return out;
+  };
+  for (double r : shares(0.0)) CHECK(std::abs(r) < 1e-12);
+  const std::vector<double> r = shares(0.1);
+  double mean = 0.0;
+  for (double v : r) {
+    CHECK(v >= 0.0);
+    CHECK(v <= 0.5);
+    mean += v / static_cast<double>(r.size());
+  }
+  // Half-normal: mean sd sqrt(2 / pi), SD sd sqrt(1 - 2 / pi).
+  constexpr double kPi = 3.14159265358979323846;
+  const double expected = 0.1 * std::sqrt(2.0 / kPi), se = 0.1 * std::sqrt((1.0 - 2.0 / kPi) / static_cast<double>(r.size()));
+  MESSAGE("mean shortfall " << mean << " of " << r.size() << " visits, expected " << expected);
+  REQUIRE(r.size() > 300);
+  CHECK(std::abs(mean - expected) < 3.0 * se);
 }

@@ -18,7 +18,7 @@ namespace {
 struct SimulateOptions {
   sim::CorpusConfig config;
   std::string out, csv, sequence_file, world = sim::worlds().front().name;
-  std::vector<std::string> without;
+  std::vector<std::string> without, settings;
   bool report = false, print_sequence = false;
 };
 
@@ -27,6 +27,7 @@ int simulate(SimulateOptions o) {
   if (config.intra_sessions > config.sessions) config.intra_sessions = config.sessions;
   config.world = sim::world_named(o.world);
   for (const std::string& effect : o.without) config.world = sim::without(config.world, sim::effect_named(effect));
+  for (const std::string& setting : o.settings) config.world = sim::with(config.world, setting);
   if (o.print_sequence) {
     std::cout << sim::guided_calibration_sequence(sim::pose_gallery()).to_json();
     return 0;
@@ -95,6 +96,11 @@ Command add_simulate(CLI::App& tool) {
       ->check(CLI::IsMember(std::vector<std::string>(sim::kEffectNames.begin(), sim::kEffectNames.end())))
       ->delimiter(',')
       ->type_name("EFFECT[,EFFECT...]");
+  std::string parameters;
+  for (const sim::WorldParameter& p : sim::world_parameters()) parameters += std::string(parameters.empty() ? "" : ", ") + p.name;
+  command->add_option("--set", o->settings, "set parameters of the world's effects, after --without, for fitting a world (" + parameters + ")")
+      ->delimiter(',')
+      ->type_name("NAME=VALUE[,NAME=VALUE...]");
   CLI::Option* out = command->add_option("--out", o->out, "the dataset file written")->type_name("FILE");
   command->add_option("--csv", o->csv, "also write the frames as CSV text")->type_name("FILE")->needs(out);
   CLI::Option* report = command->add_flag("--report", o->report, "print the realism report of the simulated people instead")->excludes(out);

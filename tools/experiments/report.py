@@ -140,7 +140,7 @@ def corpus_describe(path: str) -> str:
     n = header.get("timestamps", {}).get("shape", ["?"])[0]
     if meta.get("generator") == "glovepose simulate":
         return (
-            f"simulated (`glovepose simulate --seed {meta.get('seed')} --world {meta.get('world', 'clean')}{' --without ' + meta['world_without'] if meta.get('world_without') else ''}`: {meta.get('subjects')} subjects × "
+            f"simulated (`glovepose simulate --seed {meta.get('seed')} --world {meta.get('world', 'clean')}{' --without ' + meta['world_without'] if meta.get('world_without') else ''}{' --set ' + meta['world_set'] if meta.get('world_set') else ''}`: {meta.get('subjects')} subjects × "
             f"{meta.get('sessions')} sessions × {float(meta.get('minutes', 'nan')):g} min, {meta.get('intra_sessions')} intra, "
             f"{float(meta.get('calibration_seconds', 'nan')):g} s calibration per session; {n} frames)"
         )

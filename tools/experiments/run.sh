@@ -36,6 +36,7 @@ Environment knobs [default; --quick default]:
   CORPUS_SEED        seed of the simulated corpus [1]
   WORLD              simulated world of that corpus (glovepose simulate --world) [clean]
   WITHOUT            effects of that world switched off, e.g. slip,drift (glovepose simulate --without) [none]
+  SET                parameters of that world set, e.g. people.skin_spread=0.5 (glovepose simulate --set) [none]
   WIDTH              U-Net width of table1/table2/fig12/fig14 [64; 8]
   EPOCHS             training epochs [6; 1]
   FINETUNE_EPOCHS    fine-tuning epochs of Table 1 (5) [5; 1]
@@ -102,6 +103,7 @@ CORPUS=$(abspath "${CORPUS:-$OUT/corpus.safetensors}")
 CORPUS_SEED=${CORPUS_SEED:-1}
 WORLD=${WORLD:-clean}
 WITHOUT=${WITHOUT:-}
+SET=${SET:-}
 STRIDE=${STRIDE:-5}
 THREADS=${THREADS:-$(nproc)}
 SEED=${SEED:-1}
@@ -167,6 +169,7 @@ CURRENT=setup
 if [[ ! -s $CORPUS ]]; then
   sim=("$GLOVEPOSE" simulate --seed "$CORPUS_SEED" --world "$WORLD" --threads "$THREADS" --out "$CORPUS.partial")
   [[ -n $WITHOUT ]] && sim+=(--without "$WITHOUT")
+  [[ -n $SET ]] && sim+=(--set "$SET")
   ((QUICK)) && sim+=(--subjects 3 --sessions 5 --minutes 0.5)
   mkdir -p "$(dirname "$CORPUS")"
   say "simulating the corpus: $(quote "${sim[@]}")"
@@ -279,6 +282,7 @@ begin_experiment() {
 WORLD_KNOBS=""
 [[ $WORLD != clean ]] && WORLD_KNOBS+=" WORLD=$WORLD"
 [[ -n $WITHOUT ]] && WORLD_KNOBS+=" WITHOUT=$WITHOUT"
+[[ -n $SET ]] && WORLD_KNOBS+=" SET=$SET"
 COMMAND_LINE="CORPUS=$(rel "$CORPUS")$WORLD_KNOBS WIDTH=$WIDTH EPOCHS=$EPOCHS FINETUNE_EPOCHS=$FINETUNE_EPOCHS STRIDE=$STRIDE SEED=$SEED"
 experiment_command() {  # EXPERIMENT "EXTRA KNOBS"
   local quick=""

@@ -170,7 +170,7 @@ struct CorpusWorld {
 
   /// @brief The subjects, gloves and galleries of `config`.
   explicit CorpusWorld(const CorpusConfig& config)
-      : subjects(make_subjects(config.subjects, config.seed)), gallery(pose_gallery()), extremes(calibration_gallery(gallery)) {
+      : subjects(make_subjects(config.subjects, config.seed, config.world.people)), gallery(pose_gallery()), extremes(calibration_gallery(gallery)) {
     for (int g = 0; g < config.gloves; ++g) gloves.push_back(make_glove(g, config.seed, config.world.wear.placement_sd));
   }
 };
@@ -229,10 +229,13 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
                                                   static_cast<std::uint64_t>(job.donning)}));
   const bool calibration = job.kind == RecordingKind::Calibration;
   MotionConfig motion_config;
+  motion_config.independent = config.world.people.independent_fingers;
   if (calibration) {  // quick, wide movements between extremes, no blends
     motion_config.explore = 0.0;
+    motion_config.independent = 0.0;
     motion_config.pace = 1.5;
     motion_config.dwell = 0.5;
+    motion_config.shortfall = config.world.people.calibration_shortfall;
   }
   const double seconds = calibration ? config.calibration_seconds : config.minutes * 60.0;
   const int stream = 2 * job.session + (calibration ? 1 : 0);

@@ -50,6 +50,7 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   out.metadata["generator"] = "glovepose simulate";
   out.metadata["world"] = config.world.name;
   if (!config.world.ablated.empty()) out.metadata["world_without"] = config.world.ablated;
+  if (!config.world.settings.empty()) out.metadata["world_set"] = config.world.settings;
   out.metadata["seed"] = std::to_string(config.seed);
   out.metadata["subjects"] = std::to_string(config.subjects);
   out.metadata["sessions"] = std::to_string(config.sessions);
@@ -61,7 +62,7 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   out.metadata["mean_window"] = std::to_string(config.recording.readout.mean_window);
   if (config.guided_calibration) out.metadata["calibration_sequence"] = config.guided_calibration->id();
   std::string sizes = "[";
-  for (const Subject& s : make_subjects(config.subjects, config.seed))
+  for (const Subject& s : make_subjects(config.subjects, config.seed, config.world.people))
     sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " +
              std::to_string(s.size.height) + "]";
   out.metadata["subject_sizes_mm"] = sizes + "]";

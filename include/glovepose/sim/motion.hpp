@@ -40,6 +40,12 @@ struct MotionConfig {
   double tip_spread = 0.05;         ///< SD (rad) of tip flexion around kTipCoupling x middle flexion.
   double pace = 1.0;                ///< Multiplies the subject's speed (calibration sequences move faster).
   double dwell = 1.0;               ///< Multiplies the subject's mean dwell time.
+  /// SD of the share of the way to a target the person falls short, toward the gallery's first pose
+  /// (half-normal per visit, at most half): extremes a calibration sequence does not fully reach.
+  double shortfall = 0.0;
+  /// Probability that a target is a free pose: each finger takes its DoFs from a gallery pose of its
+  /// own (fingers moving independently, beyond the gallery's whole-hand poses and their blends).
+  double independent = 0.0;
 };
 
 /// @brief One stretch of the motion: a transition to `to`, then a hold.
@@ -83,6 +89,15 @@ class MotionSequence {
         const double w = rng.uniform(0.25, 0.75);
         for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] = w * target[d] + (1.0 - w) * other[d];
       }
+      if (config.independent > 0.0 && rng.bernoulli(config.independent)) {
+        std::array<std::size_t, hand::kFingerCount> source{};
+        for (std::size_t& k : source) k = static_cast<std::size_t>(rng.index(static_cast<int>(gallery.size())));
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] = gallery[source[static_cast<std::size_t>(hand::kDofs[d].finger)]].angles[d];
+      }
+      if (config.shortfall > 0.0) {
+        const double r = std::min(0.5, std::abs(rng.normal(0.0, config.shortfall)));
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] += r * (gallery.front().angles[d] - target[d]);
+      }
       seg.to = shape(target, subject, config, rng);
       // As the paper's tracker would have reported it: interpenetrating fingers give way.
       fk.pose(seg.to, skeleton);
@@ -106,8 +121,14 @@ class MotionSequence {
   MotionSequence(const Subject& subject, const calibration::Sequence& sequence, std::uint64_t seed, const MotionConfig& config = {})
       : duration_(sequence.total_seconds()) {
     core::Rng rng(seed);
+    const calibration::Step& first = sequence.steps().front();
     const auto visit = [&](const calibration::Step& step) {
-      hand::Angles q = shape(step.pose, subject, config, rng);
+      hand::Angles target = step.pose;
+      if (config.shortfall > 0.0) {  // short of the step's pose, toward the first step's, where nothing pins it
+        const double r = std::min(0.5, std::abs(rng.normal(0.0, config.shortfall)));
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] += r * (first.pose[d] - target[d]);
+      }
+      hand::Angles q = shape(target, subject, config, rng);
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (step.pinned[d]) q[d] = step.pose[d] + rng.normal(0.0, step.pinned_sd);
       return hand::JointLimits().clamp(q);

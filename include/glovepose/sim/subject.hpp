@@ -76,6 +76,18 @@ struct SkinMechanics {
 /// @brief Log-SD of the per-person skin multipliers (assumption: a factor of 1.4 either way is one SD).
 inline constexpr double kSkinSpread = 0.35;
 
+/// @brief How a world's people differ from one another and how well they perform a calibration
+/// sequence (sim/world.hpp). The defaults are the clean world's.
+struct PeopleConfig {
+  double skin_spread = kSkinSpread;  ///< Log-SD of the per-person skin multipliers (SkinMechanics).
+  /// SD of the share of the way to each extreme pose of a calibration sequence a person falls short
+  /// (half-normal per visit, at most half; 0: every extreme reached as the person forms it).
+  double calibration_shortfall = 0.0;
+  /// Share of a session's visits in which every finger goes its own way: each takes a gallery pose of
+  /// its own (0: whole-hand gallery poses and their blends only).
+  double independent_fingers = 0.0;
+};
+
 /// @brief One simulated participant: hand geometry and movement habits.
 struct Subject {
   int id = 0;                                             ///< 0-based.
@@ -139,9 +151,10 @@ inline HandSize draw_hand_size(core::Rng& rng) noexcept {
   }
 }
 
-/// @brief `count` subjects from `seed`: the paper's ten hands first, then drawn sizes. Subject i
-/// depends only on (seed, i). Throws glovepose::Error for a count below 1.
-inline std::vector<Subject> make_subjects(int count, std::uint64_t seed) {
+/// @brief `count` subjects from `seed`: the paper's ten hands first, then drawn sizes; their skin
+/// spread as `people` says. Subject i depends only on (seed, i). Throws glovepose::Error for a count
+/// below 1.
+inline std::vector<Subject> make_subjects(int count, std::uint64_t seed, const PeopleConfig& people = {}) {
   if (count < 1) throw Error("make_subjects: " + std::to_string(count) + " subjects, expected at least 1");
   std::vector<Subject> subjects;
   for (int i = 0; i < count; ++i) {
@@ -161,7 +174,7 @@ inline std::vector<Subject> make_subjects(int count, std::uint64_t seed) {
     s.coupling = rng.uniform(0.1, 0.3);
     for (double* m : {&s.skin.bend_zone, &s.skin.joint_spill, &s.skin.sheet_tension, &s.skin.slide, &s.skin.girth_flexion,
                       &s.skin.girth_abduction, &s.skin.knuckle_share, &s.skin.knuckle_falloff, &s.skin.thumb_falloff})
-      *m = std::exp(rng.normal(0.0, kSkinSpread));
+      *m = std::exp(rng.normal(0.0, people.skin_spread));
     subjects.push_back(s);
   }
   return subjects;

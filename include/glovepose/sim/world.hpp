@@ -3,17 +3,23 @@
 /// as some real one. "clean" is the glove, people and readout of docs/simulator.md with labels equal
 /// to the truth; "tracked" adds the reference tracker of sim/tracker.hpp; "worn" adds to that the
 /// wear and material effects (glove.hpp WearConfig, recorder.hpp GloveMaterial). Their parameters are
-/// assumptions, not yet fitted to the paper's numbers. One table: a world is found by its name, and
-/// one table of effects: each can be switched back to the clean world's for an ablation.
+/// assumptions, not yet fitted to the paper's numbers. One table: a world is found by its name; one
+/// table of effects: each can be switched back to the clean world's for an ablation; one table of
+/// parameters: each can be set by name (`glovepose simulate --set`), for fitting a world openly.
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <utility>
 
 #include "../config.hpp"
 #include "glove.hpp"
 #include "recorder.hpp"
+#include "subject.hpp"
 #include "tracker.hpp"
 
 namespace glovepose::sim {
@@ -25,13 +31,15 @@ struct World {
   TrackerConfig tracker{};     ///< The reference tracker that labels the frames.
   WearConfig wear{};           ///< How the glove sits and moves on the hand; how gloves differ.
   GloveMaterial material{};    ///< Hysteresis and drift of the sensor material.
+  PeopleConfig people{};       ///< How the people differ and perform the calibration.
   std::string ablated;         ///< Effects switched back to the clean world's by without(), comma-separated.
+  std::string settings;        ///< Parameters set by with(), "name=value" comma-separated.
 };
 
 /// @brief Every named world; the first is the default.
 inline const std::array<World, 3>& worlds() {
   static const std::array<World, 3> table = [] {
-    World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, ""};
+    World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
     TrackerConfig t;
     t.flexion_sd = 3.5;
     t.abduction_sd = 2.5;
@@ -48,7 +56,7 @@ inline const std::array<World, 3>& worlds() {
     t.collision_allowance = 20.0;
     t.latency = 1.0 / 60.0;
     t.smoothing = 0.02;
-    World tracked{"tracked", "labels from a simulated depth-camera tracker (assumed parameters)", t, WearConfig{}, GloveMaterial{}, ""};
+    World tracked{"tracked", "labels from a simulated depth-camera tracker (assumed parameters)", t, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
     WearConfig w;
     w.donning_shift = 3.0;
     w.cell_shift = 2.0;
@@ -63,7 +71,7 @@ inline const std::array<World, 3>& worlds() {
     m.drift_rate = 0.005;
     m.warmup_gain = 0.02;
     m.warmup_time = 300.0;
-    World worn{"worn", "tracked, and a glove that shifts, slips, drifts and differs between copies (assumed parameters)", t, w, m, ""};
+    World worn{"worn", "tracked, and a glove that shifts, slips, drifts and differs between copies (assumed parameters)", t, w, m, PeopleConfig{}, "", ""};
     return std::array<World, 3>{clean, tracked, worn};
   }();
   return table;
@@ -80,11 +88,11 @@ inline const World& world_named(const std::string& name) {
 }
 
 /// @brief The effects a world can switch back to the clean world's settings, for ablations.
-enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, Hysteresis, Drift, Count };
+enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
 
 /// @brief Effect names (`glovepose simulate --without NAME`), in enum order.
 inline constexpr std::array<const char*, static_cast<std::size_t>(Effect::Count)> kEffectNames{
-    "tracker", "donning", "slip", "loose_fit", "placement", "hysteresis", "drift"};
+    "tracker", "donning", "slip", "loose_fit", "placement", "hysteresis", "drift", "skin", "shortfall", "independent"};
 static_assert(kEffectNames.size() == static_cast<std::size_t>(Effect::Count), "one name per effect");
 
 /// @brief The effect called `name`; throws glovepose::Error naming the known effects.
@@ -120,9 +128,90 @@ inline World without(World world, Effect effect) {
       world.material.drift_rate = clean.material.drift_rate;
       world.material.warmup_gain = clean.material.warmup_gain;
       break;
+    case Effect::Skin: world.people.skin_spread = clean.people.skin_spread; break;
+    case Effect::Shortfall: world.people.calibration_shortfall = clean.people.calibration_shortfall; break;
+    case Effect::Independent: world.people.independent_fingers = clean.people.independent_fingers; break;
     case Effect::Count: break;
   }
   return world;
+}
+
+/// @brief A world's parameter that can be set by name: "group.field" as in the tables of
+/// docs/simulator.md.
+struct WorldParameter {
+  const char* name;
+  double& (*field)(World&);
+};
+
+/// @brief Every parameter a world's effects have, by name.
+inline const std::array<WorldParameter, 29>& world_parameters() {
+#define GLOVEPOSE_WORLD_PARAMETER(group, field) \
+  WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; } }
+  static const std::array<WorldParameter, 29> table{
+      GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, twist_sd),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, thumb_factor),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, occlusion_gain),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, correlation_time),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, subject_bias_sd),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, session_bias_sd),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, snap_rate),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, freeze_rate),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, failure_seconds),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, collision_allowance),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, latency),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, smoothing),
+      GLOVEPOSE_WORLD_PARAMETER(wear, donning_shift),
+      GLOVEPOSE_WORLD_PARAMETER(wear, cell_shift),
+      GLOVEPOSE_WORLD_PARAMETER(wear, pre_stretch_spread),
+      GLOVEPOSE_WORLD_PARAMETER(wear, slip_sd),
+      GLOVEPOSE_WORLD_PARAMETER(wear, slip_time),
+      GLOVEPOSE_WORLD_PARAMETER(wear, loose_gain),
+      GLOVEPOSE_WORLD_PARAMETER(wear, placement_sd),
+      GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_share),
+      GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_width),
+      GLOVEPOSE_WORLD_PARAMETER(material, drift_rate),
+      GLOVEPOSE_WORLD_PARAMETER(material, warmup_gain),
+      GLOVEPOSE_WORLD_PARAMETER(material, warmup_time),
+      GLOVEPOSE_WORLD_PARAMETER(people, skin_spread),
+      GLOVEPOSE_WORLD_PARAMETER(people, calibration_shortfall),
+      GLOVEPOSE_WORLD_PARAMETER(people, independent_fingers)};
+#undef GLOVEPOSE_WORLD_PARAMETER
+  return table;
+}
+
+/// @brief `world` with the parameter `name` set to `value`, recorded in World::settings. Throws
+/// glovepose::Error for an unknown name (naming the known ones) or a negative or non-finite value
+/// (every parameter is a size, a rate or a time).
+inline World with(World world, const std::string& name, double value) {
+  std::string known;
+  for (const WorldParameter& p : world_parameters()) {
+    if (name != p.name) {
+      known += (known.empty() ? "" : ", ") + std::string(p.name);
+      continue;
+    }
+    if (!(value >= 0.0) || !std::isfinite(value))
+      throw Error("world parameter " + name + " = " + std::to_string(value) + ", expected a finite value >= 0");
+    p.field(world) = value;
+    char text[64];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    world.settings += (world.settings.empty() ? "" : ",") + name + "=" + text;
+    return world;
+  }
+  throw Error("unknown world parameter '" + name + "', expected one of " + known);
+}
+
+/// @brief `world` with an assignment "name=value" applied (`glovepose simulate --set`); throws
+/// glovepose::Error for text that is not one.
+inline World with(World world, const std::string& assignment) {
+  const std::size_t equals = assignment.find('=');
+  const std::string value = equals == std::string::npos ? "" : assignment.substr(equals + 1);
+  char* end = nullptr;
+  const double number = std::strtod(value.c_str(), &end);
+  if (equals == std::string::npos || value.empty() || *end != '\0')
+    throw Error("world setting '" + assignment + "', expected NAME=NUMBER (e.g. people.skin_spread=0.5)");
+  return with(std::move(world), assignment.substr(0, equals), number);
 }
 
 }  // namespace glovepose::sim
