@@ -94,10 +94,7 @@ class MotionSequence {
         for (std::size_t& k : source) k = static_cast<std::size_t>(rng.index(static_cast<int>(gallery.size())));
         for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] = gallery[source[static_cast<std::size_t>(hand::kDofs[d].finger)]].angles[d];
       }
-      if (config.shortfall > 0.0) {
-        const double r = std::min(0.5, std::abs(rng.normal(0.0, config.shortfall)));
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] += r * (gallery.front().angles[d] - target[d]);
-      }
+      fall_short(target, gallery.front().angles, config, rng);
       seg.to = shape(target, subject, config, rng);
       // As the paper's tracker would have reported it: interpenetrating fingers give way.
       fk.pose(seg.to, skeleton);
@@ -124,10 +121,7 @@ class MotionSequence {
     const calibration::Step& first = sequence.steps().front();
     const auto visit = [&](const calibration::Step& step) {
       hand::Angles target = step.pose;
-      if (config.shortfall > 0.0) {  // short of the step's pose, toward the first step's, where nothing pins it
-        const double r = std::min(0.5, std::abs(rng.normal(0.0, config.shortfall)));
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] += r * (first.pose[d] - target[d]);
-      }
+      fall_short(target, first.pose, config, rng);  // the pinned angles below still hold
       hand::Angles q = shape(target, subject, config, rng);
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (step.pinned[d]) q[d] = step.pose[d] + rng.normal(0.0, step.pinned_sd);
@@ -212,6 +206,13 @@ class MotionSequence {
                                                    6.283185307179586 * rng.uniform(8.0, 12.0), 6.283185307179586 * rng.uniform()};
       }
     }
+  }
+
+  // A visit that stops short of `target`, toward `start`, by a half-normal share (at most half).
+  static void fall_short(hand::Angles& target, const hand::Angles& start, const MotionConfig& config, core::Rng& rng) {
+    if (config.shortfall <= 0.0) return;
+    const double r = std::min(0.5, std::abs(rng.normal(0.0, config.shortfall)));
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) target[d] += r * (start[d] - target[d]);
   }
 
   // A visit of a key pose: the person's style, this visit's variation, finger enslaving, the tip
