@@ -547,6 +547,27 @@ TEST_CASE("sim wear: donning shifts with their stated SDs, more on a loose fit, 
   CHECK(don_glove(full, glove, rng, still).shift == glove.placement);
 }
 
+TEST_CASE("sim wear: the size coupling passes its share of the hand's size to the cells' pre-stretch") {
+  const std::vector<Subject> subjects = make_subjects(10, 1);
+  const Subject& large = subjects[5];  // 20.5 x 10 cm
+  const Glove glove = make_glove(0, 1);
+  const auto sites = glauser2019_sites();
+  WearConfig wear;
+  wear.pre_stretch_spread = 0.0;  // the size's share alone
+  for (double coupling : {1.0, 0.5, 0.0}) {
+    wear.size_coupling = coupling;
+    core::Rng rng(3);
+    const GloveFit fit = don_glove(large, glove, rng, wear);
+    for (std::size_t c = 0; c < kCells; ++c) {
+      if (sites[c].segment == sensor::Segment::Metacarpal) continue;
+      const double ratio = large.size.length / kGloveRelaxedLength * large.finger_scale[static_cast<std::size_t>(sites[c].digit)];
+      CHECK(fit.pre_along[c] == doctest::Approx(1.0 + coupling * (ratio - 1.0)).epsilon(1e-12));
+    }
+    // Without the size's share the large hand leaves its cells relaxed at rest, as a hand of the glove's size would.
+    if (coupling == 0.0) CHECK(cells_at(GlovePhysics(large, glove, fit), hand::Angles{})[21] == doctest::Approx(glove.base_capacitance[21]).epsilon(0.02));
+  }
+}
+
 TEST_CASE("sim wear: slip and gain drift follow their processes, continuous across a donning's recordings") {
   GloveMaterial material;
   material.drift_rate = 0.01;  // 1% per sqrt(minute)
@@ -669,6 +690,7 @@ TEST_CASE("sim worlds: every effect can be switched back to the clean world's, b
   CHECK(all.wear.slip_sd == clean.wear.slip_sd);
   CHECK(all.wear.loose_gain == clean.wear.loose_gain);
   CHECK(all.wear.placement_sd == clean.wear.placement_sd);
+  CHECK(all.wear.size_coupling == clean.wear.size_coupling);
   CHECK(all.material.hysteresis_share == clean.material.hysteresis_share);
   CHECK(all.material.drift_rate == clean.material.drift_rate);
   CHECK(all.people.skin_spread == clean.people.skin_spread);
@@ -697,6 +719,20 @@ TEST_CASE("sim worlds: every parameter can be set by name, and the settings are 
   CHECK_THROWS_WITH_AS(with(worn, "wear.slip_sd", -1.0), doctest::Contains("expected a finite value >= 0"), Error);
   for (const char* bad : {"wear.slip_sd", "wear.slip_sd=", "wear.slip_sd=1mm", "=1"})
     CHECK_THROWS_AS(with(worn, std::string(bad)), Error);
+}
+
+TEST_CASE("sim worlds: the fitted world is the worn world with the fitting command's settings") {
+  // The command docs/simulator.md gives for the fit; the named world must be exactly it.
+  World set = world_named("worn");
+  for (const char* assignment : {"tracker.subject_bias_sd=5", "wear.pre_stretch_spread=0.01", "wear.size_coupling=0.5", "material.drift_rate=0.01",
+                                 "people.skin_spread=0.7", "people.calibration_shortfall=0.5", "people.independent_fingers=0.4"})
+    set = with(set, std::string(assignment));
+  World fitted = world_named("fitted");
+  for (const WorldParameter& p : world_parameters()) CHECK_MESSAGE(p.field(fitted) == p.field(set), p.name);
+  // Every effect off, the fitted world is the clean one too.
+  for (std::size_t i = 0; i < kEffectNames.size(); ++i) fitted = without(fitted, static_cast<Effect>(i));
+  World clean = world_named("clean");
+  for (const WorldParameter& p : world_parameters()) CHECK_MESSAGE(p.field(fitted) == p.field(clean), p.name);
 }
 
 TEST_CASE("sim people: the skin spread scales every person's log skin multipliers and keeps the rest") {

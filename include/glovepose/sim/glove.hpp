@@ -122,7 +122,16 @@ struct WearConfig {
   /// 10%), slack = the hand's shortfall against the glove's relaxed length plus that of its width.
   double loose_gain = 0.0;
   double placement_sd = 0.0;  ///< SD (mm) of each cell's place on a fabricated glove (hand-made steps).
+  /// Share of a hand's size difference from the glove's relaxed hand that reaches the cells'
+  /// pre-stretch; the jersey around the stiffer sensor sheet takes the rest (1: all of it).
+  double size_coupling = 1.0;
 };
+
+/// @brief The stretch ratio a cell gets from a hand whose size ratio to the glove's relaxed hand is
+/// `ratio`, when `coupling` of the difference reaches it (exactly `ratio` at coupling 1).
+inline double coupled_size(double ratio, double coupling) noexcept {
+  return coupling == 1.0 ? ratio : 1.0 + coupling * (ratio - 1.0);
+}
 
 /// @brief How loosely the glove sits on `subject`: the shortfall of the hand's length and width
 /// against the hand the sheet is relaxed on (0 for a hand that fills the glove).
@@ -210,7 +219,7 @@ struct GloveFit {
 };
 
 /// @brief Puts `glove` on a hand: the pre-stretch follows the hand's size against the glove's
-/// relaxed size, and every donning shifts the cells (more on a loose fit) and varies their
+/// relaxed size (the share WearConfig::size_coupling of it), and every donning shifts the cells (more on a loose fit) and varies their
 /// pre-stretch a little; the cells sit where the glove's fabrication put them.
 inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng& rng, const WearConfig& wear = {}) {
   const auto sites = glauser2019_sites();
@@ -227,8 +236,8 @@ inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng&
         subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
     const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / kGloveRelaxedWidth;
     fit.shift[i] = glove.placement[i] + global_shift + rng.normal(0.0, wear.cell_shift * loose);
-    fit.pre_along[i] = length * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
-    fit.pre_across[i] = across * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_along[i] = coupled_size(length, wear.size_coupling) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_across[i] = coupled_size(across, wear.size_coupling) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
   }
   return fit;
 }

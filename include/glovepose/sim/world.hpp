@@ -2,8 +2,8 @@
 /// @brief Named simulated worlds: the settings of every effect that makes a simulated capture as hard
 /// as some real one. "clean" is the glove, people and readout of docs/simulator.md with labels equal
 /// to the truth; "tracked" adds the reference tracker of sim/tracker.hpp; "worn" adds to that the
-/// wear and material effects (glove.hpp WearConfig, recorder.hpp GloveMaterial). Their parameters are
-/// assumptions, not yet fitted to the paper's numbers. One table: a world is found by its name; one
+/// wear and material effects (glove.hpp WearConfig, recorder.hpp GloveMaterial), with assumed
+/// parameters; "fitted" is "worn" with the parameters fitted openly to the paper's Table 1. One table: a world is found by its name; one
 /// table of effects: each can be switched back to the clean world's for an ablation; one table of
 /// parameters: each can be set by name (`glovepose simulate --set`), for fitting a world openly.
 #pragma once
@@ -37,8 +37,8 @@ struct World {
 };
 
 /// @brief Every named world; the first is the default.
-inline const std::array<World, 3>& worlds() {
-  static const std::array<World, 3> table = [] {
+inline const std::array<World, 4>& worlds() {
+  static const std::array<World, 4> table = [] {
     World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
     TrackerConfig t;
     t.flexion_sd = 3.5;
@@ -72,7 +72,19 @@ inline const std::array<World, 3>& worlds() {
     m.warmup_gain = 0.02;
     m.warmup_time = 300.0;
     World worn{"worn", "tracked, and a glove that shifts, slips, drifts and differs between copies (assumed parameters)", t, w, m, PeopleConfig{}, "", ""};
-    return std::array<World, 3>{clean, tracked, worn};
+    // worn with the parameters fitted to the paper's Table 1 and outlier share (docs/simulator.md,
+    // "Fitting a world to the paper"); the same as `--world worn --set` with these values.
+    World fitted = worn;
+    fitted.name = "fitted";
+    fitted.summary = "worn, with parameters fitted to the paper's Table 1 and outlier share";
+    fitted.tracker.subject_bias_sd = 5.0;
+    fitted.wear.pre_stretch_spread = 0.01;
+    fitted.wear.size_coupling = 0.5;
+    fitted.material.drift_rate = 0.01;
+    fitted.people.skin_spread = 0.7;
+    fitted.people.calibration_shortfall = 0.5;
+    fitted.people.independent_fingers = 0.4;
+    return std::array<World, 4>{clean, tracked, worn, fitted};
   }();
   return table;
 }
@@ -88,11 +100,11 @@ inline const World& world_named(const std::string& name) {
 }
 
 /// @brief The effects a world can switch back to the clean world's settings, for ablations.
-enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
+enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, SizeCoupling, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
 
 /// @brief Effect names (`glovepose simulate --without NAME`), in enum order.
 inline constexpr std::array<const char*, static_cast<std::size_t>(Effect::Count)> kEffectNames{
-    "tracker", "donning", "slip", "loose_fit", "placement", "hysteresis", "drift", "skin", "shortfall", "independent"};
+    "tracker", "donning", "slip", "loose_fit", "placement", "size_coupling", "hysteresis", "drift", "skin", "shortfall", "independent"};
 static_assert(kEffectNames.size() == static_cast<std::size_t>(Effect::Count), "one name per effect");
 
 /// @brief The effect called `name`; throws glovepose::Error naming the known effects.
@@ -120,6 +132,7 @@ inline World without(World world, Effect effect) {
     case Effect::Slip: world.wear.slip_sd = clean.wear.slip_sd; break;
     case Effect::LooseFit: world.wear.loose_gain = clean.wear.loose_gain; break;
     case Effect::Placement: world.wear.placement_sd = clean.wear.placement_sd; break;
+    case Effect::SizeCoupling: world.wear.size_coupling = clean.wear.size_coupling; break;
     case Effect::Hysteresis:
       world.material.hysteresis_share = clean.material.hysteresis_share;
       world.material.hysteresis_width = clean.material.hysteresis_width;
@@ -144,10 +157,10 @@ struct WorldParameter {
 };
 
 /// @brief Every parameter a world's effects have, by name.
-inline const std::array<WorldParameter, 29>& world_parameters() {
+inline const std::array<WorldParameter, 30>& world_parameters() {
 #define GLOVEPOSE_WORLD_PARAMETER(group, field) \
   WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; } }
-  static const std::array<WorldParameter, 29> table{
+  static const std::array<WorldParameter, 30> table{
       GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, twist_sd),
@@ -169,6 +182,7 @@ inline const std::array<WorldParameter, 29>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(wear, slip_time),
       GLOVEPOSE_WORLD_PARAMETER(wear, loose_gain),
       GLOVEPOSE_WORLD_PARAMETER(wear, placement_sd),
+      GLOVEPOSE_WORLD_PARAMETER(wear, size_coupling),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_share),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_width),
       GLOVEPOSE_WORLD_PARAMETER(material, drift_rate),
