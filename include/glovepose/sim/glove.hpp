@@ -219,8 +219,9 @@ struct GloveFit {
 };
 
 /// @brief Puts `glove` on a hand: the pre-stretch follows the hand's size against the glove's
-/// relaxed size (the share WearConfig::size_coupling of it), and every donning shifts the cells (more on a loose fit) and varies their
-/// pre-stretch a little; the cells sit where the glove's fabrication put them.
+/// relaxed size (the share WearConfig::size_coupling of it), and every donning shifts the cells
+/// (more on a loose fit) and varies their pre-stretch a little; the cells sit where the glove's
+/// fabrication put them.
 inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng& rng, const WearConfig& wear = {}) {
   const auto sites = glauser2019_sites();
   GloveFit fit;

@@ -3,9 +3,10 @@
 /// as some real one. "clean" is the glove, people and readout of docs/simulator.md with labels equal
 /// to the truth; "tracked" adds the reference tracker of sim/tracker.hpp; "worn" adds to that the
 /// wear and material effects (glove.hpp WearConfig, recorder.hpp GloveMaterial), with assumed
-/// parameters; "fitted" is "worn" with the parameters fitted openly to the paper's Table 1. One table: a world is found by its name; one
-/// table of effects: each can be switched back to the clean world's for an ablation; one table of
-/// parameters: each can be set by name (`glovepose simulate --set`), for fitting a world openly.
+/// parameters; "fitted" is "worn" with parameters fitted openly to the paper's Table 1. One table: a
+/// world is found by its name; one table of effects: each can be switched back to the clean world's
+/// for an ablation; one table of parameters: each can be set by name (`glovepose simulate --set`),
+/// for fitting a world openly.
 #pragma once
 
 #include <array>
