@@ -210,8 +210,8 @@ def main() -> int:
 
     scratch = os.environ.get("GLOVEPOSE_C_TEST_DIR") or tempfile.mkdtemp(prefix="glovepose_capi_")
     dataset = Path(scratch) / "python_capi_session.safetensors"
-    subprocess.run([cli, "simulate", "--seed", "41", "--subjects", "1", "--sessions", "1", "--gloves", "1", "--minutes", "0.1",
-                    "--calibration-seconds", "3", "--raw-rows", "--threads", "1", "--out", str(dataset)],
+    subprocess.run([cli, "simulate", "--world", "clean", "--seed", "41", "--subjects", "1", "--sessions", "1", "--gloves", "1",
+                    "--minutes", "0.1", "--calibration-seconds", "3", "--raw-rows", "--threads", "1", "--out", str(dataset)],
                    check=True, stdout=subprocess.DEVNULL)
     tensors, _ = safetensors_io.load(dataset)
     rows = tensors["raw_rows"].numpy()

@@ -351,7 +351,7 @@ def cli_dir() -> Path:
         raise Skip(f"no glovepose binary at {CLI} (build it, or set GLOVEPOSE_CLI)")
     d = TMP / "cli"
     d.mkdir(exist_ok=True)
-    run_cli(["simulate", "--seed", "3", "--subjects", "2", "--sessions", "2", "--minutes", "0.2", "--gloves", "1",
+    run_cli(["simulate", "--world", "clean", "--seed", "3", "--subjects", "2", "--sessions", "2", "--minutes", "0.2", "--gloves", "1",
              "--calibration-seconds", "5", "--threads", "1", "--out", "c.safetensors"], d)
     for stem, model_args in MODELS.items():
         run_cli(["train", "--data", "c.safetensors", *model_args, "--epochs", "1", "--threads", "1", "--batch", "64",

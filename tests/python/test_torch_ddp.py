@@ -30,7 +30,7 @@ def run(args, cwd):
 
 def main():
     with tempfile.TemporaryDirectory() as work:
-        run([CLI, "simulate", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
+        run([CLI, "simulate", "--world", "clean", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
              "--calibration-seconds", "10", "--out", "corpus.safetensors"], work)
         out = run(["torchrun", "--nproc_per_node=2", "--redirects", "1", "--tee", "1", "--log_dir", os.path.join(work, "logs"),
                    str(ROOT / "tools" / "python" / "train_torch.py"), "--data", "corpus.safetensors", "--model", "unet:8",

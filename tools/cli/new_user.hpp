@@ -17,11 +17,12 @@ struct NewUser {
   double cycle_rate = 0.0;  ///< readout cycles per second
 };
 
-/// Subject 0 of simulation seed `seed` with a session of `minutes`. The user follows the model's
+/// Subject 0 of simulation seed `seed` in the simulator's default world, with a session of `minutes`. The user follows the model's
 /// guided calibration sequence when it carries one (pose-guided calibration), else explores the
 /// extreme poses freely (min-max).
 inline NewUser simulate_new_user(std::uint64_t seed, double minutes, const PoseModel& model) {
   sim::CorpusConfig config;
+  config.world = sim::default_world();
   config.seed = seed;
   config.subjects = 1;
   config.sessions = 1;

@@ -17,7 +17,7 @@ namespace {
 
 struct SimulateOptions {
   sim::CorpusConfig config;
-  std::string out, csv, sequence_file, world = sim::worlds().front().name;
+  std::string out, csv, sequence_file, world = sim::default_world().name;
   std::vector<std::string> without, settings;
   bool report = false, print_sequence = false;
 };

@@ -46,7 +46,7 @@ struct CorpusConfig {
   std::optional<calibration::Sequence> guided_calibration;
   int threads = 0;              ///< 0: all hardware threads.
   RecordingConfig recording{};  ///< Readout settings (raw rows, noise).
-  World world = worlds().front();  ///< The world's effects (the reference tracker).
+  World world = worlds().front();  ///< The world: clean unless set (the tools start from default_world()).
   /// The hand the glove is worn on: a left hand is the right one mirrored, wearing the right glove's
   /// sheet turned over (the same cells at the mirrored places).
   hand::Handedness handedness = hand::Handedness::Right;

@@ -37,7 +37,7 @@ struct World {
   std::string settings;        ///< Parameters set by with(), "name=value" comma-separated.
 };
 
-/// @brief Every named world; the first is the default.
+/// @brief Every named world; the first, "clean", is the physics the library's tests measure against.
 inline const std::array<World, 4>& worlds() {
   static const std::array<World, 4> table = [] {
     World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
@@ -99,6 +99,11 @@ inline const World& world_named(const std::string& name) {
   }
   throw Error("unknown world '" + name + "', expected one of " + known);
 }
+
+/// @brief The simulator's default world (`glovepose simulate`, the demo, the viewer's simulated user):
+/// the world fitted to the paper's measurements, so that every figure the tools print is from the
+/// world as hard as the paper's. sim::CorpusConfig itself starts from the clean world.
+inline const World& default_world() { return world_named("fitted"); }
 
 /// @brief The effects a world can switch back to the clean world's settings, for ablations.
 enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, SizeCoupling, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
