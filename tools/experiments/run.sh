@@ -2,11 +2,11 @@
 # Re-runs the paper's experiments (Glauser et al. 2019, Sec. 5.2 and 5.4) on the simulated corpus
 # and writes a markdown section per experiment. See tools/experiments/README.md.
 #
-#   tools/experiments/run.sh table1|table2|table45|fig12|fig14|all [--quick]
+#   tools/experiments/run.sh table1|table2|table3|table45|fig12|fig14|all [--quick]
 #
 # Knobs (environment, defaults in brackets; --quick changes some, see usage below):
 #   GLOVEPOSE, CORPUS, CORPUS_SEED, OUT, WIDTH, EPOCHS, FINETUNE_EPOCHS, STRIDE, THREADS, SEED,
-#   SUBJECTS, TABLE2_SUBJECTS, TABLE2_FRACTIONS, TABLE2_SAME_STEPS, TABLE45_SUBJECTS, TABLE45_UNET_WIDTHS,
+#   SUBJECTS, TABLE2_SUBJECTS, TABLE2_FRACTIONS, TABLE2_SAME_STEPS, TABLE3_SUBJECTS, TABLE45_SUBJECTS, TABLE45_UNET_WIDTHS,
 #   FCN_OPTIMIZER, FIG12_SUBJECTS, FIG14_SUBJECTS
 set -euo pipefail
 
@@ -22,6 +22,7 @@ usage: tools/experiments/run.sh EXPERIMENT [--quick]
 EXPERIMENT:
   table1    personalised / generic / fine-tuned models per subject (paper Table 1)
   table2    less training data: 100/50/25/10% (paper Table 2)
+  table3    Glove II: generic (glove I), fine-tuned on glove II, personalised on glove II (paper Table 3)
   table45   FCN vs U-Net vs linear at ~3M and ~13M parameters (paper Tables 4, 5)
   fig12     14 vs 44 sensor cells, generic model (4) (paper Fig. 12)
   fig14     cumulative error curve of (4), with (2) and (3) (paper Fig. 14)
@@ -47,6 +48,7 @@ Environment knobs [default; --quick default]:
   FIG14_SUBJECTS     subjects pooled in fig14 [\$SUBJECTS]
   TABLE2_SUBJECTS    [0,4,9; 0,2]     TABLE2_FRACTIONS  percentages [100 50 25 10]
   TABLE2_SAME_STEPS  1: train a fraction f for EPOCHS/f epochs (as many steps as 100%) [0: EPOCHS]
+  TABLE3_SUBJECTS    [0,4,9; 0,2]
   TABLE45_SUBJECTS   [0,4,9; 0,2]     TABLE45_UNET_WIDTHS  [48 100 (paper3m, paper13m); 6 8]
   FCN_OPTIMIZER      adam|sgd (sgd: the paper's lr 0.01) [adam]
   FIG12_SUBJECTS     [0,4,9; 0,2]
@@ -68,7 +70,7 @@ for arg in "$@"; do
   case "$arg" in
     --quick) QUICK=1 ;;
     -h | --help) usage; exit 0 ;;
-    table1 | table2 | table45 | fig12 | fig14 | all)
+    table1 | table2 | table3 | table45 | fig12 | fig14 | all)
       [[ -z $EXPERIMENT ]] || die "one experiment at a time (got '$EXPERIMENT' and '$arg'); use 'all' for every one"
       EXPERIMENT=$arg ;;
     *) usage >&2; die "unknown argument '$arg'" ;;
@@ -84,6 +86,7 @@ if ((QUICK)); then
   EPOCHS=${EPOCHS:-1}
   FINETUNE_EPOCHS=${FINETUNE_EPOCHS:-1}
   TABLE2_SUBJECTS=${TABLE2_SUBJECTS:-0,2}
+  TABLE3_SUBJECTS=${TABLE3_SUBJECTS:-0,2}
   TABLE45_SUBJECTS=${TABLE45_SUBJECTS:-0,2}
   TABLE45_UNET_WIDTHS=${TABLE45_UNET_WIDTHS:-6 8}
   FIG12_SUBJECTS=${FIG12_SUBJECTS:-0,2}
@@ -93,6 +96,7 @@ else
   EPOCHS=${EPOCHS:-6}
   FINETUNE_EPOCHS=${FINETUNE_EPOCHS:-5}
   TABLE2_SUBJECTS=${TABLE2_SUBJECTS:-0,4,9}
+  TABLE3_SUBJECTS=${TABLE3_SUBJECTS:-0,4,9}
   TABLE45_SUBJECTS=${TABLE45_SUBJECTS:-0,4,9}
   TABLE45_UNET_WIDTHS=${TABLE45_UNET_WIDTHS:-48 100}
   FIG12_SUBJECTS=${FIG12_SUBJECTS:-0,4,9}
@@ -403,6 +407,35 @@ run_table2() {
   finish_experiment table2 "TABLE2_SUBJECTS=$TABLE2_SUBJECTS TABLE2_FRACTIONS='$TABLE2_FRACTIONS' TABLE2_SAME_STEPS=$TABLE2_SAME_STEPS"
 }
 
+# Glove II (the corpus' glove 1: each subject's two sessions with it, each a fresh donning). The paper
+# tests on one Glove II session; here session 1, after fine-tuning or training on session 0 (5 min).
+run_table3() {
+  begin_experiment table3
+  local dir=$OUT/table3 s m
+  local subjects
+  subjects=$(check_subjects TABLE3_SUBJECTS "$TABLE3_SUBJECTS")
+  for s in $subjects; do
+    generic_cal_model "$s"  # Table 1's (4): the other subjects, glove I only
+    JSON=$dir/s${s}_glove1.json
+    eval_json "$JSON" "s$s glove II, generic (glove I)" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 \
+      --calibration onthefly
+    record "$s" "column=glove1" "$JSON"
+    m=$dir/s${s}_tuned.safetensors
+    train_model "$m" "s$s glove II, fine-tuned" finetune --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 0 \
+      --epochs "$FINETUNE_EPOCHS" --seed "$SEED"
+    JSON=$dir/s${s}_tuned.json
+    eval_json "$JSON" "s$s glove II, fine-tuned" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration onthefly
+    record "$s" "column=tuned" "$JSON"
+    m=$dir/s${s}_personal.safetensors
+    train_model "$m" "s$s glove II, personalised" train --data "$CORPUS" --model "unet:$WIDTH" --subjects "$s" --gloves 1 --sessions 0 \
+      --calibration onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED"
+    JSON=$dir/s${s}_personal.json
+    eval_json "$JSON" "s$s glove II, personalised" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration onthefly
+    record "$s" "column=personal" "$JSON"
+  done
+  finish_experiment table3 "TABLE3_SUBJECTS=$TABLE3_SUBJECTS"
+}
+
 run_table45() {
   begin_experiment table45
   local dir=$OUT/table45 s w h size arch m tag opt=()
@@ -483,8 +516,8 @@ run_fig14() {
 
 case "$EXPERIMENT" in
   all)
-    for e in table1 fig14 table2 table45 fig12; do "run_$e"; done
-    cat "$OUT"/{table1,table2,table45,fig12,fig14}.md >"$OUT/all.md"
+    for e in table1 fig14 table2 table3 table45 fig12; do "run_$e"; done
+    cat "$OUT"/{table1,table2,table3,table45,fig12,fig14}.md >"$OUT/all.md"
     echo "run.sh: all experiments done; the sections are in $(rel "$OUT")/all.md" >&2 ;;
   *) "run_$EXPERIMENT" ;;
 esac
