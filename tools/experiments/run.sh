@@ -35,7 +35,7 @@ Environment knobs [default; --quick default]:
   OUT                output directory [<repo>/experiments-out; <repo>/experiments-out/quick]
   CORPUS             dataset file [\$OUT/corpus.safetensors, simulated if missing]
   CORPUS_SEED        seed of the simulated corpus [1]
-  WORLD              simulated world of that corpus (glovepose simulate --world) [clean]
+  WORLD              simulated world of that corpus (glovepose simulate --world) [fitted, the simulator's default]
   WITHOUT            effects of that world switched off, e.g. slip,drift (glovepose simulate --without) [none]
   SET                parameters of that world set, e.g. people.skin_spread=0.5 (glovepose simulate --set) [none]
   WIDTH              U-Net width of table1/table2/fig12/fig14 [64; 8]
@@ -105,7 +105,7 @@ OUT=$(abspath "$OUT")
 GLOVEPOSE=$(abspath "${GLOVEPOSE:-$ROOT/build/tools/glovepose}")
 CORPUS=$(abspath "${CORPUS:-$OUT/corpus.safetensors}")
 CORPUS_SEED=${CORPUS_SEED:-1}
-WORLD=${WORLD:-clean}
+WORLD=${WORLD:-fitted}
 WITHOUT=${WITHOUT:-}
 SET=${SET:-}
 STRIDE=${STRIDE:-5}
@@ -282,9 +282,8 @@ begin_experiment() {
 }
 
 # The exact command, with every knob that changes the results.
-# The corpus's world matters only when the run simulates it; it is named whenever it is not the default.
-WORLD_KNOBS=""
-[[ $WORLD != clean ]] && WORLD_KNOBS+=" WORLD=$WORLD"
+# The corpus's world matters only when the run simulates it; it is always named.
+WORLD_KNOBS=" WORLD=$WORLD"
 [[ -n $WITHOUT ]] && WORLD_KNOBS+=" WITHOUT=$WITHOUT"
 [[ -n $SET ]] && WORLD_KNOBS+=" SET=$SET"
 COMMAND_LINE="CORPUS=$(rel "$CORPUS")$WORLD_KNOBS WIDTH=$WIDTH EPOCHS=$EPOCHS FINETUNE_EPOCHS=$FINETUNE_EPOCHS STRIDE=$STRIDE SEED=$SEED"
