@@ -41,9 +41,8 @@ calibration::Sequence two_steps() {
 }
 
 // `subjects` simulated new users of seed `seed` who follow the shipped calibration sequence, then
-// record one session of `minutes` (C_c frames at 60 Hz, the recorder's readout).
-// People of the simulator's default world, the one the shipped model and its pose-guided
-// calibration were trained and fitted in.
+// record one session of `minutes` (C_c frames at 60 Hz, the recorder's readout), in the simulator's
+// default world: the one the shipped model and its pose-guided calibration were made in.
 io::Dataset guided_users(std::uint64_t seed, int subjects, double minutes) {
   sim::CorpusConfig config;
   config.world = sim::default_world();

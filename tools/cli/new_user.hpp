@@ -17,9 +17,9 @@ struct NewUser {
   double cycle_rate = 0.0;  ///< readout cycles per second
 };
 
-/// Subject 0 of simulation seed `seed` in the simulator's default world, with a session of `minutes`. The user follows the model's
-/// guided calibration sequence when it carries one (pose-guided calibration), else explores the
-/// extreme poses freely (min-max).
+/// Subject 0 of simulation seed `seed` in the simulator's default world, with a session of
+/// `minutes`. The user follows the model's guided calibration sequence when it carries one
+/// (pose-guided calibration), else explores the extreme poses freely (min-max).
 inline NewUser simulate_new_user(std::uint64_t seed, double minutes, const PoseModel& model) {
   sim::CorpusConfig config;
   config.world = sim::default_world();

@@ -342,6 +342,14 @@ T1_ORDERINGS = [  # the paper's chain on the averages: (1) < (2) < (5) < (4) < (
 T1_NAMES = dict(T1_COLUMNS)
 
 
+def truth_row(entries: Sequence[Entry], columns, blanks: int = 0) -> List[List[str]]:
+    """The averages against the truth behind the labels, when every entry of every column has them (simulated data)."""
+    truth = {c: [e.truth_mean for e in select(entries, column=c)] for c, _ in columns}
+    if not all(v and None not in v for v in truth.values()):
+        return []
+    return [["Average against the truth", *([""] * blanks), *(fmt(average(truth[c])) for c, _ in columns)]]
+
+
 def ordering_lines(means: Dict[str, Dict[int, float]], avg: Dict[str, float], pairs, names, paper: Dict[str, float]) -> List[str]:
     lines = []
     for a, b, meaning in pairs:
@@ -379,10 +387,7 @@ def report_table1(ctx: Context) -> None:
     avg = {c: average(list(means[c].values())) for c, _ in T1_COLUMNS}
     rows.append(["**Average**", "", "", *(f"**{fmt(avg[c])}**" for c, _ in T1_COLUMNS)])
     rows.append(["Paper average", "", "", *(f"{PAPER_TABLE1_AVERAGE[c]:.1f}" for c, _ in T1_COLUMNS)])
-    # Simulated data also knows the truth behind its labels: the same averages against it.
-    truth = {c: [e.truth_mean for e in select(entries, column=c)] for c, _ in T1_COLUMNS}
-    if all(v and None not in v for v in truth.values()):
-        rows.append(["Average against the truth", "", "", *(fmt(average(truth[c])) for c, _ in T1_COLUMNS)])
+    rows += truth_row(entries, T1_COLUMNS, blanks=2)
 
     lines = ctx.header(
         "Table 1: personalised, generic and fine-tuned models (simulated corpus)",
@@ -473,10 +478,6 @@ def report_table2(ctx: Context) -> None:
 
 
 # --------------------------------------------------------------------------------------------------
-# Tables 4 and 5.
-
-
-# --------------------------------------------------------------------------------------------------
 # Table 3.
 
 T3_COLUMNS = [("glove1", "Generic w calib. (Glove I)"), ("tuned", "Fine-tuned (Glove I & II)"), ("personal", "Personalised (Glove II)")]
@@ -494,9 +495,7 @@ def report_table3(ctx: Context) -> None:
     avg = {c: average(list(means[c].values())) for c, _ in T3_COLUMNS}
     rows.append(["**Average**", *(f"**{fmt(avg[c])}**" for c, _ in T3_COLUMNS)])
     rows.append(["Paper", *(f"{PAPER_TABLE3[c]:.2f}" for c, _ in T3_COLUMNS)])
-    truth = {c: [e.truth_mean for e in select(entries, column=c)] for c, _ in T3_COLUMNS}
-    if all(v and None not in v for v in truth.values()):
-        rows.append(["Average against the truth", *(fmt(average(truth[c])) for c, _ in T3_COLUMNS)])
+    rows += truth_row(entries, T3_COLUMNS)
     lines = ctx.header(
         "Table 3: a second glove (simulated corpus)",
         "Mean angle error in degrees over the 25 DoFs against the data's labels on Glove II (the corpus' glove 1, a copy "
@@ -513,6 +512,10 @@ def report_table3(ctx: Context) -> None:
     first = subjects[0]
     lines += ctx.commands([e for e in entries if e.subject == first], f"subject {first}; the other subjects alike")
     ctx.write(lines)
+
+
+# --------------------------------------------------------------------------------------------------
+# Tables 4 and 5.
 
 
 def paper_size(params: float) -> Optional[str]:
@@ -731,7 +734,9 @@ def report_fig14(ctx: Context) -> None:
 def main(argv: Sequence[str]) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    for name in ["table1", "table2", "table3", "table45", "fig12", "fig14"]:
+    reports = {"table1": report_table1, "table2": report_table2, "table3": report_table3, "table45": report_table45,
+               "fig12": report_fig12, "fig14": report_fig14}
+    for name in reports:
         p = sub.add_parser(name)
         p.add_argument("--manifest", required=True)
         p.add_argument("--md", required=True)
@@ -766,8 +771,6 @@ def main(argv: Sequence[str]) -> None:
         glove14(args.data, args.data_out, args.glove_out)
     else:
         ctx = Context(args)
-        reports = {"table1": report_table1, "table2": report_table2, "table3": report_table3, "table45": report_table45}
-        reports.update({"fig12": report_fig12, "fig14": report_fig14})
         reports[args.command](ctx)
 
 
