@@ -3,6 +3,8 @@
 # Usage: tools/setup.sh [EXTRA_PACKAGE ...]   (extra Debian packages to ensure as well)
 set -euo pipefail
 # python3-torch: the PyTorch reference the numerics tests compare with (Debian's, for /usr/bin/python3).
+# libopenblas0-pthread: the BLAS Debian's PyTorch then uses (it links the reference libblas3 otherwise:
+#   a 1024x1024 float product at 6 GFLOP/s instead of 174 on 2 cores).
 # mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
@@ -10,7 +12,7 @@ set -euo pipefail
 # libcli11-dev: CLI11, the glovepose tool's command-line parsing (the library headers do not need it).
 # python3-pip, python3-setuptools: `pip install ./python` (the Python package) without any registry.
 # chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
-packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch python3-numpy mono-mcs
+packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch libopenblas0-pthread python3-numpy mono-mcs
           libopenxr-dev nlohmann-json3-dev libcli11-dev python3-pip python3-setuptools chromium "$@")
 missing=()
 for p in "${packages[@]}"; do
