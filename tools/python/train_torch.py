@@ -72,12 +72,19 @@ def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, flat_range: float) 
     return out
 
 
-def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float, settings: dict):
-    """(train, validation) dicts of inputs, targets (normalised), angles (radians), with the labelled mask."""
+def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float, settings: dict,
+                 gloves=None, sessions=None, stride: int = 1, history: int = 1, truth: bool = False):
+    """(train, validation) dicts of inputs, targets (normalised), angles (radians), with the labelled mask.
+
+    Runs of `subjects`, `gloves` and `sessions` (None: all); every `stride`-th kept frame of a run
+    (train/samples.hpp). history > 1: each input is the window [N, history, cells] of the run's
+    recording frames ending at the sample's frame (outliers included, the first frame repeated
+    before the run starts), for networks that read time. truth: also "true_angles" (simulated data)."""
     cells = data["cells"].numpy().astype(np.float64)
     angles = data["angles"].numpy().astype(np.float64)
     subject, glove, session = data["subject"].numpy(), data["glove"].numpy(), data["session"].numpy()
     kind, outlier = data["kind"].numpy(), data["outlier"].numpy()
+    true_angles = data["true_angles"].numpy().astype(np.float64) if truth else None
     labelled = np.ones(25, dtype=bool)
     if "labelled_dofs" in meta:
         names = meta["labelled_dofs"].split(",")
@@ -87,31 +94,34 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
     rest = np.clip(0.0, lo_lim, hi_lim)
     parts = {"train": [], "validation": []}
     for key in sorted(set(zip(subject.tolist(), glove.tolist(), session.tolist()))):
-        if subjects is not None and key[0] not in subjects:
+        if any(ids is not None and k not in ids for k, ids in zip(key, (subjects, gloves, sessions))):
             continue
         run = (subject == key[0]) & (glove == key[1]) & (session == key[2])
-        keep = run & (kind == 0) & (outlier == 0)
-        if not keep.any():
+        recording = np.flatnonzero(run & (kind == 0))
+        kept = np.flatnonzero(outlier[recording] == 0)[::stride]  # positions within the recording
+        if not len(kept):
             continue
-        x = cells[keep]
+        x = cells[recording]
         if calibration == "onthefly":
             calibration_frames = cells[run & (kind == 1)]
             if len(calibration_frames) < window:
                 sys.exit(f"train_torch: subject {key[0]}, glove {key[1]}, session {key[2]} has {len(calibration_frames)} calibration frames, "
                          f"expected at least {window} for on-the-fly calibration")
             x = normalize(x, *onthefly_range(calibration_frames, window), settings["flat_relative_range"])
-        a = angles[keep]
+        x = x[np.maximum(kept[:, None] + np.arange(1 - history, 1), 0)] if history > 1 else x[kept]
+        a = angles[recording[kept]]
         toward = np.where(labelled, a, rest)
         t = 2.0 * (toward - lo_lim) / (hi_lim - lo_lim) - 1.0
         cut = len(x) - math.floor(validation * len(x))
-        parts["train"].append((x[:cut], t[:cut], a[:cut]))
-        parts["validation"].append((x[cut:], t[cut:], a[cut:]))
+        q = true_angles[recording[kept]] if truth else a
+        parts["train"].append((x[:cut], t[:cut], a[:cut], q[:cut]))
+        parts["validation"].append((x[cut:], t[cut:], a[cut:], q[cut:]))
     if not parts["train"]:
         sys.exit("train_torch: no recording frame passes the selection")
 
     def stack(items):
-        return {name: torch.tensor(np.vstack([i[k] for i in items]), dtype=torch.float32)
-                for k, name in enumerate(("inputs", "targets", "angles"))}
+        names = ("inputs", "targets", "angles") + (("true_angles",) if truth else ())
+        return {name: torch.tensor(np.concatenate([i[k] for i in items]), dtype=torch.float32) for k, name in enumerate(names)}
     return stack(parts["train"]), stack(parts["validation"]), torch.tensor(labelled)
 
 
@@ -126,7 +136,7 @@ class Pipeline(nn.Module):
     def __init__(self, network: nn.Module, cell_slots, dof_slots):
         super().__init__()
         self.network = network
-        self.unet = isinstance(network, UNet)
+        self.unet = getattr(network, "reads_maps", False)  # the U-Net and the ResNet read stretch maps
         on_maps = [i for i, slot in enumerate(cell_slots) if slot is not None] if self.unet else []
         extra = [i for i, slot in enumerate(cell_slots) if slot is None] if self.unet else []
         if self.unet and len(extra) != network.extra_inputs:
@@ -141,6 +151,10 @@ class Pipeline(nn.Module):
     def forward(self, cells: torch.Tensor) -> torch.Tensor:
         if not self.unet:
             return self.network(cells)
+        return self.readout(self.network(self.planes(cells)))
+
+    def planes(self, cells: torch.Tensor) -> torch.Tensor:
+        """[N, cells] -> the network's input planes [N, 2 + E, 5, 5]."""
         n = cells.shape[0]
         maps = torch.zeros(n, 50, dtype=cells.dtype, device=cells.device)
         maps[:, self.map_index] = cells[:, self.map_inputs]
@@ -148,8 +162,11 @@ class Pipeline(nn.Module):
         if self.extra_inputs.numel():
             constant = cells[:, self.extra_inputs].view(n, -1, 1, 1).expand(n, self.extra_inputs.numel(), 5, 5)
             planes = torch.cat([planes, constant], 1)
-        pose = self.network(planes).view(-1, 25)
-        return pose[:, self.dof_index]
+        return planes
+
+    def readout(self, pose_map: torch.Tensor) -> torch.Tensor:
+        """[N, 1, 5, 5] pose map -> [N, 25] DoFs."""
+        return pose_map.reshape(-1, 25)[:, self.dof_index]
 
 
 def initialize(module: nn.Module, seed: int) -> None:
@@ -164,14 +181,21 @@ def initialize(module: nn.Module, seed: int) -> None:
             nn.init.zeros_(m.bias)
 
 
-def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device, settings: dict) -> float:
+def predict_radians(model: nn.Module, inputs: torch.Tensor, device, settings: dict) -> torch.Tensor:
+    """The model's angles (radians, float64) for calibrated inputs, in batches, in eval mode."""
     lo = torch.tensor(settings["joint_limits_min"], dtype=torch.float64)
     hi = torch.tensor(settings["joint_limits_max"], dtype=torch.float64)
     model.eval()
     with torch.no_grad():
-        out = torch.cat([model(x.to(device)).cpu() for x in samples["inputs"].split(4096)]).double()
+        out = torch.cat([model(x.to(device)).cpu() for x in inputs.split(4096)]).double()
     model.train()
-    radians = lo + 0.5 * (out + 1.0) * (hi - lo)
+    return lo + 0.5 * (out + 1.0) * (hi - lo)
+
+
+def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device, settings: dict, radians=None) -> float:
+    """Mean absolute angle error over the labelled DoFs (`glovepose eval`'s mean_deg), in degrees."""
+    if radians is None:
+        radians = predict_radians(model, samples["inputs"], device, settings)
     errors = (radians - samples["angles"].double()).abs()[:, labelled]
     return float(errors.mean() * 180.0 / math.pi)
 

@@ -6,6 +6,8 @@ Modules:
     export          model (UNet, FCN or torch.nn.Linear(inputs, 25)) <-> model file with glovepose
                     metadata; import_model_with_info also returns the parsed metadata (ModelInfo)
     fcn             the paper's fully connected baseline (appendix A) and its random initialisation
+    paper_networks  the paper's LSTM, ResNet and CGAN discriminator (Sec. 5.4, appendix A), for
+                    re-running its Tables 4 and 5 (glovepose does not run them)
 
 Needs PyTorch from Debian (`python3-torch`): run with /usr/bin/python3.
 """

@@ -37,6 +37,8 @@ class UNet(nn.Module):
     order); only enc1's weight changes shape ([width, 2 + E, 5, 5]). E = 0: the paper's U-Net.
     """
 
+    reads_maps = True  # train_torch.Pipeline scatters the cells into the stretch maps for it
+
     def __init__(self, width: int = 64, extra_inputs: int = 0) -> None:
         super().__init__()
         if width < 1:
