@@ -11,7 +11,8 @@
     joints = estimator.joints()    # (21, 7): position x, y, z (m), rotation quaternion x, y, z, w
 
 The library is found through $GLOVEPOSE_LIBRARY, the system's library path (an installed
-glovepose), or a build tree of the clone this package sits in (build/capi/).
+glovepose), the lib/ of this Python's prefix (a virtual environment glovepose was installed into),
+or a build tree of the clone this package sits in (build/capi/).
 """
 from __future__ import annotations
 

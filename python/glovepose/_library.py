@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import os
+import sys
 from pathlib import Path
 
 DOF_COUNT, JOINT_COUNT = 25, 21
@@ -96,13 +97,16 @@ _SIGNATURES = {
 
 def _candidates() -> list[str]:
     """Where the library may be: $GLOVEPOSE_LIBRARY, the system's search (an installed prefix),
-    then a build tree beside this package's source (python/ in a clone: build/capi/)."""
+    the lib/ of this Python's prefix (a virtual environment glovepose was installed into with
+    `cmake --install build --prefix VENV`), then a build tree beside this package's source (python/
+    in a clone: build/capi/)."""
     found = []
     if os.environ.get("GLOVEPOSE_LIBRARY"):
         found.append(os.environ["GLOVEPOSE_LIBRARY"])
     system = ctypes.util.find_library("glovepose_c")
     if system:
         found.append(system)
+    found.append(str(Path(sys.prefix) / "lib" / "libglovepose_c.so"))
     clone = Path(__file__).resolve().parents[2]
     for build in ("build", "build-clang"):
         found.append(str(clone / build / "capi" / "libglovepose_c.so"))
