@@ -17,6 +17,7 @@ or a build tree of the clone this package sits in (build/capi/).
 from __future__ import annotations
 
 import ctypes
+import enum
 
 import numpy as np
 
@@ -24,12 +25,33 @@ from . import _library
 from .dataset import load_dataset
 
 __all__ = ["PoseModel", "Estimator", "Pose", "GloveposeError", "load_dataset", "DOF_NAMES", "JOINT_NAMES",
-           "OK", "SOLVED", "NOT_READY", "UNCALIBRATED"]
+           "Status", "OK", "SOLVED", "NOT_READY", "UNCALIBRATED"]
 
 _lib = _library.load()
 
-#: Per-frame statuses (glovepose_c.h).
-OK, SOLVED, NOT_READY, UNCALIBRATED = 0, 1, 2, 8
+
+
+class Status(enum.IntEnum):
+    """Per-frame statuses (glovepose_c.h's GLOVEPOSE_* >= 0): what push_row, push_measurements and
+    push_cells return. Equal to their ints; str() gives the library's name ("size mismatch")."""
+    OK = 0
+    SOLVED = 1
+    NOT_READY = 2
+    NON_FINITE = 3
+    NEGATIVE = 4
+    UNKNOWN_INDEX = 5
+    TIMESTAMP_BACKWARDS = 6
+    SIZE_MISMATCH = 7
+    UNCALIBRATED = 8
+
+    def __str__(self) -> str:
+        return _lib.glovepose_result_name(self.value).decode()
+
+
+# The library names every status and none past the last: the enum is complete.
+if any(str(s) == "unknown result" for s in Status) or _lib.glovepose_result_name(len(Status)).decode() != "unknown result":
+    raise ImportError("glovepose: the C library's per-frame statuses differ from glovepose.Status (a library of another version)")
+OK, SOLVED, NOT_READY, UNCALIBRATED = Status.OK, Status.SOLVED, Status.NOT_READY, Status.UNCALIBRATED
 _WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
 
 #: The 25 DoFs of the hand model, in the order of every angle array.
@@ -127,21 +149,21 @@ class Estimator(_Closing):
         self._cells = np.zeros(model.cell_count, dtype=np.float64)
 
     # Streaming: each returns the per-frame status (SOLVED: a new pose); refusals of the call itself raise.
-    def push_row(self, row: int, value: float, timestamp: float) -> int:
+    def push_row(self, row: int, value: float, timestamp: float) -> Status:
         """One reading of measurement row `row` at `timestamp` (s, increasing)."""
-        return _check(_lib.glovepose_estimator_push_row(self._handle, row, value, timestamp))
+        return Status(_check(_lib.glovepose_estimator_push_row(self._handle, row, value, timestamp)))
 
-    def push_measurements(self, values, timestamp: float) -> int:
+    def push_measurements(self, values, timestamp: float) -> Status:
         """A whole frame of row_count compound measurements."""
         v = np.ascontiguousarray(values, dtype=np.float64)
-        return _check(_lib.glovepose_estimator_push_measurements(self._handle, v.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                                                                 v.size, timestamp))
+        return Status(_check(_lib.glovepose_estimator_push_measurements(self._handle, v.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                                        v.size, timestamp)))
 
-    def push_cells(self, cells, timestamp: float, oldest_age: float = 0.0) -> int:
+    def push_cells(self, cells, timestamp: float, oldest_age: float = 0.0) -> Status:
         """A frame of cell_count solved cell values."""
         c = np.ascontiguousarray(cells, dtype=np.float64)
-        return _check(_lib.glovepose_estimator_push_cells(self._handle, c.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), c.size,
-                                                          timestamp, oldest_age))
+        return Status(_check(_lib.glovepose_estimator_push_cells(self._handle, c.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), c.size,
+                                                                 timestamp, oldest_age)))
 
     def pose(self) -> Pose:
         """The latest pose."""
@@ -149,13 +171,19 @@ class Estimator(_Closing):
         return Pose(self._pose)
 
     def angles(self) -> np.ndarray:
-        """The latest pose's (25,) angles, radians, DOF_NAMES order."""
-        return self.pose().angles
+        """The latest pose's (25,) angles, radians, DOF_NAMES order. Before the first pose (no push
+        has returned SOLVED) raises GloveposeError with code NOT_READY: there are no angles yet."""
+        pose = self.pose()
+        if not pose.valid:
+            raise GloveposeError(int(Status.NOT_READY), "no pose yet: angles() before any push returned SOLVED (not ready)")
+        return pose.angles
 
     def joints(self) -> np.ndarray:
         """The latest (21, 7) joints: position x, y, z (metres), rotation quaternion x, y, z, w
-        (needs joint_transforms=True)."""
+        (needs joint_transforms=True). Before the first pose raises as angles() does."""
         _check(_lib.glovepose_estimator_get_joints(self._handle, self._joints, _library.JOINT_COUNT))
+        if not self.pose().valid:
+            raise GloveposeError(int(Status.NOT_READY), "no pose yet: joints() before any push returned SOLVED (not ready)")
         return np.array([list(j.position) + list(j.rotation) for j in self._joints], dtype=np.float64)
 
     def reset(self) -> None:

@@ -111,8 +111,17 @@ class Errors(unittest.TestCase):
             glovepose.Estimator(model, readout_mean_window=0)
         self.assertIn("mean", str(caught.exception))
         estimator = glovepose.Estimator(model)
-        self.assertEqual(estimator.push_cells(np.ones(3), 0.0), 7)  # GLOVEPOSE_SIZE_MISMATCH: a status, not an exception
-        self.assertEqual(estimator.push_row(0, float("nan"), 0.0), 3)  # GLOVEPOSE_NON_FINITE
+        with self.assertRaises(glovepose.GloveposeError) as caught:
+            estimator.angles()  # no pose yet: not zeros
+        self.assertEqual(caught.exception.code, glovepose.NOT_READY)
+        status = estimator.push_cells(np.ones(3), 0.0)  # a status, not an exception; the C header's numbers
+        self.assertIs(status, glovepose.Status.SIZE_MISMATCH)
+        self.assertEqual((status, str(status)), (7, "size mismatch"))
+        self.assertEqual(estimator.push_measurements(np.ones(100), 0.0), glovepose.Status.SIZE_MISMATCH)
+        self.assertIs(estimator.push_row(0, float("nan"), 0.0), glovepose.Status.NON_FINITE)
+        self.assertEqual(glovepose.Status.NON_FINITE, 3)
+        self.assertEqual(glovepose.Status.TIMESTAMP_BACKWARDS, 6)
+        self.assertEqual(glovepose.Status.UNCALIBRATED, 8)
         with self.assertRaises(glovepose.GloveposeError):
             estimator.finish_calibration()  # none started
         with self.assertRaises(glovepose.GloveposeError) as caught:
