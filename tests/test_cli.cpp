@@ -503,6 +503,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   for (const hand::Dof& d : hand::kDofs) columns.push_back(d.name);
   columns.push_back("timestamp");
   columns.push_back("frame");  // ignored
+  columns.push_back("note");   // ignored
   std::shuffle(columns.begin(), columns.end(), std::mt19937(11));
   std::ofstream list(temp("import_takes.csv"));
   list << "file,subject,session,kind\n";
@@ -542,7 +543,12 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   REQUIRE(takes == 3 * 2 * 2);  // 3 subjects x 2 sessions x (calibration, recording)
 
   const std::string imported_file = temp("imported.safetensors");
+  // A column neither known nor skipped is refused, and the message says how to skip it.
   Run r = run("import --glove " + glove_file + " --rate 60 --ignore frame --takes " + temp("import_takes.csv") + " --out " + imported_file);
+  CHECK(r.status != 0);
+  CHECK_MESSAGE(r.out.find("'note'") != std::string::npos, r.out);
+  CHECK_MESSAGE(r.out.find("--ignore COLUMN[,COLUMN...]") != std::string::npos, r.out);
+  r = run("import --glove " + glove_file + " --rate 60 --ignore frame,note --takes " + temp("import_takes.csv") + " --out " + imported_file);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("imported 12 takes: " + std::to_string(reference.frames()) + " frames") == 0);
   CHECK(r.out.find("of 3 subjects, 6 sessions, glove 'maker-44', 44 cells, with the 25 DoF angles") != std::string::npos);

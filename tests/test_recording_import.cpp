@@ -276,6 +276,11 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   bad.replace(time3, bad.find(',', time3) - time3, "0");
   CHECK(import_error(bad, take).find("CSV file 't.csv', line 3: time 0 s is not after the frame before (0 s) of subject 0, session 0") ==
         0);
+  bad = good;
+  bad.replace(time3, bad.find(',', time3) - time3, "14:03:07.250");  // a logger's time of day
+  CHECK(import_error(bad, take).find("CSV file 't.csv', line 3, column 'timestamp': '14:03:07.250' is a time of day, expected a number of "
+                                     "seconds") == 0);
+  CHECK(import_error(bad, take).find("`glovepose import --ignore COLUMN`") != std::string::npos);
   CHECK(import_error(replace(replace(good, "subject", "kind"), "\n0,", "\nwarmup,"), {"t.csv", 1, {}, {}}) ==
         "CSV file 't.csv', line 2, column 'kind': 'warmup' is not a kind, expected recording, calibration, 0 or 1");
   CHECK(import_error(replace(good, "subject,timestamp", "subject,timestamp,timestamp_ms"), take)

@@ -157,7 +157,11 @@ Command add_import(CLI::App& tool) {
       ->check(existing_file())
       ->type_name("FILE");
   command->add_flag("--degrees", o->import.degrees, "angle columns are in degrees");
-  command->add_option("--ignore", o->import.ignored_columns, "a column to skip; repeatable")->type_name("COLUMN")->allow_extra_args(false);
+  command
+      ->add_option("--ignore", o->import.ignored_columns, "columns to skip, comma-separated (e.g. --ignore Scenario,Time); repeatable")
+      ->type_name("COLUMN[,COLUMN...]")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   command->add_flag("--allow-flat", o->import.allow_flat, "keep calibration takes where a sensor does not move (it then reads 0); listed");
   command->add_option("--out", o->out, "the dataset file written")->required()->type_name("FILE");
   return {command, [o] { return import_recordings(*o); }};

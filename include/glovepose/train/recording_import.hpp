@@ -178,7 +178,7 @@ class RecordingImporter {
         throw Error(where + ": unknown column, expected a cell of glove '" + glove_.id() + "' (e.g. '" + glove_.cell_names().front() +
                     "'), a DoF name (e.g. '" + hand::kDofs[0].name +
                     "'), subject, session, glove, kind, timestamp or timestamp_ms"
-                    " (other columns can be ignored by name)");
+                    " (skip other columns by name: ignored_columns, `glovepose import --ignore COLUMN[,COLUMN...]`)");
       times += column->role == Role::Seconds || column->role == Role::Milliseconds;
       columns.push_back(*column);
     }
@@ -263,10 +263,10 @@ class RecordingImporter {
             kind = parse_kind(fields[k], where);
             break;
           case Role::Seconds:
-            time = io::parse_csv_number<double>(fields[k], where);
+            time = parse_time(fields[k], where);
             break;
           case Role::Milliseconds:
-            time = io::parse_csv_number<double>(fields[k], where) / 1000.0;
+            time = parse_time(fields[k], where) / 1000.0;
             break;
           case Role::Ignored:
             break;
@@ -294,6 +294,14 @@ class RecordingImporter {
     if (in.bad()) throw Error(at + ", line " + std::to_string(line_no + 1) + ": read error");
     if (line_of.empty()) throw Error(at + ": no frames after the header, expected at least one row of readings");
     check_calibration_runs(first_frame, line_of, take.path);
+  }
+
+  // A time stamp as a number; a time of day (a common logger format) is named as such, with the ways out.
+  static double parse_time(const std::string& text, const std::string& where) {
+    if (text.find(':') != std::string::npos)
+      throw Error(where + " is a time of day, expected a number of seconds (or milliseconds for timestamp_ms): convert the column, "
+                          "or skip it (ignored_columns, `glovepose import --ignore COLUMN`) and frames are 1/rate apart");
+    return io::parse_csv_number<double>(text, where);
   }
 
   static std::uint8_t parse_kind(const std::string& text, const std::string& where) {
