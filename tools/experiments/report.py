@@ -57,9 +57,18 @@ PAPER_TABLE1_AVERAGE = {"intra": 5.8, "inter": 6.2, "nocal": 8.3, "cal": 7.6, "t
 PAPER_TABLE2 = {100: (5.50, 6.57), 75: (6.32, 6.98), 50: (6.47, 7.51), 25: (6.57, 7.96), 10: (7.14, 9.85)}
 # Table 3, Glove II: generic with calibration trained on Glove I, fine-tuned on Glove I & II, personalised on Glove II.
 PAPER_TABLE3 = {"glove1": 8.80, "tuned": 5.73, "personal": 5.30}
-# Tables 4 (personalised (2)) and 5 (generic (4)): network size -> {FCN, U-Net} mean error.
-PAPER_TABLE4 = {"3M": {"fcn": 6.63, "unet": 5.63}, "13M": {"fcn": 6.95, "unet": 5.50}, "50M": {"fcn": 7.10, "unet": 5.55}}
-PAPER_TABLE5 = {"3M": {"fcn": 7.64, "unet": 6.81}, "13M": {"fcn": 7.58, "unet": 6.57}, "50M": {"fcn": 7.98, "unet": 6.65}}
+# Tables 4 (personalised (2)) and 5 (generic (4)): network size -> the five networks' mean error.
+PAPER_TABLE4 = {
+    "3M": {"fcn": 6.63, "lstm": 5.81, "resnet": 6.06, "unet": 5.63, "cgan": 5.59},
+    "13M": {"fcn": 6.95, "lstm": 6.02, "resnet": 6.12, "unet": 5.50, "cgan": 5.51},
+    "50M": {"fcn": 7.10, "lstm": 6.38, "resnet": 6.20, "unet": 5.55, "cgan": 5.47},
+}
+PAPER_TABLE5 = {
+    "3M": {"fcn": 7.64, "lstm": 7.68, "resnet": 7.28, "unet": 6.81, "cgan": 7.09},
+    "13M": {"fcn": 7.58, "lstm": 7.65, "resnet": 7.35, "unet": 6.57, "cgan": 6.50},
+    "50M": {"fcn": 7.98, "lstm": 7.76, "resnet": 7.18, "unet": 6.65, "cgan": 6.61},
+}
+NETWORK_NAMES = {"fcn": "FCN", "lstm": "LSTM", "resnet": "ResNet", "unet": "U-Net", "cgan": "CGAN"}
 PAPER_SIZES = {"3M": 3e6, "13M": 13e6, "50M": 50e6}
 # Fig. 12: mean error with 14 and with 44 sensor cells.
 PAPER_FIG12 = {14: 8.67, 44: 6.75}
@@ -529,40 +538,91 @@ def report_table45(ctx: Context) -> None:
     entries = ctx.entries
     subjects = sorted({e.subject for e in entries})
     sizes = sorted({int(e.tags["size"]) for e in entries if "size" in e.tags})
+    torch_nets = [n for n in NETWORK_NAMES if any(e.tags.get("trainer") == "pytorch" and e.tags["arch"] == n for e in entries)]
+    # Columns: glovepose's FCN and U-Net, the networks trained with PyTorch, the linear map.
+    columns = [("fcn", None), ("unet", None)] + [(n, "pytorch") for n in torch_nets]
+
+    def title_of(arch: str, trainer: Optional[str]) -> str:
+        return NETWORK_NAMES[arch] + (" (PyTorch)" if trainer and arch in ("fcn", "unet") else "")
+
     lines = ctx.header(
-        "Tables 4 and 5: FCN vs U-Net (simulated corpus)",
-        f"Mean angle error in degrees of the fully connected baseline (FCN: 44 → h → h → h → h → h/2 → 25, h chosen to "
-        f"match the U-Net's parameter count), the U-Net and a linear least-squares map, for the personalised model (2) "
-        f"and the generic model (4), averaged over subjects {', '.join(map(str, subjects))} (the paper's Tables 4 and 5, "
-        f"Sec. 5.4; its LSTM, ResNet and CGAN columns are not re-run). FCN optimizer: {ctx.settings.get('fcn_optimizer', 'adam')}.",
+        "Tables 4 and 5: the paper's networks (simulated corpus)",
+        f"Mean angle error in degrees (against the labels) of the paper's networks at the U-Net's parameter count, for the "
+        f"personalised model (2) and the generic model (4), averaged over subjects {', '.join(map(str, subjects))} (the "
+        f"paper's Tables 4 and 5, Sec. 5.4), with a linear least-squares map beside them. FCN (44 → h → h → h → h → h/2 → 25) "
+        f"and U-Net: glovepose's trainer; FCN optimizer: {ctx.settings.get('fcn_optimizer', 'adam')}."
+        + (
+            f" {', '.join(title_of(n, 'pytorch') for n in torch_nets)}: trained with PyTorch by `tools/experiments/torch_networks.py` "
+            f"on the same samples, calibration, loss and epochs (Adam lr 2e-4 for all; LSTM: two layers over a window of 5 "
+            f"frames; ResNet: stride-2 encoder, 12 residual blocks, stride-2 decoder; CGAN: the U-Net as generator, a "
+            f"C64-C128-C256-C512-C1 discriminator, pix2pix's adversarial + 100 × L1 loss)."
+            if torch_nets else " The paper's LSTM, ResNet and CGAN are not run (TABLE45_TORCH)."
+        ),
     )
-    verdicts = []
+    verdicts: List[str] = []
     for kind, title, paper in [("inter", "Table 4: personalised (2)", PAPER_TABLE4), ("cal", "Table 5: generic (4)", PAPER_TABLE5)]:
         rows = []
-        linear = average([e.mean for e in select(entries, column=kind, arch="linear")])
+        linear = by_subject(entries, column=kind, arch="linear")
         for size in sizes:
-            u = select(entries, column=kind, arch="unet", size=str(size))
-            f = select(entries, column=kind, arch="fcn", size=str(size))
-            if not u and not f:
+            found = {(a, t): by_subject(entries, column=kind, arch=a, size=str(size), trainer=t) for a, t in columns}
+            found = {c: v for c, v in found.items() if v}
+            if not found:
                 continue
-            width = u[0].tags["width"] if u else "?"
-            hidden = f[0].tags["width"] if f else "?"
-            up, fp = unet_params(int(width)) if u else None, fcn_params(int(hidden)) if f else None
-            label = f"U-Net w{width} ({up / 1e6:.2f}M) / FCN h{hidden} ({fp / 1e6:.2f}M)" if up and fp else f"size {size}"
-            um, fm = average([e.mean for e in u]), average([e.mean for e in f])
-            p = paper.get(paper_size(up)) if up else None
-            rows.append(
-                [label, f"**{fmt(fm)}**", f"**{fmt(um)}**", fmt(linear), fmt(p["fcn"]) if p else "–", fmt(p["unet"]) if p else "–"]
-            )
-            if math.isfinite(um) and math.isfinite(fm):
+            some = next(iter(found.values()))
+            width = next((e.tags["width"] for e in select(entries, column=kind, arch="unet", size=str(size), trainer=None)), None)
+            params = unet_params(int(width)) if width else float(next(iter(some.values())).result.get("parameters", 0))
+            name = paper_size(params)
+            p = paper.get(name, {}) if name else {}
+            label = f"{params / 1e6:.2f}M" + (f" (U-Net w{width})" if width else "")
+            avg = {c: average([e.mean for e in v.values()]) for c, v in found.items()}
+            rows.append([label, *(f"**{fmt(avg.get(c))}**" if c in found else "–" for c in columns),
+                         fmt(average([e.mean for e in linear.values()])), *(fmt(p.get(n)) for n in NETWORK_NAMES)])
+
+            def truth(group) -> Optional[float]:
+                values = [e.truth_mean for e in group.values()]
+                return average(values) if values and None not in values else None
+            if any(truth(v) is not None for v in found.values()):
+                rows.append([f"{label}, against the truth", *(fmt(truth(found[c])) if c in found else "–" for c in columns),
+                             fmt(truth(linear)) if linear else "–", *([""] * len(NETWORK_NAMES))])
+            # The paper's ordering of every pair of its networks, ours with per-subject counts (glovepose's
+            # FCN and U-Net where both trainers ran one; the PyTorch U-Net is compared with glovepose's).
+            ours = {}
+            for (a, t), v in found.items():
+                if t is None or a not in ours:
+                    ours[a] = (v, title_of(a, None) if t is None else title_of(a, t))
+            names = [n for n in NETWORK_NAMES if n in ours and n in p]
+            for i, a in enumerate(names):
+                for b in names[i + 1:]:
+                    better, worse = (a, b) if p[a] <= p[b] else (b, a)
+                    ea, eb = ours[better][0], ours[worse][0]
+                    common = sorted(set(ea) & set(eb))
+                    ma, mb = average([ea[s].mean for s in common]), average([eb[s].mean for s in common])
+                    wins = sum(1 for s in common if ea[s].mean < eb[s].mean)
+                    verdicts.append(
+                        f"- {title.split(': ')[1]}, {label}: {ours[better][1]} < {ours[worse][1]} **{'holds' if ma < mb else 'does not hold'}** "
+                        f"({ma:.2f} vs {mb:.2f} deg; paper {p[better]:.2f} vs {p[worse]:.2f}), per subject in {wins} of {len(common)}."
+                    )
+            if ("unet", None) in found and ("unet", "pytorch") in found:
+                g, t = found[("unet", None)], found[("unet", "pytorch")]
+                common = sorted(set(g) & set(t))
                 verdicts.append(
-                    f"- {title.split(': ')[1]}, {label}: U-Net < FCN **{'holds' if um < fm else 'does not hold'}** "
-                    f"({um:.2f} vs {fm:.2f} deg; paper {fmt(p['unet']) if p else '–'} vs {fmt(p['fcn']) if p else '–'})."
+                    f"- {title.split(': ')[1]}, {label}: the same U-Net from the two trainers: glovepose "
+                    f"{average([g[s].mean for s in common]):.2f}, PyTorch {average([t[s].mean for s in common]):.2f} deg "
+                    f"(PyTorch lower for {sum(1 for s in common if t[s].mean < g[s].mean)} of {len(common)} subjects)."
+                )
+            best = min(found, key=lambda c: avg[c])
+            if linear:
+                common = sorted(set(linear) & set(found[best]))
+                lm, bm = average([linear[s].mean for s in common]), average([found[best][s].mean for s in common])
+                verdicts.append(
+                    f"- {title.split(': ')[1]}, {label}: the best network ({title_of(*best)}, {bm:.2f} deg) beats the linear map "
+                    f"({lm:.2f}) **{'yes' if bm < lm else 'no'}**, per subject in "
+                    f"{sum(1 for s in common if found[best][s].mean < linear[s].mean)} of {len(common)}."
                 )
         lines += [f"### {title}", ""]
-        lines += table(["Network size", "FCN", "U-Net", "Linear", "Paper FCN", "Paper U-Net"], rows)
+        lines += table(["Parameters", *(title_of(*c) for c in columns), "Linear", *(f"Paper {NETWORK_NAMES[n]}" for n in NETWORK_NAMES)], rows)
         lines.append("")
-    lines += ["Ordering of the paper (the U-Net beats the FCN at every size):", ""] + verdicts + [""]
+    lines += ["Orderings of the paper's networks (the paper's better one first):", ""] + verdicts + [""]
     first = subjects[0]
     lines += ctx.commands([e for e in entries if e.subject == first], f"subject {first}; the other subjects alike")
     ctx.write(lines)

@@ -7,7 +7,7 @@
 # Knobs (environment, defaults in brackets; --quick changes some, see usage below):
 #   GLOVEPOSE, CORPUS, CORPUS_SEED, OUT, WIDTH, EPOCHS, FINETUNE_EPOCHS, STRIDE, THREADS, SEED,
 #   SUBJECTS, TABLE2_SUBJECTS, TABLE2_FRACTIONS, TABLE2_SAME_STEPS, TABLE3_SUBJECTS, TABLE45_SUBJECTS, TABLE45_UNET_WIDTHS,
-#   FCN_OPTIMIZER, FIG12_SUBJECTS, FIG14_SUBJECTS
+#   TABLE45_TORCH, FCN_OPTIMIZER, FIG12_SUBJECTS, FIG14_SUBJECTS
 set -euo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -23,7 +23,7 @@ EXPERIMENT:
   table1    personalised / generic / fine-tuned models per subject (paper Table 1)
   table2    less training data: 100/50/25/10% (paper Table 2)
   table3    Glove II: generic (glove I), fine-tuned on glove II, personalised on glove II (paper Table 3)
-  table45   FCN vs U-Net vs linear at ~3M and ~13M parameters (paper Tables 4, 5)
+  table45   FCN vs U-Net vs linear (and LSTM, ResNet, CGAN: TABLE45_TORCH) at ~3M and ~13M parameters (paper Tables 4, 5)
   fig12     14 vs 44 sensor cells, generic model (4) (paper Fig. 12)
   fig14     cumulative error curve of (4), with (2) and (3) (paper Fig. 14)
   all       all of the above (table1 first: the others reuse its models)
@@ -50,6 +50,8 @@ Environment knobs [default; --quick default]:
   TABLE2_SAME_STEPS  1: train a fraction f for EPOCHS/f epochs (as many steps as 100%) [0: EPOCHS]
   TABLE3_SUBJECTS    [0,4,9; 0,2]
   TABLE45_SUBJECTS   [0,4,9; 0,2]     TABLE45_UNET_WIDTHS  [48 100 (paper3m, paper13m); 6 8]
+  TABLE45_TORCH      networks of table45 trained with PyTorch (torch_networks.py), of the U-Net's size:
+                     any of lstm resnet cgan unet fcn [none]
   FCN_OPTIMIZER      adam|sgd (sgd: the paper's lr 0.01) [adam]
   FIG12_SUBJECTS     [0,4,9; 0,2]
 Lists: "0,4,9" or "0-9". Finished models and results are kept: a re-run skips them.
@@ -114,6 +116,7 @@ SEED=${SEED:-1}
 TABLE2_FRACTIONS=${TABLE2_FRACTIONS:-100 50 25 10}
 TABLE2_SAME_STEPS=${TABLE2_SAME_STEPS:-0}
 FCN_OPTIMIZER=${FCN_OPTIMIZER:-adam}
+TABLE45_TORCH=${TABLE45_TORCH:-}
 
 is_uint() { [[ $1 =~ ^[0-9]+$ ]]; }
 for knob in WIDTH EPOCHS FINETUNE_EPOCHS STRIDE THREADS SEED CORPUS_SEED TABLE2_SAME_STEPS; do
@@ -123,6 +126,7 @@ done
   die "WIDTH, EPOCHS, FINETUNE_EPOCHS, STRIDE and THREADS must be >= 1"
 for w in $TABLE45_UNET_WIDTHS; do is_uint "$w" && ((w >= 1)) || die "TABLE45_UNET_WIDTHS: '$w' is not a width >= 1"; done
 for p in $TABLE2_FRACTIONS; do is_uint "$p" && ((p >= 1 && p <= 100)) || die "TABLE2_FRACTIONS: '$p' is not a percentage 1..100"; done
+for n in $TABLE45_TORCH; do [[ $n =~ ^(lstm|resnet|cgan|unet|fcn)$ ]] || die "TABLE45_TORCH: '$n', expected lstm, resnet, cgan, unet or fcn"; done
 [[ $FCN_OPTIMIZER == adam || $FCN_OPTIMIZER == sgd ]] || die "FCN_OPTIMIZER='$FCN_OPTIMIZER', expected adam or sgd"
 [[ -x $GLOVEPOSE ]] || die "no glovepose binary at $GLOVEPOSE (build it: cmake --build build --target glovepose, or set GLOVEPOSE)"
 [[ -x $PY ]] || die "$PY not found (Debian's python3 with numpy is needed for the reports)"
@@ -263,6 +267,30 @@ eval_json() {
   fi
   mv "$out.partial" "$out"
   say "$label: mean error $("$PY" -c 'import json,sys; print("%.2f deg" % json.load(open(sys.argv[1]))["mean_deg"])' "$out")"
+}
+
+# torch_json OUT.json LABEL torch_networks.py-args...   (--json/--threads added): trains with PyTorch and scores
+torch_json() {
+  local out=$1 label=$2
+  shift 2
+  local shown=("$PY" "$HERE/torch_networks.py" "$@" --threads "$THREADS" --json)
+  JOB_CMDS+="$(show "${shown[@]}") $(rel "$out") ; "
+  if [[ -s $out ]]; then
+    log "skip (exists): $(quote "${shown[@]}" "$out")"
+    return 0
+  fi
+  local joblog=$OUT/logs/${out#"$OUT"/}
+  joblog=${joblog%.json}.log status=0 start=$SECONDS
+  mkdir -p "$(dirname "$joblog")" "$(dirname "$out")"
+  log "$(quote "${shown[@]}" "$out.partial") && mv $(quote "$out.partial" "$out")"
+  say "$label (PyTorch) ..."
+  "${shown[@]}" "$out.partial" >"$joblog" 2>&1 || status=$?
+  if ((status != 0)); then
+    tail -n 15 "$joblog" >&2
+    die "torch_networks.py failed (exit $status) for $label; full output in $joblog"
+  fi
+  mv "$out.partial" "$out"
+  say "$label: $(tail -n 1 "$joblog" | sed 's/; wrote .*//') [$((SECONDS - start)) s]"
 }
 
 # record SUBJECT "TAGS" JSON: one manifest line for report.py; resets JOB_CMDS.
@@ -462,6 +490,19 @@ run_table45() {
         eval_json "${m%.safetensors}.json" "s$s (4) $name" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration onthefly
         record "$s" "column=cal arch=${arch%%:*} width=${arch#*:} size=$size" "${m%.safetensors}.json"
       done
+      # The paper's other networks (and, to compare the trainers, its U-Net) with PyTorch, of the U-Net's size
+      local params n
+      params=$("$PY" "$REPORT" unet-params --width "$w")
+      for n in $TABLE45_TORCH; do
+        m=$dir/s${s}_inter_torch_${n}_$params.json
+        torch_json "$m" "s$s (2) $n" --data "$CORPUS" --model "$n@$params" --subjects "$s" --gloves 0 --sessions 0-3 \
+          --eval-subjects "$s" --eval-sessions 4 --batch 256 --epochs "$EPOCHS" --seed "$SEED"
+        record "$s" "column=inter arch=$n trainer=pytorch size=$size" "$m"
+        m=$dir/s${s}_cal_torch_${n}_$params.json
+        torch_json "$m" "s$s (4) $n" --data "$CORPUS" --model "$n@$params" --exclude-subjects "$s" --gloves 0 \
+          --stride "$STRIDE" --eval-subjects "$s" --batch 1024 --epochs "$EPOCHS" --seed "$SEED"
+        record "$s" "column=cal arch=$n trainer=pytorch size=$size" "$m"
+      done
     done
     m=$dir/s${s}_inter_linear.safetensors
     train_model "$m" "s$s (2) linear" train --data "$CORPUS" --model linear --subjects "$s" --gloves 0 --sessions 0-3 --calibration onthefly
@@ -472,7 +513,7 @@ run_table45() {
     eval_json "${m%.safetensors}.json" "s$s (4) linear" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration onthefly
     record "$s" "column=cal arch=linear" "${m%.safetensors}.json"
   done
-  finish_experiment table45 "TABLE45_SUBJECTS=$TABLE45_SUBJECTS TABLE45_UNET_WIDTHS='$TABLE45_UNET_WIDTHS' FCN_OPTIMIZER=$FCN_OPTIMIZER"
+  finish_experiment table45 "TABLE45_SUBJECTS=$TABLE45_SUBJECTS TABLE45_UNET_WIDTHS='$TABLE45_UNET_WIDTHS'${TABLE45_TORCH:+ TABLE45_TORCH='$TABLE45_TORCH'} FCN_OPTIMIZER=$FCN_OPTIMIZER"
 }
 
 run_fig12() {
