@@ -548,7 +548,7 @@ def report_table45(ctx: Context) -> None:
     lines = ctx.header(
         "Tables 4 and 5: the paper's networks (simulated corpus)",
         f"Mean angle error in degrees (against the labels) of the paper's networks at the U-Net's parameter count, for the "
-        f"personalised model (2) and the generic model (4), averaged over subjects {', '.join(map(str, subjects))} (the "
+        f"personalised model (2) and the generic model (4), averaged over subject{'s' if len(subjects) > 1 else ''} {', '.join(map(str, subjects))} (the "
         f"paper's Tables 4 and 5, Sec. 5.4), with a linear least-squares map beside them. FCN (44 → h → h → h → h → h/2 → 25) "
         f"and U-Net: glovepose's trainer; FCN optimizer: {ctx.settings.get('fcn_optimizer', 'adam')}."
         + (
