@@ -21,6 +21,8 @@ import tempfile
 
 import numpy as np
 
+from readme_blocks import sh_commands
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 BUILD = os.environ["GLOVEPOSE_BUILD_DIR"]
@@ -42,16 +44,7 @@ def read_safetensors(path):
 
 
 def readme_commands():
-    text = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
-    section = text[text.index("## Your own glove"):]
-    section = section[: section.index("\n## ", 3)]
-    block = re.search(r"```sh\n(.*?)```", section, re.S).group(1)
-    commands = []
-    for line in block.splitlines():
-        line = line.split("    #")[0].strip()
-        if line:
-            commands.append(line)
-    return commands
+    return sh_commands("## Your own glove")
 
 
 def run(command, cwd):

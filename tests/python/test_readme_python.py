@@ -9,25 +9,19 @@ and must print the version and the shipped model's 44 cells.
 Environment: GLOVEPOSE_BUILD_DIR (the build tree).
 """
 import os
-import re
 import shlex
 import subprocess
 import sys
 import tempfile
 
+from readme_blocks import sh_commands
+
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 BUILD = os.environ["GLOVEPOSE_BUILD_DIR"]
 
 
-def readme_block():
-    text = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
-    section = text[text.index("## Python"):]
-    section = section[: section.index("\n## ", 3)]
-    return re.search(r"```sh\n(.*?)```", section, re.S).group(1).splitlines()
-
-
 def main():
-    lines = [line.split("  #")[0].strip() for line in readme_block() if line.strip()]
+    lines = sh_commands("## Python")
     if len(lines) != 4:
         sys.exit(f"FAIL: expected the README's 4 install commands, found {lines}")
     env = {k: v for k, v in os.environ.items() if k not in ("GLOVEPOSE_LIBRARY", "PYTHONPATH", "VIRTUAL_ENV")}
