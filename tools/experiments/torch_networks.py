@@ -34,7 +34,7 @@ from torch import nn
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 
-from glovepose_ref import import_model, safetensors_io  # noqa: E402
+from glovepose_ref import import_model, safetensors_io, use_fast_transposed_convolution  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
 from glovepose_ref.glove import glove_settings, glove_tables  # noqa: E402
 from glovepose_ref.paper_networks import PatchDiscriminator, build, parameters, sized  # noqa: E402
@@ -43,31 +43,6 @@ from train_torch import Pipeline, id_list, initialize, make_samples, mean_error_
 
 LSTM_WINDOW = 5  # frames (appendix A)
 L1_WEIGHT = 100.0  # pix2pix's weight of the L1 term of the CGAN's generator loss
-
-
-def transposed_convolution(self: nn.ConvTranspose2d, x: torch.Tensor, output_size=None) -> torch.Tensor:
-    """nn.ConvTranspose2d.forward as the equivalent convolution: zeros between the input's pixels,
-    padding k - 1 - p, the kernel flipped with its channel axes swapped. The same numbers (checked in
-    main); Debian's PyTorch 1.13 runs its own transposed convolution on the CPU 10-40x slower at
-    these 1x1-3x3 sizes (9.3 s vs 0.25 s for a forward and backward of dec1, batch 4096)."""
-    if self.groups != 1 or self.dilation != (1, 1) or self.output_padding != (0, 0) or output_size is not None:
-        return nn.ConvTranspose2d._original_forward(self, x, output_size)
-    n, c, h, w = x.shape
-    (sh, sw), (kh, kw), (ph, pw) = self.stride, self.kernel_size, self.padding
-    spread = x.new_zeros(n, c, (h - 1) * sh + 1, (w - 1) * sw + 1)
-    spread[:, :, ::sh, ::sw] = x
-    return nn.functional.conv2d(spread, self.weight.flip(2, 3).transpose(0, 1), self.bias, padding=(kh - 1 - ph, kw - 1 - pw))
-
-
-def use_fast_transposed_convolution() -> None:
-    nn.ConvTranspose2d._original_forward = nn.ConvTranspose2d.forward
-    nn.ConvTranspose2d.forward = transposed_convolution
-    torch.manual_seed(0)
-    for k, size in ((4, 1), (3, 2), (3, 3)):  # the U-Net's and ResNet's up-convolutions
-        layer, x = nn.ConvTranspose2d(6, 5, k, stride=2, padding=1), torch.randn(3, 6, size, size)
-        gap = (layer(x) - nn.ConvTranspose2d._original_forward(layer, x)).abs().max()
-        if not gap < 1e-5:
-            die(f"the convolution form of a transposed convolution differs from PyTorch's by {float(gap)}")
 
 
 def die(message: str) -> None:

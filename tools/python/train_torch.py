@@ -42,7 +42,7 @@ from torch import nn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from glovepose_ref import FCN, UNet, export_model, safetensors_io  # noqa: E402
+from glovepose_ref import FCN, UNet, export_model, safetensors_io, use_fast_transposed_convolution  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
 from glovepose_ref.glove import DOF_NAMES, glove_settings, glove_tables, median_frames  # noqa: E402
 
@@ -227,6 +227,7 @@ def main() -> int:
             device = torch.device("cuda", int(os.environ.get("LOCAL_RANK", 0)))
             torch.cuda.set_device(device)
         torch.set_num_threads(max(1, (os.cpu_count() or 1) // int(os.environ.get("LOCAL_WORLD_SIZE", world))))
+    use_fast_transposed_convolution()
     if args.batch % world:
         sys.exit(f"train_torch: --batch {args.batch} is not a multiple of the {world} processes")
 
