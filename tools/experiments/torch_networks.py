@@ -155,7 +155,7 @@ def main() -> int:
 
     if args.check_model:
         model = import_model(args.check_model)
-        kind, history = "file", 1
+        history = 1
         model = Pipeline(model, cell_slots, dof_slots) if isinstance(model, UNet) else model
     else:
         kind, width = parse_model(args.model, len(cell_slots))
