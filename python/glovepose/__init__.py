@@ -9,6 +9,7 @@
     estimator.finish_calibration()
     angles = estimator.angles()    # (25,) radians, DOF_NAMES order
     joints = estimator.joints()    # (21, 7): position x, y, z (m), rotation quaternion x, y, z, w
+    hand = estimator.xr_joints(t)  # OpenXR's 26 joints at time t (wrist frame): positions, orientations, ...
 
 The library is found through $GLOVEPOSE_LIBRARY, the system's library path (an installed
 glovepose), the lib/ of this Python's prefix (a virtual environment glovepose was installed into),
@@ -24,8 +25,11 @@ import numpy as np
 from . import _library
 from .dataset import load_dataset
 
-__all__ = ["PoseModel", "Estimator", "Pose", "GloveposeError", "load_dataset", "DOF_NAMES", "JOINT_NAMES",
-           "Status", "OK", "SOLVED", "NOT_READY", "UNCALIBRATED"]
+__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "GloveposeError", "InputError", "load_dataset", "DOF_NAMES",
+           "JOINT_NAMES", "JOINT_PARENTS",
+           "XR_JOINT_NAMES", "XR_JOINT_PARENTS", "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED",
+           "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID", "XR_ANGULAR_VELOCITY_VALID", "Status", "OK", "SOLVED", "NOT_READY",
+           "UNCALIBRATED"]
 
 _lib = _library.load()
 
@@ -58,6 +62,17 @@ _WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
 DOF_NAMES = tuple(_lib.glovepose_dof_name(d).decode() for d in range(_library.DOF_COUNT))
 #: The 21 joints of joints(), in order.
 JOINT_NAMES = tuple(_lib.glovepose_joint_name(j).decode() for j in range(_library.JOINT_COUNT))
+#: The parent of each of the 21 joints (-1 for the palm).
+JOINT_PARENTS = tuple(_lib.glovepose_joint_parent(j) for j in range(_library.JOINT_COUNT))
+#: OpenXR's 26 hand joints of xr_joints(), in XrHandJointEXT order ("palm", "wrist", "thumb_metacarpal", ...).
+XR_JOINT_NAMES = tuple(_lib.glovepose_xr_joint_name(j).decode() for j in range(_library.XR_JOINT_COUNT))
+#: The parent of each OpenXR joint (-1 for the wrist; the palm and the metacarpals hang off the wrist).
+XR_JOINT_PARENTS = tuple(_lib.glovepose_xr_joint_parent(j) for j in range(_library.XR_JOINT_COUNT))
+#: Bits of XrHand.location_flags (OpenXR's XrSpaceLocationFlags) and XrHand.velocity_flags (XrSpaceVelocityFlags).
+XR_ORIENTATION_VALID, XR_POSITION_VALID = _library.XR_ORIENTATION_VALID, _library.XR_POSITION_VALID
+XR_ORIENTATION_TRACKED, XR_POSITION_TRACKED = _library.XR_ORIENTATION_TRACKED, _library.XR_POSITION_TRACKED
+XR_LINEAR_VELOCITY_VALID, XR_ANGULAR_VELOCITY_VALID = _library.XR_LINEAR_VELOCITY_VALID, _library.XR_ANGULAR_VELOCITY_VALID
+_HANDS = {"right": _library.HAND_RIGHT, "left": _library.HAND_LEFT}
 
 version = _lib.glovepose_version().decode()
 
@@ -70,11 +85,29 @@ class GloveposeError(RuntimeError):
         self.code = code
 
 
+class InputError(GloveposeError, ValueError):
+    """A value the call cannot take: an array of the wrong length (code Status.SIZE_MISMATCH, the
+    message names the expected length) or a non-finite time (code Status.NON_FINITE). Both a
+    GloveposeError and a ValueError."""
+
+
 def _check(code: int) -> int:
     if code < 0:
         name = _lib.glovepose_result_name(code).decode()
         raise GloveposeError(code, f"{_lib.glovepose_last_error().decode()} ({name})")
     return code
+
+
+def _status(code: int, call: str, time: float, not_ready_ok: bool = False) -> None:
+    """The result of a call locating the hand at `time`: errors, a non-finite time and (unless
+    not_ready_ok) no pose yet raise; OK passes."""
+    _check(code)
+    if code == Status.NON_FINITE:
+        raise InputError(code, f"{call}: time {time!r}, expected a finite time (s) ({Status(code)})")
+    if code == Status.NOT_READY and not not_ready_ok:
+        raise GloveposeError(code, f"no pose yet: {call}() before any push returned SOLVED ({Status(code)})")
+    if code not in (Status.OK, Status.NOT_READY):
+        raise GloveposeError(code, f"{call}: unexpected status {Status(code)}")
 
 
 class _Closing:
@@ -125,24 +158,88 @@ class Pose:
         self.flags, self.sequence, self.rejected, self.valid = raw.flags, raw.sequence, raw.rejected, bool(raw.valid)
 
 
-class Estimator(_Closing):
-    """One glove stream through a model. Settings not given keep the library's defaults
-    (glovepose_estimator_config_default): readout_mean_window, readout_solve_every,
-    calibration_median_window, calibration_sample_period, calibration_min_relative_range,
-    calibration_clamp_limit, smoothing (bool), joint_transforms (bool), smoothing_frequency,
-    smoothing_min_cutoff, smoothing_beta, smoothing_d_cutoff."""
+class PredictedPose:
+    """The hand at a requested time (Estimator.pose_at): angles (25,) radians, within the joint
+    limits; rate (25,) rad/s, the recent poses' least-squares slope; time (s, the stream's clock)
+    as asked; horizon (s): the time located minus the newest pose's timestamp (> 0: predicted
+    ahead, at most max_prediction); predicted (extrapolated past the newest pose), clamped (asked
+    further ahead than max_prediction: located at the bound), has_rate (rate from two poses or
+    more), trusted (the newest pose has no fault flag), flags (the newest pose's)."""
 
-    def __init__(self, model: PoseModel, **settings):
-        config = _library.EstimatorConfig()
+    def __init__(self, raw: _library.PredictedPose):
+        self.angles = np.array(raw.angles[:], dtype=np.float64)
+        self.rate = np.array(raw.rate[:], dtype=np.float64)
+        self.time, self.horizon, self.flags = raw.time, raw.horizon, raw.flags
+        self.predicted, self.clamped, self.has_rate, self.trusted = (bool(raw.predicted), bool(raw.clamped), bool(raw.has_rate),
+                                                                     bool(raw.trusted))
+
+
+class XrHand:
+    """One hand's 26 OpenXR joints (XR_EXT_hand_tracking, XR_JOINT_NAMES order) at one time, in the
+    wrist joint's frame: metres, right-handed, the wrist the identity pose, fingers along -Z, the
+    back of the hand +Y, the thumb towards +X on a right hand and -X on a left one (an engine
+    composes them with the wrist pose its tracker reports). numpy arrays (float64 holding the
+    library's float32 values):
+
+    - positions (26, 3) m; orientations (26, 4) unit quaternions x, y, z, w (+Z along the bone away
+      from the tip, +Y out of the back of the finger); radii (26,) m; location_flags (26,) uint64,
+      XR_*_VALID / XR_*_TRACKED bits (tracked when the newest pose is trusted and not clamped);
+    - linear_velocities (26, 3) m/s; angular_velocities (26, 3) rad/s (axis times rate);
+      velocity_flags (26,) uint64, XR_*_VELOCITY_VALID bits (0 before two poses give a rate);
+    - active (False before the first pose: every flag 0, nothing to show, like OpenXR's isActive),
+      predicted, clamped (as PredictedPose), hand ("right" or "left"), time and horizon (s)."""
+
+    def __init__(self, raw: _library.XrHand):
+        locations, velocities = np.ctypeslib.as_array(raw.locations), np.ctypeslib.as_array(raw.velocities)
+        self.positions = locations["position"].astype(np.float64)
+        self.orientations = locations["orientation"].astype(np.float64)
+        self.radii = locations["radius"].astype(np.float64)
+        self.location_flags = locations["location_flags"].astype(np.uint64)
+        self.linear_velocities = velocities["linear_velocity"].astype(np.float64)
+        self.angular_velocities = velocities["angular_velocity"].astype(np.float64)
+        self.velocity_flags = velocities["velocity_flags"].astype(np.uint64)
+        self.active, self.predicted, self.clamped = bool(raw.active), bool(raw.predicted), bool(raw.clamped)
+        self.hand = "left" if raw.handedness == _library.HAND_LEFT else "right"
+        self.time, self.horizon = raw.time, raw.horizon
+
+
+def _new(struct: type):
+    """A struct of the ABI zeroed, with struct_size set, as its *_init function leaves it."""
+    value = struct()
+    value.struct_size = ctypes.sizeof(struct)
+    return value
+
+
+class Estimator(_Closing):
+    """One glove stream through a model, for a right (default) or left hand: hand="left" mirrors
+    the joints (x -> -x) for the same readings, as a left glove is the right one's sensor sheet
+    turned over; the angles are the same. Settings not given keep the library's defaults
+    (glovepose_estimator_config_default, glovepose_hand_options_default): readout_mean_window,
+    readout_solve_every, calibration_median_window, calibration_sample_period,
+    calibration_min_relative_range, calibration_clamp_limit, smoothing (bool), joint_transforms
+    (bool), smoothing_frequency, smoothing_min_cutoff, smoothing_beta, smoothing_d_cutoff, and for
+    pose_at / xr_joints: prediction_window (s of recent poses whose slope predicts ahead, 0.15) and
+    max_prediction (s past the newest pose predicted at most, 0.05)."""
+
+    def __init__(self, model: PoseModel, hand: str = "right", **settings):
+        if hand not in _HANDS:
+            raise ValueError(f"hand {hand!r}, expected one of {sorted(_HANDS)}")
+        config, options = _library.EstimatorConfig(), _library.HandOptions()
         _check(_lib.glovepose_estimator_config_default(ctypes.byref(config)))
-        fields = {name for name, _ in _library.EstimatorConfig._fields_} - {"struct_size"}
+        _check(_lib.glovepose_hand_options_default(ctypes.byref(options)))
+        options.handedness = _HANDS[hand]
+        fields = {name: struct for struct in (config, options) for name, _ in struct._fields_}
+        for name in ("struct_size", "handedness"):
+            del fields[name]
         for name, value in settings.items():
             if name not in fields:
                 raise TypeError(f"unknown setting {name!r}, expected one of {sorted(fields)}")
-            setattr(config, name, int(value) if isinstance(value, bool) else value)
+            setattr(fields[name], name, int(value) if isinstance(value, bool) else value)
         self._model = model  # kept alive with the estimator
+        self.hand = hand
         self._handle = ctypes.c_void_p()
-        _check(_lib.glovepose_estimator_create(model._handle, ctypes.byref(config), ctypes.byref(self._handle)))
+        _check(_lib.glovepose_estimator_create_for_hand(model._handle, ctypes.byref(config), ctypes.byref(options),
+                                                        ctypes.byref(self._handle)))
         self._pose = _library.Pose()
         self._pose.struct_size = ctypes.sizeof(_library.Pose)
         self._joints = (_library.Joint * _library.JOINT_COUNT)()
@@ -185,6 +282,24 @@ class Estimator(_Closing):
         if not self.pose().valid:
             raise GloveposeError(int(Status.NOT_READY), "no pose yet: joints() before any push returned SOLVED (not ready)")
         return np.array([list(j.position) + list(j.rotation) for j in self._joints], dtype=np.float64)
+
+    def pose_at(self, time: float) -> PredictedPose:
+        """The pose at `time` (s, the stream's clock of the timestamps pushed): at or before the
+        newest pose, interpolated between the recent poses (the newest pose itself at its
+        timestamp); after it, extrapolated along their slope for at most max_prediction seconds and
+        held within the joint limits. Before the first pose raises GloveposeError with code
+        NOT_READY, as angles() does; a NaN or infinite time raises InputError (code NON_FINITE)."""
+        out = _new(_library.PredictedPose)
+        _status(_lib.glovepose_estimator_get_pose_at(self._handle, time, ctypes.byref(out)), "pose_at", time)
+        return PredictedPose(out)
+
+    def xr_joints(self, time: float) -> XrHand:
+        """OpenXR's 26 hand joints at `time` (s, the stream's clock), located from pose_at(time),
+        with velocities. Before the first pose returns an XrHand with active False and every flag
+        0 (an engine polls every frame; OpenXR's isActive); a NaN or infinite time raises InputError."""
+        out = _new(_library.XrHand)
+        _status(_lib.glovepose_estimator_get_xr_joints(self._handle, time, ctypes.byref(out)), "xr_joints", time, not_ready_ok=True)
+        return XrHand(out)
 
     def reset(self) -> None:
         _check(_lib.glovepose_estimator_reset(self._handle))

@@ -9,6 +9,13 @@ import sys
 from pathlib import Path
 
 DOF_COUNT, JOINT_COUNT = 25, 21
+#: GLOVEPOSE_XR_JOINT_COUNT: OpenXR's hand joints (XR_HAND_JOINT_COUNT_EXT).
+XR_JOINT_COUNT = 26
+#: GLOVEPOSE_HAND_RIGHT / GLOVEPOSE_HAND_LEFT.
+HAND_RIGHT, HAND_LEFT = 0, 1
+#: GLOVEPOSE_XR_*: OpenXR's XrSpaceLocationFlags and XrSpaceVelocityFlags bits.
+XR_ORIENTATION_VALID, XR_POSITION_VALID, XR_ORIENTATION_TRACKED, XR_POSITION_TRACKED = 0x1, 0x2, 0x4, 0x8
+XR_LINEAR_VELOCITY_VALID, XR_ANGULAR_VELOCITY_VALID = 0x1, 0x2
 
 
 class EstimatorConfig(ctypes.Structure):
@@ -60,7 +67,82 @@ class CalibrationProgress(ctypes.Structure):
     ]
 
 
-_SIZES = {EstimatorConfig: 80, Pose: 448, Joint: 28, CalibrationProgress: 32}
+class HandOptions(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("handedness", ctypes.c_int32),
+        ("prediction_window", ctypes.c_double),
+        ("max_prediction", ctypes.c_double),
+    ]
+
+
+class PredictedPose(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("flags", ctypes.c_uint32),
+        ("angles", ctypes.c_double * DOF_COUNT),
+        ("rate", ctypes.c_double * DOF_COUNT),
+        ("time", ctypes.c_double),
+        ("horizon", ctypes.c_double),
+        ("predicted", ctypes.c_int32),
+        ("clamped", ctypes.c_int32),
+        ("has_rate", ctypes.c_int32),
+        ("trusted", ctypes.c_int32),
+    ]
+
+
+class CalibrationStep(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("step", ctypes.c_int32),
+        ("step_count", ctypes.c_int32),
+        ("pose", ctypes.c_float * DOF_COUNT),
+        ("start_seconds", ctypes.c_double),
+        ("seconds", ctypes.c_double),
+        ("name", ctypes.c_char * 32),
+        ("instruction", ctypes.c_char * 1024),
+    ]
+
+
+class XrJointLocation(ctypes.Structure):
+    _fields_ = [
+        ("location_flags", ctypes.c_uint64),
+        ("orientation", ctypes.c_float * 4),
+        ("position", ctypes.c_float * 3),
+        ("radius", ctypes.c_float),
+    ]
+
+
+class XrJointVelocity(ctypes.Structure):
+    _fields_ = [
+        ("velocity_flags", ctypes.c_uint64),
+        ("linear_velocity", ctypes.c_float * 3),
+        ("angular_velocity", ctypes.c_float * 3),
+    ]
+
+
+class XrHand(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", ctypes.c_uint32),
+        ("active", ctypes.c_int32),
+        ("predicted", ctypes.c_int32),
+        ("clamped", ctypes.c_int32),
+        ("handedness", ctypes.c_int32),
+        ("reserved", ctypes.c_int32),
+        ("time", ctypes.c_double),
+        ("horizon", ctypes.c_double),
+        ("locations", XrJointLocation * XR_JOINT_COUNT),
+        ("velocities", XrJointVelocity * XR_JOINT_COUNT),
+    ]
+
+
+# The sizes glovepose_c.h documents for ABI 1 (and its static_asserts hold the C compiler to).
+_SIZES = {EstimatorConfig: 80, Pose: 448, Joint: 28, CalibrationProgress: 32, HandOptions: 24, PredictedPose: 440,
+          CalibrationStep: 1184, XrJointLocation: 40, XrJointVelocity: 32, XrHand: 1912}
+# The function that fills each struct with the library's own sizeof(struct) in struct_size.
+_INITS = {EstimatorConfig: "glovepose_estimator_config_default", HandOptions: "glovepose_hand_options_default", Pose: "glovepose_pose_init",
+          CalibrationProgress: "glovepose_calibration_progress_init", CalibrationStep: "glovepose_calibration_step_init",
+          XrHand: "glovepose_xr_hand_init", PredictedPose: "glovepose_predicted_pose_init"}
 
 _P = ctypes.POINTER
 _VOID = ctypes.c_void_p
@@ -71,27 +153,52 @@ _SIGNATURES = {
     "glovepose_result_name": (ctypes.c_char_p, [ctypes.c_int32]),
     "glovepose_dof_name": (ctypes.c_char_p, [ctypes.c_int32]),
     "glovepose_joint_name": (ctypes.c_char_p, [ctypes.c_int32]),
+    "glovepose_joint_parent": (ctypes.c_int32, [ctypes.c_int32]),
+    "glovepose_xr_joint_name": (ctypes.c_char_p, [ctypes.c_int32]),
+    "glovepose_xr_joint_parent": (ctypes.c_int32, [ctypes.c_int32]),
     "glovepose_model_load": (ctypes.c_int32, [ctypes.c_char_p, ctypes.c_int32, ctypes.c_char_p, _P(_VOID)]),
     "glovepose_model_free": (None, [_VOID]),
     "glovepose_model_cell_count": (ctypes.c_int32, [_VOID]),
     "glovepose_model_row_count": (ctypes.c_int32, [_VOID]),
     "glovepose_model_glove_id": (ctypes.c_char_p, [_VOID]),
     "glovepose_model_cell_name": (ctypes.c_char_p, [_VOID, ctypes.c_int32]),
+    "glovepose_model_has_training_range": (ctypes.c_int32, [_VOID]),
+    "glovepose_model_calibration_step_count": (ctypes.c_int32, [_VOID]),
+    "glovepose_model_get_calibration_step": (ctypes.c_int32, [_VOID, ctypes.c_int32, _P(CalibrationStep)]),
     "glovepose_estimator_config_default": (ctypes.c_int32, [_P(EstimatorConfig)]),
     "glovepose_estimator_create": (ctypes.c_int32, [_VOID, _P(EstimatorConfig), _P(_VOID)]),
+    "glovepose_hand_options_default": (ctypes.c_int32, [_P(HandOptions)]),
+    "glovepose_estimator_create_for_hand": (ctypes.c_int32, [_VOID, _P(EstimatorConfig), _P(HandOptions), _P(_VOID)]),
     "glovepose_estimator_free": (None, [_VOID]),
     "glovepose_estimator_push_row": (ctypes.c_int32, [_VOID, ctypes.c_int32, ctypes.c_double, ctypes.c_double]),
     "glovepose_estimator_push_measurements": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), ctypes.c_int32, ctypes.c_double]),
     "glovepose_estimator_push_cells": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), ctypes.c_int32, ctypes.c_double, ctypes.c_double]),
     "glovepose_estimator_get_pose": (ctypes.c_int32, [_VOID, _P(Pose)]),
     "glovepose_estimator_get_joints": (ctypes.c_int32, [_VOID, _P(Joint), ctypes.c_int32]),
+    "glovepose_estimator_get_pose_at": (ctypes.c_int32, [_VOID, ctypes.c_double, _P(PredictedPose)]),
+    "glovepose_estimator_get_xr_joints": (ctypes.c_int32, [_VOID, ctypes.c_double, _P(XrHand)]),
+    "glovepose_estimator_get_cells": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), ctypes.c_int32]),
     "glovepose_estimator_reset": (ctypes.c_int32, [_VOID]),
+    "glovepose_latest_create": (ctypes.c_int32, [_P(_VOID)]),
+    "glovepose_latest_free": (None, [_VOID]),
+    "glovepose_latest_publish": (ctypes.c_int32, [_VOID, _VOID]),
+    "glovepose_latest_read": (ctypes.c_int32, [_VOID, _P(Pose), _P(Joint), ctypes.c_int32, _P(ctypes.c_uint64)]),
+    "glovepose_latest_get_xr_joints": (ctypes.c_int32, [_VOID, _VOID, ctypes.c_double, _P(XrHand)]),
     "glovepose_calibration_start": (ctypes.c_int32, [_VOID]),
     "glovepose_calibration_finish": (ctypes.c_int32, [_VOID]),
     "glovepose_calibration_cancel": (ctypes.c_int32, [_VOID]),
     "glovepose_calibration_get_progress": (ctypes.c_int32, [_VOID, _P(CalibrationProgress)]),
+    "glovepose_calibration_get_step": (ctypes.c_int32, [_VOID, _P(ctypes.c_int32), _P(ctypes.c_double)]),
     "glovepose_calibration_load": (ctypes.c_int32, [_VOID, ctypes.c_char_p]),
     "glovepose_calibration_save": (ctypes.c_int32, [_VOID, ctypes.c_char_p]),
+    "glovepose_calibration_use_training": (ctypes.c_int32, [_VOID]),
+    "glovepose_calibration_set_range": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), _P(ctypes.c_double), ctypes.c_int32]),
+    "glovepose_calibration_get_range": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), _P(ctypes.c_double), ctypes.c_int32]),
+    "glovepose_pose_init": (None, [_P(Pose)]),
+    "glovepose_calibration_progress_init": (None, [_P(CalibrationProgress)]),
+    "glovepose_calibration_step_init": (None, [_P(CalibrationStep)]),
+    "glovepose_xr_hand_init": (None, [_P(XrHand)]),
+    "glovepose_predicted_pose_init": (None, [_P(PredictedPose)]),
 }
 
 
@@ -113,6 +220,25 @@ def _candidates() -> list[str]:
     return found
 
 
+def library_size(lib: ctypes.CDLL, struct: type) -> int:
+    """sizeof(struct) in the library: what its init / _default function writes into struct_size,
+    called on a buffer larger than any struct of the ABI."""
+    buffer = (ctypes.c_uint8 * 8192)()
+    init = getattr(lib, _INITS[struct])
+    init(ctypes.cast(buffer, init.argtypes[0]))
+    return ctypes.c_uint32.from_buffer(buffer).value
+
+
+def _check_layouts(lib: ctypes.CDLL, path: str) -> None:
+    """The structs above against the documented sizes and the library's own sizeof: a mismatch
+    means a library of another ABI (or a mistake here), which would corrupt memory."""
+    for struct, size in _SIZES.items():
+        sizes = {ctypes.sizeof(struct), size} | ({library_size(lib, struct)} if struct in _INITS else set())
+        if len(sizes) != 1:
+            raise OSError(f"{path}: {struct.__name__} is {ctypes.sizeof(struct)} bytes here, {size} documented"
+                          + (f", {library_size(lib, struct)} in the library" if struct in _INITS else ""))
+
+
 def load() -> ctypes.CDLL:
     """libglovepose_c with the signatures above; raises OSError naming the places tried."""
     tried = []
@@ -127,7 +253,6 @@ def load() -> ctypes.CDLL:
             fn.restype, fn.argtypes = restype, argtypes
         if lib.glovepose_abi_version() != 1:
             raise OSError(f"{path}: ABI version {lib.glovepose_abi_version()}, expected 1")
-        for struct, size in _SIZES.items():
-            assert ctypes.sizeof(struct) == size, f"{struct.__name__}: {ctypes.sizeof(struct)} bytes, expected {size}"
+        _check_layouts(lib, path)
         return lib
     raise OSError("libglovepose_c not found; set GLOVEPOSE_LIBRARY to its path. Tried: " + "; ".join(tried))

@@ -7,10 +7,21 @@
   round trip): angles, raw angles, joints, sequences.
 - A malformed model raises GloveposeError carrying the library's message.
 - load_dataset gives the values `glovepose simulate --csv` writes for the same data.
+- The ctypes structs have the C ABI's layout: the sizes the library's own *_init functions write
+  and the sizes and offsets capi/ documents (its static_asserts, the header, the C test).
+- OpenXR joints are the joint list's joints in another frame (a rigid motion, the same for every
+  pose), with constant bone lengths along XR_JOINT_PARENTS and velocities equal to the finite
+  differences of the positions and orientations; a left hand mirrors the right one (x -> -x) for
+  the same readings; pose_at equals the newest pose at its time, interpolates linearly between
+  two poses, and extrapolates along the least-squares slope of the poses in prediction_window,
+  for at most max_prediction.
 
 Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CPP_REFERENCE, GLOVEPOSE_CLI.
 """
+import ctypes
+import json
 import os
+import re
 import subprocess
 import tempfile
 import unittest
@@ -19,9 +30,50 @@ from pathlib import Path
 import numpy as np
 
 import glovepose
+from glovepose import _library
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "models" / "glovepose_fcn512.safetensors"
+
+
+def stream(dataset: dict, *estimators):
+    """Pushes a simulated session's cells through each estimator, calibrating on the fly over its
+    calibration frames; yields the frame index after every frame all of them solved."""
+    end = int(np.argmax(dataset["kind"] == 0))
+    cells, stamps = dataset["cells"].astype(np.float64), dataset["timestamps"]
+    for e in estimators:
+        e.start_calibration()
+    for f in range(len(cells)):
+        if f == end:
+            for e in estimators:
+                e.finish_calibration()
+        if [e.push_cells(cells[f], stamps[f]) for e in estimators] == [glovepose.SOLVED] * len(estimators) and f > end:
+            yield f
+
+
+def joint_limits():
+    """The shipped model's joint limits (radians, DOF_NAMES order) from its file's metadata."""
+    metadata = glovepose.load_dataset(MODEL)["metadata"]
+    return np.array(json.loads(metadata["joint_limits_min"])), np.array(json.loads(metadata["joint_limits_max"]))
+
+
+def rigid_fit(a: np.ndarray, b: np.ndarray):
+    """Kabsch: the rotation R and translation t minimising |R a + t - b| over the rows, and the
+    largest residual."""
+    ca, cb = a.mean(0), b.mean(0)
+    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    translation = cb - rotation @ ca
+    return rotation, translation, float(np.abs(a @ rotation.T + translation - b).max())
+
+
+def quaternion_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton products of rows x, y, z, w."""
+    x1, y1, z1, w1 = p.T
+    x2, y2, z2, w2 = q.T
+    return np.stack([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2], axis=1)
 
 
 class Session(unittest.TestCase):
@@ -85,6 +137,178 @@ class Session(unittest.TestCase):
         self.assertEqual(estimator.calibration_progress()["source"], 1)  # calibrated on the fly
         estimator.close()
         model.close()
+
+    def test_xr_joints_are_the_joint_lists_in_the_wrist_frame(self):
+        data = glovepose.load_dataset(self.dataset)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model, joint_transforms=True) as estimator:
+            before = estimator.xr_joints(0.0)  # no pose yet: inactive, nothing valid
+            self.assertFalse(before.active)
+            self.assertEqual(int(before.location_flags.max()), 0)
+            # The joints both lists have (the joint list's "pinky" is OpenXR's "little"; the palms differ).
+            names = [n.replace("pinky", "little") for n in glovepose.JOINT_NAMES]
+            shared = [n for n in names if n in glovepose.XR_JOINT_NAMES and n != "palm"]
+            self.assertEqual(len(shared), 20)
+            ours, xr = [names.index(n) for n in shared], [glovepose.XR_JOINT_NAMES.index(n) for n in shared]
+            bones = [(j, p) for j, p in enumerate(glovepose.XR_JOINT_PARENTS) if p >= 0]
+            self.assertEqual(len(bones), 25)  # a tree: every joint but the wrist has a parent
+            rotations, lengths, worst = [], [], 0.0
+            for _ in stream(data, estimator):
+                pose, joints = estimator.pose(), estimator.joints()
+                hand = estimator.xr_joints(pose.timestamp)
+                self.assertEqual(hand.positions.shape, (26, 3))
+                self.assertEqual(hand.orientations.shape, (26, 4))
+                self.assertEqual((hand.radii.shape, hand.location_flags.shape, hand.linear_velocities.shape,
+                                  hand.angular_velocities.shape, hand.velocity_flags.shape), ((26,), (26,), (26, 3), (26, 3), (26,)))
+                self.assertTrue(hand.active)
+                self.assertFalse(hand.predicted)
+                self.assertEqual((hand.hand, hand.time, hand.horizon), ("right", pose.timestamp, 0.0))
+                valid = glovepose.XR_POSITION_VALID | glovepose.XR_ORIENTATION_VALID
+                self.assertTrue(all(int(f) & valid == valid for f in hand.location_flags))
+                self.assertTrue(np.all((hand.radii > 0.003) & (hand.radii < 0.02)))
+                wrist = glovepose.XR_JOINT_NAMES.index("wrist")
+                np.testing.assert_array_equal(hand.positions[wrist], [0, 0, 0])
+                np.testing.assert_allclose(hand.orientations[wrist], [0, 0, 0, 1], rtol=0, atol=1e-7)
+                np.testing.assert_allclose(np.linalg.norm(hand.orientations, axis=1), 1.0, atol=1e-6)
+                rotation, translation, residual = rigid_fit(joints[ours, :3], hand.positions[xr])
+                worst = max(worst, residual)
+                self.assertGreater(np.linalg.det(rotation), 0.0)  # a rotation, not a mirror
+                rotations.append(np.concatenate([rotation.ravel(), translation]))
+                lengths.append([np.linalg.norm(hand.positions[j] - hand.positions[p]) for j, p in bones])
+            self.assertGreater(len(rotations), 100)
+            self.assertLess(worst, 2e-6)  # metres: float32 positions of a hand 0.2 m long
+            # One fixed frame change for every pose, and bones that keep their length.
+            self.assertLess(float(np.ptp(rotations, axis=0).max()), 1e-5)
+            self.assertLess(float(np.ptp(lengths, axis=0).max()), 1e-6)
+            self.assertLess(hand.positions[glovepose.XR_JOINT_NAMES.index("middle_proximal"), 2], -0.05)  # fingers along -Z
+
+    def test_left_hand_mirrors_the_right_one(self):
+        data = glovepose.load_dataset(self.dataset)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model, joint_transforms=True) as right, \
+                glovepose.Estimator(model, hand="left", joint_transforms=True) as left:
+            self.assertEqual((right.hand, left.hand), ("right", "left"))
+            mirror_q = np.array([1.0, -1.0, -1.0, 1.0])  # S R S, S = diag(-1, 1, 1): the quaternion's y and z negate
+            count = 0
+            for _ in stream(data, right, left):
+                count += 1
+                np.testing.assert_array_equal(left.angles(), right.angles())  # the same model, the same readings
+                r, l = right.joints(), left.joints()
+                np.testing.assert_array_equal(l[:, 0], -r[:, 0])
+                np.testing.assert_array_equal(l[:, 1:3], r[:, 1:3])
+                same_rotation = np.abs((l[:, 3:] * r[:, 3:] * mirror_q).sum(axis=1))  # |<q_l, mirrored q_r>|: 1 when equal up to sign
+                np.testing.assert_allclose(same_rotation, 1.0, atol=1e-6)
+                t = right.pose().timestamp + 0.01
+                rx, lx = right.xr_joints(t), left.xr_joints(t)
+                self.assertEqual((rx.hand, lx.hand), ("right", "left"))
+                np.testing.assert_array_equal(lx.positions, rx.positions * [-1, 1, 1])
+                np.testing.assert_array_equal(lx.orientations, rx.orientations * mirror_q)
+                np.testing.assert_array_equal(lx.linear_velocities, rx.linear_velocities * [-1, 1, 1])
+                np.testing.assert_array_equal(lx.angular_velocities, rx.angular_velocities * [1, -1, -1])  # an axis: a pseudovector
+                np.testing.assert_array_equal(lx.radii, rx.radii)
+                thumb = glovepose.XR_JOINT_NAMES.index("thumb_tip")
+                self.assertGreater(rx.positions[thumb, 0], 0.0)  # the thumb towards +X on a right hand
+                self.assertLess(lx.positions[thumb, 0], 0.0)
+            self.assertGreater(count, 100)
+        with glovepose.PoseModel(MODEL) as model, self.assertRaises(ValueError):
+            glovepose.Estimator(model, hand="both")
+
+    def test_pose_at_interpolates_and_predicts_along_the_recent_slope(self):
+        data = glovepose.load_dataset(self.dataset)
+        window, bound = 0.09, 0.03  # 5.4 frames of 60 Hz: no pose on the window's edge
+        low, high = joint_limits()
+        with glovepose.PoseModel(MODEL) as model, \
+                glovepose.Estimator(model, prediction_window=window, max_prediction=bound) as estimator:
+            with self.assertRaises(glovepose.GloveposeError) as caught:
+                estimator.pose_at(0.0)
+            self.assertEqual(caught.exception.code, glovepose.NOT_READY)
+            history, checked, unclamped = [], 0, 0
+            for _ in stream(data, estimator):
+                pose = estimator.pose()
+                history.append((pose.timestamp, pose.angles))
+                now = estimator.pose_at(pose.timestamp)
+                np.testing.assert_array_equal(now.angles, pose.angles)
+                self.assertEqual((now.predicted, now.clamped, now.horizon, now.time), (False, False, 0.0, pose.timestamp))
+                (t0, a0), (t1, a1) = history[-2:] if len(history) > 1 else history * 2
+                if t1 - history[0][0] <= window:
+                    continue  # the trend also holds the first pose, taken before stream() yields
+                between = estimator.pose_at(0.25 * t0 + 0.75 * t1)
+                np.testing.assert_allclose(between.angles, 0.25 * a0 + 0.75 * a1, rtol=0, atol=1e-12)
+                self.assertFalse(between.predicted)
+                # The rate: the least-squares line through the poses of the last `window` seconds.
+                times = np.array([t for t, _ in history if t1 - t <= window])
+                values = np.array([a for t, a in history if t1 - t <= window])
+                slope = np.polyfit(times - t1, values, 1)[0]
+                self.assertTrue(now.has_rate)
+                np.testing.assert_allclose(now.rate, slope, rtol=1e-6, atol=1e-6)
+                ahead = estimator.pose_at(t1 + 0.02)
+                self.assertTrue(ahead.predicted)
+                self.assertFalse(ahead.clamped)
+                self.assertAlmostEqual(ahead.horizon, 0.02, delta=1e-12)
+                # Along the rate, held within the model's joint limits (its metadata, read here without the library).
+                along = a1 + ahead.rate * ahead.horizon
+                np.testing.assert_allclose(ahead.angles, np.clip(along, low, high), rtol=0, atol=1e-12)
+                unclamped += bool(np.all((along > low) & (along < high)))
+                far = estimator.pose_at(t1 + 100.0)
+                self.assertTrue(far.clamped)
+                self.assertEqual(far.horizon, bound)
+                checked += 1
+            self.assertGreater(checked, 100)
+            self.assertGreater(unclamped, 20)
+            for bad in (float("nan"), float("inf")):
+                with self.assertRaises(glovepose.InputError) as caught:
+                    estimator.pose_at(bad)
+                self.assertEqual(caught.exception.code, glovepose.Status.NON_FINITE)
+                self.assertIsInstance(caught.exception, ValueError)
+                with self.assertRaises(ValueError):
+                    estimator.xr_joints(bad)
+
+    def test_xr_velocities_are_the_joints_rates_of_change(self):
+        data = glovepose.load_dataset(self.dataset)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            checked, dt = 0, 1e-4
+            low, high = joint_limits()
+            for _ in stream(data, estimator):
+                pose = estimator.pose()
+                t = pose.timestamp + 0.02
+                ahead = estimator.pose_at(t)
+                if not all(np.all((a > low + 1e-3) & (a < high - 1e-3)) for a in (ahead.angles, pose.angles + ahead.rate * (0.02 + dt))):
+                    continue  # held at a joint limit near t: not moving along the rate
+                before, hand, after = estimator.xr_joints(t - dt), estimator.xr_joints(t), estimator.xr_joints(t + dt)
+                self.assertTrue(all(int(f) == glovepose.XR_LINEAR_VELOCITY_VALID | glovepose.XR_ANGULAR_VELOCITY_VALID
+                                    for f in hand.velocity_flags))
+                linear = (after.positions - before.positions) / (2 * dt)
+                turn = quaternion_product(after.orientations, before.orientations * [-1, -1, -1, 1])  # after * before^-1
+                angular = turn[:, :3] * np.sign(turn[:, 3:]) / dt  # 2 sin(angle / 2) axis / (2 dt)
+                # Up to 0.4 m/s and 11 rad/s here; float32 positions differenced over 0.2 ms leave ~1e-4.
+                self.assertLess(float(np.abs(linear - hand.linear_velocities).max()), 5e-4)
+                self.assertLess(float(np.abs(angular - hand.angular_velocities).max()), 5e-3)
+                checked += 1
+            self.assertGreater(checked, 20)
+
+
+class Layout(unittest.TestCase):
+    STRUCTS = {"glovepose_estimator_config": _library.EstimatorConfig, "glovepose_hand_options": _library.HandOptions,
+               "glovepose_pose": _library.Pose, "glovepose_joint": _library.Joint, "glovepose_predicted_pose": _library.PredictedPose,
+               "glovepose_calibration_progress": _library.CalibrationProgress, "glovepose_calibration_step": _library.CalibrationStep,
+               "glovepose_xr_joint_location": _library.XrJointLocation, "glovepose_xr_joint_velocity": _library.XrJointVelocity,
+               "glovepose_xr_hand": _library.XrHand}
+
+    def test_structs_have_the_libraries_sizes(self):
+        for struct, function in _library._INITS.items():
+            self.assertEqual(ctypes.sizeof(struct), _library.library_size(glovepose._lib, struct), function)
+        self.assertEqual(len(_library._INITS), 7)  # every struct with a struct_size
+
+    def test_structs_have_the_documented_sizes_and_offsets(self):
+        capi = ROOT / "capi"
+        text = "\n".join((capi / name).read_text() for name in ("glovepose_c.h", "glovepose_c.cpp", "tests/test_capi.c"))
+        sizes = re.findall(r"sizeof\((glovepose_\w+)\) (?:== |\()(\d+)", text)
+        offsets = re.findall(r"offsetof\((glovepose_\w+), (\w+)\) == (\d+)", text)
+        self.assertEqual({name for name, _ in sizes}, set(self.STRUCTS))  # every struct of the ABI is documented, and here
+        self.assertGreaterEqual(len(offsets), 8)
+        for name, size in sizes:
+            self.assertEqual(ctypes.sizeof(self.STRUCTS[name]), int(size), name)
+        for name, field, offset in offsets:
+            self.assertEqual(getattr(self.STRUCTS[name], field).offset, int(offset), f"{name}.{field}")
+        self.assertEqual(_library.XrHand.locations.offset + 26 * 40, _library.XrHand.velocities.offset)
 
 
 class Errors(unittest.TestCase):
