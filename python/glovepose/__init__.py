@@ -25,7 +25,8 @@ import numpy as np
 from . import _library
 from .dataset import load_dataset
 
-__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "GloveposeError", "InputError", "load_dataset", "DOF_NAMES",
+__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "CalibrationStep", "CalibrationProgress", "CalibrationSource",
+           "GloveposeError", "InputError", "load_dataset", "DOF_NAMES",
            "JOINT_NAMES", "JOINT_PARENTS",
            "XR_JOINT_NAMES", "XR_JOINT_PARENTS", "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED",
            "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID", "XR_ANGULAR_VELOCITY_VALID", "Status", "OK", "SOLVED", "NOT_READY",
@@ -57,6 +58,14 @@ if any(str(s) == "unknown result" for s in Status) or _lib.glovepose_result_name
     raise ImportError("glovepose: the C library's per-frame statuses differ from glovepose.Status (a library of another version)")
 OK, SOLVED, NOT_READY, UNCALIBRATED = Status.OK, Status.SOLVED, Status.NOT_READY, Status.UNCALIBRATED
 _WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
+
+
+class CalibrationSource(enum.IntEnum):
+    """Where the calibration range in use comes from (glovepose_c.h's GLOVEPOSE_CALIBRATION_*)."""
+    NONE = 0        #: none yet: no pose can be computed
+    ON_THE_FLY = 1  #: this user's on-the-fly calibration (start_calibration ... finish_calibration)
+    USER = 2        #: set or loaded by the caller (load_calibration)
+    TRAINING = 3    #: the model's training-set range (expect larger errors than with the user's own)
 
 #: The 25 DoFs of the hand model, in the order of every angle array.
 DOF_NAMES = tuple(_lib.glovepose_dof_name(d).decode() for d in range(_library.DOF_COUNT))
@@ -110,6 +119,13 @@ def _status(code: int, call: str, time: float, not_ready_ok: bool = False) -> No
         raise GloveposeError(code, f"{call}: unexpected status {Status(code)}")
 
 
+def _new(struct: type):
+    """A struct of the ABI zeroed, with struct_size set, as its *_init function leaves it."""
+    value = struct()
+    value.struct_size = ctypes.sizeof(struct)
+    return value
+
+
 class _Closing:
     """close() on leaving a with-block and when collected."""
 
@@ -126,8 +142,27 @@ class _Closing:
         self.close()
 
 
+class CalibrationStep:
+    """One step of a model's guided calibration sequence (docs/calibration.md), what to show the
+    user: index (0-based) of step_count; name (a short id, e.g. "flat_on_table"); instruction
+    (what to tell the user); pose (25,) radians, DOF_NAMES order: the pose to copy; start_seconds
+    (after the sequence's first calibration frame) and seconds (how long it lasts)."""
+
+    def __init__(self, raw: _library.CalibrationStep):
+        self.index, self.step_count = raw.step, raw.step_count
+        self.name, self.instruction = raw.name.decode("utf-8"), raw.instruction.decode("utf-8")
+        self.pose = np.array(raw.pose[:], dtype=np.float64)
+        self.start_seconds, self.seconds = raw.start_seconds, raw.seconds
+
+    def __repr__(self) -> str:
+        return f"CalibrationStep({self.index}, {self.name!r}, {self.start_seconds:g}..{self.start_seconds + self.seconds:g} s)"
+
+
 class PoseModel(_Closing):
-    """A model file (weights_format.md) with its glove; shared by any number of estimators."""
+    """A model file (weights_format.md) with its glove; shared by any number of estimators.
+    cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names, and
+    calibration_steps: the model's guided calibration sequence, a tuple of CalibrationStep (empty
+    when the model's calibration is min-max only)."""
 
     def __init__(self, path: str, weights: str = "f32", glove: str | None = None):
         if weights not in _WEIGHTS:
@@ -139,6 +174,12 @@ class PoseModel(_Closing):
         self.row_count = _lib.glovepose_model_row_count(self._handle)
         self.glove_id = _lib.glovepose_model_glove_id(self._handle).decode()
         self.cell_names = tuple(_lib.glovepose_model_cell_name(self._handle, c).decode() for c in range(self.cell_count))
+        steps = []
+        for k in range(_lib.glovepose_model_calibration_step_count(self._handle)):
+            step = _new(_library.CalibrationStep)
+            _check(_lib.glovepose_model_get_calibration_step(self._handle, k, ctypes.byref(step)))
+            steps.append(CalibrationStep(step))
+        self.calibration_steps = tuple(steps)
 
     def close(self) -> None:
         """Releases the model (estimators made from it keep it alive until they are closed)."""
@@ -203,11 +244,23 @@ class XrHand:
         self.time, self.horizon = raw.time, raw.horizon
 
 
-def _new(struct: type):
-    """A struct of the ABI zeroed, with struct_size set, as its *_init function leaves it."""
-    value = struct()
-    value.struct_size = ctypes.sizeof(struct)
-    return value
+class CalibrationProgress:
+    """How far an on-the-fly calibration has come, and the range in use: collecting (between
+    start_calibration and finish/cancel), frames (taken so far), frames_needed (before
+    finish_calibration can succeed), ready (it would now), source (CalibrationSource of the range in
+    use), flat_cells (cells of that range too flat to normalise by; 0 without a range); with a
+    guided sequence, step (the CalibrationStep under way; None before the first frame, after the
+    last step, when not collecting or without a sequence) and sequence_seconds (stream time since
+    the sequence's first frame, 0 before it)."""
+
+    def __init__(self, raw: _library.CalibrationProgress, step: CalibrationStep | None, sequence_seconds: float):
+        self.collecting, self.frames, self.frames_needed, self.ready = bool(raw.collecting), raw.frames, raw.frames_needed, bool(raw.ready)
+        self.source, self.flat_cells = CalibrationSource(raw.source), raw.flat_cells
+        self.step, self.sequence_seconds = step, sequence_seconds
+
+    def __repr__(self) -> str:
+        return (f"CalibrationProgress(collecting={self.collecting}, frames={self.frames}/{self.frames_needed}, ready={self.ready}, "
+                f"source={self.source.name}, flat_cells={self.flat_cells}, step={self.step!r}, sequence_seconds={self.sequence_seconds:g})")
 
 
 class Estimator(_Closing):
@@ -314,12 +367,13 @@ class Estimator(_Closing):
     def cancel_calibration(self) -> None:
         _check(_lib.glovepose_calibration_cancel(self._handle))
 
-    def calibration_progress(self) -> dict:
-        """collecting, frames, frames_needed, ready, source, flat_cells."""
-        p = _library.CalibrationProgress()
-        p.struct_size = ctypes.sizeof(p)
+    def calibration_progress(self) -> CalibrationProgress:
+        """How far the calibration has come, the range in use, and the guided step under way (what
+        to show the user now: progress.step.instruction, progress.step.pose)."""
+        p, step, seconds = _new(_library.CalibrationProgress), ctypes.c_int32(), ctypes.c_double()
         _check(_lib.glovepose_calibration_get_progress(self._handle, ctypes.byref(p)))
-        return {name: getattr(p, name) for name, _ in p._fields_ if name != "struct_size"}
+        _check(_lib.glovepose_calibration_get_step(self._handle, ctypes.byref(step), ctypes.byref(seconds)))
+        return CalibrationProgress(p, self._model.calibration_steps[step.value] if step.value >= 0 else None, seconds.value)
 
     def save_calibration(self, path: str) -> None:
         _check(_lib.glovepose_calibration_save(self._handle, str(path).encode()))

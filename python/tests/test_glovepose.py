@@ -15,6 +15,8 @@
   the same readings; pose_at equals the newest pose at its time, interpolates linearly between
   two poses, and extrapolates along the least-squares slope of the poses in prediction_window,
   for at most max_prediction.
+- The guided calibration steps are the sequence in the model file's metadata (read here with json),
+  and the progress follows it step by step as frames arrive.
 
 Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CPP_REFERENCE, GLOVEPOSE_CLI.
 """
@@ -134,7 +136,8 @@ class Session(unittest.TestCase):
             worst = max(worst, float(np.abs(pose.angles - numbers[:25]).max()), float(np.abs(pose.raw_angles - numbers[25:50]).max()),
                         float(np.abs(joints.ravel() - numbers[50:]).max()))
         self.assertEqual(worst, 0.0)
-        self.assertEqual(estimator.calibration_progress()["source"], 1)  # calibrated on the fly
+        self.assertIs(estimator.calibration_progress().source, glovepose.CalibrationSource.ON_THE_FLY)
+        self.assertEqual(glovepose.CalibrationSource.ON_THE_FLY, 1)  # the C header's GLOVEPOSE_CALIBRATION_ON_THE_FLY
         estimator.close()
         model.close()
 
@@ -283,6 +286,67 @@ class Session(unittest.TestCase):
                 self.assertLess(float(np.abs(angular - hand.angular_velocities).max()), 5e-3)
                 checked += 1
             self.assertGreater(checked, 20)
+
+
+class GuidedCalibration(unittest.TestCase):
+    @staticmethod
+    def sequence() -> list:
+        """The steps of the guided sequence in the shipped model file's metadata (read without the library)."""
+        return json.loads(glovepose.load_dataset(MODEL)["metadata"]["pose_offset"])["sequence"]["steps"]
+
+    def test_steps_are_the_model_files_sequence(self):
+        expected = self.sequence()
+        with glovepose.PoseModel(MODEL) as model:
+            steps = model.calibration_steps
+            self.assertEqual(len(steps), 10)
+            self.assertEqual(len(steps), len(expected))
+            self.assertEqual(len(steps), glovepose._lib.glovepose_model_calibration_step_count(model._handle))
+            start = 0.0
+            for k, (step, e) in enumerate(zip(steps, expected)):
+                self.assertIsInstance(step, glovepose.CalibrationStep)
+                self.assertEqual((step.index, step.step_count, step.name, step.instruction), (k, 10, e["name"], e["instruction"]))
+                self.assertEqual(step.seconds, e["seconds"])
+                self.assertAlmostEqual(step.start_seconds, start, delta=1e-12)
+                start += e["seconds"]
+                degrees = np.array([e["pose_degrees"][name] for name in glovepose.DOF_NAMES])
+                self.assertEqual(step.pose.shape, (25,))
+                np.testing.assert_allclose(step.pose, np.radians(degrees), rtol=0, atol=1e-7)  # float32 in the C struct
+            self.assertEqual(steps[0].name, "flat_on_table")
+            self.assertIn("flat_on_table", repr(steps[0]))
+
+    def test_progress_follows_the_sequence_as_frames_arrive(self):
+        expected = self.sequence()
+        ends = np.cumsum([e["seconds"] for e in expected])
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            progress = estimator.calibration_progress()
+            self.assertEqual((progress.collecting, progress.frames, progress.ready, progress.step, progress.sequence_seconds),
+                             (False, 0, False, None, 0.0))
+            self.assertIs(progress.source, glovepose.CalibrationSource.NONE)
+            estimator.start_calibration()
+            progress = estimator.calibration_progress()
+            self.assertTrue(progress.collecting)
+            self.assertIsNone(progress.step)  # before the first frame
+            cells, start, seen = 20.0 + np.arange(44.0), 100.0, []
+            for k in range(int(ends[-1] * 60) + 60):  # the whole sequence at 60 Hz, and a second more
+                t = start + k / 60.0
+                cells[k % 44] += 0.5 if k % 2 else -0.5
+                self.assertIs(estimator.push_cells(cells, t), glovepose.UNCALIBRATED)  # no range yet: no pose
+                progress = estimator.calibration_progress()
+                self.assertEqual(progress.frames, k + 1)  # one frame per 1/60 s (calibration_sample_period)
+                self.assertEqual(progress.ready, progress.frames >= progress.frames_needed)
+                self.assertAlmostEqual(progress.sequence_seconds, t - start, delta=1e-9)
+                under_way = int(np.searchsorted(ends, t - start, side="right"))  # the step whose [start, end) holds the time
+                if under_way < len(expected):
+                    self.assertIs(progress.step, model.calibration_steps[under_way])
+                    seen.append(under_way)
+                else:
+                    self.assertIsNone(progress.step)  # past the last step
+            self.assertEqual(sorted(set(seen)), list(range(10)))
+            self.assertGreater(progress.frames_needed, 1)
+            estimator.finish_calibration()
+            progress = estimator.calibration_progress()
+            self.assertEqual((progress.collecting, progress.step), (False, None))
+            self.assertIs(progress.source, glovepose.CalibrationSource.ON_THE_FLY)
 
 
 class Layout(unittest.TestCase):
