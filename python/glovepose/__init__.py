@@ -107,6 +107,15 @@ def _check(code: int) -> int:
     return code
 
 
+def _vector(values, expected: int, call: str, what: str) -> np.ndarray:
+    """`values` as a contiguous float64 array of shape (expected,), else InputError naming `expected`."""
+    v = np.asarray(values, dtype=np.float64)
+    if v.shape != (expected,):
+        raise InputError(int(Status.SIZE_MISMATCH), f"{call}: an array of shape {v.shape}, expected {expected} values ({what}) "
+                         f"({Status.SIZE_MISMATCH})")
+    return np.ascontiguousarray(v)
+
+
 def _status(code: int, call: str, time: float, not_ready_ok: bool = False) -> None:
     """The result of a call locating the hand at `time`: errors, a non-finite time and (unless
     not_ready_ok) no pose yet raise; OK passes."""
@@ -298,20 +307,34 @@ class Estimator(_Closing):
         self._joints = (_library.Joint * _library.JOINT_COUNT)()
         self._cells = np.zeros(model.cell_count, dtype=np.float64)
 
-    # Streaming: each returns the per-frame status (SOLVED: a new pose); refusals of the call itself raise.
+    # Streaming. Each push returns the per-frame Status, as in C: SOLVED (a new pose), OK or
+    # NOT_READY (accepted, no new pose yet), UNCALIBRATED (solved, but no calibration range), or a
+    # rejected reading: NON_FINITE (NaN or infinite value or timestamp), NEGATIVE, UNKNOWN_INDEX (a
+    # row outside the wiring, or a model without wiring), TIMESTAMP_BACKWARDS. Returned, not raised:
+    # a glitch in one frame of a real-time stream is counted (Pose.rejected) and the stream goes on.
+    # An array of the wrong length is the caller's mistake, the same on every frame: push_measurements
+    # and push_cells raise InputError (a ValueError, code SIZE_MISMATCH) naming the expected length,
+    # and never return SIZE_MISMATCH.
     def push_row(self, row: int, value: float, timestamp: float) -> Status:
-        """One reading of measurement row `row` at `timestamp` (s, increasing)."""
+        """One reading of measurement row `row` (0 .. row_count-1) at `timestamp` (s, increasing);
+        returns the per-frame Status (a NaN value: NON_FINITE)."""
         return Status(_check(_lib.glovepose_estimator_push_row(self._handle, row, value, timestamp)))
 
     def push_measurements(self, values, timestamp: float) -> Status:
-        """A whole frame of row_count compound measurements."""
-        v = np.ascontiguousarray(values, dtype=np.float64)
+        """A whole frame of row_count compound measurements, solved at once; returns the per-frame
+        Status (NaN values: their rows are skipped and counted). An array whose shape is not
+        (row_count,) raises InputError naming row_count."""
+        rows = self._model.row_count
+        v = _vector(values, rows, "push_measurements", "the model's row_count") if rows else np.ascontiguousarray(values, np.float64)
         return Status(_check(_lib.glovepose_estimator_push_measurements(self._handle, v.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
                                                                         v.size, timestamp)))
 
     def push_cells(self, cells, timestamp: float, oldest_age: float = 0.0) -> Status:
-        """A frame of cell_count solved cell values."""
-        c = np.ascontiguousarray(cells, dtype=np.float64)
+        """A frame of cell_count solved cell capacitances (pF) at `timestamp`; `oldest_age` (s) is
+        the age of its oldest reading (0 if unknown). Returns the per-frame Status (a NaN anywhere:
+        NON_FINITE, the frame rejected). An array whose shape is not (cell_count,) raises InputError
+        naming cell_count."""
+        c = _vector(cells, self._model.cell_count, "push_cells", "the model's cell_count")
         return Status(_check(_lib.glovepose_estimator_push_cells(self._handle, c.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), c.size,
                                                                  timestamp, oldest_age)))
 

@@ -376,6 +376,33 @@ class Layout(unittest.TestCase):
 
 
 class Errors(unittest.TestCase):
+    def test_arrays_of_the_wrong_length_raise_naming_the_expected_length(self):
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            self.assertEqual((model.cell_count, model.row_count), (44, 180))
+            calls = [(lambda a: estimator.push_cells(a, 0.0), model.cell_count),
+                     (lambda a: estimator.push_measurements(a, 0.0), model.row_count)]
+            for push, expected in calls:
+                for wrong in (np.ones(3), np.ones(expected + 1), np.ones((1, expected)), [], 5.0):
+                    with self.assertRaises(glovepose.InputError) as caught:
+                        push(wrong)
+                    self.assertIsInstance(caught.exception, ValueError)
+                    self.assertIsInstance(caught.exception, glovepose.GloveposeError)
+                    self.assertEqual(caught.exception.code, glovepose.Status.SIZE_MISMATCH)
+                    self.assertIn(f"expected {expected} values", str(caught.exception))
+                    self.assertIn(str(np.shape(wrong)), str(caught.exception))
+            self.assertEqual(estimator.pose().rejected, 0)  # refused before the library saw them: nothing counted
+            # Bad values in an array of the right length stay per-frame statuses (the real-time contract).
+            cells = np.full(44, 20.0)
+            cells[5] = np.nan
+            self.assertIs(estimator.push_cells(cells, 0.0), glovepose.Status.NON_FINITE)
+            self.assertIs(estimator.push_cells(np.full(44, 20.0), float("inf")), glovepose.Status.NON_FINITE)
+            self.assertIs(estimator.push_cells(np.full(44, 20.0), 1.0), glovepose.UNCALIBRATED)
+            self.assertIs(estimator.push_cells(np.full(44, 20.0), 0.5), glovepose.Status.TIMESTAMP_BACKWARDS)
+            self.assertIs(estimator.push_row(180, 1.0, 2.0), glovepose.Status.UNKNOWN_INDEX)
+            # Lists, tuples and float32 arrays of the right length are taken as they are.
+            self.assertIs(estimator.push_cells([20.0] * 44, 3.0), glovepose.UNCALIBRATED)
+            self.assertIn(estimator.push_measurements(np.full(180, 5.0, dtype=np.float32), 3.1), (glovepose.NOT_READY, glovepose.UNCALIBRATED))
+
     def test_malformed_model_raises_with_the_librarys_message(self):
         with tempfile.NamedTemporaryFile(suffix=".safetensors") as f:
             f.write(b"\x10\x00\x00\x00\x00\x00\x00\x00{not json at all")
@@ -402,11 +429,8 @@ class Errors(unittest.TestCase):
         with self.assertRaises(glovepose.GloveposeError) as caught:
             estimator.angles()  # no pose yet: not zeros
         self.assertEqual(caught.exception.code, glovepose.NOT_READY)
-        status = estimator.push_cells(np.ones(3), 0.0)  # a status, not an exception; the C header's numbers
-        self.assertIs(status, glovepose.Status.SIZE_MISMATCH)
-        self.assertEqual((status, str(status)), (7, "size mismatch"))
-        self.assertEqual(estimator.push_measurements(np.ones(100), 0.0), glovepose.Status.SIZE_MISMATCH)
-        self.assertIs(estimator.push_row(0, float("nan"), 0.0), glovepose.Status.NON_FINITE)
+        self.assertEqual((glovepose.Status.SIZE_MISMATCH, str(glovepose.Status.SIZE_MISMATCH)), (7, "size mismatch"))  # the C header's
+        self.assertIs(estimator.push_row(0, float("nan"), 0.0), glovepose.Status.NON_FINITE)  # a per-frame status, not an exception
         self.assertEqual(glovepose.Status.NON_FINITE, 3)
         self.assertEqual(glovepose.Status.TIMESTAMP_BACKWARDS, 6)
         self.assertEqual(glovepose.Status.UNCALIBRATED, 8)
