@@ -25,12 +25,11 @@ import numpy as np
 from . import _library
 from .dataset import load_dataset
 
-__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "CalibrationStep", "CalibrationProgress", "CalibrationSource",
-           "GloveposeError", "InputError", "load_dataset", "DOF_NAMES",
-           "JOINT_NAMES", "JOINT_PARENTS",
-           "XR_JOINT_NAMES", "XR_JOINT_PARENTS", "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED",
-           "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID", "XR_ANGULAR_VELOCITY_VALID", "Status", "OK", "SOLVED", "NOT_READY",
-           "UNCALIBRATED"]
+__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "Latest", "LatestHand", "CalibrationStep",
+           "CalibrationProgress", "CalibrationSource", "GloveposeError", "InputError", "load_dataset", "Status", "OK", "SOLVED",
+           "NOT_READY", "UNCALIBRATED", "DOF_NAMES", "JOINT_NAMES", "JOINT_PARENTS", "XR_JOINT_NAMES", "XR_JOINT_PARENTS",
+           "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED", "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID",
+           "XR_ANGULAR_VELOCITY_VALID"]
 
 _lib = _library.load()
 
@@ -208,6 +207,12 @@ class Pose:
         self.flags, self.sequence, self.rejected, self.valid = raw.flags, raw.sequence, raw.rejected, bool(raw.valid)
 
 
+def _joint_array(joints) -> np.ndarray:
+    """A ctypes array of glovepose_joint as (n, 7): position x, y, z, quaternion x, y, z, w."""
+    a = np.ctypeslib.as_array(joints)
+    return np.concatenate([a["position"], a["rotation"]], axis=1).astype(np.float64)
+
+
 class PredictedPose:
     """The hand at a requested time (Estimator.pose_at): angles (25,) radians, within the joint
     limits; rate (25,) rad/s, the recent poses' least-squares slope; time (s, the stream's clock)
@@ -357,7 +362,7 @@ class Estimator(_Closing):
         _check(_lib.glovepose_estimator_get_joints(self._handle, self._joints, _library.JOINT_COUNT))
         if not self.pose().valid:
             raise GloveposeError(int(Status.NOT_READY), "no pose yet: joints() before any push returned SOLVED (not ready)")
-        return np.array([list(j.position) + list(j.rotation) for j in self._joints], dtype=np.float64)
+        return _joint_array(self._joints)
 
     def pose_at(self, time: float) -> PredictedPose:
         """The pose at `time` (s, the stream's clock of the timestamps pushed): at or before the
@@ -407,4 +412,51 @@ class Estimator(_Closing):
     def close(self) -> None:
         if getattr(self, "_handle", None):  # also when __init__ stopped before creating it
             _lib.glovepose_estimator_free(self._handle)
+            self._handle = ctypes.c_void_p()
+
+
+class LatestHand:
+    """One hand published to a Latest: number (1 for the first publish, counting up), pose (the
+    estimator's Pose then) and joints ((21, 7) as Estimator.joints(); rest values when the
+    estimator has no joint_transforms)."""
+
+    def __init__(self, number: int, pose: Pose, joints: np.ndarray):
+        self.number, self.pose, self.joints = number, pose, joints
+
+
+class Latest(_Closing):
+    """The newest hand of one estimator for any number of reader threads (glovepose_latest): the
+    estimator's thread publish()es after each push that returned SOLVED; readers on other threads
+    read() it or locate its OpenXR joints, never blocking the writer and never seeing a torn hand
+    (the library's calls run without the GIL, so Python threads really do run side by side).
+    close() it after every thread has stopped using it."""
+
+    def __init__(self):
+        self._handle = ctypes.c_void_p()
+        _check(_lib.glovepose_latest_create(ctypes.byref(self._handle)))
+
+    def publish(self, estimator: Estimator) -> None:
+        """Writer (the estimator's thread, one writer): makes the estimator's current pose, joint
+        list and rate the newest."""
+        _check(_lib.glovepose_latest_publish(self._handle, estimator._handle))
+
+    def read(self) -> LatestHand | None:
+        """Reader, any thread: the newest published hand, None before the first publish."""
+        pose, joints, number = _new(_library.Pose), (_library.Joint * _library.JOINT_COUNT)(), ctypes.c_uint64()
+        _check(_lib.glovepose_latest_read(self._handle, ctypes.byref(pose), joints, _library.JOINT_COUNT, ctypes.byref(number)))
+        return LatestHand(number.value, Pose(pose), _joint_array(joints)) if number.value else None
+
+    def xr_joints(self, estimator: Estimator, time: float) -> XrHand:
+        """Reader, any thread: OpenXR's 26 joints at `time` (s, the stream's clock), predicted from
+        the newest published hand with `estimator`'s hand model, side and max_prediction (only its
+        immutable parts are read: its own thread may stream meanwhile). As Estimator.xr_joints:
+        active False before the first publish, InputError for a non-finite time."""
+        out = _new(_library.XrHand)
+        _status(_lib.glovepose_latest_get_xr_joints(self._handle, estimator._handle, time, ctypes.byref(out)), "xr_joints", time,
+                not_ready_ok=True)
+        return XrHand(out)
+
+    def close(self) -> None:
+        if getattr(self, "_handle", None):
+            _lib.glovepose_latest_free(self._handle)
             self._handle = ctypes.c_void_p()

@@ -15,6 +15,8 @@
   the same readings; pose_at equals the newest pose at its time, interpolates linearly between
   two poses, and extrapolates along the least-squares slope of the poses in prediction_window,
   for at most max_prediction.
+- A Latest gives reader threads the hand the estimator published: its pose, joints and OpenXR
+  joints, never torn while the writer streams.
 - The guided calibration steps are the sequence in the model file's metadata (read here with json),
   and the progress follows it step by step as frames arrive.
 
@@ -26,6 +28,7 @@ import os
 import re
 import subprocess
 import tempfile
+import threading
 import unittest
 from pathlib import Path
 
@@ -183,6 +186,50 @@ class Session(unittest.TestCase):
             self.assertLess(float(np.ptp(rotations, axis=0).max()), 1e-5)
             self.assertLess(float(np.ptp(lengths, axis=0).max()), 1e-6)
             self.assertLess(hand.positions[glovepose.XR_JOINT_NAMES.index("middle_proximal"), 2], -0.05)  # fingers along -Z
+
+    def test_latest_gives_readers_the_published_hand(self):
+        data = glovepose.load_dataset(self.dataset)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model, joint_transforms=True, hand="left") as estimator, \
+                glovepose.Latest() as latest:
+            self.assertIsNone(latest.read())  # nothing published yet
+            self.assertFalse(latest.xr_joints(estimator, 0.0).active)
+            published, read, stop = {}, [], threading.Event()
+
+            def reader():  # another thread, reading while the writer streams
+                while not stop.is_set():
+                    hand = latest.read()
+                    if hand is not None:
+                        read.append((hand.number, hand.pose.sequence, hand.pose.angles, hand.joints))
+
+            thread = threading.Thread(target=reader)
+            thread.start()
+            try:
+                for number, _ in enumerate(stream(data, estimator), start=1):
+                    latest.publish(estimator)
+                    pose, joints = estimator.pose(), estimator.joints()
+                    published[number] = (pose.sequence, pose.angles, joints)
+                    hand = latest.read()
+                    self.assertEqual((hand.number, hand.pose.sequence, hand.pose.timestamp), (number, pose.sequence, pose.timestamp))
+                    np.testing.assert_array_equal(hand.pose.angles, pose.angles)
+                    np.testing.assert_array_equal(hand.joints, joints)
+                    t = pose.timestamp + 0.01
+                    mine, theirs = estimator.xr_joints(t), latest.xr_joints(estimator, t)
+                    self.assertEqual((theirs.active, theirs.predicted, theirs.hand), (True, True, "left"))
+                    for name in ("positions", "orientations", "radii", "location_flags", "linear_velocities", "angular_velocities"):
+                        np.testing.assert_array_equal(getattr(theirs, name), getattr(mine, name), name)
+            finally:
+                stop.set()
+                thread.join()
+            self.assertGreater(len(published), 100)
+            self.assertGreater(len(read), 10)
+            numbers = [n for n, *_ in read]
+            self.assertEqual(numbers, sorted(numbers))  # never older than what was read before
+            for number, sequence, angles, joints in read:  # each read is one published hand, whole
+                self.assertEqual(sequence, published[number][0])
+                np.testing.assert_array_equal(angles, published[number][1])
+                np.testing.assert_array_equal(joints, published[number][2])
+            with self.assertRaises(ValueError):
+                latest.xr_joints(estimator, float("nan"))
 
     def test_left_hand_mirrors_the_right_one(self):
         data = glovepose.load_dataset(self.dataset)
