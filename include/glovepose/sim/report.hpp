@@ -18,6 +18,7 @@
 
 #include <Eigen/Dense>
 
+#include "../core/statistics.hpp"
 #include "../sensor/calibration.hpp"
 #include "../sensor/layout.hpp"
 #include "corpus.hpp"
@@ -59,13 +60,6 @@ struct RealismReport {
 };
 
 namespace detail {
-
-inline double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(p, 0.0, 1.0) * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 // A session's frames calibrated by the on-the-fly min-max of its calibration sequence (paper
 // Sec. 4.3, 20-frame median), plus a bias column, the raw cells with a bias column, and the labels;
@@ -146,15 +140,15 @@ inline RealismReport make_report(const CorpusConfig& config) {
   for (double e : label_errors) report.label_mean_deg += e;
   report.label_mean_deg /= static_cast<double>(std::max<std::size_t>(1, label_errors.size()));
   report.label_thumb_deg = thumb_error / static_cast<double>(std::max<long>(1, thumb_count));
-  report.label_p95_deg = detail::percentile(label_errors, 0.95);
+  report.label_p95_deg = core::percentile(label_errors, 0.95);
   report.age_min = *std::min_element(ages.begin(), ages.end());
   report.age_max = *std::max_element(ages.begin(), ages.end());
-  report.age_median = detail::percentile(ages, 0.5);
+  report.age_median = core::percentile(ages, 0.5);
   const hand::JointLimits limits;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {
     auto& out = report.dofs[d];
-    out.p1 = detail::percentile(angles[d], 0.01);
-    out.p99 = detail::percentile(angles[d], 0.99);
+    out.p1 = core::percentile(angles[d], 0.01);
+    out.p99 = core::percentile(angles[d], 0.99);
     out.coverage = (out.p99 - out.p1) / (limits.max()[d] - limits.min()[d]);
     std::array<long, 10> bins{};
     for (double a : angles[d]) {
@@ -188,8 +182,8 @@ inline RealismReport make_report(const CorpusConfig& config) {
       const double mean = sum / noisy.frames;
       auto& out = report.cells[static_cast<std::size_t>(c)];
       out.noise_sd = std::sqrt(std::max(0.0, sq / noisy.frames - mean * mean));
-      out.p1 = detail::percentile(values[static_cast<std::size_t>(c)], 0.01);
-      out.p99 = detail::percentile(values[static_cast<std::size_t>(c)], 0.99);
+      out.p1 = core::percentile(values[static_cast<std::size_t>(c)], 0.01);
+      out.p99 = core::percentile(values[static_cast<std::size_t>(c)], 0.99);
       out.snr = (out.p99 - out.p1) / std::max(1e-12, out.noise_sd);
     }
   }
