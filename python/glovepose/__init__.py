@@ -26,7 +26,7 @@ from . import _library
 from .dataset import load_dataset
 
 __all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "Latest", "LatestHand", "CalibrationStep",
-           "CalibrationProgress", "CalibrationSource", "GloveposeError", "InputError", "load_dataset", "Status", "OK", "SOLVED",
+           "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "Status", "OK", "SOLVED",
            "NOT_READY", "UNCALIBRATED", "DOF_NAMES", "JOINT_NAMES", "JOINT_PARENTS", "XR_JOINT_NAMES", "XR_JOINT_PARENTS",
            "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED", "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID",
            "XR_ANGULAR_VELOCITY_VALID"]
@@ -57,6 +57,21 @@ if any(str(s) == "unknown result" for s in Status) or _lib.glovepose_result_name
     raise ImportError("glovepose: the C library's per-frame statuses differ from glovepose.Status (a library of another version)")
 OK, SOLVED, NOT_READY, UNCALIBRATED = Status.OK, Status.SOLVED, Status.NOT_READY, Status.UNCALIBRATED
 _WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
+
+
+class PoseFlag(enum.IntFlag):
+    """Bits of Pose.flags and PredictedPose.flags (glovepose_c.h's GLOVEPOSE_POSE_*); 0: nothing to
+    distrust. A pose with any FAULT_FLAGS bit cannot be trusted (Pose.trusted)."""
+    READINGS_REJECTED = 0x1      #: readings were rejected since the previous pose (their rows kept older values)
+    INPUT_CLAMPED = 0x2          #: a calibrated cell lay beyond the clamp limit
+    TRAINING_CALIBRATION = 0x4   #: normalised with the model's training-set range, not the user's own
+    CALIBRATING = 0x8            #: produced while an on-the-fly calibration was collecting
+    STALE_READINGS = 0x10        #: (fault) some rows stopped arriving
+    RECOVERING = 0x20            #: (fault) some rows hold fewer readings than the mean window
+    STUCK_ROWS = 0x40            #: (fault) a row repeats one value: a stuck sensor
+    DISCONNECTED_ROWS = 0x80     #: (fault) a row reads (near) zero: a disconnected trace
+    OUTLIER_ROWS = 0x100         #: (fault) a row disagrees with the least-squares solve
+    FAULT_FLAGS = 0x1F0          #: the fault bits together
 
 
 class CalibrationSource(enum.IntEnum):
@@ -168,9 +183,10 @@ class CalibrationStep:
 
 class PoseModel(_Closing):
     """A model file (weights_format.md) with its glove; shared by any number of estimators.
-    cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names, and
-    calibration_steps: the model's guided calibration sequence, a tuple of CalibrationStep (empty
-    when the model's calibration is min-max only)."""
+    cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names,
+    has_training_range (Estimator.use_training_calibration works), and calibration_steps: the
+    model's guided calibration sequence, a tuple of CalibrationStep (empty when the model's
+    calibration is min-max only)."""
 
     def __init__(self, path: str, weights: str = "f32", glove: str | None = None):
         if weights not in _WEIGHTS:
@@ -182,6 +198,7 @@ class PoseModel(_Closing):
         self.row_count = _lib.glovepose_model_row_count(self._handle)
         self.glove_id = _lib.glovepose_model_glove_id(self._handle).decode()
         self.cell_names = tuple(_lib.glovepose_model_cell_name(self._handle, c).decode() for c in range(self.cell_count))
+        self.has_training_range = _lib.glovepose_model_has_training_range(self._handle) == 1
         steps = []
         for k in range(_lib.glovepose_model_calibration_step_count(self._handle)):
             step = _new(_library.CalibrationStep)
@@ -197,14 +214,16 @@ class PoseModel(_Closing):
 
 
 class Pose:
-    """One pose: angles and raw_angles (25,) radians, timestamp and oldest_age (s), flags, sequence,
-    rejected (readings since the pose before), valid (False before the first pose)."""
+    """One pose: angles and raw_angles (25,) radians, timestamp and oldest_age (s), flags (PoseFlag),
+    trusted (no fault flag), sequence, rejected (readings since the pose before), valid (False
+    before the first pose), compute_seconds (wall time the estimator spent on it)."""
 
     def __init__(self, raw: _library.Pose):
         self.angles = np.array(raw.angles[:], dtype=np.float64)
         self.raw_angles = np.array(raw.raw_angles[:], dtype=np.float64)
         self.timestamp, self.oldest_age, self.compute_seconds = raw.timestamp, raw.oldest_age, raw.compute_seconds
-        self.flags, self.sequence, self.rejected, self.valid = raw.flags, raw.sequence, raw.rejected, bool(raw.valid)
+        self.flags, self.sequence, self.rejected, self.valid = PoseFlag(raw.flags), raw.sequence, raw.rejected, bool(raw.valid)
+        self.trusted = not self.flags & PoseFlag.FAULT_FLAGS
 
 
 def _joint_array(joints) -> np.ndarray:
@@ -219,12 +238,12 @@ class PredictedPose:
     as asked; horizon (s): the time located minus the newest pose's timestamp (> 0: predicted
     ahead, at most max_prediction); predicted (extrapolated past the newest pose), clamped (asked
     further ahead than max_prediction: located at the bound), has_rate (rate from two poses or
-    more), trusted (the newest pose has no fault flag), flags (the newest pose's)."""
+    more), trusted (the newest pose has no fault flag), flags (the newest pose's PoseFlag bits)."""
 
     def __init__(self, raw: _library.PredictedPose):
         self.angles = np.array(raw.angles[:], dtype=np.float64)
         self.rate = np.array(raw.rate[:], dtype=np.float64)
-        self.time, self.horizon, self.flags = raw.time, raw.horizon, raw.flags
+        self.time, self.horizon, self.flags = raw.time, raw.horizon, PoseFlag(raw.flags)
         self.predicted, self.clamped, self.has_rate, self.trusted = (bool(raw.predicted), bool(raw.clamped), bool(raw.has_rate),
                                                                      bool(raw.trusted))
 
@@ -310,7 +329,6 @@ class Estimator(_Closing):
         self._pose = _library.Pose()
         self._pose.struct_size = ctypes.sizeof(_library.Pose)
         self._joints = (_library.Joint * _library.JOINT_COUNT)()
-        self._cells = np.zeros(model.cell_count, dtype=np.float64)
 
     # Streaming. Each push returns the per-frame Status, as in C: SOLVED (a new pose), OK or
     # NOT_READY (accepted, no new pose yet), UNCALIBRATED (solved, but no calibration range), or a
@@ -382,17 +400,32 @@ class Estimator(_Closing):
         _status(_lib.glovepose_estimator_get_xr_joints(self._handle, time, ctypes.byref(out)), "xr_joints", time, not_ready_ok=True)
         return XrHand(out)
 
+    def cells(self) -> np.ndarray:
+        """The latest solved cell capacitances (cell_count,), pF: the network's input before
+        calibration (cell_names order; zeros before the first frame)."""
+        out = np.zeros(self._model.cell_count, dtype=np.float64)
+        _check(_lib.glovepose_estimator_get_cells(self._handle, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), out.size))
+        return out
+
     def reset(self) -> None:
+        """Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged;
+        keeps the calibration and the last pose."""
         _check(_lib.glovepose_estimator_reset(self._handle))
 
     # Calibration.
     def start_calibration(self) -> None:
+        """Starts (or restarts) an on-the-fly calibration: solved frames also feed the per-cell
+        range, and a guided sequence's clock starts at the first frame (calibration_progress()).
+        Poses keep coming from the previous range, if any, flagged PoseFlag.CALIBRATING."""
         _check(_lib.glovepose_calibration_start(self._handle))
 
     def finish_calibration(self) -> None:
+        """Ends the calibration and uses its range (source ON_THE_FLY). GloveposeError when none is
+        running or fewer than frames_needed frames arrived (it then keeps collecting)."""
         _check(_lib.glovepose_calibration_finish(self._handle))
 
     def cancel_calibration(self) -> None:
+        """Stops collecting and keeps the previous range."""
         _check(_lib.glovepose_calibration_cancel(self._handle))
 
     def calibration_progress(self) -> CalibrationProgress:
@@ -403,10 +436,37 @@ class Estimator(_Closing):
         _check(_lib.glovepose_calibration_get_step(self._handle, ctypes.byref(step), ctypes.byref(seconds)))
         return CalibrationProgress(p, self._model.calibration_steps[step.value] if step.value >= 0 else None, seconds.value)
 
+    def use_training_calibration(self) -> None:
+        """Uses the model's training-set range (the paper's "without calibration"; poses are flagged
+        PoseFlag.TRAINING_CALIBRATION). GloveposeError when the model records none
+        (PoseModel.has_training_range)."""
+        _check(_lib.glovepose_calibration_use_training(self._handle))
+
+    def set_calibration_range(self, minimum, maximum) -> None:
+        """Uses the range minimum[c] .. maximum[c] of each cell (pF, cell_names order); source
+        USER. Arrays whose shape is not (cell_count,) raise InputError naming cell_count;
+        non-finite values or a minimum above its maximum raise GloveposeError naming the cell."""
+        low = _vector(minimum, self._model.cell_count, "set_calibration_range", "the model's cell_count")
+        high = _vector(maximum, self._model.cell_count, "set_calibration_range", "the model's cell_count")
+        _check(_lib.glovepose_calibration_set_range(self._handle, low.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                    high.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), low.size))
+
+    def calibration_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """The range in use as (minimum, maximum), each (cell_count,) pF. Before any range is set
+        raises GloveposeError with code UNCALIBRATED (there is none to give)."""
+        low, high = np.zeros(self._model.cell_count), np.zeros(self._model.cell_count)
+        code = _check(_lib.glovepose_calibration_get_range(self._handle, low.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                           high.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), low.size))
+        if code == Status.UNCALIBRATED:
+            raise GloveposeError(code, f"calibration_range: no calibration range yet ({Status(code)})")
+        return low, high
+
     def save_calibration(self, path: str) -> None:
+        """Saves the range in use as a text file (an exact round trip); GloveposeError before any range."""
         _check(_lib.glovepose_calibration_save(self._handle, str(path).encode()))
 
     def load_calibration(self, path: str) -> None:
+        """Uses a range file save_calibration wrote for the same glove (source USER)."""
         _check(_lib.glovepose_calibration_load(self._handle, str(path).encode()))
 
     def close(self) -> None:

@@ -8,7 +8,10 @@
 - A malformed model raises GloveposeError carrying the library's message.
 - load_dataset gives the values `glovepose simulate --csv` writes for the same data.
 - The ctypes structs have the C ABI's layout: the sizes the library's own *_init functions write
-  and the sizes and offsets capi/ documents (its static_asserts, the header, the C test).
+  and the sizes and offsets capi/ documents (its static_asserts, the header, the C test); the
+  package's constants and enums are the header's #defines.
+- Calibration ranges: the training range is the one in the model file's metadata; a range set is
+  the range read back, saved and loaded exactly; cells() is the frame pushed.
 - OpenXR joints are the joint list's joints in another frame (a rigid motion, the same for every
   pose), with constant bone lengths along XR_JOINT_PARENTS and velocities equal to the finite
   differences of the positions and orientations; a left hand mirrors the right one (x -> -x) for
@@ -26,6 +29,7 @@ import ctypes
 import json
 import os
 import re
+import struct
 import subprocess
 import tempfile
 import threading
@@ -396,12 +400,104 @@ class GuidedCalibration(unittest.TestCase):
             self.assertIs(progress.source, glovepose.CalibrationSource.ON_THE_FLY)
 
 
-class Layout(unittest.TestCase):
+class Ranges(unittest.TestCase):
+    def test_training_range_is_the_model_files(self):
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            self.assertNotIn("calibration_min", glovepose.load_dataset(MODEL)["metadata"])
+            self.assertFalse(model.has_training_range)
+            with self.assertRaises(glovepose.GloveposeError) as caught:
+                estimator.use_training_calibration()
+            self.assertEqual(caught.exception.code, -7)  # GLOVEPOSE_ERROR_CALIBRATION_STATE
+        # The shipped model with a training range added to its metadata (weights_format.md: calibration_min/max).
+        low, high = [10.0 + 0.25 * c for c in range(44)], [30.0 + 0.5 * c for c in range(44)]
+        raw = MODEL.read_bytes()
+        size = struct.unpack("<Q", raw[:8])[0]
+        header = json.loads(raw[8:8 + size])
+        header["__metadata__"].update(calibration_min=json.dumps(low), calibration_max=json.dumps(high))
+        text = json.dumps(header).encode()
+        text += b" " * (-len(text) % 8)
+        with tempfile.TemporaryDirectory() as work:
+            path = Path(work) / "trained.safetensors"
+            path.write_bytes(struct.pack("<Q", len(text)) + text + raw[8 + size:])
+            with glovepose.PoseModel(path) as model, glovepose.Estimator(model) as estimator:
+                self.assertTrue(model.has_training_range)
+                estimator.use_training_calibration()
+                self.assertIs(estimator.calibration_progress().source, glovepose.CalibrationSource.TRAINING)
+                got_low, got_high = estimator.calibration_range()
+                self.assertEqual((got_low.tolist(), got_high.tolist()), (low, high))
+                self.assertIs(estimator.push_cells(np.full(44, 20.0), 0.0), glovepose.SOLVED)
+                pose = estimator.pose()
+                self.assertEqual(pose.flags, glovepose.PoseFlag.TRAINING_CALIBRATION)
+                self.assertTrue(pose.trusted)
+
+    def test_a_range_set_is_the_range_used_saved_and_loaded(self):
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator, glovepose.Estimator(model) as other:
+            with self.assertRaises(glovepose.GloveposeError) as caught:
+                estimator.calibration_range()  # none yet
+            self.assertEqual(caught.exception.code, glovepose.UNCALIBRATED)
+            np.testing.assert_array_equal(estimator.cells(), np.zeros(44))  # no frame yet
+            low, high = 15.0 + np.arange(44) / 7.0, 25.0 + np.arange(44) / 3.0
+            estimator.set_calibration_range(low, high)
+            self.assertIs(estimator.calibration_progress().source, glovepose.CalibrationSource.USER)
+            got = estimator.calibration_range()
+            np.testing.assert_array_equal(got[0], low)
+            np.testing.assert_array_equal(got[1], high)
+            with tempfile.TemporaryDirectory() as work:
+                estimator.save_calibration(Path(work) / "range.txt")
+                other.load_calibration(Path(work) / "range.txt")
+            np.testing.assert_array_equal(other.calibration_range()[0], low)  # an exact round trip
+            np.testing.assert_array_equal(other.calibration_range()[1], high)
+            with self.assertRaises(glovepose.InputError) as caught:
+                estimator.set_calibration_range(low[:40], high)
+            self.assertIn("expected 44 values", str(caught.exception))
+            bad = high.copy()
+            bad[7] = low[7] - 1.0
+            with self.assertRaises(glovepose.GloveposeError) as caught:
+                estimator.set_calibration_range(low, bad)
+            self.assertIn(model.cell_names[7], str(caught.exception))
+            cells = 20.0 + np.sin(np.arange(44.0))
+            self.assertIs(estimator.push_cells(cells, 1.0), glovepose.SOLVED)
+            np.testing.assert_array_equal(estimator.cells(), cells)
+            self.assertTrue(estimator.pose().trusted)
+            self.assertEqual(estimator.pose().flags & glovepose.PoseFlag.TRAINING_CALIBRATION, 0)
+
+
+class Abi(unittest.TestCase):
+    HEADER = (ROOT / "capi" / "glovepose_c.h").read_text()
     STRUCTS = {"glovepose_estimator_config": _library.EstimatorConfig, "glovepose_hand_options": _library.HandOptions,
                "glovepose_pose": _library.Pose, "glovepose_joint": _library.Joint, "glovepose_predicted_pose": _library.PredictedPose,
                "glovepose_calibration_progress": _library.CalibrationProgress, "glovepose_calibration_step": _library.CalibrationStep,
                "glovepose_xr_joint_location": _library.XrJointLocation, "glovepose_xr_joint_velocity": _library.XrJointVelocity,
                "glovepose_xr_hand": _library.XrHand}
+
+    def define(self, name: str) -> int:
+        found = re.search(rf"#define GLOVEPOSE_{name} \(?(-?(?:0x[0-9A-Fa-f]+|\d+))u?\)?\s", self.HEADER)
+        self.assertIsNotNone(found, name)
+        return int(found.group(1), 0)
+
+    def test_constants_are_the_headers(self):
+        self.assertEqual((_library.DOF_COUNT, _library.JOINT_COUNT, _library.XR_JOINT_COUNT),
+                         (self.define("DOF_COUNT"), self.define("JOINT_COUNT"), self.define("XR_JOINT_COUNT")))
+        self.assertEqual((len(glovepose.DOF_NAMES), len(glovepose.JOINT_NAMES), len(glovepose.XR_JOINT_NAMES)), (25, 21, 26))
+        self.assertEqual((_library.HAND_RIGHT, _library.HAND_LEFT), (self.define("HAND_RIGHT"), self.define("HAND_LEFT")))
+        for name in ("ORIENTATION_VALID", "POSITION_VALID", "ORIENTATION_TRACKED", "POSITION_TRACKED", "LINEAR_VELOCITY_VALID",
+                     "ANGULAR_VELOCITY_VALID"):
+            self.assertEqual(getattr(glovepose, "XR_" + name), self.define("XR_" + name), name)
+        for status in glovepose.Status:
+            self.assertEqual(status, self.define(status.name), status.name)
+        for source in glovepose.CalibrationSource:
+            self.assertEqual(source, self.define("CALIBRATION_" + source.name), source.name)
+        flags = re.findall(r"#define GLOVEPOSE_POSE_(\w+) ", self.HEADER)
+        self.assertEqual(sorted(flags), sorted(glovepose.PoseFlag.__members__))  # every flag, no more
+        for name, flag in glovepose.PoseFlag.__members__.items():
+            self.assertEqual(flag, self.define("POSE_" + name), name)
+        self.assertEqual(glovepose.JOINT_PARENTS[0], -1)
+        self.assertEqual(glovepose.XR_JOINT_PARENTS[glovepose.XR_JOINT_NAMES.index("wrist")], -1)
+
+    def test_every_function_of_the_header_is_declared_here(self):
+        functions = set(re.findall(r"GLOVEPOSE_C_API[^;(]*?\b(glovepose_\w+)\(", self.HEADER))
+        self.assertGreaterEqual(len(functions), 52)
+        self.assertEqual(functions, set(_library._SIGNATURES))  # the package reaches the whole C ABI
 
     def test_structs_have_the_libraries_sizes(self):
         for struct, function in _library._INITS.items():
