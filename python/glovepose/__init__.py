@@ -334,7 +334,7 @@ class Estimator(_Closing):
     # NOT_READY (accepted, no new pose yet), UNCALIBRATED (solved, but no calibration range), or a
     # rejected reading: NON_FINITE (NaN or infinite value or timestamp), NEGATIVE, UNKNOWN_INDEX (a
     # row outside the wiring, or a model without wiring), TIMESTAMP_BACKWARDS. Returned, not raised:
-    # a glitch in one frame of a real-time stream is counted (Pose.rejected) and the stream goes on.
+    # a glitch in one frame of a real-time stream is reported and the stream goes on.
     # An array of the wrong length is the caller's mistake, the same on every frame: push_measurements
     # and push_cells raise InputError (a ValueError, code SIZE_MISMATCH) naming the expected length,
     # and never return SIZE_MISMATCH.
