@@ -81,6 +81,7 @@ class CalibrationSource(enum.IntEnum):
     USER = 2        #: set or loaded by the caller (load_calibration)
     TRAINING = 3    #: the model's training-set range (expect larger errors than with the user's own)
 
+
 #: The 25 DoFs of the hand model, in the order of every angle array.
 DOF_NAMES = tuple(_lib.glovepose_dof_name(d).decode() for d in range(_library.DOF_COUNT))
 #: The 21 joints of joints(), in order.

@@ -500,8 +500,8 @@ class Abi(unittest.TestCase):
         self.assertEqual(functions, set(_library._SIGNATURES))  # the package reaches the whole C ABI
 
     def test_structs_have_the_libraries_sizes(self):
-        for struct, function in _library._INITS.items():
-            self.assertEqual(ctypes.sizeof(struct), _library.library_size(glovepose._lib, struct), function)
+        for layout, function in _library._INITS.items():
+            self.assertEqual(ctypes.sizeof(layout), _library.library_size(glovepose._lib, layout), function)
         self.assertEqual(len(_library._INITS), 7)  # every struct with a struct_size
 
     def test_structs_have_the_documented_sizes_and_offsets(self):
