@@ -3,16 +3,26 @@
 // files: a glove description, one calibration take and one recording take (CSV) per person, and the
 // list of takes for `glovepose import --takes`.
 //
+// With --keypoints LAYOUT the takes carry no angles: each has a hand tracker's keypoint file beside
+// it instead (MediaPipe's 21 landmarks or OpenXR's 26 joints, metres, 30 Hz, 5 mm 3D RMS noise, on
+// the tracker's own clock: offset from the glove's by up to 2 s), listed in takes.csv's keypoints
+// column. Each person's hand is the template scaled by 0.9-1.1; the hand turns in front of the
+// camera (sim/keypoint_tracker.hpp). The keypoints show the true angles (the corpus's true_angles
+// when it has them).
+//
 // The people are a simulated corpus (`glovepose simulate`): each sensor reads a strip over two cells
 // of the built-in 44-cell glove, as ohms with a DC offset (offset + gain x (main cell + 0.3 x a
 // neighbour) + noise), every third 60 Hz frame. Nothing is copied from anywhere; a fixed seed makes
 // the files the same on every run.
 //
-// usage: example_glove CORPUS.safetensors OUTDIR
+// usage: example_glove CORPUS.safetensors OUTDIR [--keypoints mediapipe|openxr]
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
+#include <glovepose/hand/keypoints.hpp>
 #include <glovepose/io/dataset.hpp>
+#include <glovepose/sim/keypoint_tracker.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -51,11 +61,58 @@ std::vector<Sensor> make_sensors(const grid::GridMap& paper, std::mt19937& rng) 
 
 }  // namespace
 
+// The tracker's keypoint file of frames [begin, end) of the corpus: tracker time = glove time - offset.
+void write_keypoints(const io::Dataset& corpus, std::size_t begin, std::size_t end, hand::KeypointLayout layout, double hand_scale,
+                     double offset, std::uint64_t seed, const std::filesystem::path& path) {
+  hand::HandModel model = hand::HandModel::reference();
+  for (std::size_t p = 1; p < hand::kPhalanxCount; ++p) model.rest[p].translation() *= hand_scale;
+  for (double& tip : model.tip_length) tip *= hand_scale;
+  const std::vector<float>& truth = corpus.true_angles.empty() ? corpus.angles : corpus.true_angles;
+  const double t0 = corpus.timestamps[begin];
+  // The true pose between the corpus's frames, linearly.
+  const auto pose_at = [&](double t) {
+    std::size_t i = begin;
+    while (i + 2 < end && corpus.timestamps[i + 1] - t0 < t) ++i;
+    const double w = std::clamp((t - (corpus.timestamps[i] - t0)) / (corpus.timestamps[i + 1] - corpus.timestamps[i]), 0.0, 1.0);
+    hand::Angles q{};
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      q[d] = (1.0 - w) * truth[i * hand::kDofCount + d] + w * truth[(i + 1) * hand::kDofCount + d];
+    return q;
+  };
+  sim::KeypointTrackerConfig config;
+  config.layout = layout;
+  config.rate_hz = 30.0;
+  config.noise_mm = 5.0;
+  config.offset_seconds = offset;
+  const train::KeypointTrack track =
+      sim::track_keypoints(hand::Kinematics(model), pose_at, 0.0, corpus.timestamps[end - 1] - t0, config, seed);
+  std::ofstream file(path);
+  file << "timestamp";
+  const std::size_t count = hand::keypoint_count(layout);
+  for (std::size_t k = 0; k < count; ++k)
+    for (const char* axis : {"_x", "_y", "_z"}) file << "," << hand::keypoint_name(layout, k) << axis;
+  file << "\n";
+  char number[32];
+  for (std::size_t f = 0; f < track.times.size(); ++f) {
+    std::snprintf(number, sizeof number, "%.4f", track.times[f]);
+    file << number;
+    for (std::size_t k = 0; k < count; ++k)
+      for (int a = 0; a < 3; ++a) {
+        std::snprintf(number, sizeof number, "%.5f", track.points[f * count + k][a] * 1e-3);  // metres
+        file << "," << number;
+      }
+    file << "\n";
+  }
+}
+
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::cerr << "usage: example_glove CORPUS.safetensors OUTDIR   (CORPUS: glovepose simulate --out CORPUS ...)\n";
+  const bool keypoints = argc == 5 && std::string(argv[3]) == "--keypoints";
+  if (argc != 3 && !(keypoints && (std::string(argv[4]) == "mediapipe" || std::string(argv[4]) == "openxr"))) {
+    std::cerr << "usage: example_glove CORPUS.safetensors OUTDIR [--keypoints mediapipe|openxr]   (CORPUS: glovepose simulate --out CORPUS "
+                 "...)\n";
     return 2;
   }
+  const hand::KeypointLayout layout = keypoints && std::string(argv[4]) == "openxr" ? hand::KeypointLayout::OpenXr : hand::KeypointLayout::MediaPipe;
   try {
     const io::Dataset corpus = io::Dataset::read(argv[1]);
     if (!corpus.has_angles() || corpus.cell_count != 44) throw Error("the corpus needs angles and the 44 cells of the built-in glove");
@@ -86,7 +143,9 @@ int main(int argc, char** argv) {
 
     std::normal_distribution<double> noise(0.0, 0.05);
     std::ofstream takes(out / "takes.csv");
-    takes << "file,subject,session,kind\n";
+    takes << (keypoints ? "file,subject,session,kind,keypoints\n" : "file,subject,session,kind\n");
+    std::uniform_real_distribution<double> hand_scale(0.9, 1.1), offset(-2.0, 2.0);
+    std::vector<double> scale_of;  // each person's hand size
     std::size_t written = 0;
     for (std::size_t begin = 0; begin < corpus.frames();) {
       std::size_t end = begin + 1;
@@ -96,12 +155,20 @@ int main(int argc, char** argv) {
       const bool calibration = corpus.kind[begin] == io::kKindCalibration;
       const std::string file = "person" + std::to_string(corpus.subject[begin]) + "_session" + std::to_string(corpus.session[begin]) +
                                (calibration ? "_calibration.csv" : "_recording.csv");
-      takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording")
-            << "\n";
+      takes << file << "," << corpus.subject[begin] << "," << corpus.session[begin] << "," << (calibration ? "calibration" : "recording");
+      if (keypoints) {
+        const auto subject = static_cast<std::size_t>(corpus.subject[begin]);
+        while (scale_of.size() <= subject) scale_of.push_back(hand_scale(rng));
+        const std::string keypoint_file = file.substr(0, file.size() - 4) + "_keypoints.csv";
+        write_keypoints(corpus, begin, end, layout, scale_of[subject], offset(rng), rng(), out / keypoint_file);
+        takes << "," << keypoint_file;
+      }
+      takes << "\n";
       std::ofstream take(out / file);
       take << "timestamp_ms";
       for (const Sensor& s : sensors) take << "," << s.name;
-      for (std::size_t d : labelled) take << "," << hand::kDofs[d].name;
+      if (!keypoints)
+        for (std::size_t d : labelled) take << "," << hand::kDofs[d].name;
       take << "\n";
       char number[32];
       for (std::size_t i = begin; i < end; i += 3) {  // 60 Hz -> 20 Hz
@@ -114,6 +181,7 @@ int main(int argc, char** argv) {
           take << "," << number;
         }
         for (std::size_t d : labelled) {
+          if (keypoints) break;
           std::snprintf(number, sizeof number, "%.6f", static_cast<double>(corpus.angles[i * hand::kDofCount + d]));
           take << "," << number;
         }
@@ -122,8 +190,9 @@ int main(int argc, char** argv) {
       ++written;
       begin = end;
     }
-    std::printf("wrote %s: glove example-20 (20 sensors), %zu takes of %zu frames at 60 Hz read at 20 Hz, 21 labelled DoFs, takes.csv\n",
-                out.string().c_str(), written, corpus.frames());
+    std::printf("wrote %s: glove example-20 (20 sensors), %zu takes of %zu frames at 60 Hz read at 20 Hz, %s, takes.csv\n",
+                out.string().c_str(), written, corpus.frames(),
+                keypoints ? (std::string(hand::to_string(layout)) + " keypoint files (30 Hz, the tracker's clock)").c_str() : "21 labelled DoFs");
     return 0;
   } catch (const Error& e) {
     std::cerr << "example_glove: " << e.what() << "\n";

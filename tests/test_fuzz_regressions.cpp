@@ -7,6 +7,7 @@
 #include <glovepose/io/tensor_file.hpp>
 #include <glovepose/model/model_info.hpp>
 #include <glovepose/sensor/calibration.hpp>
+#include <glovepose/train/keypoint_columns.hpp>
 
 #include <algorithm>
 #include <array>
@@ -118,4 +119,13 @@ TEST_CASE("fuzz regression: readings so large that the residual overflows give n
   }
   CHECK(refused > 0);             // the overflowing frames are reported
   CHECK(last_solved_cycle == 2);  // and poses resume once plausible readings replace the huge ones
+}
+
+// keypoint_file_fuzz, fuzz/corpus/keypoint_file_fuzz/duplicate_column (reduced here to its cause): a
+// header naming a keypoint coordinate twice (thumb_tip_z twice, no thumb_tip_y) counted three columns
+// for the keypoint, so it was read as reported with y never set: a keypoint finite in x and z, NaN in y.
+TEST_CASE("fuzz regression: a keypoint coordinate named twice is refused, not read with a hole") {
+  std::istringstream file("timestamp,thumb_tip_x,thumb_tip_z,thumb_tip_z\n0,1,2,3\n");
+  CHECK_THROWS_WITH_AS(train::read_keypoint_file(file, "k.csv", 1.0, {}),
+                       "keypoint file 'k.csv', line 1, column 4 'thumb_tip_z': named like column 3, expected each column once", Error);
 }

@@ -3,6 +3,7 @@
 #include <glovepose/train/recording_import.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,8 @@ struct ImportOptions {
   std::vector<std::string> recordings, calibrations;  // FILE... and --calibration FILE
   std::string out, glove, takes_list;
   std::optional<std::int32_t> subject, session;
+  std::string keypoint_unit = "m";
+  std::optional<double> keypoint_offset;
   train::CsvImportOptions import;
   const CLI::App* command = nullptr;
   const CLI::Option* recordings_option = nullptr;
@@ -39,7 +42,7 @@ struct ImportOptions {
   }
 };
 
-// The takes of a list file: header file,subject[,session][,kind], one take per line.
+// The takes of a list file: header file,subject[,session][,kind][,keypoints], one take per line.
 std::vector<train::CsvTake> read_takes_list(const std::string& path) {
   const std::string at = "takes list '" + path + "'";
   std::ifstream in(path);
@@ -47,13 +50,14 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
   std::string line;
   if (!std::getline(in, line) || io::blank_csv_line(line)) throw Error(at + ", line 1: no header, expected file,subject,session,kind");
   const std::vector<std::string> header = io::split_csv_line(line);
-  const std::vector<std::string> known{"file", "subject", "session", "kind"};
+  const std::vector<std::string> known{"file", "subject", "session", "kind", "keypoints"};
   std::vector<int> column(known.size(), -1);
   for (std::size_t k = 0; k < header.size(); ++k) {
     const auto it = std::find(known.begin(), known.end(), header[k]);
     if (it == known.end() || column[static_cast<std::size_t>(it - known.begin())] >= 0)
       throw Error(at + ", line 1, column " + std::to_string(k + 1) + " '" + header[k] + "': " +
-                  (it == known.end() ? "unknown column" : "a second time") + ", expected file, subject, session and kind once each");
+                  (it == known.end() ? "unknown column" : "a second time") +
+                  ", expected file, subject, session, kind and keypoints once each");
     column[static_cast<std::size_t>(it - known.begin())] = static_cast<int>(k);
   }
   if (column[0] < 0 || column[1] < 0) throw Error(at + ", line 1: expected at least the columns file and subject");
@@ -78,6 +82,10 @@ std::vector<train::CsvTake> read_takes_list(const std::string& path) {
       take.kind = io::kKindCalibration;
     else if (column[3] >= 0 && field(3) != "recording")
       throw Error(where(3) + " is not a kind, expected recording or calibration");
+    if (column[4] >= 0 && !field(4).empty()) {
+      const std::filesystem::path keypoints = field(4);
+      take.keypoints = (keypoints.is_absolute() ? keypoints : folder / keypoints).string();
+    }
     takes.push_back(take);
   }
   if (takes.empty()) throw Error(at + ": no takes after the header, expected one line per CSV file");
@@ -98,8 +106,12 @@ int import_recordings(const ImportOptions& o) {
   if (!o.takes_list.empty())
     for (train::CsvTake& take : read_takes_list(o.takes_list)) takes.push_back(std::move(take));
   grid::GloveDescription glove = o.glove.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove);
-  train::RecordingImporter importer(std::move(glove), o.import);
+  train::CsvImportOptions options = o.import;
+  options.keypoint_scale = o.keypoint_unit == "m" ? 1000.0 : o.keypoint_unit == "cm" ? 10.0 : 1.0;
+  options.keypoint_labels.offset = o.keypoint_offset;
+  train::RecordingImporter importer(std::move(glove), options);
   for (const train::CsvTake& take : takes) importer.add(take);
+  importer.finish();
   const io::Dataset& data = importer.dataset();
   data.write(o.out);
 
@@ -116,6 +128,18 @@ int import_recordings(const ImportOptions& o) {
   for (const train::FlatSensor& flat : importer.flat_sensors())
     std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
                 flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
+  for (const train::KeypointSubjectReport& hand : importer.keypoint_subjects())
+    std::printf("subject %d's hand from keypoints: %.0f mm from wrist to middle fingertip, keypoint noise %.1f mm (3D RMS)\n", hand.subject,
+                hand.hand_length_mm, hand.noise_mm);
+  for (const train::KeypointTakeReport& take : importer.keypoint_takes()) {
+    const std::string clock = std::isfinite(take.clock.correlation)
+                                  ? "found by motion (correlation " + io::number_text(std::round(take.clock.correlation * 100) / 100) + ")"
+                                  : "given";
+    std::printf("labels of %s (%s): %zu of %zu frames (%.1f%%), fit residual median %.1f mm, 95th %.1f mm, tracker clock offset %+.3f s %s\n",
+                take.path.c_str(), hand::to_string(take.layout), take.labelled, take.frames, 100.0 * take.labelled / take.frames,
+                take.median_rms_mm, take.p95_rms_mm, take.clock.offset, clock.c_str());
+  }
+  for (const std::string& warning : importer.warnings()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
   std::printf("wrote %s\n", o.out.c_str());
   return 0;
 }
@@ -131,7 +155,8 @@ Command add_import(CLI::App& tool) {
       command
           ->add_option("CSV", o->recordings,
                        "recording takes: CSV files whose first line names the columns: every cell of the glove, "
-                       "optionally the 25 DoFs (radians), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
+                       "optionally the 25 DoFs (radians) or a hand tracker's keypoints (<keypoint>_x,_y,_z of MediaPipe's or "
+                       "OpenXR's names), subject, session, glove, kind, timestamp (seconds) or timestamp_ms")
           ->check(existing_file())
           ->type_name("CSV");
   o->calibrations_option =
@@ -141,8 +166,9 @@ Command add_import(CLI::App& tool) {
           ->allow_extra_args(false);
   command
       ->add_option("--takes", o->takes_list,
-                   "a CSV list of takes with the header file,subject,session,kind (kind: recording or "
-                   "calibration; session and kind may be left out); files relative to the list")
+                   "a CSV list of takes with the header file,subject,session,kind,keypoints (kind: recording or "
+                   "calibration; keypoints: the take's hand-tracker keypoint file with its own timestamps; session, kind "
+                   "and keypoints may be left out); files relative to the list")
       ->check(existing_file())
       ->type_name("LIST");
   add_number(*command, "--subject", "N", o->subject, "subject id of the CSV and --calibration takes whose columns do not have one")
@@ -163,6 +189,19 @@ Command add_import(CLI::App& tool) {
       ->delimiter(',')
       ->allow_extra_args(false);
   command->add_flag("--allow-flat", o->import.allow_flat, "keep calibration takes where a sensor does not move (it then reads 0); listed");
+  command
+      ->add_option("--keypoint-unit", o->keypoint_unit,
+                   "unit of a hand tracker's keypoint columns: m (default; MediaPipe world landmarks, OpenXR), cm or mm")
+      ->check(CLI::IsMember({"m", "cm", "mm"}))
+      ->type_name("UNIT");
+  add_number(*command, "--keypoint-offset", "S", o->keypoint_offset,
+             "the tracker's clock offset, glove time = tracker time + S (default: found from the motion both record)");
+  add_number(*command, "--glove-delay", "S", o->import.keypoint_labels.glove_delay_seconds,
+             "the glove's response delay (how long after a motion its cells show it), taken off the offset found (default 0)")
+      ->check(at_least(0.0));
+  add_number(*command, "--keypoint-smoothing", "S", o->import.keypoint_labels.smoothing_seconds,
+             "SD of the lag-free smoothing of the keypoint labels in time (default 0.08; 0: none)")
+      ->check(at_least(0.0));
   command->add_option("--out", o->out, "the dataset file written")->required()->type_name("FILE");
   return {command, [o] { return import_recordings(*o); }};
 }

@@ -140,6 +140,9 @@ inline HandShapeFit fit_hand_shape(KeypointLayout layout, const std::vector<Eige
       }
   }
   out.noise_mm = scatter_n > 0 ? std::sqrt(scatter / (3.0 * static_cast<double>(scatter_n))) : 0.0;
+  if (!std::isfinite(out.noise_mm) || out.noise_mm > 100.0)
+    throw Error("hand shape: the palm keypoints scatter by " + std::to_string(out.noise_mm) + " mm about their mean shape, expected a hand "
+                "(a few mm; keypoints in millimetres after the unit is applied?)");
 
   // The palm frame keeps the template's orientation; its origin goes to the wrist keypoint.
   std::size_t wrist = 0;

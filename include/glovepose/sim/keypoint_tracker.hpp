@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 
 #include <Eigen/Geometry>
 
@@ -30,10 +31,10 @@ struct KeypointTrackerConfig {
   double offset_seconds = 0.0;   ///< Glove time = tracker time + offset.
 };
 
-/// @brief The keypoints (mm, in the camera's frame) a tracker reports while the hand makes
-/// `motion` between glove times `from` and `to`. Deterministic in `seed`.
-inline train::KeypointTrack track_keypoints(const hand::Kinematics& kinematics, const MotionSequence& motion, double from, double to,
-                                            const KeypointTrackerConfig& config, std::uint64_t seed) {
+/// @brief The keypoints (mm, in the camera's frame) a tracker reports while the hand takes the
+/// poses `pose_at(glove time)` between glove times `from` and `to`. Deterministic in `seed`.
+inline train::KeypointTrack track_keypoints(const hand::Kinematics& kinematics, const std::function<hand::Angles(double)>& pose_at, double from,
+                                            double to, const KeypointTrackerConfig& config, std::uint64_t seed) {
   const hand::KeypointModel model(config.layout, kinematics);
   core::Rng rng(seed);
   const double phase = rng.uniform(0.0, 1.0) / config.rate_hz;
@@ -54,13 +55,19 @@ inline train::KeypointTrack track_keypoints(const hand::Kinematics& kinematics, 
                      Eigen::AngleAxisd(turn * wave(2), Eigen::Vector3d::UnitZ()))
                         .toRotationMatrix();
     root.translation() = Eigen::Vector3d(60.0 * wave(3), 60.0 * wave(4), 400.0 + 60.0 * wave(5));
-    kinematics.pose(motion.at(t), skeleton, root);
+    kinematics.pose(pose_at(t), skeleton, root);
     model.positions(skeleton, points);
     track.times.push_back(t - config.offset_seconds);
     for (std::size_t k = 0; k < model.count(); ++k)
       track.points.push_back(points[k] + Eigen::Vector3d(rng.normal(0.0, sd), rng.normal(0.0, sd), rng.normal(0.0, sd)));
   }
   return track;
+}
+
+/// @brief The keypoints a tracker reports while the hand makes `motion`.
+inline train::KeypointTrack track_keypoints(const hand::Kinematics& kinematics, const MotionSequence& motion, double from, double to,
+                                            const KeypointTrackerConfig& config, std::uint64_t seed) {
+  return track_keypoints(kinematics, [&](double t) { return motion.at(t); }, from, to, config, seed);
 }
 
 }  // namespace glovepose::sim

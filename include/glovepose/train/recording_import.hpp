@@ -9,12 +9,21 @@
 ///   NaN, not trained, not scored), and every take must label the same DoFs;
 /// - optionally `subject`, `session`, `glove` (ids >= 0), `kind` (`recording`, `calibration`, 0 or
 ///   1) and `timestamp` (seconds) or `timestamp_ms` (milliseconds);
+/// - a hand tracker's keypoints instead of DoF columns (train/keypoint_columns.hpp: `<keypoint>_x`,
+///   `_y`, `_z` of MediaPipe's or OpenXR's keypoint names, CsvImportOptions::keypoint_scale mm per
+///   unit), or the same in a file of its own with the tracker's timestamps (CsvTake::keypoints);
+///   finish() turns them into the labels (train/keypoint_labels.hpp);
 /// - columns listed in CsvImportOptions::ignored_columns, skipped.
 /// Any other column is an error. Ids and kind absent from the columns come from the take
 /// (CsvTake); session, glove and kind default to 0, 0 and recording, the subject has no default.
 /// Without a timestamp column, frames are 1 / frame_rate apart, counted per run (a run: consecutive
 /// frames of one subject, session, glove and kind). Blank lines and lines starting with '#' are
-/// skipped. Imported frames are not collision outliers (outlier = 0) and donning = session.
+/// skipped. Imported frames are not collision outliers (outlier = 0), except frames of keypoint takes
+/// without a trusted label (outlier = 1, their angles the rest pose), and donning = session.
+///
+/// Keypoint takes: finish() fits each subject's hand to all their takes' keypoints, then labels
+/// every take (its clock placed on the glove's by the motion both show, unless an offset is given).
+/// A take's timestamps that disagree with the frame rate by more than 10% are reported in warnings().
 ///
 /// A calibration take must move every sensor: a cell that is flat over a calibration run (the
 /// calibration's own rule, sensor::is_flat_range) is an error naming the file, the run's lines and
@@ -38,12 +47,17 @@
 #include <vector>
 
 #include "../config.hpp"
+#include "../core/statistics.hpp"
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/csv_fields.hpp"
 #include "../io/number_text.hpp"
-#include "../sensor/calibration.hpp"
+#include "../hand/keypoint_fit.hpp"
+#include "../hand/keypoints.hpp"
 #include "../io/dataset.hpp"
+#include "../sensor/calibration.hpp"
+#include "keypoint_columns.hpp"
+#include "keypoint_labels.hpp"
 
 namespace glovepose::train {
 
@@ -53,6 +67,7 @@ struct CsvTake {
   std::optional<std::int32_t> subject;  ///< Subject of every row, when the file has no `subject` column.
   std::optional<std::int32_t> session;  ///< Session of every row, when the file has no `session` column (else 0).
   std::optional<std::uint8_t> kind;     ///< io::kKindRecording or io::kKindCalibration, when the file has no `kind` column.
+  std::string keypoints = {};           ///< A hand tracker's keypoint file for the take (read_keypoint_file), or none.
 };
 
 /// @brief How the takes are read.
@@ -62,6 +77,27 @@ struct CsvImportOptions {
   bool degrees = false;                      ///< Angle columns are in degrees (stored as radians).
   std::vector<std::string> ignored_columns;  ///< Columns to skip (e.g. a frame counter).
   bool allow_flat = false;                   ///< Keep a calibration take where a sensor is flat (listed in flat_sensors()).
+  double keypoint_scale = 1000.0;            ///< Millimetres per keypoint unit (1000: metres, as MediaPipe's world landmarks and OpenXR).
+  KeypointLabelConfig keypoint_labels = {};  ///< How keypoints become labels (a known clock offset, the glove's delay, smoothing).
+};
+
+/// @brief What finish() found in a keypoint take.
+struct KeypointTakeReport {
+  std::string path;                  ///< The take (and its keypoint file, when it has one).
+  std::int32_t subject = 0;          ///< Whose hand.
+  hand::KeypointLayout layout = hand::KeypointLayout::MediaPipe;
+  ClockAlignment clock;              ///< The offset found (correlation NaN: given).
+  double median_rms_mm = 0.0;        ///< Median fit residual of its tracker frames.
+  double p95_rms_mm = 0.0;           ///< 95th percentile of the same.
+  std::size_t frames = 0;            ///< Glove frames of the take.
+  std::size_t labelled = 0;          ///< Of those, with a trusted label.
+};
+
+/// @brief A subject's hand as finish() fitted it to their keypoints.
+struct KeypointSubjectReport {
+  std::int32_t subject = 0;
+  double hand_length_mm = 0.0;       ///< Wrist to the middle fingertip along the bones.
+  double noise_mm = 0.0;             ///< The keypoints' noise seen on the palm (3D RMS).
 };
 
 /// @brief A sensor found flat in a calibration run that was kept (CsvImportOptions::allow_flat).
@@ -99,7 +135,7 @@ class RecordingImporter {
   /// left as it was before the call.
   void add(std::istream& in, const CsvTake& take) {
     const std::size_t before = data_.frames();
-    const std::size_t flats_before = flat_.size();
+    const std::size_t flats_before = flat_.size(), pending_before = pending_.size(), warnings_before = warnings_.size();
     const auto metadata_before = data_.metadata;
     try {
       read(in, take);
@@ -107,18 +143,67 @@ class RecordingImporter {
       truncate(before);
       data_.metadata = metadata_before;
       flat_.resize(flats_before);
+      pending_.resize(pending_before);
+      warnings_.resize(warnings_before);
       throw;
     }
   }
 
-  /// @brief The frames read so far.
+  /// @brief Turns the keypoint takes' keypoints into labels (see the file comment); call it once
+  /// after the last add(). Throws glovepose::Error naming the takes when a subject's hand cannot be
+  /// fitted (too few frames, keypoints in another unit), a take's clock cannot be placed, or a take
+  /// has no trusted frame; the dataset is then left without those labels.
+  void finish() {
+    keypoint_takes_.clear();
+    keypoint_subjects_.clear();
+    std::vector<std::int32_t> subjects;
+    for (const Pending& take : pending_)
+      if (std::find(subjects.begin(), subjects.end(), take.subject) == subjects.end()) subjects.push_back(take.subject);
+    for (const std::int32_t subject : subjects) {
+      std::vector<Eigen::Vector3d> points;
+      std::string files;
+      std::optional<hand::KeypointLayout> layout;
+      for (const Pending& take : pending_) {
+        if (take.subject != subject) continue;
+        files += (files.empty() ? "'" : ", '") + take.path + "'";
+        if (layout && *layout != take.layout)
+          throw Error("keypoints of subject " + std::to_string(subject) + " (" + files + "): both " + hand::to_string(*layout) + " and " +
+                      hand::to_string(take.layout) + " keypoints, expected one tracker's per person");
+        layout = take.layout;
+        points.insert(points.end(), take.track.points.begin(), take.track.points.end());
+      }
+      hand::HandShapeFit shape;
+      try {
+        shape = hand::fit_hand_shape(*layout, points, hand::Kinematics());
+      } catch (const Error& e) {
+        throw Error("keypoints of subject " + std::to_string(subject) + " (" + files + "), " + e.what() + " (keypoint unit: " +
+                    io::number_text(options_.keypoint_scale) + " mm; `glovepose import --keypoint-unit`)");
+      }
+      keypoint_subjects_.push_back({subject, shape.hand_length_mm, shape.noise_mm * std::sqrt(3.0)});
+      const hand::KeypointIk ik(hand::KeypointModel(*layout, hand::Kinematics(shape.model)), hand::JointLimits(), options_.keypoint_labels.ik);
+      for (const Pending& take : pending_) {
+        if (take.subject != subject) continue;
+        label(take, ik);
+      }
+    }
+    pending_.clear();
+  }
+
+  /// @brief The keypoint takes finish() labelled, in the order of their subjects.
+  const std::vector<KeypointTakeReport>& keypoint_takes() const noexcept { return keypoint_takes_; }
+  /// @brief The hands finish() fitted.
+  const std::vector<KeypointSubjectReport>& keypoint_subjects() const noexcept { return keypoint_subjects_; }
+  /// @brief What the takes read so far did that may be a mistake (a frame rate their timestamps contradict).
+  const std::vector<std::string>& warnings() const noexcept { return warnings_; }
+
+  /// @brief The frames read so far (keypoint takes without labels until finish()).
   const io::Dataset& dataset() const noexcept { return data_; }
   /// @brief Flat sensors of calibration runs kept under allow_flat, in the order met.
   const std::vector<FlatSensor>& flat_sensors() const noexcept { return flat_; }
 
  private:
   // What each column of a take holds.
-  enum class Role { Cell, Dof, Subject, Session, Glove, Kind, Seconds, Milliseconds, Ignored };
+  enum class Role { Cell, Dof, Keypoint, Subject, Session, Glove, Kind, Seconds, Milliseconds, Ignored };
   struct Column {
     Role role;
     int index = 0;  // cell or DoF index
@@ -147,7 +232,17 @@ class RecordingImporter {
     return -1;
   }
 
-  std::vector<Column> columns_of(const std::vector<std::string>& header, const std::string& at) const {
+  // A keypoint take waiting for finish(): its frames and the tracker's keypoints.
+  struct Pending {
+    std::string path;
+    std::int32_t subject = 0;
+    std::size_t first = 0, end = 0;  // its frames
+    hand::KeypointLayout layout = hand::KeypointLayout::MediaPipe;
+    std::array<bool, hand::kMaxKeypoints> present{};
+    KeypointTrack track;
+  };
+
+  std::vector<Column> columns_of(const std::vector<std::string>& header, const std::string& at, const KeypointColumns* keypoints) const {
     const std::pair<const char*, Role> named[] = {{"subject", Role::Subject},   {"session", Role::Session},
                                                   {"glove", Role::Glove},       {"kind", Role::Kind},
                                                   {"timestamp", Role::Seconds}, {"timestamp_ms", Role::Milliseconds}};
@@ -174,10 +269,11 @@ class RecordingImporter {
       if (const int d = dof_of(name); !column && d >= 0) {
         column = Column{Role::Dof, d};
       }
+      if (!column && keypoints && keypoints->is_keypoint(k)) column = Column{Role::Keypoint};
       if (!column)
         throw Error(where + ": unknown column, expected a cell of glove '" + glove_.id() + "' (e.g. '" + glove_.cell_names().front() +
                     "'), a DoF name (e.g. '" + hand::kDofs[0].name +
-                    "'), subject, session, glove, kind, timestamp or timestamp_ms"
+                    "'), a keypoint coordinate (e.g. 'index_finger_tip_x'), subject, session, glove, kind, timestamp or timestamp_ms"
                     " (skip other columns by name: ignored_columns, `glovepose import --ignore COLUMN[,COLUMN...]`)");
       times += column->role == Role::Seconds || column->role == Role::Milliseconds;
       columns.push_back(*column);
@@ -204,17 +300,43 @@ class RecordingImporter {
                   ", expected the column names (the glove's cells, optionally the 25 DoFs, subject, session, glove, kind, timestamp)");
     const std::size_t header_line = line_no;
     const std::vector<std::string> header = io::split_csv_line(line);
-    const std::vector<Column> columns = columns_of(header, at + ", line " + std::to_string(header_line));
+    const std::string at_header = at + ", line " + std::to_string(header_line);
+    // Keypoints: columns of this take, or a file of the tracker's own.
+    std::optional<KeypointColumns> keypoint_columns;
+    if (const std::optional<hand::KeypointLayout> layout = keypoint_layout_of(header, at_header))
+      keypoint_columns.emplace(header, *layout, options_.keypoint_scale, at_header);
+    std::optional<KeypointFile> keypoint_file;
+    if (!take.keypoints.empty()) {
+      if (keypoint_columns)
+        throw Error(at_header + ": keypoint columns and a keypoint file ('" + take.keypoints + "'), expected one of them");
+      std::ifstream file(take.keypoints);
+      if (!file) throw Error("keypoint file '" + take.keypoints + "': cannot open, expected a readable file");
+      keypoint_file = read_keypoint_file(file, take.keypoints, options_.keypoint_scale, options_.ignored_columns);
+    }
+    const std::vector<Column> columns = columns_of(header, at_header, keypoint_columns ? &*keypoint_columns : nullptr);
     const auto has = [&](Role role) {
       return std::any_of(columns.begin(), columns.end(), [&](const Column& c) { return c.role == role; });
     };
+    const bool keypoints = keypoint_columns || keypoint_file;
+    if (keypoints && has(Role::Dof))
+      throw Error(at_header + ": DoF columns and keypoints, expected the reference as angles or as keypoints, not both");
     if (!has(Role::Subject) && !take.subject)
       throw Error(at + ", line " + std::to_string(header_line) +
                   ": no 'subject' column and no subject given for the file, expected one of them");
-    const bool angles = has(Role::Dof);
+    const bool angles = has(Role::Dof) || keypoints;
     hand::DofSet labelled{};
     for (const Column& column : columns)
       if (column.role == Role::Dof) labelled[static_cast<std::size_t>(column.index)] = true;
+    Pending pending;
+    if (keypoints) {
+      pending.path = take.path + (keypoint_file ? " with '" + take.keypoints + "'" : "");
+      pending.layout = keypoint_file ? keypoint_file->layout : keypoint_columns->layout();
+      pending.present = keypoint_file ? keypoint_file->present : keypoint_columns->present();
+      if (keypoint_file) pending.track = std::move(keypoint_file->track);
+      labelled = labelled_by(hand::KeypointModel(pending.layout, hand::Kinematics()), pending.present);
+      if (labelled == hand::DofSet{})
+        throw Error(at_header + ": keypoints that complete no digit, expected every keypoint of at least one digit");
+    }
     if (data_.frames() > 0 && angles != data_.has_angles())
       throw Error(at + ", line " + std::to_string(header_line) + ": " + std::string(angles ? "has" : "has no") + " DoF columns, expected " +
                   (data_.has_angles() ? "the DoFs" : "none") + " as the takes before it");
@@ -239,6 +361,7 @@ class RecordingImporter {
       std::uint8_t kind = take.kind.value_or(io::kKindRecording);
       std::optional<double> time;
       std::fill(pose.begin(), pose.end(), NAN);
+      if (keypoint_columns) keypoint_columns->read_row(fields, header, at_line, pending.track.points);
       for (std::size_t k = 0; k < fields.size(); ++k) {
         const std::string where = at_line + ", column '" + header[k] + "': '" + fields[k] + "'";
         const Column& column = columns[k];
@@ -268,6 +391,7 @@ class RecordingImporter {
           case Role::Milliseconds:
             time = parse_time(fields[k], where) / 1000.0;
             break;
+          case Role::Keypoint:
           case Role::Ignored:
             break;
         }
@@ -294,6 +418,70 @@ class RecordingImporter {
     if (in.bad()) throw Error(at + ", line " + std::to_string(line_no + 1) + ": read error");
     if (line_of.empty()) throw Error(at + ": no frames after the header, expected at least one row of readings");
     check_calibration_runs(first_frame, line_of, take.path);
+    if (has(Role::Seconds) || has(Role::Milliseconds)) check_rate(first_frame, take.path);
+    if (keypoints) {
+      pending.subject = data_.subject[first_frame];
+      for (std::size_t i = first_frame; i < data_.frames(); ++i)
+        if (data_.subject[i] != pending.subject)
+          throw Error(at + ", line " + std::to_string(line_of[i - first_frame]) + ": subject " + std::to_string(data_.subject[i]) +
+                      " in a take with keypoints of subject " + std::to_string(pending.subject) +
+                      ", expected one person per keypoint take (their hand is fitted to them)");
+      pending.first = first_frame;
+      pending.end = data_.frames();
+      if (keypoint_columns) pending.track.times.assign(data_.timestamps.begin() + static_cast<std::ptrdiff_t>(first_frame), data_.timestamps.end());
+      pending_.push_back(std::move(pending));
+    }
+  }
+
+  // A take whose timestamps' median spacing disagrees with the frame rate by more than 10%.
+  void check_rate(std::size_t first, const std::string& path) {
+    std::vector<double> spacing;
+    for (std::size_t i = first + 1; i < data_.frames(); ++i)
+      if (data_.same_run(i - 1, i)) spacing.push_back(data_.timestamps[i] - data_.timestamps[i - 1]);
+    if (spacing.size() < 2) return;
+    const double rate = 1.0 / core::percentile(spacing, 0.5);
+    if (std::abs(rate - data_.frame_rate()) > 0.1 * data_.frame_rate())
+      warnings_.push_back("CSV file '" + path + "': its timestamps are " + io::number_text(std::round(rate * 100.0) / 100.0) + " frames per second, the dataset's rate is " +
+                          io::number_text(data_.frame_rate()) + " (the glove description's rate_hz or --rate): one of them is wrong");
+  }
+
+  // Labels of one keypoint take from the subject's fitted hand; untrusted frames become outliers.
+  void label(const Pending& take, const hand::KeypointIk& ik) {
+    const std::size_t C = data_.cell_count, D = hand::kDofCount;
+    const hand::DofSet labelled = labelled_by(ik.model(), take.present);
+    const std::vector<double> times(data_.timestamps.begin() + static_cast<std::ptrdiff_t>(take.first),
+                                    data_.timestamps.begin() + static_cast<std::ptrdiff_t>(take.end));
+    const std::vector<double> cells(data_.cells.begin() + static_cast<std::ptrdiff_t>(take.first * C),
+                                    data_.cells.begin() + static_cast<std::ptrdiff_t>(take.end * C));
+    TakeLabels labels;
+    try {
+      labels = label_take(ik, take.track, labelled, times, cells, C, options_.keypoint_labels);
+    } catch (const Error& e) {
+      throw Error("keypoints of '" + take.path + "': " + e.what());
+    }
+    KeypointTakeReport report;
+    report.path = take.path;
+    report.subject = take.subject;
+    report.layout = take.layout;
+    report.clock = labels.clock;
+    std::vector<double> residuals;
+    for (double r : labels.rms_mm)
+      if (std::isfinite(r)) residuals.push_back(r);
+    report.median_rms_mm = core::percentile(residuals, 0.5);
+    report.p95_rms_mm = core::percentile(residuals, 0.95);
+    report.frames = take.end - take.first;
+    const hand::Angles rest = hand::JointLimits().rest();
+    for (std::size_t i = 0; i < report.frames; ++i) {
+      const std::size_t frame = take.first + i;
+      report.labelled += labels.trusted[i];
+      data_.outlier[frame] = labels.trusted[i] ? 0 : 1;
+      for (std::size_t d = 0; d < D; ++d)
+        data_.angles[frame * D + d] = !labelled[d] ? NAN : labels.trusted[i] ? labels.angles[i * D + d] : static_cast<float>(rest[d]);
+    }
+    if (report.labelled == 0)
+      throw Error("keypoints of '" + take.path + "': no frame with a trusted fit (median residual " + io::number_text(report.median_rms_mm) +
+                  " mm; every keypoint of the labelled digits seen?), expected a take the tracker followed");
+    keypoint_takes_.push_back(std::move(report));
   }
 
   // A time stamp as a number; a time of day (a common logger format) is named as such, with the ways out.
@@ -360,6 +548,10 @@ class RecordingImporter {
   CsvImportOptions options_;
   io::Dataset data_;
   std::vector<FlatSensor> flat_;
+  std::vector<Pending> pending_;
+  std::vector<KeypointTakeReport> keypoint_takes_;
+  std::vector<KeypointSubjectReport> keypoint_subjects_;
+  std::vector<std::string> warnings_;
 };
 
 }  // namespace glovepose::train

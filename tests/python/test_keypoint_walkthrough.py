@@ -1,0 +1,52 @@
+"""docs/own_glove.md's "Labels from a hand tracker" walk-through, run as written (its sh block, with
+build/ pointing at this build), then checked against the truth it was simulated from: the labels
+`import` made from the simulated tracker's keypoints against the true angles of the same takes
+(read here from both dataset files), every take's labelled share and clock correlation, and the
+held-out error of the linear map trained on the keypoint labels against the one trained on the
+true angles (within 10%).
+
+Environment: GLOVEPOSE_BUILD_DIR (the build tree: tools/glovepose, examples/example_glove).
+"""
+import os
+import re
+import sys
+import tempfile
+
+import numpy as np
+
+from readme_blocks import sh_commands
+from test_own_glove import read_safetensors, run
+
+
+def held_out_mean(output):
+    return float(re.search(r"^all\s+([0-9.]+)", output, re.M).group(1))
+
+
+def main():
+    commands = sh_commands("## Labels from a hand tracker", "docs/own_glove.md")
+    assert len(commands) == 9, commands
+    with tempfile.TemporaryDirectory() as work:
+        outputs = [run(command, work) for command in commands]
+        for command in commands:
+            print("ran:", command)
+        imported = outputs[2]
+        takes = re.findall(r"^labels of .*: (\d+) of (\d+) frames .*\(correlation ([0-9.]+)\)$", imported, re.M)
+        assert len(takes) == 8, imported
+        for labelled, frames, correlation in takes:
+            assert int(labelled) >= 0.95 * int(frames), imported
+            assert float(correlation) >= 0.5, imported
+        tracked, _ = read_safetensors(os.path.join(work, "tracked.safetensors"))
+        truth, _ = read_safetensors(os.path.join(work, "truth.safetensors"))
+        kept = tracked["outlier"] == 0
+        error = np.degrees(np.abs(tracked["angles"] - truth["angles"]))[kept]
+        mean = float(np.nanmean(error))  # over the 21 DoFs the true takes label
+        print(f"keypoint labels against the truth: {mean:.3f} deg over {kept.sum()} of {kept.size} frames")
+        assert mean <= 3.0, mean
+        tracked_error, truth_error = held_out_mean(outputs[7]), held_out_mean(outputs[8])
+        print(f"held-out person: trained on keypoint labels {tracked_error} deg, on the true angles {truth_error} deg")
+        assert tracked_error <= 1.1 * truth_error, (tracked_error, truth_error)
+    print("PASS")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
