@@ -14,6 +14,10 @@
 #include <string>
 #include <vector>
 
+#if __has_include(<fnmatch.h>)
+#include <fnmatch.h>  // POSIX: the reference for --ignore patterns
+#endif
+
 using namespace glovepose;
 
 namespace {
@@ -339,4 +343,37 @@ TEST_CASE("import: a take labelling some DoFs: the others are NaN and not labell
   CHECK_THROWS_WITH_AS(importer.add(second, {"all.csv", {}, {}, {}}),
                        doctest::Contains("CSV file 'all.csv', line 1: DoF columns thumb_base_abduction,"), Error);
   CHECK(importer.dataset().frames() == 4);
+}
+
+TEST_CASE("import: --ignore patterns match as POSIX fnmatch does and never skip a cell or DoF column") {
+  CHECK(io::column_matches("AccX", "Acc?"));
+  CHECK(!io::column_matches("AccXY", "Acc?"));
+  CHECK(io::column_matches("Q0", "Q*"));
+  CHECK(io::column_matches("", "*"));
+  CHECK(!io::column_matches("P10", "P1"));
+#if __has_include(<fnmatch.h>)
+  // The matcher against the C library's fnmatch (no brackets, no escapes: '*' and '?' only).
+  std::mt19937 rng(3);
+  const std::string alphabet = "ab*?";
+  for (int i = 0; i < 20000; ++i) {
+    std::string name, pattern;
+    for (int k = static_cast<int>(rng() % 7); k > 0; --k) name += "ab"[rng() % 2];
+    for (int k = static_cast<int>(rng() % 6); k > 0; --k) pattern += alphabet[rng() % alphabet.size()];
+    CAPTURE(name);
+    CAPTURE(pattern);
+    CHECK(io::column_matches(name, pattern) == (fnmatch(pattern.c_str(), name.c_str(), 0) == 0));
+  }
+#endif
+  // A logger's extra columns skipped by pattern; "*_bend" would match every cell, which stays read.
+  train::CsvImportOptions o = options();
+  o.ignored_columns = {"Acc?", "Q*", "*_bend", "Status"};
+  train::RecordingImporter importer(small_glove(), o);
+  std::istringstream in(
+      "subject,AccX,AccY,thumb_bend,index_bend,middle_bend,ring_bend,pinky_bend,Q0,Qw,Status\n"
+      "0,1,2,1.5,1.6,1.7,1.8,1.9,0.1,0.2,ok\n");
+  importer.add(in, {"logger.csv", {}, {}, {}});
+  const std::vector<float> cells(importer.dataset().cells.begin(), importer.dataset().cells.end());
+  CHECK(cells == std::vector<float>{1.5f, 1.6f, 1.7f, 1.8f, 1.9f});
+  std::istringstream unknown("subject,AccXY,thumb_bend,index_bend,middle_bend,ring_bend,pinky_bend\n0,1,1,1,1,1,1\n");
+  CHECK_THROWS_WITH_AS(importer.add(unknown, {"logger2.csv", {}, {}, {}}), doctest::Contains("column 2 'AccXY': unknown column"), Error);
 }

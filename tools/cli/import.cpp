@@ -184,8 +184,9 @@ Command add_import(CLI::App& tool) {
       ->type_name("FILE");
   command->add_flag("--degrees", o->import.degrees, "angle columns are in degrees");
   command
-      ->add_option("--ignore", o->import.ignored_columns, "columns to skip, comma-separated (e.g. --ignore Scenario,Time); repeatable")
-      ->type_name("COLUMN[,COLUMN...]")
+      ->add_option("--ignore", o->import.ignored_columns, "columns to skip, comma-separated names or patterns with * and ? (e.g. --ignore Scenario,Time,Acc*); "
+                   "repeatable; a pattern never skips a cell or DoF column")
+      ->type_name("COLUMN[,PATTERN...]")
       ->delimiter(',')
       ->allow_extra_args(false);
   command->add_flag("--allow-flat", o->import.allow_flat, "keep calibration takes where a sensor does not move (it then reads 0); listed");

@@ -31,6 +31,35 @@ inline std::vector<std::string> split_csv_line(const std::string& line) {
   }
 }
 
+/// @brief Whether column `name` matches `pattern`: '*' stands for any run of characters (also
+/// none), '?' for any one character, everything else for itself (case-sensitive).
+inline bool column_matches(const std::string& name, const std::string& pattern) {
+  // Greedy wildcard matching with one backtrack point: the last '*' seen.
+  std::size_t n = 0, p = 0, star = std::string::npos, resume = 0;
+  while (n < name.size()) {
+    if (p < pattern.size() && (pattern[p] == '?' || (pattern[p] != '*' && pattern[p] == name[n]))) {
+      ++n, ++p;
+    } else if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      resume = n;
+    } else if (star != std::string::npos) {
+      p = star + 1;
+      n = ++resume;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*') ++p;
+  return p == pattern.size();
+}
+
+/// @brief Whether column `name` is one of `patterns` (column_matches()).
+inline bool column_listed(const std::string& name, const std::vector<std::string>& patterns) {
+  for (const std::string& pattern : patterns)
+    if (column_matches(name, pattern)) return true;
+  return false;
+}
+
 /// @brief Whether `line` holds nothing but blanks.
 inline bool blank_csv_line(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
 

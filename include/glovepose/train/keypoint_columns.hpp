@@ -136,7 +136,7 @@ struct KeypointFile {
 };
 
 /// @brief Reads a keypoint file: a header with `timestamp` (seconds) or `timestamp_ms`, keypoint
-/// columns of one layout and the columns listed in `ignored`; then one line per tracker frame,
+/// columns of one layout and the columns listed in `ignored` (names or patterns, io::column_listed); then one line per tracker frame,
 /// times increasing. Blank lines and lines starting with '#' are skipped. `scale`: mm per unit.
 /// Throws glovepose::Error "keypoint file '<path>', line L, column 'C': ..." for anything else.
 inline KeypointFile read_keypoint_file(std::istream& in, const std::string& path, double scale, const std::vector<std::string>& ignored) {
@@ -159,7 +159,7 @@ inline KeypointFile read_keypoint_file(std::istream& in, const std::string& path
   int time_column = -1;
   double time_unit = 1.0;
   for (std::size_t c = 0; c < header.size(); ++c) {
-    if (columns.is_keypoint(c) || std::find(ignored.begin(), ignored.end(), header[c]) != ignored.end()) continue;
+    if (columns.is_keypoint(c) || io::column_listed(header[c], ignored)) continue;
     if ((header[c] == "timestamp" || header[c] == "timestamp_ms") && time_column < 0) {
       time_column = static_cast<int>(c);
       time_unit = header[c] == "timestamp" ? 1.0 : 1e-3;

@@ -13,7 +13,8 @@
 ///   `_y`, `_z` of MediaPipe's or OpenXR's keypoint names, CsvImportOptions::keypoint_scale mm per
 ///   unit), or the same in a file of its own with the tracker's timestamps (CsvTake::keypoints);
 ///   finish() turns them into the labels (train/keypoint_labels.hpp);
-/// - columns listed in CsvImportOptions::ignored_columns, skipped.
+/// - columns listed in CsvImportOptions::ignored_columns (names, or patterns with '*' and '?'),
+///   skipped; a pattern never skips a cell's or a DoF's column.
 /// Any other column is an error. Ids and kind absent from the columns come from the take
 /// (CsvTake); session, glove and kind default to 0, 0 and recording, the subject has no default.
 /// Without a timestamp column, frames are 1 / frame_rate apart, counted per run (a run: consecutive
@@ -75,7 +76,7 @@ struct CsvImportOptions {
   double frame_rate =
       0.0;  ///< Frames per second (> 0; 0: the glove description's rate_hz): the dataset's rate, and the spacing without timestamps.
   bool degrees = false;                      ///< Angle columns are in degrees (stored as radians).
-  std::vector<std::string> ignored_columns;  ///< Columns to skip (e.g. a frame counter).
+  std::vector<std::string> ignored_columns;  ///< Columns to skip (e.g. a frame counter): names or patterns ('*', '?'; io::column_matches).
   bool allow_flat = false;                   ///< Keep a calibration take where a sensor is flat (listed in flat_sensors()).
   double keypoint_scale = 1000.0;            ///< Millimetres per keypoint unit (1000: metres, as MediaPipe's world landmarks and OpenXR).
   KeypointLabelConfig keypoint_labels = {};  ///< How keypoints become labels (a known clock offset, the glove's delay, smoothing).
@@ -120,7 +121,7 @@ class RecordingImporter {
         options_(std::move(options)),
         data_(static_cast<std::size_t>(glove_.cell_count()), 0, glove_.id(), checked_rate(options_.frame_rate, glove_)) {
     for (const std::string& name : options_.ignored_columns)
-      if (cell_of(name) >= 0 || dof_of(name) >= 0)
+      if (name.find_first_of("*?") == std::string::npos && (cell_of(name) >= 0 || dof_of(name) >= 0))
         throw Error("ignored column '" + name + "' is a cell or DoF of glove '" + glove_.id() + "', expected another column");
   }
 
@@ -256,8 +257,7 @@ class RecordingImporter {
       for (std::size_t earlier = 0; earlier < k; ++earlier)
         if (header[earlier] == name)
           throw Error(where + ": named like column " + std::to_string(earlier + 1) + ", expected each column once");
-      const bool ignored =
-          std::find(options_.ignored_columns.begin(), options_.ignored_columns.end(), name) != options_.ignored_columns.end();
+      const bool ignored = cell_of(name) < 0 && dof_of(name) < 0 && io::column_listed(name, options_.ignored_columns);
       std::optional<Column> column;
       if (ignored) column = Column{Role::Ignored};
       for (const auto& [text, role] : named)
