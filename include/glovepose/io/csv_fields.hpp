@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <istream>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -62,6 +63,21 @@ inline bool column_listed(const std::string& name, const std::vector<std::string
 
 /// @brief Whether `line` holds nothing but blanks.
 inline bool blank_csv_line(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
+
+/// @brief Whether a recording's CSV reader passes over `line`: blank, or a comment ('#' first).
+inline bool skipped_csv_line(const std::string& line) {
+  return blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#';
+}
+
+/// @brief Reads the next line that skipped_csv_line() does not pass over into `line`, counting
+/// every line read in `line_no`; false at the end of `in`.
+inline bool next_csv_line(std::istream& in, std::string& line, std::size_t& line_no) {
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!skipped_csv_line(line)) return true;
+  }
+  return false;
+}
 
 /// @brief The field `text` as a finite number of type T (a leading '+' allowed). Throws
 /// glovepose::Error "<where> is not a number" or "... is not a finite number".

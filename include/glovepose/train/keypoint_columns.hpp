@@ -141,15 +141,9 @@ struct KeypointFile {
 /// Throws glovepose::Error "keypoint file '<path>', line L, column 'C': ..." for anything else.
 inline KeypointFile read_keypoint_file(std::istream& in, const std::string& path, double scale, const std::vector<std::string>& ignored) {
   const std::string at = "keypoint file '" + path + "'";
-  const auto skipped = [](const std::string& line) { return io::blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#'; };
   std::string line;
   std::size_t line_no = 0;
-  bool header_read = false;
-  while (!header_read && std::getline(in, line)) {
-    ++line_no;
-    header_read = !skipped(line);
-  }
-  if (!header_read) throw Error(at + ", line " + std::to_string(line_no + 1) + ": no header, expected timestamp and keypoint columns");
+  if (!io::next_csv_line(in, line, line_no)) throw Error(at + ", line " + std::to_string(line_no + 1) + ": no header, expected timestamp and keypoint columns");
   const std::string at_header = at + ", line " + std::to_string(line_no);
   const std::vector<std::string> header = io::split_csv_line(line);
   const std::optional<hand::KeypointLayout> layout = keypoint_layout_of(header, at_header);
@@ -173,9 +167,7 @@ inline KeypointFile read_keypoint_file(std::istream& in, const std::string& path
   KeypointFile out;
   out.layout = *layout;
   out.present = columns.present();
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (skipped(line)) continue;
+  while (io::next_csv_line(in, line, line_no)) {
     const std::string at_line = at + ", line " + std::to_string(line_no);
     const std::vector<std::string> fields = io::split_csv_line(line);
     if (fields.size() != header.size())

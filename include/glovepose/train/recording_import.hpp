@@ -290,12 +290,7 @@ class RecordingImporter {
     const std::string at = "CSV file '" + take.path + "'";
     std::string line;
     std::size_t line_no = 0;
-    bool header_read = false;
-    while (!header_read && std::getline(in, line)) {
-      ++line_no;
-      header_read = !skipped(line);
-    }
-    if (!header_read)
+    if (!io::next_csv_line(in, line, line_no))
       throw Error(at + ", line " + std::to_string(line_no + 1) + ": " + std::string(in.bad() ? "read error" : "no header") +
                   ", expected the column names (the glove's cells, optionally the 25 DoFs, subject, session, glove, kind, timestamp)");
     const std::size_t header_line = line_no;
@@ -349,9 +344,7 @@ class RecordingImporter {
     std::vector<std::size_t> line_of;  // file line of each frame of this take
     std::vector<float> cells(static_cast<std::size_t>(glove_.cell_count()));
     std::vector<float> pose(angles ? hand::kDofCount : 0);
-    while (std::getline(in, line)) {
-      ++line_no;
-      if (skipped(line)) continue;
+    while (io::next_csv_line(in, line, line_no)) {
       const std::vector<std::string> fields = io::split_csv_line(line);
       const std::string at_line = at + ", line " + std::to_string(line_no);
       if (fields.size() != columns.size())
@@ -498,8 +491,6 @@ class RecordingImporter {
     throw Error(where + " is not a kind, expected recording, calibration, 0 or 1");
   }
 
-  // Blank lines and comments ('#' first) are not read.
-  static bool skipped(const std::string& line) { return io::blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#'; }
 
   // Every calibration run of the frames from `first` on: a flat cell is an error, or kept and listed.
   void check_calibration_runs(std::size_t first, const std::vector<std::size_t>& line_of, const std::string& path) {
