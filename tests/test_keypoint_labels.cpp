@@ -252,6 +252,7 @@ TEST_CASE("keypoint labels: missing digits are not labelled, unseen frames not t
       lost += 1;
     }
     if (labels.trusted[f]) {
+      CHECK(labels.frame_rms_mm[f] <= labels.rms_threshold_mm);
       CHECK(std::isnan(labels.angles[f * hand::kDofCount + hand::dof_of(hand::Finger::Pinky, hand::Motion::BaseFlexion)]));
       CHECK(std::isfinite(labels.angles[f * hand::kDofCount + hand::dof_of(hand::Finger::Index, hand::Motion::BaseFlexion)]));
     }

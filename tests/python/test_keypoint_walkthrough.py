@@ -1,7 +1,8 @@
 """docs/own_glove.md's "Labels from a hand tracker" walk-through, run as written (its sh block, with
 build/ pointing at this build), then checked against the truth it was simulated from: the labels
 `import` made from the simulated tracker's keypoints against the true angles of the same takes
-(read here from both dataset files), every take's labelled share and clock correlation, and the
+(read here from both dataset files), every take's labelled share and clock correlation, the
+per-frame report against the dataset's outlier flags, and the
 held-out error of the linear map trained on the keypoint labels against the one trained on the
 true angles (within 10%).
 
@@ -36,6 +37,12 @@ def main():
             assert int(labelled) >= 0.95 * int(frames), imported
             assert float(correlation) >= 0.5, imported
         tracked, _ = read_safetensors(os.path.join(work, "tracked.safetensors"))
+        report = np.genfromtxt(os.path.join(work, "tracked_labels.csv"), delimiter=",", names=True, dtype=None, encoding="utf-8")
+        assert len(report) == len(tracked["outlier"]), len(report)
+        assert np.array_equal(report["labelled"], 1 - tracked["outlier"])
+        residual = np.median(report["residual_mm"][report["labelled"] == 1])
+        print(f"median fit residual behind the labels: {residual:.2f} mm")
+        assert 3.0 <= residual <= 6.0, residual  # 5 mm of noise on 21 keypoints less the 31 fitted parameters
         truth, _ = read_safetensors(os.path.join(work, "truth.safetensors"))
         kept = tracked["outlier"] == 0
         error = np.degrees(np.abs(tracked["angles"] - truth["angles"]))[kept]

@@ -19,7 +19,7 @@ namespace {
 
 struct ImportOptions {
   std::vector<std::string> recordings, calibrations;  // FILE... and --calibration FILE
-  std::string out, glove, takes_list;
+  std::string out, glove, takes_list, keypoint_report;
   std::optional<std::int32_t> subject, session;
   std::string keypoint_unit = "m";
   std::optional<double> keypoint_offset;
@@ -135,9 +135,23 @@ int import_recordings(const ImportOptions& o) {
     const std::string clock = std::isfinite(take.clock.correlation)
                                   ? "found by motion (correlation " + io::number_text(std::round(take.clock.correlation * 100) / 100) + ")"
                                   : "given";
+    const std::string source = take.keypoint_file.empty() ? take.path : take.path + " with '" + take.keypoint_file + "'";
     std::printf("labels of %s (%s): %zu of %zu frames (%.1f%%), fit residual median %.1f mm, 95th %.1f mm, tracker clock offset %+.3f s %s\n",
-                take.path.c_str(), hand::to_string(take.layout), take.labelled, take.frames, 100.0 * take.labelled / take.frames,
+                source.c_str(), hand::to_string(take.layout), take.labelled, take.frames, 100.0 * take.labelled / take.frames,
                 take.median_rms_mm, take.p95_rms_mm, take.clock.offset, clock.c_str());
+  }
+  if (!o.keypoint_report.empty()) {
+    std::ofstream report(o.keypoint_report);
+    report << "take,subject,session,timestamp,residual_mm,labelled\n";
+    for (const train::KeypointTakeReport& take : importer.keypoint_takes())
+      for (std::size_t i = 0; i < take.frames; ++i) {
+        const std::size_t f = take.first_frame + i;
+        report << take.path << "," << data.subject[f] << "," << data.session[f] << "," << io::number_text(data.timestamps[f]) << ","
+               << (std::isnan(take.frame_rms_mm[i]) ? std::string("nan") : io::number_text(std::round(take.frame_rms_mm[i] * 1000) / 1000))
+               << "," << (data.outlier[f] ? 0 : 1) << "\n";
+      }
+    if (!report) throw Error("--keypoint-report '" + o.keypoint_report + "': cannot write, expected a writable file");
+    std::printf("wrote %s: the fit residual behind every keypoint label\n", o.keypoint_report.c_str());
   }
   for (const std::string& warning : importer.warnings()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
   std::printf("wrote %s\n", o.out.c_str());
@@ -200,6 +214,11 @@ Command add_import(CLI::App& tool) {
   add_number(*command, "--glove-delay", "S", o->import.keypoint_labels.glove_delay_seconds,
              "the glove's response delay (how long after a motion its cells show it), taken off the offset found (default 0)")
       ->check(at_least(0.0));
+  command
+      ->add_option("--keypoint-report", o->keypoint_report,
+                   "also write a CSV of every keypoint-labelled frame: take, subject, session, timestamp, the fit residual (mm) "
+                   "behind its label and whether it is labelled (trusted)")
+      ->type_name("FILE");
   add_number(*command, "--keypoint-smoothing", "S", o->import.keypoint_labels.smoothing_seconds,
              "SD of the lag-free smoothing of the keypoint labels in time (default 0.08; 0: none)")
       ->check(at_least(0.0));

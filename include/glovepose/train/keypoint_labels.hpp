@@ -63,6 +63,7 @@ struct ClockAlignment {
 struct TakeLabels {
   std::vector<float> angles;          ///< Glove frames x 25, radians; NaN for unlabelled DoFs and untrusted frames.
   std::vector<std::uint8_t> trusted;  ///< Per glove frame: 1 when it has a label.
+  std::vector<double> frame_rms_mm;   ///< Per glove frame: the larger fit residual of the two tracker frames it lies between (NaN: none).
   ClockAlignment clock;
   std::vector<double> rms_mm;         ///< Per tracker frame: the fit residual (NaN: too few keypoints).
   std::size_t tracker_trusted = 0;    ///< Tracker frames trusted.
@@ -266,12 +267,15 @@ inline TakeLabels label_take(const hand::KeypointIk& ik, const KeypointTrack& tr
   const std::size_t n = glove_times.size();
   out.angles.assign(n * D, NAN);
   out.trusted.assign(n, 0);
+  out.frame_rms_mm.assign(n, NAN);
   for (std::size_t i = 0; i < n; ++i) {
     const double t = glove_times[i] - out.clock.offset;
     if (frames < 2 || t < track.times.front() || t > track.times.back()) continue;
     std::size_t hi = static_cast<std::size_t>(std::lower_bound(track.times.begin(), track.times.end(), t) - track.times.begin());
     if (hi == 0) hi = 1;
     const std::size_t lo = hi - 1;
+    out.frame_rms_mm[i] = std::max(out.rms_mm[lo], out.rms_mm[hi]);  // NaN when either has no fit
+    if (std::isnan(out.rms_mm[lo]) || std::isnan(out.rms_mm[hi])) out.frame_rms_mm[i] = NAN;
     if (!trusted[lo] || !trusted[hi] || track.times[hi] - track.times[lo] > gap) continue;
     const double w = (t - track.times[lo]) / (track.times[hi] - track.times[lo]);
     for (std::size_t d = 0; d < D; ++d)

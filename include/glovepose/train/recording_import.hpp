@@ -84,7 +84,8 @@ struct CsvImportOptions {
 
 /// @brief What finish() found in a keypoint take.
 struct KeypointTakeReport {
-  std::string path;                  ///< The take (and its keypoint file, when it has one).
+  std::string path;                  ///< The take.
+  std::string keypoint_file;         ///< Its keypoint file, or empty (keypoint columns in the take).
   std::int32_t subject = 0;          ///< Whose hand.
   hand::KeypointLayout layout = hand::KeypointLayout::MediaPipe;
   ClockAlignment clock;              ///< The offset found (correlation NaN: given).
@@ -92,6 +93,8 @@ struct KeypointTakeReport {
   double p95_rms_mm = 0.0;           ///< 95th percentile of the same.
   std::size_t frames = 0;            ///< Glove frames of the take.
   std::size_t labelled = 0;          ///< Of those, with a trusted label.
+  std::size_t first_frame = 0;       ///< The take's first frame in the dataset.
+  std::vector<double> frame_rms_mm;  ///< Per frame of the take: the fit residual behind its label (TakeLabels::frame_rms_mm).
 };
 
 /// @brief A subject's hand as finish() fitted it to their keypoints.
@@ -235,7 +238,7 @@ class RecordingImporter {
 
   // A keypoint take waiting for finish(): its frames and the tracker's keypoints.
   struct Pending {
-    std::string path;
+    std::string path, keypoint_file;
     std::int32_t subject = 0;
     std::size_t first = 0, end = 0;  // its frames
     hand::KeypointLayout layout = hand::KeypointLayout::MediaPipe;
@@ -324,7 +327,8 @@ class RecordingImporter {
       if (column.role == Role::Dof) labelled[static_cast<std::size_t>(column.index)] = true;
     Pending pending;
     if (keypoints) {
-      pending.path = take.path + (keypoint_file ? " with '" + take.keypoints + "'" : "");
+      pending.path = take.path;
+      pending.keypoint_file = take.keypoints;
       pending.layout = keypoint_file ? keypoint_file->layout : keypoint_columns->layout();
       pending.present = keypoint_file ? keypoint_file->present : keypoint_columns->present();
       if (keypoint_file) pending.track = std::move(keypoint_file->track);
@@ -450,10 +454,11 @@ class RecordingImporter {
     try {
       labels = label_take(ik, take.track, labelled, times, cells, C, options_.keypoint_labels);
     } catch (const Error& e) {
-      throw Error("keypoints of '" + take.path + "': " + e.what());
+      throw Error("keypoints of '" + take.path + "'" + (take.keypoint_file.empty() ? "" : " ('" + take.keypoint_file + "')") + ": " + e.what());
     }
     KeypointTakeReport report;
     report.path = take.path;
+    report.keypoint_file = take.keypoint_file;
     report.subject = take.subject;
     report.layout = take.layout;
     report.clock = labels.clock;
@@ -463,6 +468,8 @@ class RecordingImporter {
     report.median_rms_mm = core::percentile(residuals, 0.5);
     report.p95_rms_mm = core::percentile(residuals, 0.95);
     report.frames = take.end - take.first;
+    report.first_frame = take.first;
+    report.frame_rms_mm = labels.frame_rms_mm;
     const hand::Angles rest = hand::JointLimits().rest();
     for (std::size_t i = 0; i < report.frames; ++i) {
       const std::size_t frame = take.first + i;
@@ -472,7 +479,7 @@ class RecordingImporter {
         data_.angles[frame * D + d] = !labelled[d] ? NAN : labels.trusted[i] ? labels.angles[i * D + d] : static_cast<float>(rest[d]);
     }
     if (report.labelled == 0)
-      throw Error("keypoints of '" + take.path + "': no frame with a trusted fit (median residual " + io::number_text(report.median_rms_mm) +
+      throw Error("keypoints of '" + take.path + "'" + (take.keypoint_file.empty() ? "" : " ('" + take.keypoint_file + "')") + ": no frame with a trusted fit (median residual " + io::number_text(report.median_rms_mm) +
                   " mm; every keypoint of the labelled digits seen?), expected a take the tracker followed");
     keypoint_takes_.push_back(std::move(report));
   }
