@@ -21,8 +21,12 @@
 
 namespace glovepose {
 
-/// @brief The library version as "major.minor.patch".
-inline constexpr const char* kVersion = "0.1.0";
+#define GLOVEPOSE_VERSION_TEXT_(major, minor, patch) #major "." #minor "." #patch
+#define GLOVEPOSE_VERSION_TEXT(major, minor, patch) GLOVEPOSE_VERSION_TEXT_(major, minor, patch)
+
+/// @brief The library version as "major.minor.patch", from the three macros above (the version's
+/// one home: CMakeLists.txt reads them, python/pyproject.toml is checked against them).
+inline constexpr const char* kVersion = GLOVEPOSE_VERSION_TEXT(GLOVEPOSE_VERSION_MAJOR, GLOVEPOSE_VERSION_MINOR, GLOVEPOSE_VERSION_PATCH);
 
 /// @brief The one exception type of set-up code (loading, configuring, training).
 ///

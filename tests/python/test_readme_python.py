@@ -9,6 +9,7 @@ and must print the version and the shipped model's 44 cells.
 Environment: GLOVEPOSE_BUILD_DIR (the build tree).
 """
 import os
+import re
 import shlex
 import subprocess
 import sys
@@ -18,6 +19,12 @@ from readme_blocks import sh_commands
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 BUILD = os.environ["GLOVEPOSE_BUILD_DIR"]
+
+
+def package_version():
+    """python/pyproject.toml's version, which must be the C library's (glovepose_version())."""
+    text = open(os.path.join(ROOT, "python", "pyproject.toml"), encoding="utf-8").read()
+    return re.search(r'^version = "([^"]+)"', text, re.M).group(1)
 
 
 def main():
@@ -40,8 +47,9 @@ def main():
                 sys.exit(f"FAIL: {shlex.join(words)} exited {result.returncode}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}")
             output = result.stdout
         print(output.strip())
-        if output.split() != ["0.1.0", "44"]:
-            sys.exit(f"FAIL: the import printed {output!r}, expected the version and 44 cells")
+        if output.split() != [package_version(), "44"]:
+            sys.exit(f"FAIL: the import printed {output!r}, expected the version of python/pyproject.toml "
+                     f"({package_version()}) and 44 cells")
         where = subprocess.run([os.path.join(venv, "bin", "python"), "-c",
                                 "import glovepose, glovepose._library as l; print(glovepose.__file__); print(l.load()._name)"],
                                cwd="/", env=env, capture_output=True, text=True)
