@@ -37,15 +37,16 @@ grid::GloveSettings own_settings() {
   return s;
 }
 
-// One subject's calibration run (40 frames) then 5 recording frames, at 20 Hz. Cell "b" moves only
-// 0.5% of its value (a resistive sensor on a DC offset).
+// One subject's calibration run (40 frames) then 5 recording frames, at 20 Hz. Cell "a" moves
+// between -1 and 3, cell "b" only 0.5% of its value (a resistive sensor on a DC offset), each with a
+// little noise (a cell whose readings were noise alone would be named noise only, whatever its range).
 io::Dataset twenty_hertz_session() {
   io::Dataset data(2, 0, "two-cell", 20.0);
   std::mt19937 rng(4);
-  std::uniform_real_distribution<float> a(-1.0f, 3.0f), b(100.0f, 100.5f), angle(-0.5f, 1.2f);
+  std::uniform_real_distribution<float> noise(-0.01f, 0.01f), angle(-0.5f, 1.2f);
   for (int i = 0; i < 45; ++i) {
-    data.cells.push_back(a(rng));
-    data.cells.push_back(b(rng));
+    data.cells.push_back(1.0f + 2.0f * static_cast<float>(std::sin(2.0 * kPi * i / 16.0)) + 5.0f * noise(rng));
+    data.cells.push_back(100.25f - 0.25f * static_cast<float>(std::cos(2.0 * kPi * i / 20.0)) + 0.5f * noise(rng));
     for (std::size_t d = 0; d < hand::kDofCount; ++d) data.angles.push_back(angle(rng));
     data.timestamps.push_back(i / 20.0);
     data.subject.push_back(1);
