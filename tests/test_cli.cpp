@@ -6,6 +6,11 @@
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -388,22 +393,38 @@ TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
   CHECK(loaded.info.width == 8);
 }
 
-TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and predicts") {
-  // The paper's Fig. 12 ablation glove: only the 14 main-joint cells along the fingers, cut out of
-  // the 44-cell corpus and placed where the full glove has them.
+namespace {
+// A glove described by a file and read cell by cell (no wiring): the paper's Fig. 12 ablation
+// glove, only the 14 main-joint cells along the fingers, cut out of the 44-cell corpus and placed
+// where the full glove has them. Its dataset and description are written under `tag`.
+struct DescribedGlove {
+  std::string corpus, data, glove_file;
+  io::Dataset dataset;
+  std::vector<std::string> names;
+};
+DescribedGlove main14_glove(const std::string& tag) {
   const std::vector<int> keep{0, 20, 21, 22, 23, 24, 32, 33, 34, 35, 36, 40, 41, 42};
-  const std::string corpus = small_corpus("main14");
-  const io::Dataset part = cells_of(io::Dataset::read(corpus), keep, "main14");
-  const std::string data = temp("main14.safetensors"), glove_file = temp("main14.json"), model_file = temp("t_main14.safetensors");
-  part.write(data);
+  DescribedGlove g;
+  g.corpus = small_corpus(tag);
+  g.dataset = cells_of(io::Dataset::read(g.corpus), keep, "main14");
+  g.data = temp(tag + ".safetensors");
+  g.glove_file = temp(tag + ".json");
+  g.dataset.write(g.data);
   const grid::GridMap paper = grid::GridMap::glauser2019();
   std::vector<grid::Slot> slots;
-  std::vector<std::string> names;
   for (int c : keep) {
     slots.push_back(paper.cell_slots()[static_cast<std::size_t>(c)]);
-    names.push_back("cell_" + std::to_string(c));
+    g.names.push_back("cell_" + std::to_string(c));
   }
-  grid::GloveDescription("main14", names, grid::GridMap(slots, paper.dof_slots())).write(glove_file);
+  grid::GloveDescription("main14", g.names, grid::GridMap(slots, paper.dof_slots())).write(g.glove_file);
+  return g;
+}
+}  // namespace
+
+TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and predicts") {
+  const DescribedGlove glove = main14_glove("main14");
+  const std::string &corpus = glove.corpus, &data = glove.data, &glove_file = glove.glove_file;
+  const std::string model_file = temp("t_main14.safetensors");
 
   Run r = run("train --data " + data + " --model unet:8 --epochs 1 --batch 256 --out " + model_file);
   CHECK(r.status == 1);
@@ -715,6 +736,136 @@ std::size_t occurrences(const std::string& text, const std::string& part) {
   return n;
 }
 }  // namespace
+
+namespace {
+// GET `path` from the server at 127.0.0.1:`port`; the response body ("" when it cannot connect).
+std::string http_get(int port, const std::string& path) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  std::string response;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0) {
+    const std::string request = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+    (void)::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+    char buf[4096];
+    for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) response.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  const std::size_t body = response.find("\r\n\r\n");
+  return body == std::string::npos ? "" : response.substr(body + 4);
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cell rows and refuses streams it cannot use, saying why") {
+  // A model of the 14-cell glove read cell by cell (no wiring), and a live stream of subject 2's
+  // frames as the glove would send them: "timestamp,cell_0,...,cell_42", 60 Hz, its 10 s
+  // calibration first. One cell is a dead channel (noise only around 29,000 counts); one line is
+  // garbage.
+  const DescribedGlove glove = main14_glove("view14");
+  const std::string model_file = temp("t_view14.safetensors");
+  Run r = run("train --data " + glove.data + " --glove " + glove.glove_file +
+              " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --quiet --out " + model_file);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const io::Dataset& d = glove.dataset;
+  const std::size_t cells = d.cell_count, dead = 3;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> adc(0.0, 60.0);
+  std::string header = "timestamp";
+  for (const std::string& name : glove.names) header += "," + name;
+  std::vector<std::string> lines;  // the frames, without the header
+  for (std::size_t f = 0; f < d.frames(); ++f) {
+    if (d.subject[f] != 2 || d.session[f] != 0) continue;
+    std::string line = number17(static_cast<double>(lines.size()) / 60.0);
+    for (std::size_t c = 0; c < cells; ++c) line += "," + number17(c == dead ? 29000.0 + adc(rng) : d.cells[f * cells + c]);
+    lines.push_back(line);
+  }
+  REQUIRE(lines.size() == 2400);  // 10 s of calibration and 30 s of session at 60 Hz
+  const auto write = [&](const std::string& name, const std::string& first, std::size_t count, const std::string& garbage_at_100) {
+    std::ofstream out(temp(name));
+    out << first;
+    for (std::size_t i = 0; i < count; ++i) out << (i == 100 ? garbage_at_100 : "") << lines[i] << "\n";
+    return temp(name);
+  };
+  const std::string stream = write("view14_stream.csv", "# the glove's logger\n" + header + "\n", lines.size(), "12.5,oops\n");
+
+  // Poses served over HTTP: the tool prints its address, reads the stream (a summary when stdin
+  // ends) and serves the last pose until --seconds.
+  FILE* server = popen((std::string(GLOVEPOSE_CLI) + " view --stdin --port 0 --seconds 10 --calibration-seconds 10 --model " + model_file +
+                        " < " + stream + " 2>" + temp("view14_stderr.txt"))
+                           .c_str(),
+                       "r");
+  REQUIRE(server);
+  char buf[512] = {0};
+  REQUIRE(std::fgets(buf, sizeof buf, server));
+  const std::string address = buf;
+  const std::size_t colon = address.rfind(':');
+  REQUIRE_MESSAGE(address.find("http://127.0.0.1:") != std::string::npos, address);
+  const int port = std::stoi(address.substr(colon + 1));
+  const std::string summary = std::fgets(buf, sizeof buf, server) ? buf : "";
+  // 2400 frames understood; the poses: every frame from 10 s of stream time on.
+  CHECK_MESSAGE(summary == "stdin: 2401 lines, 2400 understood, 1 skipped, 0 refused by the estimator; 1800 poses\n", summary);
+  const nlohmann::json state = nlohmann::json::parse(http_get(port, "/state"));
+  CHECK(state.value("active", false));
+  CHECK_FALSE(state.value("calibrating", true));
+  CHECK(state["joints"].size() == 26);
+  CHECK(state["angles"].size() == 25);
+  CHECK(state["skipped"] == 1);
+  CHECK(state["first_skipped"].get<std::string>().find("line 103: 2 fields, expected 15 (a timestamp in seconds and the 14 cells of glove "
+                                                       "'main14': cell_0,cell_20,") == 0);
+  // The dead channel reads 0 (a capacitive glove's 1% rule already finds it flat; test_calibration.cpp: by its noise).
+  CHECK(state["zeroed"].get<std::string>().find("1 of 14 sensors read 0: cell_22 (") == 0);
+  CHECK(state["lines"] == 2401);
+  CHECK(WEXITSTATUS(pclose(server)) == 0);
+  const std::string told = slurp(temp("view14_stderr.txt"));
+  CHECK_MESSAGE(told.find("glovepose view: stdin line 103: 2 fields, expected 15") == 0, told);
+  CHECK(told.find("glovepose view: calibration: 1 of 14 sensors read 0: cell_22 (") != std::string::npos);
+  CHECK(told.find("glovepose view: 1 of 2401 lines on stdin not understood and skipped (the first: line 103: ") != std::string::npos);
+
+  // Streams it cannot use: a non-zero exit and the reason.
+  std::ofstream(temp("view14_garbage.txt")) << "hello glove\n\nnot,a,frame\n# comment\n1;2;3\n";
+  const std::string view = "view --stdin --port 0 --calibration-seconds 10 --model " + model_file + " < ";
+  r = run(view + temp("view14_garbage.txt"));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("glovepose view: no line of stdin understood (3 lines, the first not understood: line 1: 1 field, expected 15 "
+                           "(a timestamp in seconds and the 14 cells of glove 'main14': ") != std::string::npos,
+                r.out);
+  CHECK(r.out.find("glovepose view: stdin line 1: 1 field, expected 15") != std::string::npos);  // told when it came
+  // The shipped model (the built-in glove, 44 cells or raw rows) fed the 14-cell glove's lines.
+  r = run("view --stdin --port 0 < " + write("view14_plain.csv", "", 50, ""));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("no line of stdin understood (50 lines, the first not understood: line 1: 15 fields, expected 3 "
+                           "(row,value,timestamp: a raw row of its wiring) or 45 (a timestamp in seconds and the 44 cells of glove "
+                           "'glauser2019-44': ") != std::string::npos,
+                r.out);
+  CHECK(r.out.find("another glove's lines need --model, a model trained for it") != std::string::npos);
+  // A cell missing from every line.
+  {
+    std::ofstream out(temp("view14_short.csv"));
+    for (std::size_t i = 0; i < 50; ++i) out << lines[i].substr(0, lines[i].rfind(',')) << "\n";
+  }
+  r = run(view + temp("view14_short.csv"));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("(50 lines, the first not understood: line 1: 14 fields, expected 15 ") != std::string::npos, r.out);
+  // A header naming other columns.
+  r = run(view + write("view14_header.csv", "timestamp,thumb,index\n", 50, ""));
+  CHECK(r.status == 1);
+  CHECK(r.out.find("stdin line 1 names the columns 'timestamp,thumb,index', expected 'timestamp' and the 14 cells of glove 'main14' in "
+                   "the order of its description: timestamp,cell_0,cell_20,") != std::string::npos);
+  // A calibration too short for its running median (20 frames: a third of a second at 60 Hz).
+  r = run("view --stdin --port 0 --calibration-seconds 0.1 --model " + model_file + " < " + stream);
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("glovepose view: the calibration took 6 frames in the first 0.1 s of stream time (--calibration-seconds), "
+                           "expected at least 20 (its running median's window; frames: one per line of cells)") != std::string::npos,
+                r.out);
+  // A stream that ends within the calibration.
+  r = run(view + write("view14_brief.csv", "", 300, ""));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("glovepose view: stdin ended after 4.98333") != std::string::npos, r.out);  // 299 frames at 60 Hz
+  CHECK(r.out.find(" s of stream time, within the calibration (--calibration-seconds 10): no pose was computed") != std::string::npos);
+}
 
 TEST_CASE("cli: glovepose demo streams a new user through the shipped model and writes the table and pictures") {
   const std::string out = temp("demo");

@@ -11,8 +11,9 @@ and replayed by `glovepose view --port 0 --replay FILE` in real time. The test
     page keeps receiving, the sequence grows and the fingertip moves: the drawing follows the stream;
 (d) checks the server listens on the loopback address only;
 (e) streams the same recording's rows as text lines on stdin to `glovepose view --stdin
-    --calibration-seconds 2` (a real glove's path), paced at twice real time: the hand is first
-    calibrating, then posed, and its pose sequence grows while rows arrive.
+    --calibration-seconds 2` (a real glove's path), paced at twice real time, after a line that is
+    not a row: the hand is first calibrating, then posed, and its pose sequence grows while rows
+    arrive; /state counts the skipped line and says why.
 
 Run: /usr/bin/python3 tests/python/test_view.py   (GLOVEPOSE_CLI: the tool, default
 build/tools/glovepose). Exit code 0 when every check passes; the last line reads 'N passed, N failed'.
@@ -125,6 +126,7 @@ def check_stdin(recording: Path) -> None:
             return
         url = f"http://127.0.0.1:{match.group(1)}/"
         period = 1.0 / (rows * 60.0)  # a row's slot in the 60 Hz readout cycle
+        server.stdin.write("hello glove\n")  # not a row: skipped, counted and told
         seen_calibrating = False
         sequences = []
         for f in range(frames):
@@ -137,11 +139,18 @@ def check_stdin(recording: Path) -> None:
                 seen_calibrating |= state.get("calibrating") is True
                 if state.get("active") and not state.get("calibrating"):
                     sequences.append(state.get("seq", 0))
-        state = get_state(url)
+        for _ in range(50):  # the tool reads the last rows
+            state = get_state(url)
+            if state.get("lines") == frames * rows + 1:
+                break
+            time.sleep(0.1)
         check(seen_calibrating, "--stdin: the first 2 s of stream time calibrate")
         check(state.get("active") is True and not state.get("calibrating"), "--stdin: a calibrated pose after the calibration")
         check(len(state.get("joints", [])) == 26, "--stdin: 26 OpenXR joints")
         check(len(sequences) >= 5 and sequences[-1] > sequences[0], f"--stdin: the pose sequence grows as rows arrive ({sequences[:3]}...)")
+        check(state.get("skipped") == 1 and state.get("lines") == frames * rows + 1, f"--stdin: the line that is not a row is counted ({state.get('skipped')} of {state.get('lines')})")
+        check(str(state.get("first_skipped", "")).startswith("line 1: 1 field, expected 3 (row,value,timestamp"),
+              f"--stdin: the page is told why ({state.get('first_skipped')!r})")
     finally:
         server.terminate()
         server.wait(timeout=10)

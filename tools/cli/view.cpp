@@ -1,10 +1,14 @@
 // glovepose view: a live view of the hand in the browser: a local web server (loopback only) whose page draws the
 //   estimator's OpenXR joints in 3D with WebGL, the 25 angles, the trust flags, the calibration step
 //   with its target pose, and the latency. The glove is a simulated new user streamed in real time
-//   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove's
-//   rows on stdin, one "row,value,timestamp" line each (--stdin; the first 30 s of stream time, or
-//   --calibration-seconds, are the calibration). The page asks for the newest hand (GET /state) about 30 times a second.
+//   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove on stdin
+//   (--stdin): any glove's frames, one "timestamp,cell,...,cell" line each (the model's glove's cells in
+//   the order of its description), or the built-in glove's raw rows, one "row,value,timestamp" line each;
+//   the first 30 s of stream time, or --calibration-seconds, are the calibration (docs/own_glove.md,
+//   "Live viewing"). The page asks for the newest hand (GET /state) about 30 times a second.
 #include <glovepose/estimator.hpp>
+#include <glovepose/io/csv_fields.hpp>
+#include <glovepose/io/number_text.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -16,14 +20,16 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <sstream>
+#include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "commands.hpp"
 #include "new_user.hpp"
@@ -48,6 +54,99 @@ struct ViewOptions {
 const char* const kFlagNames[] = {"readings rejected", "input clamped", "training calibration", "calibrating", "stale readings",
                                   "recovering",        "stuck rows",    "disconnected rows",    "outlier rows"};
 
+// The lines of a glove on stdin, for the model's glove: a frame of its cells, "timestamp,v_0,...,v_{n-1}"
+// (seconds, then the n cells in the order of its description, in the glove's own unit), for any glove;
+// or, when the model knows the glove's wiring (the built-in glove), a raw row "row,value,timestamp".
+// A first line "timestamp,<the cell names>" names the columns; it must name the glove's cells in order.
+class StdinFormat {
+ public:
+  enum class Kind { Header, Cells, Row };
+
+  StdinFormat(const PoseModel& model, bool shipped_model) : glove_(model.glove()), shipped_(shipped_model) {
+    if (model.solver()) rows_ = model.solver()->layout().row_count();
+  }
+
+  // One line (not blank, not a comment) into `cells` (a frame) or `row`, `value`, `t`; throws Error
+  // "line N: why" for a line that is neither.
+  Kind parse(const std::string& line, long line_no, std::vector<double>& cells, int& row, double& value, double& t) const {
+    const std::vector<std::string> fields = io::split_csv_line(line);
+    const std::string at = "line " + std::to_string(line_no);
+    const auto field = [&](std::size_t i) { return at + ", field " + std::to_string(i + 1) + " ('" + clip(fields[i]) + "')"; };
+    if (fields[0] == "timestamp") return Kind::Header;
+    if (fields.size() == cells.size() + 1) {
+      t = io::parse_csv_number<double>(fields[0], field(0));
+      for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = reading(fields[c + 1], field(c + 1));
+      return Kind::Cells;
+    }
+    if (rows_ > 0 && fields.size() == 3) {
+      const std::int32_t r = io::parse_csv_id(fields[0], field(0));
+      if (r >= rows_) throw Error(field(0) + " is not a row of the glove's wiring, expected 0.." + std::to_string(rows_ - 1));
+      row = r;
+      value = reading(fields[1], field(1));
+      t = io::parse_csv_number<double>(fields[2], field(2));
+      return Kind::Row;
+    }
+    throw Error(at + ": " + std::to_string(fields.size()) + (fields.size() == 1 ? " field" : " fields") + ", expected " + expected());
+  }
+
+  // Throws Error unless a header line names a timestamp and the glove's cells, in order.
+  void check_header(const std::string& line, long line_no) const {
+    std::vector<std::string> names{"timestamp"};
+    names.insert(names.end(), glove_.cell_names().begin(), glove_.cell_names().end());
+    if (io::split_csv_line(line) != names)
+      throw Error("stdin line " + std::to_string(line_no) + " names the columns '" + clip(line) + "', expected 'timestamp' and the " +
+                  std::to_string(glove_.cell_count()) + " cells of glove '" + glove_.id() +
+                  "' in the order of its description: " + join(names));
+  }
+
+  // What a line holds, for messages.
+  std::string expected() const {
+    std::string out = std::to_string(glove_.cell_count() + 1) + " (a timestamp in seconds and the " + std::to_string(glove_.cell_count()) +
+                      " cells of glove '" + glove_.id() + "': " + clip(join(glove_.cell_names())) + ")";
+    if (rows_ > 0) out = "3 (row,value,timestamp: a raw row of its wiring) or " + out;
+    if (shipped_) out += "; the glove is the shipped model's: another glove's lines need --model, a model trained for it";
+    return out;
+  }
+
+  // A frame is one line of cells; raw rows make one once each of the wiring's rows arrived.
+  std::string frames_from() const {
+    return rows_ > 0 ? "one per line of cells, or once every one of the wiring's " + std::to_string(rows_) + " rows has arrived"
+                     : "one per line of cells";
+  }
+
+ private:
+  static std::string join(const std::vector<std::string>& names) {
+    std::string out;
+    for (const std::string& n : names) out += (out.empty() ? "" : ",") + n;
+    return out;
+  }
+  static std::string clip(const std::string& text) { return text.size() > 80 ? text.substr(0, 77) + "..." : text; }
+  // A reading: a number, or nan/inf (a reading the glove dropped), which the estimator refuses and
+  // counts in the pose's flags, as it does from any source.
+  static double reading(const std::string& text, const std::string& where) {
+    double v = 0.0;
+    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (!text.empty() && r.ec == std::errc() && r.ptr == text.data() + text.size()) return v;
+    return io::parse_csv_number<double>(text, where);  // a leading '+', or the reason it is no number
+  }
+
+  const grid::GloveDescription& glove_;
+  int rows_ = 0;
+  bool shipped_ = false;
+};
+
+// What the glove's stream has told so far, for the page and the end of the run.
+struct StreamNotes {
+  mutable std::mutex lock;
+  long lines = 0;             // lines read (but blank lines, comments and the header)
+  long inputs = 0;            // frames of cells and rows understood
+  long skipped = 0;           // lines not understood
+  long rejected = 0;          // inputs the estimator refused (readout.hpp statuses: e.g. a timestamp going back)
+  long poses = 0;             // poses computed
+  std::string first_skipped;  // "line N: why"
+  std::string calibration;    // the calibration's report of sensors read as 0, once it finished
+};
+
 // The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
 // 0 is `start`), publishing the hand after each pose and the calibration's progress after each frame.
 class GloveStream {
@@ -64,30 +163,92 @@ class GloveStream {
       std::this_thread::sleep_until(
           start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
       for (std::size_t r = 0; r < user.data.row_count; ++r)
-        push(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
+        (void)estimator_.push_row(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
       latest_.publish(estimator_.state());
     }
   }
 
-  void from_stdin(double calibration_seconds) {
+  // Lines of `format` from stdin until it ends (or stop). Throws Error when the stream cannot
+  // serve a pose: no line understood, a header naming other columns, a calibration without enough
+  // frames, or a stream that ends within the calibration. Lines not understood are counted in
+  // `notes`; the first is told on stderr when it comes, the count when stdin ends, with a summary
+  // on stdout.
+  void from_stdin(const StdinFormat& format, double calibration_seconds, StreamNotes& notes) {
     std::string line;
-    double first = std::nan("");
+    long line_no = 0;
+    bool header_allowed = true;
+    double first = std::nan(""), last = std::nan("");
+    std::vector<double> cells(static_cast<std::size_t>(estimator_.model().cell_count()));
     estimator_.start_calibration();
     while (!stop_ && std::getline(std::cin, line)) {
-      std::istringstream fields(line);
+      ++line_no;
+      if (io::blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#') continue;
+      StdinFormat::Kind kind;
       int row = 0;
       double value = 0.0, t = 0.0;
-      char comma1 = 0, comma2 = 0;
-      if (!(fields >> row >> comma1 >> value >> comma2 >> t) || comma1 != ',' || comma2 != ',') continue;  // not a row: skipped
+      try {
+        kind = format.parse(line, line_no, cells, row, value, t);
+      } catch (const Error& e) {
+        const std::lock_guard<std::mutex> hold(notes.lock);
+        ++notes.lines;
+        if (notes.skipped++ == 0) {
+          notes.first_skipped = e.what();
+          std::cerr << "glovepose view: stdin " << e.what() << "; skipped (lines that do not parse are counted, the first is told)\n";
+        }
+        continue;
+      }
+      if (kind == StdinFormat::Kind::Header) {
+        if (!header_allowed)
+          throw Error("stdin line " + std::to_string(line_no) + " names columns after the first line, expected rows of values");
+        format.check_header(line, line_no);
+        header_allowed = false;
+        continue;
+      }
+      header_allowed = false;
       if (std::isnan(first)) first = t;
-      if (estimator_.calibration_progress().collecting && t - first >= calibration_seconds) estimator_.finish_calibration();
-      push(row, value, t);
+      last = t;
+      if (estimator_.calibration_progress().collecting && t - first >= calibration_seconds)
+        finish_calibration(format, calibration_seconds, notes);
+      const Status status = kind == StdinFormat::Kind::Cells ? estimator_.push_cells(cells.data(), static_cast<int>(cells.size()), t)
+                                                             : estimator_.push_row(row, value, t);
       latest_.publish(estimator_.state());
+      const std::lock_guard<std::mutex> hold(notes.lock);
+      ++notes.lines;
+      ++notes.inputs;
+      notes.poses += status == Status::Solved;
+      notes.rejected += status != Status::Solved && status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated;
     }
+    if (stop_) return;
+    const std::lock_guard<std::mutex> hold(notes.lock);
+    if (notes.inputs == 0)
+      throw Error("no line of stdin understood (" + std::to_string(notes.lines) + (notes.lines == 1 ? " line" : " lines") +
+                  (notes.skipped > 0 ? ", the first not understood: " + notes.first_skipped : "") + "), expected lines of " +
+                  format.expected());
+    if (estimator_.calibration_progress().collecting)
+      throw Error("stdin ended after " + io::number_text(last - first) +
+                  " s of stream time, within the calibration (--calibration-seconds " + io::number_text(calibration_seconds) +
+                  "): no pose was computed, expected a stream that goes on after the calibration");
+    if (notes.skipped > 0)
+      std::cerr << "glovepose view: " << notes.skipped << " of " << notes.lines
+                << " lines on stdin not understood and skipped (the first: " << notes.first_skipped << ")\n";
+    std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", notes.lines, notes.inputs,
+                notes.skipped, notes.rejected, notes.poses);
+    std::fflush(stdout);
   }
 
  private:
-  void push(int row, double value, double t) { (void)estimator_.push_row(row, value, t); }
+  // Ends the calibration at its time: enough frames, or an Error saying how many came.
+  void finish_calibration(const StdinFormat& format, double seconds, StreamNotes& notes) {
+    const CalibrationProgress progress = estimator_.calibration_progress();
+    if (!progress.ready)
+      throw Error("the calibration took " + std::to_string(progress.frames) + " frames in the first " + io::number_text(seconds) +
+                  " s of stream time (--calibration-seconds), expected at least " + std::to_string(progress.frames_needed) +
+                  " (its running median's window; frames: " + format.frames_from() + ")");
+    const std::string report = estimator_.finish_calibration().flat_report();
+    if (!report.empty()) std::cerr << "glovepose view: calibration: " << report << "\n";
+    const std::lock_guard<std::mutex> hold(notes.lock);
+    notes.calibration = report;
+  }
 
   GlovePoseEstimator& estimator_;
   LatestHand& latest_;
@@ -96,10 +257,18 @@ class GloveStream {
 
 // The newest hand as the page's JSON: pose, OpenXR joints (wrist frame, metres), the calibration
 // step and its target pose's joints, latency.
-json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, Clock::time_point stream_start, double stream_t0) {
+json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, const StreamNotes& notes, Clock::time_point stream_start,
+                double stream_t0) {
   HandState state;
   (void)latest.read(state);
   json out = {{"active", state.pose.valid}, {"calibrating", state.calibration.collecting}};
+  {
+    const std::lock_guard<std::mutex> hold(notes.lock);
+    out["lines"] = notes.lines;
+    out["skipped"] = notes.skipped;
+    out["first_skipped"] = notes.first_skipped;
+    out["zeroed"] = notes.calibration;
+  }
   const XrHandLocator& locator = estimator.locator();
   const auto joints_of = [&](const hand::Angles& angles) {
     XrHandJoints joints;
@@ -169,43 +338,62 @@ void respond(int fd, const char* status, const char* type, const std::string& bo
                    "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + body);
 }
 
+// What the server and the glove's thread share. The thread holds it too: detached while it waits
+// for stdin, it outlives view().
+struct ViewShared {
+  ViewShared(std::shared_ptr<const PoseModel> model, bool shipped_model)
+      : format(*model, shipped_model), estimator(std::move(model), EstimatorConfig{}) {}
+  StdinFormat format;  // refers to the glove of the estimator's model
+  GlovePoseEstimator estimator;
+  LatestHand latest;
+  StreamNotes notes;
+  std::string failure;  // why the glove's stream stopped; written before stream_done
+  std::atomic<bool> stop{false}, stream_done{false};
+};
+
 int view(const ViewOptions& o) {
   const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
-  if (!model->solver()) throw Error("the model's glove has no wiring to solve rows with, expected a model of a glove with a trace layout");
-  NewUser user;
+  if (!model->solver() && !o.from_stdin)
+    throw Error("the model's glove '" + model->glove().id() + "' has no wiring to simulate or replay raw rows of, expected --stdin (its " +
+                std::to_string(model->cell_count()) + " cells, one frame per line) or a model of a glove with a trace layout");
+  auto user = std::make_shared<NewUser>();
   if (!o.replay.empty()) {
-    user.data = read_dataset(o.replay);
-    if (!user.data.has_raw_rows())
+    user->data = read_dataset(o.replay);
+    if (!user->data.has_raw_rows())
       throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
-    user.cycle_rate = user.data.frame_rate();
-    while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == io::kKindCalibration)
-      ++user.first_session_frame;
-    if (user.first_session_frame == 0)
+    user->cycle_rate = user->data.frame_rate();
+    while (user->first_session_frame < user->data.frames() && user->data.kind[user->first_session_frame] == io::kKindCalibration)
+      ++user->first_session_frame;
+    if (user->first_session_frame == 0)
       throw Error("'" + o.replay + "' starts with no calibration frames (kind 1), expected a calibration sequence before the session");
   } else if (!o.from_stdin) {
-    user = simulate_new_user(o.seed, 10.0, *model);
+    *user = simulate_new_user(o.seed, 10.0, *model);
   }
-  GlovePoseEstimator estimator(model, EstimatorConfig{});
-  LatestHand latest;
-  std::atomic<bool> stop{false}, stream_done{false};
+  const auto shared = std::make_shared<ViewShared>(model, o.model.empty());
   const auto [server, port] = listen_on_loopback(o.port);
   std::printf("glovepose view: http://127.0.0.1:%d/\n", port);
   std::fflush(stdout);
   const Clock::time_point start = Clock::now();
-  const double stream_t0 = o.from_stdin ? 0.0 : row_time(user, 0, 0);
-  std::thread glove([&] {
+  const double stream_t0 = o.from_stdin ? 0.0 : row_time(*user, 0, 0);
+  std::thread glove([shared, user, from_stdin = o.from_stdin, calibration_seconds = o.calibration_seconds] {
     try {
-      GloveStream stream(estimator, latest, stop);
-      if (o.from_stdin)
-        stream.from_stdin(o.calibration_seconds);
+      GloveStream stream(shared->estimator, shared->latest, shared->stop);
+      if (from_stdin)
+        stream.from_stdin(shared->format, calibration_seconds, shared->notes);
       else
-        stream.recorded(user);
+        stream.recorded(*user);
     } catch (const Error& e) {
-      std::cerr << "glovepose view: the glove's stream stopped: " << e.what() << "\n";
+      shared->failure = e.what();
     }
-    stream_done = true;
+    shared->stream_done = true;
   });
-  while (!(o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : stream_done.load())) {
+  // The stream failed: nothing more to show, the tool says why and exits.
+  const auto failed = [&] { return shared->stream_done && !shared->failure.empty(); };
+  const auto finished = [&] {
+    return failed() ||
+           (o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : shared->stream_done.load());
+  };
+  while (!finished()) {
     pollfd waiting{server, POLLIN, 0};
     if (::poll(&waiting, 1, 100) <= 0) continue;
     const int client = ::accept(server, nullptr, nullptr);
@@ -218,18 +406,18 @@ int view(const ViewOptions& o) {
     if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0)
       respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
     else if (line.rfind("GET /state", 0) == 0)
-      respond(client, "200 OK", "application/json", state_json(latest, estimator, start, stream_t0).dump());
+      respond(client, "200 OK", "application/json", state_json(shared->latest, shared->estimator, shared->notes, start, stream_t0).dump());
     else
       respond(client, "404 Not Found", "text/plain", "not found\n");
     ::close(client);
   }
-  stop = true;
+  shared->stop = true;
   ::close(server);
-  if (o.from_stdin) {
-    glove.detach();  // blocked reading stdin; the process ends here
-    return 0;
-  }
-  glove.join();
+  if (shared->stream_done || !o.from_stdin)
+    glove.join();  // a recording stops at its next frame
+  else
+    glove.detach();  // blocked reading stdin; it holds what it uses
+  if (failed()) throw Error(shared->failure);
   return 0;
 }
 
@@ -241,7 +429,7 @@ Command add_view(CLI::App& tool) {
       "view",
       "A live view of the hand in the browser: a local web server (loopback only) whose page draws the estimator's joints in 3D, "
       "the 25 angles, the trust flags, the calibration step with its target pose, and the latency. The glove is a simulated new "
-      "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove's rows on stdin (--stdin).");
+      "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove on stdin (--stdin).");
   add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")
       ->check(CLI::Range(0, 65535));
   add_model_file(*command, o->model, "weights (default: the shipped model)");
@@ -250,11 +438,13 @@ Command add_view(CLI::App& tool) {
       command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
           ->check(existing_file())
           ->type_name("FILE");
-  CLI::Option* from_stdin = command
-                                ->add_flag("--stdin", o->from_stdin,
-                                           "a real glove's rows on stdin, one 'row,value,timestamp' line each; "
-                                           "the first --calibration-seconds of stream time calibrate")
-                                ->excludes(replay);
+  CLI::Option* from_stdin =
+      command
+          ->add_flag("--stdin", o->from_stdin,
+                     "a real glove on stdin: one frame per line, 'timestamp,cell,...,cell' (the model's glove's cells "
+                     "in the order of its description), or for the built-in glove one raw row per line, "
+                     "'row,value,timestamp'; the first --calibration-seconds of stream time calibrate")
+          ->excludes(replay);
   add_number(*command, "--calibration-seconds", "S", o->calibration_seconds, "--stdin: stream time of the calibration (default 30)")
       ->check(above(0.0))
       ->needs(from_stdin);

@@ -1,5 +1,6 @@
 // The page `glovepose view` serves: the hand drawn in 3D with WebGL (no library: a few shaders),
-// the 25 angles, the trust flags, the calibration step with its target pose, and the latency.
+// the 25 angles, the trust flags, the calibration step with its target pose, what the glove's stream
+// said (lines not understood, sensors the calibration reads as 0), and the latency.
 // It asks the tool for the newest hand (GET /state, JSON) about 30 times a second.
 #pragma once
 
@@ -15,6 +16,7 @@ h1 { font-size: 15px; margin: 4px 0 8px; }
 .bad { color: #ff7b6b; } .good { color: #8fd18f; }
 table { border-collapse: collapse; } td { padding: 0 8px 0 0; }
 #step { color: #7fb4ff; }
+#notes { white-space: pre-wrap; }
 </style></head>
 <body>
 <canvas id="hand" width="640" height="560"></canvas>
@@ -22,6 +24,7 @@ table { border-collapse: collapse; } td { padding: 0 8px 0 0; }
 <h1>glovepose: the hand, live</h1>
 <div id="trust"></div>
 <div id="step"></div>
+<div id="notes" class="bad"></div>
 <div id="latency"></div>
 <table id="angles"></table>
 <pre id="status">frames 0</pre>
@@ -111,6 +114,11 @@ function show(state) {
       `frames ${viewer.frames} seq ${state.seq} webgl ${viewer.webgl} tip ${state.joints[10].map(v => v.toFixed(4)).join(",")}`;
   }
   document.getElementById("step").textContent = state.step_name ? `step ${state.step + 1}: ${state.step_name}: ${state.instruction}` : "";
+  // What the glove's stream said: lines not understood, sensors the calibration reads as 0.
+  const notes = [];
+  if (state.skipped) notes.push(`${state.skipped} of ${state.lines} lines not understood (the first: ${state.first_skipped})`);
+  if (state.zeroed) notes.push(`calibration: ${state.zeroed}`);
+  document.getElementById("notes").textContent = notes.join("\n");
   draw(state.joints, state.target_joints);
 }
 async function poll() {
