@@ -852,8 +852,19 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   // A header naming other columns.
   r = run(view + write("view14_header.csv", "timestamp,thumb,index\n", 50, ""));
   CHECK(r.status == 1);
-  CHECK(r.out.find("stdin line 1 names the columns 'timestamp,thumb,index', expected 'timestamp' and the 14 cells of glove 'main14' in "
-                   "the order of its description: timestamp,cell_0,cell_20,") != std::string::npos);
+  CHECK(r.out.find("stdin line 1 names the columns 'timestamp,thumb,index', expected 'timestamp' (seconds) or 'timestamp_ms' and the 14 "
+                   "cells of glove 'main14' in the order of its description: timestamp,cell_0,cell_20,") != std::string::npos);
+  // The time in milliseconds under a 'timestamp_ms' header, as a take's file has it for import: the same poses.
+  {
+    std::ofstream out(temp("view14_ms.csv"));
+    out << "timestamp_ms" << header.substr(header.find(',')) << "\n";
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      out << number17(1000.0 * static_cast<double>(i) / 60.0) << lines[i].substr(lines[i].find(',')) << "\n";
+  }
+  r = run(view + temp("view14_ms.csv"));
+  CHECK_MESSAGE(r.status == 0, r.out);
+  CHECK_MESSAGE(r.out.find("stdin: 2400 lines, 2400 understood, 0 skipped, 0 refused by the estimator; 1800 poses") != std::string::npos,
+                r.out);
   // A calibration too short for its running median (20 frames: a third of a second at 60 Hz).
   r = run("view --stdin --port 0 --calibration-seconds 0.1 --model " + model_file + " < " + stream);
   CHECK(r.status == 1);

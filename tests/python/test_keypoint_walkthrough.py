@@ -3,8 +3,8 @@ build/ pointing at this build), then checked against the truth it was simulated 
 `import` made from the simulated tracker's keypoints against the true angles of the same takes
 (read here from both dataset files), every take's labelled share and clock correlation, the
 per-frame report against the dataset's outlier flags, and the
-held-out error of the linear map trained on the keypoint labels against the one trained on the
-true angles (within 10%).
+held-out error of the linear map and the FCN trained on the keypoint labels against the same trained
+on the true angles (within 10%), and the held-out person's glove streamed live to `view --stdin`.
 
 Environment: GLOVEPOSE_BUILD_DIR (the build tree: tools/glovepose, examples/example_glove).
 """
@@ -25,7 +25,7 @@ def held_out_mean(output):
 
 def main():
     commands = sh_commands("## Labels from a hand tracker", "docs/own_glove.md")
-    assert len(commands) == 9, commands
+    assert len(commands) == 14, commands
     with tempfile.TemporaryDirectory() as work:
         outputs = [run(command, work) for command in commands]
         for command in commands:
@@ -52,6 +52,14 @@ def main():
         tracked_error, truth_error = held_out_mean(outputs[7]), held_out_mean(outputs[8])
         print(f"held-out person: trained on keypoint labels {tracked_error} deg, on the true angles {truth_error} deg")
         assert tracked_error <= 1.1 * truth_error, (tracked_error, truth_error)
+        tracked_error, truth_error = held_out_mean(outputs[11]), held_out_mean(outputs[12])
+        print(f"FCN: trained on keypoint labels {tracked_error} deg, on the true angles {truth_error} deg")
+        assert tracked_error <= 1.1 * truth_error, (tracked_error, truth_error)
+        # The held-out person's take streamed live: every line a frame, a pose for each after the
+        # 20 s of on-the-fly calibration (the take: 120 s at 20 Hz).
+        live = outputs[13]
+        print("live:", live.strip().splitlines()[-1])
+        assert "stdin: 2400 lines, 2400 understood, 0 skipped, 0 refused by the estimator; 2000 poses" in live, live
     print("PASS")
 
 

@@ -9,6 +9,7 @@ the error on subject 3 over the 21 labelled DoFs. glovepose's linear map must ag
 
 Environment: GLOVEPOSE_BUILD_DIR (the build tree: tools/glovepose, examples/example_glove).
 """
+import contextlib
 import json
 import math
 import os
@@ -48,10 +49,17 @@ def readme_commands():
 
 
 def run(command, cwd):
+    """One documented command as written (`build/` is this build; `< FILE` feeds FILE to stdin);
+    its stdout, or exit with its output when it fails."""
     args = shlex.split(command)
     if args[0].startswith("build/"):
         args[0] = os.path.join(BUILD, args[0][len("build/"):])
-    result = subprocess.run(args, cwd=cwd, capture_output=True, text=True)
+    feed = None
+    if "<" in args:
+        feed = os.path.join(cwd, args[args.index("<") + 1])
+        args = args[: args.index("<")]
+    with open(feed, "rb") if feed else contextlib.nullcontext() as stdin:
+        result = subprocess.run(args, cwd=cwd, capture_output=True, text=True, stdin=stdin)
     if result.returncode != 0:
         sys.exit(f"FAIL: {command}\n{result.stdout}\n{result.stderr}")
     return result.stdout

@@ -57,7 +57,8 @@ const char* const kFlagNames[] = {"readings rejected", "input clamped", "trainin
 // The lines of a glove on stdin, for the model's glove: a frame of its cells, "timestamp,v_0,...,v_{n-1}"
 // (seconds, then the n cells in the order of its description, in the glove's own unit), for any glove;
 // or, when the model knows the glove's wiring (the built-in glove), a raw row "row,value,timestamp".
-// A first line "timestamp,<the cell names>" names the columns; it must name the glove's cells in order.
+// A first line "timestamp,<the cell names>" (or "timestamp_ms,...", as import reads a take) names the
+// columns; it must name the glove's cells in order.
 class StdinFormat {
  public:
   enum class Kind { Header, Cells, Row };
@@ -72,7 +73,7 @@ class StdinFormat {
     const std::vector<std::string> fields = io::split_csv_line(line);
     const std::string at = "line " + std::to_string(line_no);
     const auto field = [&](std::size_t i) { return at + ", field " + std::to_string(i + 1) + " ('" + clip(fields[i]) + "')"; };
-    if (fields[0] == "timestamp") return Kind::Header;
+    if (fields[0] == "timestamp" || fields[0] == "timestamp_ms") return Kind::Header;
     if (fields.size() == cells.size() + 1) {
       t = io::parse_csv_number<double>(fields[0], field(0));
       for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = reading(fields[c + 1], field(c + 1));
@@ -89,14 +90,16 @@ class StdinFormat {
     throw Error(at + ": " + std::to_string(fields.size()) + (fields.size() == 1 ? " field" : " fields") + ", expected " + expected());
   }
 
-  // Throws Error unless a header line names a timestamp and the glove's cells, in order.
-  void check_header(const std::string& line, long line_no) const {
-    std::vector<std::string> names{"timestamp"};
+  // The units per second of the time column a header line names ('timestamp': 1, 'timestamp_ms':
+  // 1000); throws Error unless it names a time column and the glove's cells, in order.
+  double check_header(const std::string& line, long line_no) const {
+    std::vector<std::string> fields = io::split_csv_line(line), names{fields[0]};
     names.insert(names.end(), glove_.cell_names().begin(), glove_.cell_names().end());
-    if (io::split_csv_line(line) != names)
-      throw Error("stdin line " + std::to_string(line_no) + " names the columns '" + clip(line) + "', expected 'timestamp' and the " +
-                  std::to_string(glove_.cell_count()) + " cells of glove '" + glove_.id() +
-                  "' in the order of its description: " + join(names));
+    if (fields != names)
+      throw Error("stdin line " + std::to_string(line_no) + " names the columns '" + clip(line) +
+                  "', expected 'timestamp' (seconds) or 'timestamp_ms' and the " + std::to_string(glove_.cell_count()) +
+                  " cells of glove '" + glove_.id() + "' in the order of its description: " + join(names));
+    return fields[0] == "timestamp_ms" ? 1000.0 : 1.0;
   }
 
   // What a line holds, for messages.
@@ -177,6 +180,7 @@ class GloveStream {
     std::string line;
     long line_no = 0;
     bool header_allowed = true;
+    double units_per_second = 1.0;  // of the time column; a header may say milliseconds
     double first = std::nan(""), last = std::nan("");
     std::vector<double> cells(static_cast<std::size_t>(estimator_.model().cell_count()));
     estimator_.start_calibration();
@@ -200,11 +204,12 @@ class GloveStream {
       if (kind == StdinFormat::Kind::Header) {
         if (!header_allowed)
           throw Error("stdin line " + std::to_string(line_no) + " names columns after the first line, expected rows of values");
-        format.check_header(line, line_no);
+        units_per_second = format.check_header(line, line_no);
         header_allowed = false;
         continue;
       }
       header_allowed = false;
+      t /= units_per_second;
       if (std::isnan(first)) first = t;
       last = t;
       if (estimator_.calibration_progress().collecting && t - first >= calibration_seconds)
