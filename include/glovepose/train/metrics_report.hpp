@@ -1,6 +1,6 @@
 /// @file metrics_report.hpp
-/// @brief An AngleErrorReport (metrics.hpp) as text: one JSON object with stable keys (what
-/// `glovepose eval --json` prints) or a plain table.
+/// @brief An AngleErrorReport (metrics.hpp) and a FingertipReport (fingertip_metrics.hpp) as text:
+/// JSON objects with stable keys (what `glovepose eval --json` prints) or plain tables.
 #pragma once
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../io/number_text.hpp"
+#include "fingertip_metrics.hpp"
 #include "metrics.hpp"
 
 namespace glovepose::train {
@@ -103,6 +104,77 @@ inline std::string format_table(const AngleErrorReport& r) {
     if (i < r.curve.size()) add("  %d deg %.1f%%", r.curve[i].threshold_deg, 100.0 * r.curve[i].share);
   }
   out += "\n";
+  return out;
+}
+
+/// @brief The fingertip report as one JSON object (what `glovepose eval --json` carries as
+/// "fingertips"): "frames", "pinch_threshold_mm", "pinch_release_mm", "onset_window_ms", `extra`
+/// members (key, JSON value text: e.g. what was scored against and on which hands), "tips" (array of
+/// {"finger", "frames", "mean_mm", "median_mm", "p95_mm", "max_mm"}, thumb..pinky then "all") and
+/// "pinches" (array of {"finger", "frames", "distance_error_mean_mm", "distance_error_p95_mm",
+/// "true_frames", "predicted_frames", "both_frames", "precision", "recall", "onsets",
+/// "detected_onsets", "missed_onsets", "false_onsets", "latency_median_ms", "latency_mean_ms"},
+/// index..pinky then "all"). Undefined figures (no frame, no pinch, no onset) are null.
+inline std::string to_json(const FingertipReport& r, const std::vector<std::pair<std::string, std::string>>& extra = {}) {
+  const auto number = detail::json_number;
+  std::string out = "{\"frames\": " + std::to_string(r.frames) + ", \"pinch_threshold_mm\": " + number(r.config.pinch_threshold_mm) +
+                    ", \"pinch_release_mm\": " + number(r.config.pinch_release_mm) +
+                    ", \"onset_window_ms\": " + number(1e3 * r.config.onset_window_s);
+  for (const auto& [key, value] : extra) out += ", \"" + key + "\": " + value;
+  out += ",\n    \"tips\": [";
+  const auto tip = [&](const TipErrorSummary& t) {
+    return std::string("{\"finger\": \"") + t.finger + "\", \"frames\": " + std::to_string(t.frames) +
+           ", \"mean_mm\": " + number(t.mean_mm) + ", \"median_mm\": " + number(t.median_mm) + ", \"p95_mm\": " + number(t.p95_mm) +
+           ", \"max_mm\": " + number(t.max_mm) + "}";
+  };
+  for (const TipErrorSummary& t : r.tips) out += "\n      " + tip(t) + ",";
+  out += "\n      " + tip(r.all) + "],\n    \"pinches\": [";
+  const auto pinch = [&](const PinchScore& p) {
+    return std::string("{\"finger\": \"") + p.finger + "\", \"frames\": " + std::to_string(p.frames) +
+           ", \"distance_error_mean_mm\": " + number(p.distance_error_mean_mm) +
+           ", \"distance_error_p95_mm\": " + number(p.distance_error_p95_mm) + ", \"true_frames\": " + std::to_string(p.true_frames) +
+           ", \"predicted_frames\": " + std::to_string(p.predicted_frames) + ", \"both_frames\": " + std::to_string(p.both_frames) +
+           ", \"precision\": " + number(p.precision) + ", \"recall\": " + number(p.recall) + ", \"onsets\": " + std::to_string(p.onsets) +
+           ", \"detected_onsets\": " + std::to_string(p.detected_onsets) + ", \"missed_onsets\": " + std::to_string(p.missed_onsets) +
+           ", \"false_onsets\": " + std::to_string(p.false_onsets) + ", \"latency_median_ms\": " + number(p.latency_median_ms) +
+           ", \"latency_mean_ms\": " + number(p.latency_mean_ms) + "}";
+  };
+  for (const PinchScore& p : r.pinches) out += "\n      " + pinch(p) + ",";
+  out += "\n      " + pinch(r.all_pinches) + "]}";
+  return out;
+}
+
+/// @brief The fingertip report as a plain-text table: per digit the tip error (mean, median, p95),
+/// per pair the distance error, per-frame precision and recall, onsets missed and the median onset
+/// latency; `reference` says what the truth was (e.g. "the true angles, each person's hand").
+inline std::string format_table(const FingertipReport& r, const std::string& reference) {
+  std::string out;
+  char line[256];
+  const auto add = [&](const char* format, auto... args) {
+    std::snprintf(line, sizeof line, format, args...);
+    out += line;
+  };
+  // A figure, or "-" when it is undefined (no frame, no pinch, no onset).
+  const auto figure = [](double value, const char* format) {
+    char text[32] = "-";
+    if (std::isfinite(value)) std::snprintf(text, sizeof text, format, value);
+    return std::string(text);
+  };
+  add("Fingertips (mm, wrist-relative) against %s: %zu frames\n", reference.c_str(), r.frames);
+  add("%-8s %8s %8s %8s %8s\n", "tip", "mean", "median", "p95", "max");
+  for (const TipErrorSummary* t : {&r.tips[0], &r.tips[1], &r.tips[2], &r.tips[3], &r.tips[4], &r.all})
+    add("%-8s %8s %8s %8s %8s\n", t->finger, figure(t->mean_mm, "%.2f").c_str(), figure(t->median_mm, "%.2f").c_str(),
+        figure(t->p95_mm, "%.2f").c_str(), figure(t->max_mm, "%.2f").c_str());
+  add("Pinches (thumb tip to fingertip under %g mm, released over %g mm; onsets matched within %g ms):\n", r.config.pinch_threshold_mm,
+      r.config.pinch_release_mm, 1e3 * r.config.onset_window_s);
+  add("%-8s %10s %9s %9s %7s %7s %7s %7s %11s\n", "thumb +", "|dd| mean", "|dd| p95", "precision", "recall", "onsets", "missed", "false",
+      "latency med");
+  for (const PinchScore* p : {&r.pinches[0], &r.pinches[1], &r.pinches[2], &r.pinches[3], &r.all_pinches})
+    add("%-8s %10s %9s %9s %7s %7zu %7zu %7zu %11s\n", p->finger, figure(p->distance_error_mean_mm, "%.2f").c_str(),
+        figure(p->distance_error_p95_mm, "%.2f").c_str(), figure(p->precision, "%.3f").c_str(), figure(p->recall, "%.3f").c_str(),
+        p->onsets, p->missed_onsets, p->false_onsets,
+        (figure(p->latency_median_ms, "%.0f") + (std::isfinite(p->latency_median_ms) ? " ms" : "")).c_str());
+  out += "  (|dd|: error of the thumb-to-fingertip distance, mm; precision and recall per frame; false: predicted onsets matching none)\n";
   return out;
 }
 
