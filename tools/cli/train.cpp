@@ -3,6 +3,9 @@
 //   was not trained on (guided_calibration.hpp).
 #include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/io/json.hpp>
+#include <glovepose/sim/subject.hpp>
+#include <glovepose/train/fingertip_metrics.hpp>
 #include <glovepose/train/guided_calibration.hpp>
 #include <glovepose/train/lag.hpp>
 #include <glovepose/train/replay.hpp>
@@ -418,6 +421,47 @@ void write_predictions(const std::string& path, const io::Dataset& data, const t
   if (std::fclose(file) != 0) throw Error("--predictions: writing '" + path + "' failed");
 }
 
+// The hand of each person in the data, for the fingertip measures: a simulated corpus' people are
+// sim::make_subjects of its seed (a hand depends on the seed and the person's id only), accepted when
+// their sizes are the ones the corpus recorded ("subject_sizes_mm"); anything else gets the
+// reference hand. `description` says which.
+struct SubjectHands {
+  std::vector<hand::Kinematics> people;  // by subject id; empty: the reference hand for everyone
+  std::string description = "the reference hand";
+  hand::Kinematics of(int subject) const {
+    const auto i = static_cast<std::size_t>(subject);
+    return subject >= 0 && i < people.size() ? people[i] : hand::Kinematics();
+  }
+};
+
+SubjectHands subject_hands(const io::Dataset& data) {
+  SubjectHands hands;
+  const auto meta = [&](const char* key) {
+    const auto it = data.metadata.find(key);
+    return it == data.metadata.end() ? std::string() : it->second;
+  };
+  const std::optional<int> count = number_from_text<int>(meta("subjects"));
+  const std::optional<std::uint64_t> seed = number_from_text<std::uint64_t>(meta("seed"));
+  if (meta("generator") != "glovepose simulate" || !count || *count < 1 || !seed) return hands;
+  const std::vector<sim::Subject> people = sim::make_subjects(*count, *seed);
+  io::json::Value recorded;
+  try {
+    recorded = io::json::parse(meta("subject_sizes_mm"));
+  } catch (const Error&) {
+    return hands;
+  }
+  if (!recorded.is_array() || recorded.size() != people.size()) return hands;
+  for (const sim::Subject& p : people) {  // written with 6 decimals
+    const io::json::Value& r = recorded[static_cast<std::size_t>(p.id)];
+    const double size[] = {p.size.length, p.size.width, p.size.height};
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!r.is_array() || r.size() != 3 || !r[i].is_number() || std::abs(r[i].get<double>() - size[i]) > 1e-5) return hands;
+  }
+  for (const sim::Subject& p : people) hands.people.emplace_back(p.hand_model());
+  hands.description = "each simulated person's own hand";
+  return hands;
+}
+
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
   io::Dataset data = read_dataset(o.data);
@@ -444,6 +488,10 @@ int eval_command(Options o) {
   const bool with_truth = data.has_true_angles();
   train::AngleErrorAccumulator truth_errors(scored);
   std::vector<float> predicted(normalized.size()), truth(with_truth ? normalized.size() : 0);
+  // Fingertips and pinches against the true angles when the data has them, else the labels; a new
+  // run at every recording (and wherever time does not go forward).
+  const SubjectHands hands = subject_hands(data);
+  train::FingertipAccumulator tips;
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
@@ -460,7 +508,16 @@ int eval_command(Options o) {
     }
     errors.add(p, t);
     if (with_truth) truth_errors.add(p, q);
+    const double time = data.timestamps[source];
+    if (f == 0 || samples.run[static_cast<std::size_t>(f)] != samples.run[static_cast<std::size_t>(f) - 1] ||
+        !(time > data.timestamps[static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f) - 1])]))
+      tips.begin_run(hands.of(data.subject[source]));
+    hand::Angles reference{};
+    std::copy(with_truth ? q : t, (with_truth ? q : t) + hand::kDofCount, reference.begin());
+    tips.add(radians, reference, time);
   }
+  const std::optional<train::FingertipReport> tips_report = tips.empty() ? std::nullopt : std::optional(tips.report());
+  const std::string tips_against = with_truth ? "the true angles" : "the labels";
   const train::AngleErrorReport report = errors.report();
   const double frame_ms = 1000.0 / data.frame_rate();
   const double lag_ms = train::lag_frames(predicted, samples.angles, samples.source, samples.run) * frame_ms;
@@ -472,6 +529,9 @@ int eval_command(Options o) {
   const auto window = data.metadata.find("mean_window");
   const std::string mean_window = window == data.metadata.end() ? "null" : window->second;
   if (o.json) {
+    const std::string tips_json = tips_report ? train::to_json(*tips_report, {{"scored_against", with_truth ? "\"truth\"" : "\"labels\""},
+                                                                              {"hands", "\"" + hands.description + "\""}})
+                                              : "null";
     char lag[32];
     std::snprintf(lag, sizeof lag, "%.3f", lag_ms);
     std::printf("%s\n", train::to_json(report, {{"calibration", "\"" + calibration + "\""},
@@ -479,7 +539,8 @@ int eval_command(Options o) {
                                                 {"lag_ms", lag},
                                                 {"scored_against", "\"labels\""},
                                                 {"vs_labels", train::summary_json(report, lag_ms)},
-                                                {"vs_truth", truth_report ? train::summary_json(*truth_report, truth_lag_ms) : "null"}})
+                                                {"vs_truth", truth_report ? train::summary_json(*truth_report, truth_lag_ms) : "null"},
+                                                {"fingertips", tips_json}})
                              .c_str());
   } else {
     std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(),
@@ -489,6 +550,7 @@ int eval_command(Options o) {
     if (truth_report)
       std::printf("Against the true angles behind the labels (simulated data): mean %.2f deg, p95 %.1f deg, %.1f%% under 15 deg, lag %.1f ms\n",
                   truth_report->overall.mean_deg, truth_report->p95_deg, 100.0 * truth_report->share_under_15deg, truth_lag_ms);
+    if (tips_report) std::printf("\n%s", train::format_table(*tips_report, tips_against + ", " + hands.description).c_str());
   }
   return 0;
 }
@@ -561,7 +623,9 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
     finish(command, o, finetune_command);
   }
   {
-    auto [command, o] = add("eval", "Evaluates a model on a dataset file: angle errors per DoF and overall, and the motion lag.");
+    auto [command, o] = add("eval",
+                            "Evaluates a model on a dataset file: angle errors per DoF and overall, the motion lag, fingertip "
+                            "position errors and pinch detection.");
     add_model_file(*command, o->model, "the model to evaluate")->required();
     add_data_options(*command, *o, true);
     command
