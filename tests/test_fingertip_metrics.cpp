@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glovepose/io/json.hpp>
@@ -46,13 +47,30 @@ bool pinching_at(int frame, int period, int start, int length) { return frame % 
 }  // namespace
 
 TEST_CASE("fingertip metrics: the gallery's pinches are pinches, its other poses are not (the threshold's premise)") {
-  CHECK(tip_distance(gallery_pose("pinch_index"), hand::Finger::Index) < kPinchThresholdMm);
-  CHECK(tip_distance(gallery_pose("pinch_middle"), hand::Finger::Middle) < kPinchThresholdMm);
-  CHECK(tip_distance(gallery_pose("pinch_ring"), hand::Finger::Ring) < kPinchThresholdMm);
-  CHECK(tip_distance(gallery_pose("pinch_pinky"), hand::Finger::Pinky) < kPinchThresholdMm);
-  CHECK(tip_distance(gallery_pose("flat"), hand::Finger::Index) > kPinchReleaseMm);
-  CHECK(tip_distance(gallery_pose("flat_bent"), hand::Finger::Index) > kPinchReleaseMm);  // the closest non-pinch
-  CHECK(tip_distance(gallery_pose("pinch_index"), hand::Finger::Middle) > kPinchReleaseMm);
+  // The poses where the thumb is solved to contact with a fingertip, and that finger.
+  const std::vector<std::pair<std::string, hand::Finger>> oppositions{
+      {"pinch_index", hand::Finger::Index}, {"pinch_middle", hand::Finger::Middle},
+      {"pinch_ring", hand::Finger::Ring},   {"pinch_pinky", hand::Finger::Pinky},
+      {"ok", hand::Finger::Index},          {"key_grip", hand::Finger::Index}};
+  for (const auto& [name, finger] : oppositions) {
+    const double d = tip_distance(gallery_pose(name), finger);
+    MESSAGE(name << ": thumb to " << std::string(hand::to_string(finger)) << " tip " << d << " mm");
+    CHECK(d < kPinchThresholdMm);
+  }
+  // Every other pose keeps every pair beyond the release distance; the closest is reported.
+  double closest = INFINITY;
+  std::string closest_pose;
+  for (const sim::KeyPose& p : sim::pose_gallery()) {
+    bool opposition = false;
+    for (const auto& o : oppositions) opposition = opposition || o.first == p.name;
+    if (opposition) continue;
+    for (std::size_t f = 1; f < hand::kFingerCount; ++f) {
+      const double d = tip_distance(p.angles, static_cast<hand::Finger>(f));
+      CHECK(d > kPinchReleaseMm);
+      if (d < closest) closest = d, closest_pose = p.name + " (thumb to " + hand::to_string(static_cast<hand::Finger>(f)) + ")";
+    }
+  }
+  MESSAGE("closest pair in a pose that is not a pinch: " << closest_pose << " " << closest << " mm");
 }
 
 TEST_CASE("fingertip metrics: identical angles give 0 mm, precision = recall = 1, every onset found at 0 ms") {
