@@ -85,7 +85,7 @@ inline std::array<Eigen::Vector3d, hand::kFingerCount> fingertip_positions(const
 /// @brief Position error statistics of one fingertip (or of all five), mm. NaN when no frame scored it.
 struct TipErrorSummary {
   const char* finger = "";  ///< hand::to_string(Finger), or "all".
-  std::size_t frames = 0;   ///< Frames in which the tip was scored (its digit's angles finite).
+  std::size_t frames = 0;   ///< Frames in which the tip was scored (its digit's angles finite); "all": summed over the tips.
   double mean_mm = NAN;     ///< Mean Euclidean distance between the true and the predicted tip.
   double median_mm = NAN;   ///< Median of it.
   double p95_mm = NAN;      ///< 95th percentile of it.
@@ -95,7 +95,7 @@ struct TipErrorSummary {
 /// @brief One pinch pair's scores (thumb with `finger`), or all four pairs pooled ("all").
 struct PinchScore {
   const char* finger = "";              ///< The digit the thumb meets, or "all".
-  std::size_t frames = 0;               ///< Frames in which the pair was scored.
+  std::size_t frames = 0;               ///< Frames in which the pair was scored; "all": summed over the pairs.
   double distance_error_mean_mm = NAN;  ///< Mean |d_pred - d_true| of the thumb-to-fingertip distance.
   double distance_error_p95_mm = NAN;   ///< Its 95th percentile.
   std::size_t true_frames = 0;          ///< Frames pinching in truth.
