@@ -7,22 +7,17 @@
 ///   root frame: the global pose and the wrist are not estimated, so they are left out of both);
 ///   mean, median, 95th percentile and maximum per digit and over all five;
 /// - for index..pinky, the error of the thumb-tip-to-fingertip distance, |d_pred - d_true|, mm;
-/// - pinch detection per pair (thumb-index, -middle, -ring, -pinky): a pinch is on when the two tip
-///   points (the ends of the distal phalanxes, Kinematics::fingertip) come closer than
-///   kPinchThresholdMm and stays on until they part beyond kPinchReleaseMm (the same rule for the
-///   truth and the prediction); per-frame precision and recall of the predicted pinch against the
+/// - pinch detection per pair (thumb-index, -middle, -ring, -pinky) by the rule of hand/pinch.hpp,
+///   the one the live pinch state (xr_hand.hpp) uses: a pinch is on when the two tip points (the
+///   ends of the distal phalanxes, Kinematics::fingertip) come closer than kPinchThresholdMm and
+///   stays on until they part beyond kPinchReleaseMm (the same rule for the truth and the
+///   prediction); per-frame precision and recall of the predicted pinch against the
 ///   true one; and, for each true pinch onset, the predicted onset matched to it within
 ///   kPinchOnsetWindowS either side (its latency: predicted minus true onset time, negative when the
 ///   prediction was early), the median latency and the onsets missed.
 ///
-/// The threshold. Tip points are the ends of the distal phalanx bones, inside the fingertips: two
-/// tips touch when their points are the two tip radii apart, 11.2-12.6 mm on the reference hand
-/// (hand::kReferenceDistalRadius; thumb with pinky .. middle). The gallery's pinch poses
-/// (sim/pose_gallery.hpp: pinch_index, pinch_middle, pinch_ring, pinch_pinky, ok, key_grip, the
-/// thumb solved to contact) put them 12.0-14.4 mm apart; the nearest gallery pose that is not a
-/// pinch, flat_bent, 20.3 mm (thumb-index). 15 mm is above every gallery contact and 5 mm below
-/// the closest non-pinch; the release at 18 mm keeps a distance hovering at the threshold from
-/// making a train of onsets. docs/results.md, "Fingertips and pinches", has the measurement.
+/// The threshold and the release, and why 15 and 18 mm: hand/pinch.hpp. docs/results.md,
+/// "Fingertips and pinches", has the measurement.
 ///
 /// Evaluation is offline set-up code: it may allocate and throws glovepose::Error on misuse.
 /// Percentiles are core::percentile's (the floor(p (n - 1))-th smallest value).
@@ -41,19 +36,20 @@
 #include "../core/statistics.hpp"
 #include "../hand/dofs.hpp"
 #include "../hand/kinematics.hpp"
+#include "../hand/pinch.hpp"
 
 namespace glovepose::train {
 
 /// @brief Thumb-tip-to-fingertip distance (mm, between Kinematics::fingertip points) below which a
-/// pinch starts (see the file comment for why 15).
-inline constexpr double kPinchThresholdMm = 15.0;
-/// @brief Distance (mm) beyond which a pinch that is on ends (hysteresis against chatter).
-inline constexpr double kPinchReleaseMm = 18.0;
+/// pinch starts: hand::kPinchThresholdMm (hand/pinch.hpp says why 15).
+inline constexpr double kPinchThresholdMm = hand::kPinchThresholdMm;
+/// @brief Distance (mm) beyond which a pinch that is on ends: hand::kPinchReleaseMm.
+inline constexpr double kPinchReleaseMm = hand::kPinchReleaseMm;
 /// @brief How far (s) before or after a true pinch onset a predicted onset may be to count as its
 /// detection; a true onset without one is missed.
 inline constexpr double kPinchOnsetWindowS = 0.25;
 /// @brief Number of pinch pairs: the thumb with index, middle, ring and pinky.
-inline constexpr std::size_t kPinchPairCount = hand::kFingerCount - 1;
+inline constexpr std::size_t kPinchPairCount = hand::kPinchPairCount;
 
 /// @brief The rules of the measures. Defaults: kPinchThresholdMm, kPinchReleaseMm, kPinchOnsetWindowS.
 struct FingertipConfig {
@@ -71,16 +67,21 @@ struct FingertipConfig {
     if (!(onset_window_s >= 0.0 && std::isfinite(onset_window_s)))
       throw Error("FingertipConfig: onset_window_s is " + std::to_string(onset_window_s) + ", expected a duration of 0 s or more");
   }
+
+  /// @brief The pinch rule of these settings (hand/pinch.hpp). Its far distance, which only the
+  /// strength uses (not evaluated here), is the default, or twice the threshold when that is beyond it.
+  hand::PinchRule pinch_rule() const noexcept {
+    hand::PinchRule rule;
+    rule.threshold_mm = pinch_threshold_mm;
+    rule.release_mm = pinch_release_mm;
+    if (!(rule.far_mm > rule.threshold_mm)) rule.far_mm = 2.0 * rule.threshold_mm;
+    return rule;
+  }
 };
 
-/// @brief The five fingertips (mm, root frame of the hand), thumb to pinky, for a pose.
-inline std::array<Eigen::Vector3d, hand::kFingerCount> fingertip_positions(const hand::Kinematics& kinematics, const hand::Angles& angles) {
-  hand::Skeleton skeleton;
-  kinematics.pose(angles, skeleton);
-  std::array<Eigen::Vector3d, hand::kFingerCount> tips;
-  for (std::size_t f = 0; f < hand::kFingerCount; ++f) tips[f] = kinematics.fingertip(skeleton, static_cast<hand::Finger>(f));
-  return tips;
-}
+/// @brief The five fingertips (mm, root frame of the hand), thumb to pinky, for a pose
+/// (hand::fingertip_positions).
+using hand::fingertip_positions;
 
 /// @brief Position error statistics of one fingertip (or of all five), mm. NaN when no frame scored it.
 struct TipErrorSummary {
@@ -130,7 +131,10 @@ class FingertipAccumulator {
  public:
   /// @brief An accumulator with the given rules (validated: throws glovepose::Error), on the
   /// reference hand until begin_run() names another.
-  explicit FingertipAccumulator(const FingertipConfig& config = {}) : config_(config) { config_.validate(); }
+  explicit FingertipAccumulator(const FingertipConfig& config = {}) : config_(config) {
+    config_.validate();
+    rule_ = config_.pinch_rule();
+  }
 
   /// @brief The rules.
   const FingertipConfig& config() const noexcept { return config_; }
@@ -168,6 +172,7 @@ class FingertipAccumulator {
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (!valid[static_cast<std::size_t>(hand::kDofs[d].finger)]) p[d] = t[d] = 0.0;
     const auto pred_tips = fingertip_positions(kinematics_, p), true_tips = fingertip_positions(kinematics_, t);
+    const hand::PinchDistances true_distances = hand::pinch_distances(true_tips), pred_distances = hand::pinch_distances(pred_tips);
     bool all = true;
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
       if (!valid[f]) {
@@ -183,12 +188,12 @@ class FingertipAccumulator {
         s = PairState{};  // unknown: the next scored frame starts no onset
         continue;
       }
-      const double d_true = (true_tips[0] - true_tips[f]).norm(), d_pred = (pred_tips[0] - pred_tips[f]).norm();
+      const double d_true = true_distances[k], d_pred = pred_distances[k];
       Pair& pair = pairs_[k];
       pair.distance_errors.push_back(std::abs(d_pred - d_true));
       const bool was_true = s.known && s.true_on, was_pred = s.known && s.pred_on;
-      const bool true_on = d_true < (was_true ? config_.pinch_release_mm : config_.pinch_threshold_mm);
-      const bool pred_on = d_pred < (was_pred ? config_.pinch_release_mm : config_.pinch_threshold_mm);
+      const bool true_on = hand::pinch_next(was_true, d_true, rule_);
+      const bool pred_on = hand::pinch_next(was_pred, d_pred, rule_);
       pair.true_frames += true_on;
       pair.predicted_frames += pred_on;
       pair.both_frames += true_on && pred_on;
@@ -329,6 +334,7 @@ class FingertipAccumulator {
   }
 
   FingertipConfig config_;
+  hand::PinchRule rule_;
   hand::Kinematics kinematics_;
   std::size_t run_ = 0;
   double last_time_ = -INFINITY;
