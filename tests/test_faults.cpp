@@ -15,6 +15,8 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
+#include <string>
 #include <vector>
 
 using namespace glovepose;
@@ -209,6 +211,23 @@ Run check_fault(const char* name, const sim::FaultInjector& fault, const Expecta
 }
 
 }  // namespace
+
+TEST_CASE("faults: every PoseFlag bit has its own name, and only those bits") {
+  const PoseFlag flags[] = {kPoseReadingsRejected, kPoseInputClamped,    kPoseTrainingCalibration,
+                            kPoseCalibrating,      kPoseStaleReadings,   kPoseRecovering,
+                            kPoseStuckRows,        kPoseDisconnectedRows, kPoseOutlierRows};
+  REQUIRE(std::size(flags) == static_cast<std::size_t>(kPoseFlagCount));
+  std::set<std::string> names;
+  for (int b = 0; b < kPoseFlagCount; ++b) {
+    CHECK(flags[b] == 1u << b);  // the bits are 0 .. count - 1, in order
+    names.insert(pose_flag_name(b));
+  }
+  CHECK(names.size() == std::size(flags));
+  CHECK(names.count("unknown flag") == 0);
+  CHECK(std::string(pose_flag_name(1)) == "input clamped");
+  CHECK(std::string(pose_flag_name(kPoseFlagCount)) == "unknown flag");
+  CHECK(std::string(pose_flag_name(-1)) == "unknown flag");
+}
 
 TEST_CASE("faults: the clean stream is trusted and accurate") {
   const Run& clean = clean_run(kDefaultWindow);

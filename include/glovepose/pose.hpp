@@ -48,6 +48,19 @@ enum PoseFlag : std::uint32_t {
       1u << 8,  ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
 };
 
+/// @brief Number of PoseFlag bits (bits 0 .. kPoseFlagCount - 1).
+inline constexpr int kPoseFlagCount = 9;
+static_assert(kPoseOutlierRows == 1u << (kPoseFlagCount - 1), "kPoseFlagCount: the last PoseFlag is its highest bit");
+
+/// @brief A short, stable name of PoseFlag bit `bit` (for logs and displays).
+constexpr const char* pose_flag_name(int bit) noexcept {
+  constexpr const char* names[] = {"readings rejected", "input clamped",     "training calibration",
+                                   "calibrating",       "stale readings",    "recovering",
+                                   "stuck rows",        "disconnected rows", "outlier rows"};  // in bit order
+  static_assert(sizeof names / sizeof names[0] == kPoseFlagCount, "one name per PoseFlag bit");
+  return name_of(bit, names, "unknown flag");  // a negative bit wraps to a large index: unknown
+}
+
 /// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
 inline constexpr std::uint32_t kPoseFaultFlags =
     kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows;

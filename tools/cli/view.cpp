@@ -51,9 +51,6 @@ struct ViewOptions {
   double seconds = 0.0;               // 0: until the glove's stream ends (or Ctrl-C)
 };
 
-const char* const kFlagNames[] = {"readings rejected", "input clamped", "training calibration", "calibrating", "stale readings",
-                                  "recovering",        "stuck rows",    "disconnected rows",    "outlier rows"};
-
 // The lines of a glove on stdin, for the model's glove: a frame of its cells, "timestamp,v_0,...,v_{n-1}"
 // (seconds, then the n cells in the order of its description, in the glove's own unit), for any glove;
 // or, when the model knows the glove's wiring (the built-in glove), a raw row "row,value,timestamp".
@@ -295,8 +292,8 @@ json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, c
   if (!state.pose.valid) return out;
   json names = json::array(), flags = json::array();
   for (const hand::Dof& dof : hand::kDofs) names.push_back(dof.name);
-  for (std::size_t b = 0; b < std::size(kFlagNames); ++b)
-    if (state.pose.flags & (1u << b)) flags.push_back(kFlagNames[b]);
+  for (int b = 0; b < kPoseFlagCount; ++b)
+    if (state.pose.flags & (1u << b)) flags.push_back(pose_flag_name(b));
   const double stream_now = stream_t0 + std::chrono::duration<double>(Clock::now() - stream_start).count();
   out["seq"] = state.pose.sequence;
   out["angles"] = state.pose.angles;

@@ -121,8 +121,6 @@ enum class NoPoseReason : std::uint8_t {
 inline constexpr int kNoPoseReasonCount = 5;
 /// @brief Number of Status values (status.hpp numbers them 0 .. Uncalibrated).
 inline constexpr int kStatusCount = static_cast<int>(Status::Uncalibrated) + 1;
-/// @brief Number of PoseFlag bits (estimator.hpp).
-inline constexpr int kPoseFlagCount = 9;
 
 /// @brief A short name of a NoPoseReason.
 constexpr const char* to_string(NoPoseReason reason) noexcept {
@@ -130,14 +128,6 @@ constexpr const char* to_string(NoPoseReason reason) noexcept {
                                    "UNEXPLAINED"};  // in the enum's order
   static_assert(sizeof names / sizeof names[0] == kNoPoseReasonCount, "one name per reason");
   return name_of(reason, names, "unknown");
-}
-
-/// @brief A short name of PoseFlag bit `bit`.
-constexpr const char* pose_flag_name(int bit) noexcept {
-  constexpr const char* names[kPoseFlagCount] = {"readings rejected", "input clamped",     "training calibration",
-                                                 "calibrating",       "stale readings",    "recovering",
-                                                 "stuck rows",        "disconnected rows", "outlier rows"};
-  return name_of(bit, names, "unknown flag");  // a negative bit wraps to a large index: unknown
 }
 
 /// @brief The figures of a soak run, summed over the estimators.
