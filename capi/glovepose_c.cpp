@@ -39,6 +39,7 @@ struct glovepose_estimator {
 struct glovepose_latest {
   std::uint32_t tag = kLatestTag;
   glovepose::LatestHand latest;
+  glovepose::LatestAim aim;  // published with `latest`, from the same pose
 };
 
 namespace {
@@ -235,6 +236,29 @@ void copy_xr_hand(const glovepose::XrHandJoints& in, glovepose_xr_hand& out) noe
   out.horizon = in.horizon;
   std::memcpy(out.locations, in.locations.data(), sizeof out.locations);
   std::memcpy(out.velocities, in.velocities.data(), sizeof out.velocities);
+}
+
+// The aim state as XrHandTrackingAimStateFB carries it; type and next stay the caller's.
+void copy_xr_aim(const glovepose::XrHandAim& in, glovepose_xr_aim_state& out) noexcept {
+  static_assert(sizeof out.aim_orientation == sizeof in.aim_pose.orientation && sizeof out.aim_position == sizeof in.aim_pose.position,
+                "XrPosef's parts");
+  out.status = in.status;
+  std::memcpy(out.aim_orientation, &in.aim_pose.orientation, sizeof out.aim_orientation);
+  std::memcpy(out.aim_position, &in.aim_pose.position, sizeof out.aim_position);
+  out.pinch_strength_index = in.pinch_strength[0];
+  out.pinch_strength_middle = in.pinch_strength[1];
+  out.pinch_strength_ring = in.pinch_strength[2];
+  out.pinch_strength_little = in.pinch_strength[3];
+}
+
+glovepose_result check_xr_aim(const glovepose_xr_aim_state* out, const char* function) noexcept {
+  if (out == nullptr) return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "%s: out is NULL", function);
+  if (out->type != GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB)
+    return failf(GLOVEPOSE_ERROR_STRUCT_SIZE,
+                 "%s: out->type is %d, expected GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB (1000111001; call glovepose_xr_aim_state_init "
+                 "first)",
+                 function, static_cast<int>(out->type));
+  return GLOVEPOSE_OK;
 }
 
 glovepose_result check_xr_hand(glovepose_xr_hand* out, const char* function) noexcept {
@@ -599,6 +623,14 @@ glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estima
   return GLOVEPOSE_OK;
 }
 
+glovepose_result glovepose_estimator_get_xr_aim(const glovepose_estimator* estimator, glovepose_xr_aim_state* out) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (const glovepose_result bad = check_xr_aim(out, "glovepose_estimator_get_xr_aim"); bad != GLOVEPOSE_OK) return bad;
+  copy_xr_aim(e->aim(), *out);
+  return e->aim().active ? GLOVEPOSE_OK : GLOVEPOSE_NOT_READY;
+}
+
 glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) noexcept {
   glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
@@ -627,6 +659,7 @@ glovepose_result glovepose_latest_publish(glovepose_latest* latest, const glovep
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   l->publish(e->state());
+  latest->aim.publish(e->aim());
   return GLOVEPOSE_OK;
 }
 
@@ -669,6 +702,22 @@ glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, 
   glovepose::locate(pose, e->locator(), joints);
   copy_xr_hand(joints, *out);
   return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_latest_get_xr_aim(const glovepose_latest* latest, glovepose_xr_aim_state* out, uint64_t* sequence) noexcept {
+  if (latest_of(latest) == nullptr)
+    return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_get_xr_aim: not a snapshot from glovepose_latest_create");
+  if (const glovepose_result bad = check_xr_aim(out, "glovepose_latest_get_xr_aim"); bad != GLOVEPOSE_OK) return bad;
+  glovepose::XrHandAim aim;
+  if (latest->aim.read(aim) == 0) {
+    out->status = 0;
+    out->pinch_strength_index = out->pinch_strength_middle = out->pinch_strength_ring = out->pinch_strength_little = 0.0f;
+    if (sequence != nullptr) *sequence = 0;
+    return GLOVEPOSE_NOT_READY;
+  }
+  copy_xr_aim(aim, *out);
+  if (sequence != nullptr) *sequence = aim.sequence;
+  return aim.active ? GLOVEPOSE_OK : GLOVEPOSE_NOT_READY;
 }
 
 // ---- calibration -------------------------------------------------------------------------------
@@ -826,6 +875,13 @@ void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) noexcept {
   if (pose == nullptr) return;
   std::memset(pose, 0, sizeof *pose);
   pose->struct_size = sizeof *pose;
+}
+
+void glovepose_xr_aim_state_init(glovepose_xr_aim_state* state) noexcept {
+  if (state == nullptr) return;
+  std::memset(static_cast<void*>(state), 0, sizeof *state);
+  state->type = GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB;
+  state->next = nullptr;
 }
 
 }  // extern "C"

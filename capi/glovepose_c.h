@@ -74,6 +74,19 @@ extern "C" {
 /** @brief OpenXR velocity flag bits (the values of XrSpaceVelocityFlags). */
 #define GLOVEPOSE_XR_LINEAR_VELOCITY_VALID 0x1u
 #define GLOVEPOSE_XR_ANGULAR_VELOCITY_VALID 0x2u
+/** @brief XR_FB_hand_tracking_aim: the value of XR_TYPE_HAND_TRACKING_AIM_STATE_FB (glovepose_xr_aim_state::type). */
+#define GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB 1000111001
+/** @brief Aim status bits (the values of XrHandTrackingAimFlagsFB). COMPUTED, SYSTEM_GESTURE,
+ * DOMINANT_HAND and MENU_PRESSED are never set by this library. */
+#define GLOVEPOSE_XR_AIM_COMPUTED 0x1u
+#define GLOVEPOSE_XR_AIM_VALID 0x2u
+#define GLOVEPOSE_XR_AIM_INDEX_PINCHING 0x4u
+#define GLOVEPOSE_XR_AIM_MIDDLE_PINCHING 0x8u
+#define GLOVEPOSE_XR_AIM_RING_PINCHING 0x10u
+#define GLOVEPOSE_XR_AIM_LITTLE_PINCHING 0x20u
+#define GLOVEPOSE_XR_AIM_SYSTEM_GESTURE 0x40u
+#define GLOVEPOSE_XR_AIM_DOMINANT_HAND 0x80u
+#define GLOVEPOSE_XR_AIM_MENU_PRESSED 0x100u
 
 /** @brief Result of a call: one of the GLOVEPOSE_* codes below (32-bit on every platform). */
 typedef int32_t glovepose_result;
@@ -255,6 +268,32 @@ typedef struct glovepose_xr_hand {
   glovepose_xr_joint_velocity velocities[GLOVEPOSE_XR_JOINT_COUNT];
 } glovepose_xr_hand;
 
+/** @brief One hand's pinch and aim state, laid out as XR_FB_hand_tracking_aim's
+ * XrHandTrackingAimStateFB (same fields, order, sizes and offsets, its padding included: 4 bytes
+ * after `type` and at the end where pointers are 8 bytes), so an OpenXR layer can pass the
+ * application's struct itself. Never changes: its `type` is its version. Set type (and next) with
+ * glovepose_xr_aim_state_init; the library fills the rest and leaves type and next alone.
+ * - status: GLOVEPOSE_XR_AIM_* bits: VALID when a pose exists and has no fault flag;
+ *   *_PINCHING per finger when the thumb tip and that fingertip came closer than 15 mm and have
+ *   not parted beyond 18 mm since (hysteresis kept from pose to pose by the estimator).
+ * - aim pose: in the wrist joint's frame like the XR joints (metres): the index finger's proximal
+ *   joint at the rest pose (index straight), -Z along the straight index, +Y the back of the hand;
+ *   fixed in that frame (a pinch does not move it). Compose it with the wrist pose the engine's
+ *   tracker reports: world_from_aim = world_from_wrist * aim.
+ * - pinch strengths: 1 at or below 15 mm between thumb tip and fingertip, 0 at or beyond 40 mm,
+ *   a smoothstep between (include/glovepose/hand/pinch.hpp says why). */
+typedef struct glovepose_xr_aim_state {
+  int32_t type;                /**< GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB (XrStructureType); the caller's. */
+  void* next;                  /**< NULL or the caller's chain; never read or written by the library. */
+  uint64_t status;             /**< GLOVEPOSE_XR_AIM_* bits (XrHandTrackingAimFlagsFB). */
+  float aim_orientation[4];    /**< Unit quaternion x, y, z, w (XrPosef::orientation), wrist frame. */
+  float aim_position[3];       /**< Metres (XrPosef::position), wrist frame. */
+  float pinch_strength_index;  /**< [0, 1]: 1 when thumb and index touch. */
+  float pinch_strength_middle; /**< [0, 1]. */
+  float pinch_strength_ring;   /**< [0, 1]. */
+  float pinch_strength_little; /**< [0, 1]. */
+} glovepose_xr_aim_state;
+
 /** @brief The hand at a requested time (glovepose_estimator_get_pose_at). */
 typedef struct glovepose_predicted_pose {
   uint32_t struct_size;               /**< sizeof(glovepose_predicted_pose) (440 in ABI 1); set by the caller. */
@@ -416,6 +455,14 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_xr_joints(const glovepo
                                                                    glovepose_xr_hand* out) GLOVEPOSE_C_NOEXCEPT;
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estimator, double* out,
                                                                int32_t count) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The pinch and aim state of the latest pose (XR_FB_hand_tracking_aim; see
+ * glovepose_xr_aim_state) into *out, whose type must be GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB
+ * (glovepose_xr_aim_state_init). GLOVEPOSE_NOT_READY before the first pose (out->status 0, strengths
+ * 0, the aim pose filled). Per-frame: never allocates.
+ * @return GLOVEPOSE_OK, GLOVEPOSE_NOT_READY, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or
+ * _STRUCT_SIZE (another type). */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_xr_aim(const glovepose_estimator* estimator,
+                                                                glovepose_xr_aim_state* out) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged;
  * keeps the calibration and the last pose. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_reset(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
@@ -428,8 +475,8 @@ GLOVEPOSE_C_API glovepose_result glovepose_latest_create(glovepose_latest** out_
 /** @brief Frees a snapshot (NULL is ignored). */
 GLOVEPOSE_C_API void glovepose_latest_free(glovepose_latest* latest) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Writer, on the estimator's thread (one writer per snapshot): makes the estimator's current
- * pose and joint list the newest. Per-frame: wait-free, allocation-free; call it after a push that
- * returned GLOVEPOSE_SOLVED. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
+ * pose, joint list and pinch and aim state (glovepose_latest_get_xr_aim) the newest. Per-frame: wait-free, allocation-free; call it after a
+ * push that returned GLOVEPOSE_SOLVED. @return GLOVEPOSE_OK or _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_latest_publish(glovepose_latest* latest,
                                                           const glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Reader, any thread, any number of them: copies the newest published pose into *pose and
@@ -490,6 +537,13 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_get_range(const glovepose
  * (out->active = 0) before the first published pose. Never allocates; never blocks the writer. */
 GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, const glovepose_estimator* estimator,
                                                                 double time, glovepose_xr_hand* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief A reader thread's pinch and aim state: the one glovepose_latest_publish published with
+ * the newest pose (the pinch flags' hysteresis is the estimator's), into *out as
+ * glovepose_estimator_get_xr_aim, and that pose's sequence (0: nothing published yet) into
+ * *sequence if not NULL. GLOVEPOSE_NOT_READY before the first published pose. Never allocates;
+ * never blocks the writer. */
+GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_aim(const glovepose_latest* latest, glovepose_xr_aim_state* out,
+                                                             uint64_t* sequence) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- struct helpers ------------------------------------------------------------------------ */
 
@@ -503,6 +557,8 @@ GLOVEPOSE_C_API void glovepose_calibration_step_init(glovepose_calibration_step*
 GLOVEPOSE_C_API void glovepose_xr_hand_init(glovepose_xr_hand* hand) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Zeroes *pose and sets its struct_size. */
 GLOVEPOSE_C_API void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Zeroes *state and sets its type to GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB (next NULL). */
+GLOVEPOSE_C_API void glovepose_xr_aim_state_init(glovepose_xr_aim_state* state) GLOVEPOSE_C_NOEXCEPT;
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -6,7 +6,10 @@
  * Prints each failed check and, last, "N passed, N failed"; exit code 0 when none failed. */
 #include "glovepose_c.h"
 
+#include <openxr/openxr.h>
+
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -670,6 +673,98 @@ static void test_xr_joints(glovepose_model* model) {
   glovepose_estimator_free(right);
 }
 
+/* XR_FB_hand_tracking_aim: glovepose_xr_aim_state against openxr.h's XrHandTrackingAimStateFB
+ * (size, every offset, the flags and the type's value), then the estimator's and a reader's state. */
+static void test_xr_aim(glovepose_model* model) {
+  glovepose_estimator *right = NULL, *left = NULL;
+  glovepose_latest* latest = NULL;
+  glovepose_xr_aim_state r, l, read;
+  glovepose_hand_options options;
+  uint64_t sequence = 7;
+  double lo[44], hi[44], norm;
+  int c;
+  CHECK(sizeof(glovepose_xr_aim_state) == sizeof(XrHandTrackingAimStateFB));
+  CHECK(offsetof(glovepose_xr_aim_state, type) == offsetof(XrHandTrackingAimStateFB, type));
+  CHECK(offsetof(glovepose_xr_aim_state, next) == offsetof(XrHandTrackingAimStateFB, next));
+  CHECK(offsetof(glovepose_xr_aim_state, status) == offsetof(XrHandTrackingAimStateFB, status));
+  CHECK(offsetof(glovepose_xr_aim_state, aim_orientation) == offsetof(XrHandTrackingAimStateFB, aimPose) + offsetof(XrPosef, orientation));
+  CHECK(offsetof(glovepose_xr_aim_state, aim_position) == offsetof(XrHandTrackingAimStateFB, aimPose) + offsetof(XrPosef, position));
+  CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_index) == offsetof(XrHandTrackingAimStateFB, pinchStrengthIndex));
+  CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_middle) == offsetof(XrHandTrackingAimStateFB, pinchStrengthMiddle));
+  CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_ring) == offsetof(XrHandTrackingAimStateFB, pinchStrengthRing));
+  CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_little) == offsetof(XrHandTrackingAimStateFB, pinchStrengthLittle));
+  CHECK(sizeof r.type == sizeof(XrStructureType) && sizeof r.status == sizeof(XrHandTrackingAimFlagsFB));
+  CHECK(sizeof r.aim_orientation + sizeof r.aim_position == sizeof(XrPosef));
+  CHECK(GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB == XR_TYPE_HAND_TRACKING_AIM_STATE_FB);
+  CHECK(GLOVEPOSE_XR_AIM_COMPUTED == XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_VALID == XR_HAND_TRACKING_AIM_VALID_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_INDEX_PINCHING == XR_HAND_TRACKING_AIM_INDEX_PINCHING_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_MIDDLE_PINCHING == XR_HAND_TRACKING_AIM_MIDDLE_PINCHING_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_RING_PINCHING == XR_HAND_TRACKING_AIM_RING_PINCHING_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_LITTLE_PINCHING == XR_HAND_TRACKING_AIM_LITTLE_PINCHING_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_SYSTEM_GESTURE == XR_HAND_TRACKING_AIM_SYSTEM_GESTURE_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_DOMINANT_HAND == XR_HAND_TRACKING_AIM_DOMINANT_HAND_BIT_FB);
+  CHECK(GLOVEPOSE_XR_AIM_MENU_PRESSED == XR_HAND_TRACKING_AIM_MENU_PRESSED_BIT_FB);
+
+  for (c = 0; c < 44; ++c) {
+    lo[c] = 15.0 + 0.1 * c;
+    hi[c] = 25.0 + 0.1 * c;
+  }
+  CHECK_RESULT(glovepose_hand_options_default(&options), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &right), GLOVEPOSE_OK);
+  options.handedness = GLOVEPOSE_HAND_LEFT;
+  CHECK_RESULT(glovepose_estimator_create_for_hand(model, NULL, &options, &left), GLOVEPOSE_OK);
+  glovepose_xr_aim_state_init(&r);
+  glovepose_xr_aim_state_init(&l);
+  CHECK(r.type == GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB && r.next == NULL && r.status == 0);
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(right, &r), GLOVEPOSE_NOT_READY);
+  CHECK(r.status == 0 && r.pinch_strength_index == 0.0f);
+  CHECK(r.aim_orientation[3] != 0.0f); /* the aim pose is the hand's, there before any pose */
+  CHECK_RESULT(glovepose_calibration_set_range(right, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_set_range(left, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK(push_synthetic(right, 0.0, 30) == 30);
+  CHECK(push_synthetic(left, 0.0, 30) == 30);
+  r.next = &l; /* the caller's chain: left alone */
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(right, &r), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(left, &l), GLOVEPOSE_OK);
+  CHECK(r.type == GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB && r.next == &l);
+  CHECK((r.status & ~(uint64_t)(GLOVEPOSE_XR_AIM_VALID | 0x3Cu)) == 0); /* only VALID and the pinching bits */
+  CHECK(r.pinch_strength_index >= 0.0f && r.pinch_strength_index <= 1.0f);
+  CHECK(r.pinch_strength_little >= 0.0f && r.pinch_strength_little <= 1.0f);
+  norm = sqrt((double)r.aim_orientation[0] * r.aim_orientation[0] + (double)r.aim_orientation[1] * r.aim_orientation[1] +
+              (double)r.aim_orientation[2] * r.aim_orientation[2] + (double)r.aim_orientation[3] * r.aim_orientation[3]);
+  CHECK(fabs(norm - 1.0) < 1e-6);
+  CHECK(r.aim_position[2] < -0.04f);              /* the index knuckle lies towards the fingers (-Z) */
+  CHECK(r.aim_position[0] == -l.aim_position[0]); /* the left hand mirrored */
+  CHECK(r.aim_position[1] == l.aim_position[1]);
+  l.type = 3;
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(left, &l), GLOVEPOSE_ERROR_STRUCT_SIZE);
+  CHECK(contains(glovepose_last_error(), "glovepose_xr_aim_state_init"));
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(right, NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK_RESULT(glovepose_estimator_get_xr_aim(NULL, &r), GLOVEPOSE_ERROR_INVALID_HANDLE);
+
+  /* A reader thread: the state published with the newest pose. */
+  CHECK_RESULT(glovepose_latest_create(&latest), GLOVEPOSE_OK);
+  glovepose_xr_aim_state_init(&read);
+  read.pinch_strength_ring = 0.5f;
+  CHECK_RESULT(glovepose_latest_get_xr_aim(latest, &read, &sequence), GLOVEPOSE_NOT_READY);
+  CHECK(sequence == 0 && read.status == 0 && read.pinch_strength_ring == 0.0f);
+  CHECK_RESULT(glovepose_latest_publish(latest, right), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_get_xr_aim(latest, &read, &sequence), GLOVEPOSE_OK);
+  CHECK(sequence == 30);
+  CHECK(read.status == r.status && read.pinch_strength_index == r.pinch_strength_index);
+  CHECK(memcmp(read.aim_orientation, r.aim_orientation, sizeof r.aim_orientation) == 0);
+  CHECK(memcmp(read.aim_position, r.aim_position, sizeof r.aim_position) == 0);
+  CHECK_RESULT(glovepose_latest_get_xr_aim(latest, &read, NULL), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_latest_get_xr_aim(NULL, &read, NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_latest_get_xr_aim((const glovepose_latest*)right, &read, NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_latest_get_xr_aim(latest, NULL, NULL), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  glovepose_xr_aim_state_init(NULL);
+  glovepose_latest_free(latest);
+  glovepose_estimator_free(left);
+  glovepose_estimator_free(right);
+}
+
 /* The guided calibration sequence the shipped model carries (models/calibration_glauser2019.json):
  * its steps as data, and the step under way while a calibration collects. */
 static void test_guided_steps(glovepose_model* model) {
@@ -749,6 +844,7 @@ int main(int argc, char** argv) {
   test_guided_steps(model);
   test_latest(model);
   test_xr_joints(model);
+  test_xr_aim(model);
 
   /* Estimators share the model: freeing the caller's model handle leaves them working. */
   CHECK_RESULT(glovepose_estimator_create(model, NULL, &survivor), GLOVEPOSE_OK);

@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
   glovepose_calibration_progress progress;
   glovepose_latest* latest = NULL;
   glovepose_xr_hand hand;
+  glovepose_xr_aim_state aim;
   glovepose_predicted_pose ahead;
   uint64_t number = 0;
   int32_t step = 0;
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
   glovepose_calibration_progress_init(&progress);
   glovepose_xr_hand_init(&hand);
   glovepose_predicted_pose_init(&ahead);
+  glovepose_xr_aim_state_init(&aim);
   /* Calibrate from rows of a synthetic glove (set-up: finish allocates the range). */
   glovepose_calibration_start(estimator);
   for (f = 0; f < 40; ++f) {
@@ -127,6 +129,8 @@ int main(int argc, char** argv) {
     glovepose_estimator_get_xr_joints(estimator, f / 60.0 + 0.02, &hand);
     glovepose_estimator_get_xr_joints(estimator, f / 60.0 - 0.01, &hand);
     glovepose_latest_get_xr_joints(latest, estimator, f / 60.0 + 0.02, &hand);
+    glovepose_estimator_get_xr_aim(estimator, &aim);
+    glovepose_latest_get_xr_aim(latest, &aim, &number);
   }
   for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;
   glovepose_estimator_push_measurements(estimator, frame, 180, 2.0);

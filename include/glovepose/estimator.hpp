@@ -73,7 +73,8 @@ class GlovePoseEstimator {
         workspace_(model_->network().make_workspace(checked_threads(config_.network_threads))),
         kinematics_(config_.hand, config_.handedness),
         trend_(config_.prediction_window),
-        locator_(config_.hand, config_.handedness, model_->joint_limits()) {
+        locator_(config_.hand, config_.handedness, model_->joint_limits()),
+        aim_tracker_(locator_.mapper()) {
     if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
       throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
                   " s, expected a finite value >= 0");
@@ -192,6 +193,12 @@ class GlovePoseEstimator {
     return Status::Ok;
   }
 
+  /// @brief The pinch and aim state of the latest pose (xr_hand.hpp, XR_FB_hand_tracking_aim):
+  /// pinch strengths, the pinching flags with their hysteresis kept from pose to pose, the aim pose
+  /// in the wrist frame. active is false before the first pose. Publish it to reader threads with a
+  /// LatestAim beside the LatestHand.
+  const XrHandAim& aim() const noexcept { return aim_tracker_.aim(); }
+
   /// @brief The locator of this estimator's hand (side, hand model, joint limits), for readers of
   /// LatestHand that locate joints on their own thread (predict() and locate()).
   const XrHandLocator& locator() const noexcept { return locator_; }
@@ -293,6 +300,7 @@ class GlovePoseEstimator {
     if (readout_) readout_->reset();
     if (smoothing_) smoothing_->reset();
     trend_.reset();
+    aim_tracker_.reset();
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
     cells_backwards_run_ = 0;
     next_calibration_sample_ = -std::numeric_limits<double>::infinity();
@@ -440,6 +448,7 @@ class GlovePoseEstimator {
     pose_.health = health;
     pose_.valid = true;
     ++pose_.sequence;
+    (void)aim_tracker_.update(pose_.angles, pose_.trusted(), timestamp, pose_.sequence);
     rejected_ = 0;
     pose_.compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return Status::Solved;
@@ -466,6 +475,7 @@ class GlovePoseEstimator {
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;
   XrHandLocator locator_;
+  XrAimTracker aim_tracker_;  // the pinch flags' hysteresis and the latest aim state
   Eigen::VectorXd measurements_;
   Eigen::VectorXd cells_;
   Eigen::VectorXd normalized_;

@@ -2,7 +2,8 @@
 /// @brief One hand's 26 OpenXR joints (hand/openxr_joints.hpp) with their velocities, located from
 /// a set of angles and their rate of change: what GlovePoseEstimator::joints_at() and a reader of
 /// LatestHand hand to an engine (Unity's XR Hands, Godot's XRHandTracker, an OpenXR runtime's
-/// xrLocateHandJointsEXT).
+/// xrLocateHandJointsEXT); and the hand as an input device, XR_FB_hand_tracking_aim's pinch and
+/// aim state (XrHandAim, kept over time by XrAimTracker; LatestAim for reader threads).
 #pragma once
 
 #include <algorithm>
@@ -17,6 +18,8 @@
 #include "hand/dofs.hpp"
 #include "hand/handedness.hpp"
 #include "hand/openxr_joints.hpp"
+#include "hand/pinch.hpp"
+#include "latest.hpp"
 
 namespace glovepose {
 
@@ -118,5 +121,108 @@ class XrHandLocator {
   hand::JointLimits limits_;
   std::array<std::array<int, 4>, hand::kPhalanxCount> phalanx_dofs_{};  // DoFs turning each phalanx; [3]: how many
 };
+
+/// @brief Bits of XrHandAim::status: the values of XrHandTrackingAimFlagsFB (XR_FB_hand_tracking_aim).
+enum XrAimFlag : std::uint64_t {
+  kXrAimComputed = 0x1,         ///< XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB: aim from sources beyond the hand data (never set here).
+  kXrAimValid = 0x2,            ///< XR_HAND_TRACKING_AIM_VALID_BIT_FB: the aim data is valid (a pose exists and is trusted).
+  kXrAimIndexPinching = 0x4,    ///< XR_HAND_TRACKING_AIM_INDEX_PINCHING_BIT_FB.
+  kXrAimMiddlePinching = 0x8,   ///< XR_HAND_TRACKING_AIM_MIDDLE_PINCHING_BIT_FB.
+  kXrAimRingPinching = 0x10,    ///< XR_HAND_TRACKING_AIM_RING_PINCHING_BIT_FB.
+  kXrAimLittlePinching = 0x20,  ///< XR_HAND_TRACKING_AIM_LITTLE_PINCHING_BIT_FB.
+  kXrAimSystemGesture = 0x40,   ///< XR_HAND_TRACKING_AIM_SYSTEM_GESTURE_BIT_FB (never set: the glove knows no system gesture).
+  kXrAimDominantHand = 0x80,    ///< XR_HAND_TRACKING_AIM_DOMINANT_HAND_BIT_FB (never set: the application knows which hand leads).
+  kXrAimMenuPressed = 0x100,    ///< XR_HAND_TRACKING_AIM_MENU_PRESSED_BIT_FB (never set).
+};
+
+/// @brief The pinching bit of pinch pair k (0: thumb-index .. 3: thumb-little).
+constexpr std::uint64_t xr_aim_pinching_bit(std::size_t pair) noexcept { return std::uint64_t{kXrAimIndexPinching} << pair; }
+
+/// @brief One hand's pinch and aim state, as XR_FB_hand_tracking_aim's XrHandTrackingAimStateFB
+/// carries it (status, aim pose, four pinch strengths), with what it was computed from.
+///
+/// The aim pose, in the wrist joint's frame like the joints (metres; hand/openxr_joints.hpp): the
+/// index finger's proximal joint (its knuckle) as it stands at the rest pose, every angle 0, the
+/// index straight: its -Z points along the straight index towards its tip, +Y out of the back of
+/// the hand, the convention of OpenXR's aim poses (a ray along -Z). The palm is rigid in the hand
+/// model, so this pose is fixed in the wrist frame: the glove has no global tracking, and the
+/// engine composes it with the wrist pose its tracker reports (world_from_aim = world_from_wrist *
+/// aim_pose), so the ray follows the hand as a whole. It does not follow the estimated fingers on
+/// purpose: a ray that moved with the index would move when the user pinches to select (away
+/// from the target being selected), and with the fingers' estimation error (about 11 mm at the
+/// fingertips, docs/results.md) it would wobble by degrees.
+///
+/// Pinches (hand/pinch.hpp): per finger, index to little, the strength of the thumb-tip-to-
+/// fingertip distance and the pinching flag of the 15 / 18 mm hysteresis, kept by XrAimTracker
+/// from pose to pose. kXrAimValid is set when the pose is valid and trusted (no fault flag); the
+/// strengths and flags are those of the pose either way. Trivially copyable (for Latest).
+struct XrHandAim {
+  std::uint64_t status = 0;                                   ///< XrAimFlag bits (XrHandTrackingAimFlagsFB).
+  hand::XrPose aim_pose;                                      ///< XrPosef-compatible: the aim pose in the wrist joint's frame (metres).
+  std::array<float, hand::kPinchPairCount> pinch_strength{};  ///< [0, 1], index, middle, ring, little.
+  hand::PinchDistances distance_mm{};                         ///< Thumb tip to fingertip, mm (NaN when an angle was not finite).
+  double timestamp = 0.0;                                     ///< The pose's timestamp (the glove stream's clock, s).
+  std::uint64_t sequence = 0;                                 ///< The pose's sequence (Pose::sequence); 0: no pose yet.
+  bool active = false;                                        ///< A pose exists (sequence > 0).
+  hand::Handedness side = hand::Handedness::Right;            ///< The hand.
+};
+
+/// @brief Keeps one hand's pinch and aim state from pose to pose: the hysteresis of the four
+/// pinch flags lives here, with the writer of the poses (GlovePoseEstimator holds one), not with
+/// the readers. Per frame noexcept and allocation-free.
+class XrAimTracker {
+ public:
+  /// @brief A tracker for the hand of `mapper` (its kinematics: hand model and side), with the
+  /// pinch `rule` (validated: throws glovepose::Error).
+  explicit XrAimTracker(const hand::XrJointMapper& mapper, const hand::PinchRule& rule = {})
+      : kinematics_(mapper.kinematics()), pinch_(rule) {
+    hand::Skeleton skeleton;
+    mapper.kinematics().pose(hand::Angles{}, skeleton, mapper.root());
+    hand::XrJointFrames frames;
+    mapper.frames(skeleton, frames);
+    hand::XrJointLocations locations;
+    mapper.write(frames, 0, locations);
+    aim_.aim_pose = locations[static_cast<std::size_t>(hand::XrJoint::IndexProximal)].pose;
+    aim_.side = mapper.kinematics().side();
+  }
+
+  /// @brief The aim pose (fixed in the wrist joint's frame; XrHandAim says why).
+  const hand::XrPose& aim_pose() const noexcept { return aim_.aim_pose; }
+  /// @brief The pinch rule.
+  const hand::PinchRule& rule() const noexcept { return pinch_.rule(); }
+
+  /// @brief The state after a new pose: its angles (radians), whether it is trusted, its timestamp
+  /// and sequence. Non-finite angles make the pairs they touch read no pinch (strength 0).
+  GLOVEPOSE_REALTIME const XrHandAim& update(const hand::Angles& angles, bool trusted, double timestamp, std::uint64_t sequence) noexcept {
+    const hand::PinchState pinch = pinch_.update(kinematics_, angles);
+    std::uint64_t status = trusted ? std::uint64_t{kXrAimValid} : 0;
+    for (std::size_t k = 0; k < hand::kPinchPairCount; ++k)
+      if (pinch.pinching[k]) status |= xr_aim_pinching_bit(k);
+    aim_.status = status;
+    aim_.pinch_strength = pinch.strength;
+    aim_.distance_mm = pinch.distance_mm;
+    aim_.timestamp = timestamp;
+    aim_.sequence = sequence;
+    aim_.active = true;
+    return aim_;
+  }
+
+  /// @brief The state after the last update (active false before the first).
+  const XrHandAim& aim() const noexcept { return aim_; }
+
+  /// @brief Forgets the pinch flags' history (every pair off until its distance falls below the
+  /// threshold again); keeps the last state for aim().
+  void reset() noexcept { pinch_.reset(); }
+
+ private:
+  hand::Kinematics kinematics_;
+  hand::PinchTracker pinch_;
+  XrHandAim aim_;
+};
+
+/// @brief The newest aim state of one estimator for reader threads (latest.hpp): the estimator's
+/// thread publishes estimator.aim() beside its HandState (LatestHand); a reader matches the two by
+/// XrHandAim::sequence and Pose::sequence when it needs both of one pose.
+using LatestAim = Latest<XrHandAim>;
 
 }  // namespace glovepose

@@ -127,9 +127,9 @@ GLOVEPOSE_REALTIME inline PinchDistances pinch_distances(const Kinematics& kinem
 
 /// @brief One frame's pinch state: per pair, the distance, the strength and the flag.
 struct PinchState {
-  PinchDistances distance_mm{};                 ///< Thumb tip to fingertip, mm (NaN when not known).
+  PinchDistances distance_mm{};                   ///< Thumb tip to fingertip, mm (NaN when not known).
   std::array<float, kPinchPairCount> strength{};  ///< pinch_strength of the distance, [0, 1].
-  PinchFlags pinching{};                        ///< The hysteresis flag.
+  PinchFlags pinching{};                          ///< The hysteresis flag.
 };
 
 /// @brief The pinch flags of one hand over time: the hysteresis state of the four pairs. Per frame
