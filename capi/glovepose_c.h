@@ -270,7 +270,7 @@ typedef struct glovepose_xr_hand {
 
 /** @brief One hand's pinch and aim state, laid out as XR_FB_hand_tracking_aim's
  * XrHandTrackingAimStateFB (same fields, order, sizes and offsets, its padding included: 4 bytes
- * after `type` and at the end where pointers are 8 bytes), so an OpenXR layer can pass the
+ * after `type` and at the end where pointers are 8 bytes: 72 bytes), so an OpenXR layer can pass the
  * application's struct itself. Never changes: its `type` is its version. Set type (and next) with
  * glovepose_xr_aim_state_init; the library fills the rest and leaves type and next alone.
  * - status: GLOVEPOSE_XR_AIM_* bits: VALID when a pose exists and has no fault flag;

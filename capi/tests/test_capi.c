@@ -695,6 +695,15 @@ static void test_xr_aim(glovepose_model* model) {
   CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_little) == offsetof(XrHandTrackingAimStateFB, pinchStrengthLittle));
   CHECK(sizeof r.type == sizeof(XrStructureType) && sizeof r.status == sizeof(XrHandTrackingAimFlagsFB));
   CHECK(sizeof r.aim_orientation + sizeof r.aim_position == sizeof(XrPosef));
+  if (sizeof(void*) == 8) { /* the 64-bit layout the header documents */
+    CHECK(sizeof(glovepose_xr_aim_state) == 72);
+    CHECK(offsetof(glovepose_xr_aim_state, next) == 8);
+    CHECK(offsetof(glovepose_xr_aim_state, status) == 16);
+    CHECK(offsetof(glovepose_xr_aim_state, aim_orientation) == 24);
+    CHECK(offsetof(glovepose_xr_aim_state, aim_position) == 40);
+    CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_index) == 52);
+    CHECK(offsetof(glovepose_xr_aim_state, pinch_strength_little) == 64);
+  }
   CHECK(GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB == XR_TYPE_HAND_TRACKING_AIM_STATE_FB);
   CHECK(GLOVEPOSE_XR_AIM_COMPUTED == XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB);
   CHECK(GLOVEPOSE_XR_AIM_VALID == XR_HAND_TRACKING_AIM_VALID_BIT_FB);

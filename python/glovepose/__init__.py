@@ -10,6 +10,7 @@
     angles = estimator.angles()    # (25,) radians, DOF_NAMES order
     joints = estimator.joints()    # (21, 7): position x, y, z (m), rotation quaternion x, y, z, w
     hand = estimator.xr_joints(t)  # OpenXR's 26 joints at time t (wrist frame): positions, orientations, ...
+    aim = estimator.xr_aim()       # XR_FB_hand_tracking_aim: pinch strengths and flags, the aim pose (wrist frame)
 
 The library is found through $GLOVEPOSE_LIBRARY, the system's library path (an installed
 glovepose), the lib/ of this Python's prefix (a virtual environment glovepose was installed into),
@@ -25,7 +26,7 @@ import numpy as np
 from . import _library
 from .dataset import load_dataset
 
-__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "Latest", "LatestHand", "CalibrationStep",
+__all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "XrAim", "XrAimFlag", "Latest", "LatestHand", "CalibrationStep",
            "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "Status", "OK", "SOLVED",
            "NOT_READY", "UNCALIBRATED", "DOF_NAMES", "JOINT_NAMES", "JOINT_PARENTS", "XR_JOINT_NAMES", "XR_JOINT_PARENTS",
            "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED", "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID",
@@ -72,6 +73,20 @@ class PoseFlag(enum.IntFlag):
     DISCONNECTED_ROWS = 0x80     #: (fault) a row reads (near) zero: a disconnected trace
     OUTLIER_ROWS = 0x100         #: (fault) a row disagrees with the least-squares solve
     FAULT_FLAGS = 0x1F0          #: the fault bits together
+
+
+class XrAimFlag(enum.IntFlag):
+    """Bits of XrAim.status: OpenXR's XrHandTrackingAimFlagsFB (XR_FB_hand_tracking_aim; glovepose_c.h's
+    GLOVEPOSE_XR_AIM_*). The library never sets COMPUTED, SYSTEM_GESTURE, DOMINANT_HAND, MENU_PRESSED."""
+    COMPUTED = 0x1          #: aim from sources beyond the hand data (never set: the glove has none)
+    VALID = 0x2             #: the aim data is valid: a pose exists and has no fault flag
+    INDEX_PINCHING = 0x4    #: thumb and index pinch (closer than 15 mm, until 18 mm apart)
+    MIDDLE_PINCHING = 0x8   #: thumb and middle
+    RING_PINCHING = 0x10    #: thumb and ring
+    LITTLE_PINCHING = 0x20  #: thumb and little finger
+    SYSTEM_GESTURE = 0x40   #: (never set)
+    DOMINANT_HAND = 0x80    #: (never set)
+    MENU_PRESSED = 0x100    #: (never set)
 
 
 class CalibrationSource(enum.IntEnum):
@@ -278,6 +293,39 @@ class XrHand:
         self.time, self.horizon = raw.time, raw.horizon
 
 
+class XrAim:
+    """One hand's pinch and aim state as XR_FB_hand_tracking_aim gives it (glovepose_xr_aim_state):
+
+    - status (XrAimFlag), valid (its VALID bit: a pose exists and is trusted), active (False before
+      the first pose: status 0, strengths 0);
+    - pinching: four bools, thumb with index, middle, ring, little: closer than 15 mm between the
+      tips, until they part to 18 mm (the hysteresis is the estimator's, kept from pose to pose);
+    - pinch_strength (4,) in [0, 1], same order: 1 at or below 15 mm, 0 at or beyond 40 mm, a
+      smoothstep between;
+    - aim_position (3,) m and aim_orientation (4,) quaternion x, y, z, w: the aim pose in the wrist
+      joint's frame, like XrHand's joints: the index's proximal joint at the rest pose, -Z along the
+      straight index, +Y the back of the hand; fixed in that frame (a pinch does not move the ray):
+      an engine composes it with the wrist pose its tracker reports;
+    - sequence: the pose's sequence (Latest.xr_aim; None from Estimator.xr_aim, whose pose() tells)."""
+
+    def __init__(self, raw: _library.XrAimState, active: bool, sequence: int | None = None):
+        self.status = XrAimFlag(raw.status)
+        self.valid, self.active, self.sequence = bool(self.status & XrAimFlag.VALID), active, sequence
+        self.pinching = tuple(bool(self.status & bit) for bit in (XrAimFlag.INDEX_PINCHING, XrAimFlag.MIDDLE_PINCHING,
+                                                                  XrAimFlag.RING_PINCHING, XrAimFlag.LITTLE_PINCHING))
+        self.pinch_strength = np.array([raw.pinch_strength_index, raw.pinch_strength_middle, raw.pinch_strength_ring,
+                                        raw.pinch_strength_little], dtype=np.float64)
+        self.aim_position = np.array(raw.aim_position[:], dtype=np.float64)
+        self.aim_orientation = np.array(raw.aim_orientation[:], dtype=np.float64)
+
+
+def _aim_state() -> _library.XrAimState:
+    """A glovepose_xr_aim_state as glovepose_xr_aim_state_init leaves it (its type set)."""
+    out = _library.XrAimState()
+    _lib.glovepose_xr_aim_state_init(ctypes.byref(out))
+    return out
+
+
 class CalibrationProgress:
     """How far an on-the-fly calibration has come, and the range in use: collecting (between
     start_calibration and finish/cancel), frames (taken so far), frames_needed (before
@@ -401,6 +449,13 @@ class Estimator(_Closing):
         _status(_lib.glovepose_estimator_get_xr_joints(self._handle, time, ctypes.byref(out)), "xr_joints", time, not_ready_ok=True)
         return XrHand(out)
 
+    def xr_aim(self) -> XrAim:
+        """The pinch and aim state of the latest pose (XR_FB_hand_tracking_aim). Before the first
+        pose: active False, status 0, strengths 0 (the aim pose is already the hand's)."""
+        out = _aim_state()
+        code = _check(_lib.glovepose_estimator_get_xr_aim(self._handle, ctypes.byref(out)))
+        return XrAim(out, active=code == Status.OK)
+
     def cells(self) -> np.ndarray:
         """The latest solved cell capacitances (cell_count,), pF: the network's input before
         calibration (cell_names order; zeros before the first frame)."""
@@ -498,7 +553,7 @@ class Latest(_Closing):
 
     def publish(self, estimator: Estimator) -> None:
         """Writer (the estimator's thread, one writer): makes the estimator's current pose, joint
-        list and rate the newest."""
+        list, rate and pinch and aim state the newest."""
         _check(_lib.glovepose_latest_publish(self._handle, estimator._handle))
 
     def read(self) -> LatestHand | None:
@@ -516,6 +571,13 @@ class Latest(_Closing):
         _status(_lib.glovepose_latest_get_xr_joints(self._handle, estimator._handle, time, ctypes.byref(out)), "xr_joints", time,
                 not_ready_ok=True)
         return XrHand(out)
+
+    def xr_aim(self) -> XrAim:
+        """Reader, any thread: the pinch and aim state published with the newest pose (as
+        Estimator.xr_aim, with that pose's sequence); active False before the first publish."""
+        out, sequence = _aim_state(), ctypes.c_uint64()
+        code = _check(_lib.glovepose_latest_get_xr_aim(self._handle, ctypes.byref(out), ctypes.byref(sequence)))
+        return XrAim(out, active=code == Status.OK, sequence=sequence.value)
 
     def close(self) -> None:
         if getattr(self, "_handle", None):

@@ -16,6 +16,8 @@ HAND_RIGHT, HAND_LEFT = 0, 1
 #: GLOVEPOSE_XR_*: OpenXR's XrSpaceLocationFlags and XrSpaceVelocityFlags bits.
 XR_ORIENTATION_VALID, XR_POSITION_VALID, XR_ORIENTATION_TRACKED, XR_POSITION_TRACKED = 0x1, 0x2, 0x4, 0x8
 XR_LINEAR_VELOCITY_VALID, XR_ANGULAR_VELOCITY_VALID = 0x1, 0x2
+#: GLOVEPOSE_XR_TYPE_HAND_TRACKING_AIM_STATE_FB: XR_TYPE_HAND_TRACKING_AIM_STATE_FB, XrAimState.type.
+XR_TYPE_HAND_TRACKING_AIM_STATE_FB = 1000111001
 
 
 class EstimatorConfig(ctypes.Structure):
@@ -136,6 +138,21 @@ class XrHand(ctypes.Structure):
     ]
 
 
+class XrAimState(ctypes.Structure):
+    """glovepose_xr_aim_state, laid out as OpenXR's XrHandTrackingAimStateFB (padding included)."""
+    _fields_ = [
+        ("type", ctypes.c_int32),
+        ("next", ctypes.c_void_p),
+        ("status", ctypes.c_uint64),
+        ("aim_orientation", ctypes.c_float * 4),
+        ("aim_position", ctypes.c_float * 3),
+        ("pinch_strength_index", ctypes.c_float),
+        ("pinch_strength_middle", ctypes.c_float),
+        ("pinch_strength_ring", ctypes.c_float),
+        ("pinch_strength_little", ctypes.c_float),
+    ]
+
+
 # The sizes glovepose_c.h documents for ABI 1 (and its static_asserts hold the C compiler to).
 _SIZES = {EstimatorConfig: 80, Pose: 448, Joint: 28, CalibrationProgress: 32, HandOptions: 24, PredictedPose: 440,
           CalibrationStep: 1184, XrJointLocation: 40, XrJointVelocity: 32, XrHand: 1912}
@@ -178,12 +195,14 @@ _SIGNATURES = {
     "glovepose_estimator_get_pose_at": (ctypes.c_int32, [_VOID, ctypes.c_double, _P(PredictedPose)]),
     "glovepose_estimator_get_xr_joints": (ctypes.c_int32, [_VOID, ctypes.c_double, _P(XrHand)]),
     "glovepose_estimator_get_cells": (ctypes.c_int32, [_VOID, _P(ctypes.c_double), ctypes.c_int32]),
+    "glovepose_estimator_get_xr_aim": (ctypes.c_int32, [_VOID, _P(XrAimState)]),
     "glovepose_estimator_reset": (ctypes.c_int32, [_VOID]),
     "glovepose_latest_create": (ctypes.c_int32, [_P(_VOID)]),
     "glovepose_latest_free": (None, [_VOID]),
     "glovepose_latest_publish": (ctypes.c_int32, [_VOID, _VOID]),
     "glovepose_latest_read": (ctypes.c_int32, [_VOID, _P(Pose), _P(Joint), ctypes.c_int32, _P(ctypes.c_uint64)]),
     "glovepose_latest_get_xr_joints": (ctypes.c_int32, [_VOID, _VOID, ctypes.c_double, _P(XrHand)]),
+    "glovepose_latest_get_xr_aim": (ctypes.c_int32, [_VOID, _P(XrAimState), _P(ctypes.c_uint64)]),
     "glovepose_calibration_start": (ctypes.c_int32, [_VOID]),
     "glovepose_calibration_finish": (ctypes.c_int32, [_VOID]),
     "glovepose_calibration_cancel": (ctypes.c_int32, [_VOID]),
@@ -199,6 +218,7 @@ _SIGNATURES = {
     "glovepose_calibration_step_init": (None, [_P(CalibrationStep)]),
     "glovepose_xr_hand_init": (None, [_P(XrHand)]),
     "glovepose_predicted_pose_init": (None, [_P(PredictedPose)]),
+    "glovepose_xr_aim_state_init": (None, [_P(XrAimState)]),
 }
 
 

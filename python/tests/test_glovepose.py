@@ -20,6 +20,10 @@
   for at most max_prediction.
 - A Latest gives reader threads the hand the estimator published: its pose, joints and OpenXR
   joints, never torn while the writer streams.
+- The pinch and aim state (XR_FB_hand_tracking_aim) follows the poses: strengths in [0, 1], a
+  pinch flag only where the strength says the tips are closer than the 15 mm onset or the 18 mm
+  release allows, VALID as the pose is trusted, the aim pose fixed in the wrist frame and mirrored
+  on a left hand; a Latest gives readers the state published with the pose, with its sequence.
 - The guided calibration steps are the sequence in the model file's metadata (read here with json),
   and the progress follows it step by step as frames arrive.
 
@@ -234,6 +238,60 @@ class Session(unittest.TestCase):
                 np.testing.assert_array_equal(joints, published[number][2])
             with self.assertRaises(ValueError):
                 latest.xr_joints(estimator, float("nan"))
+
+    def test_xr_aim_follows_the_poses(self):
+        data = glovepose.load_dataset(self.dataset)
+        # Strength of a distance d (mm), pinch.hpp's definition: 1 up to 15, 0 from 40, smoothstep between.
+        u = (40.0 - 18.0) / 25.0
+        at_release = u * u * (3.0 - 2.0 * u)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as right, glovepose.Estimator(model, hand="left") as left:
+            before = right.xr_aim()
+            self.assertFalse(before.active)
+            self.assertEqual((before.status, before.pinching), (0, (False,) * 4))
+            np.testing.assert_array_equal(before.pinch_strength, np.zeros(4))
+            self.assertAlmostEqual(float(np.linalg.norm(before.aim_orientation)), 1.0, places=6)
+            was, poses, pinching, onsets = (False,) * 4, 0, 0, 0  # onsets: off -> on
+            for _ in stream(data, right, left):
+                aim, mirror, pose = right.xr_aim(), left.xr_aim(), right.pose()
+                poses += 1
+                self.assertTrue(aim.active)
+                self.assertIsNone(aim.sequence)
+                self.assertEqual(aim.valid, pose.trusted)
+                self.assertEqual(int(aim.status) & ~0x3E, 0)  # VALID and the four pinching bits only
+                self.assertTrue(np.all((aim.pinch_strength >= 0.0) & (aim.pinch_strength <= 1.0)))
+                for k in range(4):
+                    if aim.pinching[k]:  # closer than 18 mm: strength above its value at 18 mm
+                        self.assertGreater(aim.pinch_strength[k], at_release - 1e-6)
+                        if not was[k]:  # an onset: closer than 15 mm, strength 1
+                            self.assertEqual(aim.pinch_strength[k], 1.0)
+                            onsets += 1
+                    elif was[k]:  # a release: 18 mm or farther, strength at most its value at 18 mm
+                        self.assertLess(aim.pinch_strength[k], at_release + 1e-6)
+                pinching += any(aim.pinching)
+                was = aim.pinching
+                np.testing.assert_array_equal(aim.aim_position, before.aim_position)  # fixed in the wrist frame
+                np.testing.assert_array_equal(aim.aim_orientation, before.aim_orientation)
+                np.testing.assert_array_equal(mirror.aim_position, aim.aim_position * [-1, 1, 1])  # mirrored: x -> -x
+            self.assertGreater(poses, 100)
+            # This short session happens not to pinch (onsets stays 0): the checks above guard the
+            # flags' relation to the strengths; tests/test_pinch.cpp follows pinches pose by pose.
+            self.assertLess(before.aim_position[2], -0.04)  # the index knuckle, towards the fingers (-Z)
+
+    def test_latest_gives_readers_the_published_aim(self):
+        data = glovepose.load_dataset(self.dataset)
+        with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator, glovepose.Latest() as latest:
+            nothing = latest.xr_aim()
+            self.assertEqual((nothing.active, nothing.sequence, nothing.status), (False, 0, 0))
+            count = 0
+            for _ in stream(data, estimator):
+                latest.publish(estimator)
+                mine, theirs = estimator.xr_aim(), latest.xr_aim()
+                self.assertEqual((theirs.active, theirs.sequence), (True, estimator.pose().sequence))
+                self.assertEqual((theirs.status, theirs.pinching), (mine.status, mine.pinching))
+                for name in ("pinch_strength", "aim_position", "aim_orientation"):
+                    np.testing.assert_array_equal(getattr(theirs, name), getattr(mine, name), name)
+                count += 1
+            self.assertGreater(count, 100)
 
     def test_left_hand_mirrors_the_right_one(self):
         data = glovepose.load_dataset(self.dataset)
@@ -468,7 +526,7 @@ class Abi(unittest.TestCase):
                "glovepose_pose": _library.Pose, "glovepose_joint": _library.Joint, "glovepose_predicted_pose": _library.PredictedPose,
                "glovepose_calibration_progress": _library.CalibrationProgress, "glovepose_calibration_step": _library.CalibrationStep,
                "glovepose_xr_joint_location": _library.XrJointLocation, "glovepose_xr_joint_velocity": _library.XrJointVelocity,
-               "glovepose_xr_hand": _library.XrHand}
+               "glovepose_xr_hand": _library.XrHand, "glovepose_xr_aim_state": _library.XrAimState}
 
     def define(self, name: str) -> int:
         found = re.search(rf"#define GLOVEPOSE_{name} \(?(-?(?:0x[0-9A-Fa-f]+|\d+))u?\)?\s", self.HEADER)
@@ -491,6 +549,11 @@ class Abi(unittest.TestCase):
         self.assertEqual(sorted(flags), sorted(glovepose.PoseFlag.__members__))  # every flag, no more
         for name, flag in glovepose.PoseFlag.__members__.items():
             self.assertEqual(flag, self.define("POSE_" + name), name)
+        aim_flags = re.findall(r"#define GLOVEPOSE_XR_AIM_(\w+) ", self.HEADER)
+        self.assertEqual(sorted(aim_flags), sorted(glovepose.XrAimFlag.__members__))  # every flag, no more
+        for name, flag in glovepose.XrAimFlag.__members__.items():
+            self.assertEqual(flag, self.define("XR_AIM_" + name), name)
+        self.assertEqual(_library.XR_TYPE_HAND_TRACKING_AIM_STATE_FB, self.define("XR_TYPE_HAND_TRACKING_AIM_STATE_FB"))
         self.assertEqual(glovepose.JOINT_PARENTS[0], -1)
         self.assertEqual(glovepose.XR_JOINT_PARENTS[glovepose.XR_JOINT_NAMES.index("wrist")], -1)
 
