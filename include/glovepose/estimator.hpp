@@ -294,8 +294,9 @@ class GlovePoseEstimator {
 
   // ---- state -------------------------------------------------------------------------------
 
-  /// @brief Forgets the stream (readings, filter, timestamps), e.g. after the glove was unplugged or
-  /// its clock restarted; keeps the calibration and the last pose (marked by its sequence).
+  /// @brief Forgets the stream (readings, filter, timestamps, the pinch flags' history), e.g. after
+  /// the glove was unplugged or its clock restarted; keeps the calibration and the last pose (marked
+  /// by its sequence) and its aim().
   void reset() noexcept {
     if (readout_) readout_->reset();
     if (smoothing_) smoothing_->reset();
