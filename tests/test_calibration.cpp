@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include "test_files.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,7 +24,7 @@ std::vector<std::string> names(int n) {
   for (int i = 0; i < n; ++i) out.push_back("cell " + std::to_string(i));
   return out;
 }
-std::string temp_path(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
+using glovepose::test::temp_path;
 void write_file(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 // A hand exploring its extreme poses, as a calibration asks: per finger, minimum-jerk moves of

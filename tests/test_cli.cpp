@@ -4,6 +4,8 @@
 #include <glovepose/io/dataset.hpp>
 
 #include <doctest/doctest.h>
+
+#include "test_files.hpp"
 #include <nlohmann/json.hpp>
 
 #include <arpa/inet.h>
@@ -220,10 +222,7 @@ TEST_CASE("cli: bad input and bad models are refused with the line, column or fi
 }
 
 namespace {
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
+using glovepose::test::slurp;
 }  // namespace
 
 TEST_CASE("cli: glovepose simulate writes the protocol as one dataset file, byte-identical for a seed") {

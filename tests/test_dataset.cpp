@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include "test_files.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -22,7 +24,7 @@ using io::TensorFile;
 
 namespace {
 
-std::string temp_path(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
+using glovepose::test::temp_path;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -74,12 +76,7 @@ void check_equal(const Dataset& a, const Dataset& b) {
   CHECK(a.metadata == b.metadata);
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using glovepose::test::slurp;
 
 }  // namespace
 

@@ -3,6 +3,8 @@
 // shared by estimators on threads, and the statuses of bad input.
 #include <doctest/doctest.h>
 
+#include "test_files.hpp"
+
 #include <glovepose/nn/unet_diagnostics.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/model/unet_model.hpp>
@@ -21,7 +23,7 @@ using namespace glovepose;
 
 namespace {
 
-const std::string kShippedModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+using glovepose::test::kShippedModel;
 // The paper's architecture, shipped beside the default: for what only a U-Net has.
 const std::string kUNetModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
 

@@ -83,7 +83,7 @@ struct FrameRecord {
   hand::Angles angles{};
 };
 
-struct Run {
+struct FaultRun {
   std::vector<FrameRecord> frames;  // one per session frame: the latest pose at the frame's end
   long rejected_statuses = 0;
 };
@@ -94,13 +94,13 @@ const int kDefaultWindow = realtime_readout().mean_window;
 // The session streamed row by row through an estimator averaging `mean_window` readings per row;
 // `fault`, when given, turns the readings of frames [kFaultBegin, kFaultEnd) into what the faulty
 // glove delivers.
-Run stream(std::optional<sim::FaultInjector> fault, int mean_window) {
+FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window) {
   const io::Dataset& d = faults_session();
   EstimatorConfig config;
   config.readout.mean_window = mean_window;
   GlovePoseEstimator estimator(faults_model(), config);
   estimator.set_calibration(faults_range());
-  Run run;
+  FaultRun run;
   std::uint64_t last_sequence = 0;
   const std::size_t first = first_session_frame();
   for (std::size_t f = first; f < d.frames(); ++f) {
@@ -126,14 +126,14 @@ Run stream(std::optional<sim::FaultInjector> fault, int mean_window) {
   return run;
 }
 
-const Run& clean_run(int mean_window) {
-  static std::map<int, Run> runs;
+const FaultRun& clean_run(int mean_window) {
+  static std::map<int, FaultRun> runs;
   auto found = runs.find(mean_window);
   if (found == runs.end()) found = runs.emplace(mean_window, stream(std::nullopt, mean_window)).first;
   return found->second;
 }
 
-double mean_error_degrees(const Run& run, std::size_t begin, std::size_t end) {
+double mean_error_degrees(const FaultRun& run, std::size_t begin, std::size_t end) {
   const io::Dataset& d = faults_session();
   const std::size_t first = first_session_frame();
   double sum = 0.0;
@@ -164,9 +164,9 @@ double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
 // solve every 16 accepted readings) shifts with every lost or extra reading, and a pose depends on
 // the solve's place in the cycle by a few degrees, so trusted poses are compared with the truth
 // (the simulator's angles) as the clean stream is, not pose by pose with the clean stream.
-Run check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect, int mean_window = kDefaultWindow) {
-  const Run& clean = clean_run(mean_window);
-  Run run = stream(fault, mean_window);
+FaultRun check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect, int mean_window = kDefaultWindow) {
+  const FaultRun& clean = clean_run(mean_window);
+  FaultRun run = stream(fault, mean_window);
   REQUIRE(run.frames.size() == clean.frames.size());
   const std::size_t n = run.frames.size();
   const auto trusted = [](const FrameRecord& r) { return r.fresh && r.valid && (r.flags & kPoseFaultFlags) == 0; };
@@ -230,7 +230,7 @@ TEST_CASE("faults: every PoseFlag bit has its own name, and only those bits") {
 }
 
 TEST_CASE("faults: the clean stream is trusted and accurate") {
-  const Run& clean = clean_run(kDefaultWindow);
+  const FaultRun& clean = clean_run(kDefaultWindow);
   std::size_t flagged = 0;
   for (std::size_t i = 6; i < clean.frames.size(); ++i) flagged += (clean.frames[i].flags & kPoseFaultFlags) != 0;
   MESSAGE("clean stream: " << flagged << " of " << clean.frames.size() - 6 << " frames flagged; error "
@@ -251,7 +251,7 @@ TEST_CASE("faults: dropped rows") {
 TEST_CASE("faults: duplicated and out-of-order rows") {
   check_fault("every row twice", inject(sim::FaultKind::DuplicatedRows), {});
   // Rows delivered in swapped pairs: the late one is older than the last accepted, and rejected.
-  const Run run = check_fault("rows swapped in pairs", inject(sim::FaultKind::OutOfOrderRows), {kPoseReadingsRejected, 1.0, 0, 6});
+  const FaultRun run = check_fault("rows swapped in pairs", inject(sim::FaultKind::OutOfOrderRows), {kPoseReadingsRejected, 1.0, 0, 6});
   CHECK(run.rejected_statuses >= 90 * static_cast<long>(kFaultEnd - kFaultBegin));
 }
 
@@ -286,7 +286,7 @@ TEST_CASE("faults: spikes") {
 TEST_CASE("faults: NaN and infinite readings") {
   sim::FaultSettings one_in_ten;
   one_in_ten.non_finite_one_in = 10;
-  const Run run = check_fault("NaN and Inf in 1 reading of 10", inject(sim::FaultKind::NonFiniteValues, one_in_ten),
+  const FaultRun run = check_fault("NaN and Inf in 1 reading of 10", inject(sim::FaultKind::NonFiniteValues, one_in_ten),
                               {kPoseReadingsRejected, 0.9, 0, 6});
   CHECK(run.rejected_statuses > 1000);
 }
@@ -295,12 +295,12 @@ TEST_CASE("faults: glove unplugged and plugged back (a gap in the stream)") {
   // 2 s without any reading; then the readout starts over: no stale pre-gap readings are mixed in,
   // the first poses after it are flagged as recovering, and the smoothing restarts.
   // With one reading per row (the default) the first solve after the gap already has whole rows.
-  const Run run = check_fault("unplugged for 2 s", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6});
+  const FaultRun run = check_fault("unplugged for 2 s", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6});
   REQUIRE(kDefaultWindow == 1);
   CHECK((run.frames[kFaultEnd].flags & kPoseFaultFlags) == 0);
   // With a longer mean, during the gap the last pose stays (nothing arrives) and the first frame
   // after it is recovering: its rows hold fewer readings than the window.
-  const Run mean_of_2 = check_fault("unplugged for 2 s, 2 readings per row", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6}, 2);
+  const FaultRun mean_of_2 = check_fault("unplugged for 2 s, 2 readings per row", inject(sim::FaultKind::Unplugged), {0, 0.0, 0, 6}, 2);
   CHECK((mean_of_2.frames[kFaultEnd].flags & kPoseRecovering) != 0);
 }
 
@@ -310,7 +310,7 @@ TEST_CASE("faults: clock jumps") {
   check_fault("clock jumps forward by 100 s", inject(sim::FaultKind::ClockJumpForward, jump), {kPoseRecovering, 0.0, 0, 7});
   // Backwards: the readings are rejected as out of order until a whole cycle of them shows the
   // clock restarted; then the readout follows the new clock, and again when it jumps back.
-  const Run run = check_fault("clock jumps back by 100 s", inject(sim::FaultKind::ClockJumpBack, jump), {kPoseRecovering, 0.0, 0, 7});
+  const FaultRun run = check_fault("clock jumps back by 100 s", inject(sim::FaultKind::ClockJumpBack, jump), {kPoseRecovering, 0.0, 0, 7});
   CHECK(run.rejected_statuses >= 180);
 }
 

@@ -18,13 +18,6 @@ namespace {
 
 constexpr double kRate = 100.0;  // frames per second of the sequences below
 
-const hand::Angles& gallery_pose(const std::string& name) {
-  static const std::vector<sim::KeyPose> gallery = sim::pose_gallery();
-  for (const sim::KeyPose& p : gallery)
-    if (p.name == name) return p.angles;
-  FAIL("no gallery pose " << name);
-  return gallery.front().angles;
-}
 
 // Thumb-tip-to-fingertip distance (mm) on the reference hand, from the skeleton directly.
 double tip_distance(const hand::Angles& angles, hand::Finger finger) {
@@ -53,7 +46,7 @@ TEST_CASE("fingertip metrics: the gallery's pinches are pinches, its other poses
       {"pinch_ring", hand::Finger::Ring},   {"pinch_pinky", hand::Finger::Pinky},
       {"ok", hand::Finger::Index},          {"key_grip", hand::Finger::Index}};
   for (const auto& [name, finger] : oppositions) {
-    const double d = tip_distance(gallery_pose(name), finger);
+    const double d = tip_distance(sim::gallery_pose(name).angles, finger);
     MESSAGE(name << ": thumb to " << std::string(hand::to_string(finger)) << " tip " << d << " mm");
     CHECK(d < kPinchThresholdMm);
   }
@@ -74,7 +67,7 @@ TEST_CASE("fingertip metrics: the gallery's pinches are pinches, its other poses
 }
 
 TEST_CASE("fingertip metrics: identical angles give 0 mm, precision = recall = 1, every onset found at 0 ms") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   FingertipAccumulator acc;
   acc.begin_run();
   const int frames = 200, period = 50, start = 20, length = 15;
@@ -159,7 +152,7 @@ TEST_CASE("fingertip metrics: an offset on one joint moves its tip by the chord 
 }
 
 TEST_CASE("fingertip metrics: the thumb-to-fingertip distance error is |d_pred - d_true|") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   FingertipAccumulator acc;
   acc.add(pinch, open, 0.0);
   const FingertipReport r = acc.report();
@@ -174,7 +167,7 @@ TEST_CASE("fingertip metrics: the thumb-to-fingertip distance error is |d_pred -
 }
 
 TEST_CASE("fingertip metrics: pinches predicted k frames late: latency k / rate, precision and recall by counting") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   const int frames = 400, period = 100, start = 30, length = 40;
   for (const int k : {0, 3, 7, 24, 26, 60}) {
     INFO("k = " << k);
@@ -210,7 +203,7 @@ TEST_CASE("fingertip metrics: pinches predicted k frames late: latency k / rate,
 }
 
 TEST_CASE("fingertip metrics: a prediction early by k frames has latency -k / rate, and onsets are matched within a run") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   FingertipAccumulator acc;
   // Run 1: true onset at frame 30, predicted at 25. Run 2: true onset at frame 10, the prediction
   // never pinches; a predicted onset at the end of run 1 must not be taken for it.
@@ -227,7 +220,7 @@ TEST_CASE("fingertip metrics: a prediction early by k frames has latency -k / ra
 }
 
 TEST_CASE("fingertip metrics: the release distance keeps a pinch on until the tips part beyond it") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   // Blends of the pinch and the open hand at a chosen index-tip distance (bisection on the blend).
   const auto at_distance = [&](double mm) {
     double lo = 0.0, hi = 1.0;  // lo: distance below mm, hi: above
@@ -251,7 +244,7 @@ TEST_CASE("fingertip metrics: the release distance keeps a pinch on until the ti
 }
 
 TEST_CASE("fingertip metrics: a non-finite angle leaves its digit (and its pinch pair) out of that frame only") {
-  const hand::Angles pose = gallery_pose("pinch_index");
+  const hand::Angles pose = sim::gallery_pose("pinch_index").angles;
   hand::Angles broken = pose;
   broken[hand::dof_of(hand::Finger::Index, hand::Motion::MiddleFlexion)] = NAN;
   FingertipAccumulator acc;
@@ -286,7 +279,7 @@ TEST_CASE("fingertip metrics: misuse is refused with what was expected") {
 }
 
 TEST_CASE("fingertip metrics: the JSON form has every key, undefined figures null, and the table names every row") {
-  const hand::Angles open = gallery_pose("flat"), pinch = gallery_pose("pinch_index");
+  const hand::Angles open = sim::gallery_pose("flat").angles, pinch = sim::gallery_pose("pinch_index").angles;
   FingertipAccumulator acc;
   for (int i = 0; i < 10; ++i) acc.add(i >= 5 ? pinch : open, i >= 4 ? pinch : open, i / kRate);
   const FingertipReport r = acc.report();

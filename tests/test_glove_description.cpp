@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include "test_files.hpp"
+
 #include <array>
 #include <cmath>
 #include <fstream>
@@ -15,7 +17,7 @@ using namespace glovepose::grid;
 
 namespace {
 
-std::string temp_path(const std::string& name) { return std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name; }
+using glovepose::test::temp_path;
 
 bool same_slot(const Slot& a, const Slot& b) { return a.channel == b.channel && a.row == b.row && a.col == b.col; }
 

@@ -4,6 +4,8 @@
 // estimate and the replay of raw rows.
 #include <doctest/doctest.h>
 
+#include "test_files.hpp"
+
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/calibration/sequence.hpp>
 #include <glovepose/calibration/user_calibration.hpp>
@@ -24,7 +26,7 @@ using namespace glovepose;
 namespace {
 
 const std::string kSequenceFile = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/calibration_glauser2019.json";
-const std::string kShippedModel = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+using glovepose::test::kShippedModel;
 
 calibration::Sequence two_steps() {
   calibration::Step flat;

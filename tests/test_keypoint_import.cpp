@@ -6,6 +6,7 @@
 #include <glovepose/sim/corpus.hpp>
 #include <glovepose/sim/keypoint_tracker.hpp>
 #include <glovepose/train/keypoint_columns.hpp>
+#include <glovepose/train/metrics.hpp>
 #include <glovepose/train/recording_import.hpp>
 
 #include <cmath>
@@ -21,7 +22,7 @@ using namespace glovepose;
 
 namespace {
 
-constexpr double kDeg = 57.29577951308232;
+using train::kDegreesPerRadian;
 const std::filesystem::path kTmp = std::filesystem::path(GLOVEPOSE_TEST_TMP_DIR) / "keypoint_import";
 
 // A simulated session of the built-in glove and the keypoints a tracker saw of it.
@@ -122,7 +123,7 @@ struct Take {
         ++n;
       }
     }
-    return {sum / static_cast<double>(n) * kDeg, static_cast<double>(kept) / static_cast<double>(data.frames())};
+    return {sum / static_cast<double>(n) * kDegreesPerRadian, static_cast<double>(kept) / static_cast<double>(data.frames())};
   }
 };
 

@@ -8,6 +8,7 @@
 #include <glovepose/sim/corpus.hpp>
 #include <glovepose/sim/keypoint_tracker.hpp>
 #include <glovepose/train/keypoint_labels.hpp>
+#include <glovepose/train/metrics.hpp>
 
 #include <cmath>
 #include <string>
@@ -17,10 +18,10 @@ using namespace glovepose;
 
 namespace {
 
-constexpr double kDeg = 57.29577951308232;
+using train::kDegreesPerRadian;
 
 // One simulated session: the corpus job, its recording and its motion.
-struct Session {
+struct TrackedSession {
   sim::CorpusConfig config;
   sim::CorpusWorld world;
   sim::SessionRecording job;
@@ -38,7 +39,7 @@ struct Session {
     c.threads = 1;
     return c;
   }
-  Session(std::uint64_t seed, double minutes)
+  TrackedSession(std::uint64_t seed, double minutes)
       : config(config_for(seed, minutes)),
         world(config),
         job(sim::plan_corpus(config).front()),
@@ -74,7 +75,7 @@ LabelError error_against_truth(const train::TakeLabels& labels, const sim::Recor
         ++n;
       }
   }
-  return {n > 0 ? sum / static_cast<double>(n) * kDeg : NAN, static_cast<double>(trusted) / static_cast<double>(labels.trusted.size())};
+  return {n > 0 ? sum / static_cast<double>(n) * kDegreesPerRadian : NAN, static_cast<double>(trusted) / static_cast<double>(labels.trusted.size())};
 }
 
 }  // namespace
@@ -146,14 +147,14 @@ TEST_CASE("keypoint inverse kinematics recovers poses and placements from exact 
       CHECK((fit.root.translation() - root.translation()).norm() < 1.0);
     }
     MESSAGE(layout_name << ": worst residual " << worst_rms << " mm, mean angle error "
-                                    << error / (poses * hand::kDofCount) * kDeg << " deg");
+                                    << error / (poses * hand::kDofCount) * kDegreesPerRadian << " deg");
     CHECK(worst_rms < 0.5);
-    CHECK(error / (poses * hand::kDofCount) * kDeg < 1.0);
+    CHECK(error / (poses * hand::kDofCount) * kDegreesPerRadian < 1.0);
   }
 }
 
 TEST_CASE("the hand shape fitted to noisy keypoints is the simulated person's") {
-  const Session session(11, 0.5);
+  const TrackedSession session(11, 0.5);
   const hand::HandModel truth = session.subject().hand_model();
   const hand::Kinematics person(truth);
   for (hand::KeypointLayout layout : {hand::KeypointLayout::MediaPipe, hand::KeypointLayout::OpenXr}) {
@@ -188,7 +189,7 @@ TEST_CASE("the hand shape fitted to noisy keypoints is the simulated person's") 
 }
 
 TEST_CASE("a take's keypoints become labels within 3 degrees of the truth and its clock within a frame") {
-  const Session session(33, 2.0);
+  const TrackedSession session(33, 2.0);
   const sim::Recording& rec = session.job.recording;
   const hand::Kinematics person(session.subject().hand_model());
   const std::vector<double> glove_times = rec.timestamps;
@@ -225,7 +226,7 @@ TEST_CASE("a take's keypoints become labels within 3 degrees of the truth and it
 }
 
 TEST_CASE("keypoint labels: missing digits are not labelled, unseen frames not trusted, foreign takes refused") {
-  const Session session(34, 1.0);
+  const TrackedSession session(34, 1.0);
   const sim::Recording& rec = session.job.recording;
   const hand::Kinematics person(session.subject().hand_model());
   sim::KeypointTrackerConfig tracker;
@@ -262,7 +263,7 @@ TEST_CASE("keypoint labels: missing digits are not labelled, unseen frames not t
   CHECK(error.mean_deg < 3.5);
 
   // Keypoints of another session: no offset makes the motions agree.
-  const Session other(35, 1.0);
+  const TrackedSession other(35, 1.0);
   const train::KeypointTrack foreign = sim::track_keypoints(hand::Kinematics(other.subject().hand_model()), other.motion, 0.0, 60.0, tracker, 9);
   const hand::HandShapeFit foreign_shape = hand::fit_hand_shape(hand::KeypointLayout::MediaPipe, foreign.points, hand::Kinematics());
   const hand::KeypointIk foreign_ik(hand::KeypointModel(hand::KeypointLayout::MediaPipe, hand::Kinematics(foreign_shape.model)));

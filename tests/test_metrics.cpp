@@ -328,7 +328,7 @@ TEST_CASE("metrics: the table has the overall, finger, DoF and curve lines") {
 TEST_CASE("metrics: the 128-bit fixed-point sum carries past 64 bits, also when merged") {
   // Reaching 2^64 units (2^32 degrees) takes about 17 million frames of 10-degree errors; test the
   // carry on the sum itself instead.
-  detail::FixedSum a, b;
+  train::detail::FixedSum a, b;
   a.add(~std::uint64_t{0});
   a.add(std::uint64_t{2});  // 2^64 + 1
   CHECK(a.high == 1);
@@ -338,5 +338,5 @@ TEST_CASE("metrics: the 128-bit fixed-point sum carries past 64 bits, also when 
   CHECK(a.high == 2);
   CHECK(a.low == 0);
   CHECK(a.value() == 0x1p33);  // 2^65 units of 2^-32
-  CHECK(detail::to_fixed(1.5) == (std::uint64_t{3} << 31));
+  CHECK(train::detail::to_fixed(1.5) == (std::uint64_t{3} << 31));
 }

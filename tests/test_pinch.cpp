@@ -27,13 +27,6 @@ using namespace glovepose;
 
 namespace {
 
-const hand::Angles& gallery_pose(const std::string& name) {
-  static const std::vector<sim::KeyPose> gallery = sim::pose_gallery();
-  for (const sim::KeyPose& p : gallery)
-    if (p.name == name) return p.angles;
-  FAIL("no gallery pose " << name);
-  return gallery.front().angles;
-}
 
 // Thumb tip to the tip of `finger` (mm), from the skeleton directly, and the strength the file
 // comment of pinch.hpp defines: 1 up to 15 mm, 0 from 40 mm, the smoothstep between.
@@ -124,7 +117,7 @@ TEST_CASE("pinch: the gallery's poses, strengths and flags against distances fro
   }
   const auto flags = [&](const char* name) {
     hand::PinchTracker tracker;
-    return tracker.update(fk, gallery_pose(name)).pinching;
+    return tracker.update(fk, sim::gallery_pose(name).angles).pinching;
   };
   CHECK(flags("pinch_index") == hand::PinchFlags{true, false, false, false});
   CHECK(flags("ok") == hand::PinchFlags{true, false, false, false});
@@ -139,7 +132,7 @@ TEST_CASE("pinch: the gallery's poses, strengths and flags against distances fro
   // Open hands read no strength at all.
   for (const char* open : {"flat", "spread", "wave", "four_fingers"}) {
     hand::PinchTracker tracker;
-    const hand::PinchState s = tracker.update(fk, gallery_pose(open));
+    const hand::PinchState s = tracker.update(fk, sim::gallery_pose(open).angles);
     for (float v : s.strength) CHECK(v == 0.0f);
   }
 }
@@ -203,7 +196,7 @@ TEST_CASE("aim: the aim pose is the straight index's proximal joint, fixed in th
     const XrHandAim& before = tracker.aim();
     CHECK_FALSE(before.active);
     CHECK(before.status == 0);
-    const XrHandAim& aim = tracker.update(gallery_pose("pinch_index"), true, 2.5, 7);
+    const XrHandAim& aim = tracker.update(sim::gallery_pose("pinch_index").angles, true, 2.5, 7);
     CHECK(aim.active);
     CHECK(aim.side == side);
     CHECK(aim.sequence == 7);
@@ -223,7 +216,7 @@ TEST_CASE("aim: the aim pose is the straight index's proximal joint, fixed in th
     CHECK((rotation * Eigen::Vector3d(0, 0, -1)).dot(along.normalized()) > 0.999);
     CHECK((rotation * Eigen::Vector3d(0, 1, 0)).y() > 0.9);  // the wrist frame's +Y is the back of the hand
     // The pose moves nothing of it; an untrusted pose is not valid; the flags keep their hysteresis.
-    const XrHandAim& flat = tracker.update(gallery_pose("flat"), false, 2.6, 8);
+    const XrHandAim& flat = tracker.update(sim::gallery_pose("flat").angles, false, 2.6, 8);
     CHECK(flat.status == 0);
     CHECK(flat.aim_pose.position.x == expected.position.x);
     CHECK(flat.aim_pose.orientation.y == expected.orientation.y);
@@ -234,8 +227,8 @@ TEST_CASE("aim: per-frame updates allocate nothing") {
   const XrHandLocator locator(hand::HandModel::reference(), hand::Handedness::Right);
   XrAimTracker tracker(locator.mapper());
   hand::PinchTracker pinch;
-  const hand::Angles& a = gallery_pose("pinch_index");
-  const hand::Angles& b = gallery_pose("flat");
+  const hand::Angles& a = sim::gallery_pose("pinch_index").angles;
+  const hand::Angles& b = sim::gallery_pose("flat").angles;
   LatestAim latest;
   XrHandAim read;
   std::uint64_t status = 0;

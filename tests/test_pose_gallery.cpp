@@ -41,15 +41,11 @@ TEST_CASE("pose gallery: in pinches and OK the thumb tip meets the fingertip (so
                                                           {"pinch_ring", hand::Finger::Ring},
                                                           {"pinch_pinky", hand::Finger::Pinky},
                                                           {"ok", hand::Finger::Index}};
-  const auto gallery = pose_gallery();
-  for (const auto& entry : pinches) {  // no structured binding: C++17 lambdas cannot capture one (clang 14 rejects it)
-    const char* const name = entry.first;
-    const hand::Finger finger = entry.second;
-    const auto it = std::find_if(gallery.begin(), gallery.end(), [&](const KeyPose& p) { return p.name == name; });
-    REQUIRE(it != gallery.end());
-    fk.pose(it->angles, s);
+  for (const auto& [name, finger] : pinches) {
+    fk.pose(gallery_pose(name).angles, s);
     const double gap = (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, finger)).norm();
     MESSAGE(std::string(name) << ": thumb tip to fingertip " << gap << " mm");
     CHECK(gap < 16.0);  // contact is the two tip radii apart (11-12 mm); a few mm of slack for the joint limits
   }
+  CHECK_THROWS_WITH_AS(gallery_pose("pinch_thumb"), doctest::Contains("pose gallery: no pose 'pinch_thumb', expected one of "), Error);
 }

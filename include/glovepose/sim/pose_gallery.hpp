@@ -177,4 +177,15 @@ inline std::vector<KeyPose> pose_gallery() {
   return g;
 }
 
+/// @brief The gallery's pose named `name` (e.g. "pinch_index"). Throws glovepose::Error naming the
+/// gallery's poses when there is none of that name.
+inline const KeyPose& gallery_pose(const std::string& name) {
+  static const std::vector<KeyPose> gallery = pose_gallery();
+  for (const KeyPose& p : gallery)
+    if (p.name == name) return p;
+  std::string names;
+  for (const KeyPose& p : gallery) names += (names.empty() ? "" : ", ") + p.name;
+  throw Error("pose gallery: no pose '" + name + "', expected one of " + names);
+}
+
 }  // namespace glovepose::sim

@@ -40,16 +40,13 @@
 
 namespace glovepose::train {
 
-/// @brief Thumb-tip-to-fingertip distance (mm, between Kinematics::fingertip points) below which a
-/// pinch starts: hand::kPinchThresholdMm (hand/pinch.hpp says why 15).
-inline constexpr double kPinchThresholdMm = hand::kPinchThresholdMm;
-/// @brief Distance (mm) beyond which a pinch that is on ends: hand::kPinchReleaseMm.
-inline constexpr double kPinchReleaseMm = hand::kPinchReleaseMm;
+// The pinch rule is hand/pinch.hpp's (it says why 15 and 18 mm): the same entities, not copies.
+using hand::kPinchPairCount;
+using hand::kPinchReleaseMm;
+using hand::kPinchThresholdMm;
 /// @brief How far (s) before or after a true pinch onset a predicted onset may be to count as its
 /// detection; a true onset without one is missed.
 inline constexpr double kPinchOnsetWindowS = 0.25;
-/// @brief Number of pinch pairs: the thumb with index, middle, ring and pinky.
-inline constexpr std::size_t kPinchPairCount = hand::kPinchPairCount;
 
 /// @brief The rules of the measures. Defaults: kPinchThresholdMm, kPinchReleaseMm, kPinchOnsetWindowS.
 struct FingertipConfig {
