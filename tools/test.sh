@@ -19,12 +19,12 @@ if [ "${CI:-}" = "true" ]; then
   werror=ON
 fi
 echo "== GCC, native (build/)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_BASELINE=OFF -DGLOVEPOSE_HEADER_CHECK=OFF
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_BASELINE=OFF -DGLOVEPOSE_HEADER_CHECK=OFF -DGLOVEPOSE_UNITY_BUILD=ON
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 echo "== clang, baseline x86-64, the tests a compiler and an instruction set can change (build-clang/)"
 cmake -S . -B build-clang -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
-  -DGLOVEPOSE_NATIVE=OFF -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_SCOPE=isa \
+  -DGLOVEPOSE_NATIVE=OFF -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_SCOPE=isa -DGLOVEPOSE_UNITY_BUILD=ON \
   -DGLOVEPOSE_BUILD_TOOLS=OFF -DGLOVEPOSE_BUILD_EXAMPLES=OFF -DGLOVEPOSE_BUILD_BENCHMARKS=OFF
 cmake --build build-clang -j"$(nproc)"
 ctest --test-dir build-clang --output-on-failure -j"$(nproc)"
