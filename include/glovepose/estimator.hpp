@@ -159,7 +159,7 @@ class GlovePoseEstimator {
 
   /// @brief The latest pose (Pose::valid is false before the first).
   const Pose& pose() const noexcept { return pose_; }
-  /// @brief The latest skeleton (reference chain, mm), when EstimatorConfig::joint_transforms is on.
+  /// @brief The latest skeleton (reference chain, mm; posed with every pose: the pinch state reads its fingertips).
   const hand::Skeleton& skeleton() const noexcept { return skeleton_; }
   /// @brief The latest joint list (metres, quaternions; hand/joint_list.hpp), when joint_transforms is on.
   const hand::JointList& joints() const noexcept { return joints_; }
@@ -437,10 +437,8 @@ class GlovePoseEstimator {
     if (guided_) pose_.raw_angles = calibration::with_offsets(pose_.raw_angles, offsets_, model_->joint_limits());
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
-    if (config_.joint_transforms) {
-      kinematics_.pose(pose_.angles, skeleton_);
-      hand::to_joint_list(kinematics_, skeleton_, joints_);
-    }
+    kinematics_.pose(pose_.angles, skeleton_);  // the pinch state's fingertips, and the joints when asked
+    if (config_.joint_transforms) hand::to_joint_list(kinematics_, skeleton_, joints_);
     (void)trend_.add(timestamp, pose_.angles);  // refuses non-finite angles, keeping the trend as it was
     pose_.timestamp = timestamp;
     pose_.oldest_age = oldest_age;
@@ -449,7 +447,8 @@ class GlovePoseEstimator {
     pose_.health = health;
     pose_.valid = true;
     ++pose_.sequence;
-    (void)aim_tracker_.update(pose_.angles, pose_.trusted(), timestamp, pose_.sequence);
+    (void)aim_tracker_.update(hand::pinch_distances(hand::fingertip_positions(kinematics_, skeleton_)), pose_.trusted(), timestamp,
+                              pose_.sequence);
     rejected_ = 0;
     pose_.compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return Status::Solved;

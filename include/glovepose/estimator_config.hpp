@@ -64,7 +64,7 @@ struct EstimatorConfig {
   /// ReadoutConfig::clock_restart_readings.
   int clock_restart_frames = 10;
   std::optional<filter::OneEuroConfig> smoothing;       ///< 1-euro smoothing of the angles; none: the network's output.
-  bool joint_transforms = false;                        ///< Compute the skeleton and the joint list with every pose.
+  bool joint_transforms = false;                        ///< Compute the joint list with every pose (the skeleton is always posed).
   hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
   /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
   /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,

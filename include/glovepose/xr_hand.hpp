@@ -194,7 +194,14 @@ class XrAimTracker {
   /// @brief The state after a new pose: its angles (radians), whether it is trusted, its timestamp
   /// and sequence. Non-finite angles make the pairs they touch read no pinch (strength 0).
   GLOVEPOSE_REALTIME const XrHandAim& update(const hand::Angles& angles, bool trusted, double timestamp, std::uint64_t sequence) noexcept {
-    const hand::PinchState pinch = pinch_.update(kinematics_, angles);
+    return update(hand::pinch_distances(kinematics_, angles), trusted, timestamp, sequence);
+  }
+
+  /// @brief The same from the pose's thumb-tip-to-fingertip distances (mm, hand::pinch_distances),
+  /// for a caller that has posed the skeleton already (the estimator: forward kinematics once).
+  GLOVEPOSE_REALTIME const XrHandAim& update(const hand::PinchDistances& distance_mm, bool trusted, double timestamp,
+                                             std::uint64_t sequence) noexcept {
+    const hand::PinchState pinch = pinch_.update(distance_mm);
     std::uint64_t status = trusted ? std::uint64_t{kXrAimValid} : 0;
     for (std::size_t k = 0; k < hand::kPinchPairCount; ++k)
       if (pinch.pinching[k]) status |= xr_aim_pinching_bit(k);
