@@ -8,6 +8,7 @@
 /// maps, and has usable settings: joint limits that JointLimits accepts (finite, min < max), a
 /// median window of at least one frame, a flat rule in [0, 1).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -36,6 +37,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t d = 0; d < glovepose::hand::kDofCount; ++d) GLOVEPOSE_FUZZ_REQUIRE(limits.min()[d] < limits.max()[d]);
   GLOVEPOSE_FUZZ_REQUIRE(glove->calibration().median_frames(glove->rate_hz().value_or(60.0)) >= 1);
   GLOVEPOSE_FUZZ_REQUIRE(glove->calibration().flat_relative_range >= 0.0 && glove->calibration().flat_relative_range < 1.0);
+  GLOVEPOSE_FUZZ_REQUIRE(glove->calibration().min_range_to_noise >= 0.0 && std::isfinite(glove->calibration().min_range_to_noise));
 
   std::vector<double> cells(static_cast<std::size_t>(glove->cell_count()));
   for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = -1.0 + 2.0 * static_cast<double>(c) / static_cast<double>(cells.size());

@@ -253,6 +253,7 @@ TEST_CASE("glove description: joint limits, rate and calibration: defaults, roun
   const GloveDescription plain = GloveDescription::from_json(glove_text(kTwoCells));
   CHECK(!plain.rate_hz());
   CHECK(plain.calibration().flat_relative_range == sensor::CalibrationConfig{}.min_relative_range);
+  CHECK(plain.calibration().min_range_to_noise == sensor::CalibrationConfig{}.min_range_to_noise);
   CHECK(plain.calibration().median_frames(60.0) == 20);  // the paper's 20 frames at 60 Hz
   CHECK(plain.calibration().median_frames(20.0) == 7);   // a third of a second at 20 Hz
   CHECK(plain.calibration().median_frames(1.0) == 1);    // at least one frame
@@ -274,12 +275,15 @@ TEST_CASE("glove description: joint limits, rate and calibration: defaults, roun
   add_limits("thumb_base_abduction", ", \"max_degrees\": 40, \"min_degrees\": -12");
   const std::string text = "{\"format\": \"glovepose-glove\", \"version\": 1, \"id\": \"own\", \"cells\": " + kTwoCells +
                            ", \"dofs\": " + dofs +
-                           ", \"rate_hz\": 20, \"calibration\": {\"median_seconds\": 0.5, \"flat_relative_range\": 0.001}}";
+                           ", \"rate_hz\": 20, \"calibration\": {\"median_seconds\": 0.5, \"flat_relative_range\": 0.001, "
+                           "\"min_range_to_noise\": 8.5}}";
   const GloveDescription own = GloveDescription::from_json(text);
   REQUIRE(own.rate_hz());
   CHECK(*own.rate_hz() == 20.0);
   CHECK(own.calibration().median_seconds == 0.5);
   CHECK(own.calibration().flat_relative_range == 0.001);
+  CHECK(own.calibration().min_range_to_noise == 8.5);
+  CHECK(own.calibration().config().min_range_to_noise == 8.5);
   CHECK(own.calibration().median_frames(*own.rate_hz()) == 10);
   const hand::JointLimits limits = own.joint_limits();
   const double pi = 3.14159265358979323846;
@@ -309,6 +313,16 @@ TEST_CASE("glove description: joint limits, rate and calibration: defaults, roun
   other = own.settings();
   other.calibration.median_seconds = 0.4;
   CHECK(GloveDescription("own", own.cell_names(), own.map(), other) != own);
+  other = own.settings();
+  other.calibration.min_range_to_noise = 0.0;  // the noise rule off: kept as 0, not as the default
+  const GloveDescription off("own", own.cell_names(), own.map(), other);
+  CHECK(off != own);
+  CHECK(GloveDescription::from_json(off.to_json()).calibration().min_range_to_noise == 0.0);
+  // A description at the default noise rule writes no key for it (its text as before the key).
+  other.calibration.min_range_to_noise = sensor::CalibrationConfig{}.min_range_to_noise;
+  const GloveDescription default_noise("own", own.cell_names(), own.map(), other);
+  CHECK(default_noise.to_json().find("min_range_to_noise") == std::string::npos);
+  CHECK(GloveDescription::from_json(default_noise.to_json()) == default_noise);
   other = own.settings();
   other.limits_degrees[0] = std::nullopt;
   CHECK(GloveDescription("own", own.cell_names(), own.map(), other) != own);
@@ -345,6 +359,10 @@ TEST_CASE("glove description: malformed joint limits, rate and calibration are r
           "'calibration.flat_relative_range' is 1, expected a fraction >= 0 and < 1");
   refused(dofs, ", \"calibration\": {\"flat_relative_range\": -0.1}", "'calibration.flat_relative_range' is -0.1");
   refused(dofs, ", \"calibration\": {\"median_window\": 20}", "'calibration' has the unknown key 'median_window'");
+  refused(dofs, ", \"calibration\": {\"min_range_to_noise\": -1}",
+          "'calibration.min_range_to_noise' is -1, expected a multiple of the noise SD >= 0 and at most 1000");
+  refused(dofs, ", \"calibration\": {\"min_range_to_noise\": 5000}", "'calibration.min_range_to_noise' is 5000");
+  refused(dofs, ", \"calibration\": {\"min_range_to_noise\": \"12\"}", "'min_range_to_noise' is \"12\", expected a number");
   // The constructor checks the same.
   GloveSettings bad;
   bad.limits_degrees[3] = DofLimitsDegrees{10.0, -10.0};
@@ -354,4 +372,8 @@ TEST_CASE("glove description: malformed joint limits, rate and calibration are r
   bad = GloveSettings{};
   bad.calibration.median_seconds = std::nan("");
   CHECK_THROWS_WITH_AS(GloveDescription("x", two.cell_names(), two.map(), bad), doctest::Contains("median_seconds"), Error);
+  bad = GloveSettings{};
+  bad.calibration.min_range_to_noise = std::nan("");
+  CHECK_THROWS_WITH_AS(GloveDescription("x", two.cell_names(), two.map(), bad), doctest::Contains("'calibration.min_range_to_noise' is nan"),
+                       Error);
 }

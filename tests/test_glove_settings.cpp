@@ -200,3 +200,50 @@ TEST_CASE("glove settings: the estimator takes the glove's median window and fla
   CHECK(estimator.config().calibration_median_window == 20);
   CHECK(estimator.config().calibration.min_relative_range == 0.01);
 }
+
+TEST_CASE("glove settings: the description's noise rule reaches training and the estimator") {
+  // Cell "b" reads noise alone around 100 (a dead channel): its range is several percent of its
+  // value, so the flat rule keeps it, and the noise rule (range below 12 x its noise SD) names it.
+  io::Dataset data = twenty_hertz_session();
+  std::mt19937 rng(9);
+  std::normal_distribution<float> noise(0.0f, 2.0f);
+  for (std::size_t i = 0; i < data.frames(); ++i) data.cells[i * 2 + 1] = 100.0f + noise(rng);
+  grid::GloveSettings off = own_settings();
+  off.calibration.min_range_to_noise = 0.0;  // the rule off
+  const grid::GloveDescription dead = two_cell_glove(own_settings()), ruled_off = two_cell_glove(off);
+  CHECK(dead.calibration().min_range_to_noise == sensor::CalibrationConfig{}.min_range_to_noise);
+  CHECK(ruled_off.calibration().config().min_range_to_noise == 0.0);
+
+  const auto by_default = train::onthefly_ranges(data, dead.calibration());
+  const auto without = train::onthefly_ranges(data, ruled_off.calibration());
+  REQUIRE(by_default.size() == 1);
+  REQUIRE(without.size() == 1);
+  CHECK(by_default.begin()->second.flatness(0) == sensor::Flatness::Moving);
+  CHECK(by_default.begin()->second.flatness(1) == sensor::Flatness::NoiseOnly);
+  CHECK(without.begin()->second.flat_sensors().empty());
+
+  // The estimator of a model for each glove takes the glove's rule; a given one is kept.
+  const auto finished = [&](const grid::GloveDescription& glove, const EstimatorConfig& config) {
+    const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/noise_rule_" + glove.id() + ".safetensors";
+    const model::ModelInfo info = train::make_model_info("fcn", 16, glove, model::CalibrationMode::OnTheFly, nullptr);
+    train::TrainableFcn fcn(2, 16, 1);
+    fcn.initialize(3);
+    train::save_model(path, info, fcn.parameters().to_tensors());
+    GlovePoseEstimator estimator(PoseModel::load(path), config);
+    estimator.start_calibration();
+    const int count = static_cast<int>(data.cell_count);
+    std::vector<double> cells(data.cell_count);
+    for (std::size_t i = 0; i < 40; ++i) {
+      for (std::size_t c = 0; c < data.cell_count; ++c) cells[c] = data.cells[i * data.cell_count + c];
+      (void)estimator.push_cells(cells.data(), count, data.timestamps[i]);
+    }
+    return std::make_pair(estimator.config().calibration.min_range_to_noise, estimator.finish_calibration().flatness(1));
+  };
+  CHECK(finished(dead, EstimatorConfig{}) == std::make_pair(12.0, sensor::Flatness::NoiseOnly));
+  grid::GloveSettings renamed = off;  // another id: another model file
+  const grid::GloveDescription off_glove("two-cell-off", {"a", "b"}, ruled_off.map(), renamed);
+  CHECK(finished(off_glove, EstimatorConfig{}) == std::make_pair(0.0, sensor::Flatness::Moving));
+  EstimatorConfig given;
+  given.calibration.min_range_to_noise = 12.0;
+  CHECK(finished(off_glove, given) == std::make_pair(12.0, sensor::Flatness::NoiseOnly));
+}

@@ -309,16 +309,17 @@ class GlovePoseEstimator {
   /// @brief The shared model.
   const Model& model() const noexcept { return *model_; }
   /// @brief The settings in use, the glove's filled in where the given ones said "the glove's"
-  /// (calibration_median_window 0, a negative calibration.min_relative_range).
+  /// (calibration_median_window 0, a negative calibration.min_relative_range or min_range_to_noise).
   const EstimatorConfig& config() const noexcept { return config_; }
 
  private:
-  // The settings that say "the glove's" made the glove's: its flat rule, and a median window
+  // The settings that say "the glove's" made the glove's: its flat and noise rules, and a median window
   // spanning its median_seconds at the period frames are taken. Frames are taken no faster than the
   // glove's rate (its frame period when that is longer than the sample period), as training saw them.
   static EstimatorConfig with_glove_calibration(EstimatorConfig config, const grid::GloveDescription& glove) {
     const grid::GloveCalibration& own = glove.calibration();
     if (config.calibration.min_relative_range < 0.0) config.calibration.min_relative_range = own.flat_relative_range;
+    if (config.calibration.min_range_to_noise < 0.0) config.calibration.min_range_to_noise = own.min_range_to_noise;
     if (glove.rate_hz() && config.calibration_sample_period > 0.0)
       config.calibration_sample_period = std::max(config.calibration_sample_period, 1.0 / *glove.rate_hz());
     if (config.calibration_median_window == 0) {

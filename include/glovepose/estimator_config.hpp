@@ -40,14 +40,17 @@ inline sensor::ReadoutConfig realtime_readout() noexcept {
 
 /// @brief EstimatorConfig::calibration.min_relative_range that means "the glove's flat rule".
 inline constexpr double kGlovesFlatRule = -1.0;
+/// @brief EstimatorConfig::calibration.min_range_to_noise that means "the glove's noise rule".
+inline constexpr double kGlovesNoiseRule = -1.0;
 
 /// @brief Settings of one estimator (one glove stream).
 struct EstimatorConfig {
   sensor::ReadoutConfig readout = realtime_readout();  ///< Mean window and solve cadence of the row stream (default 1, 16; paper: 5, 16).
-  /// Flat-sensor threshold and the clamp of normalised values. A negative min_relative_range (the
-  /// default) takes the glove's: its description's calibration.flat_relative_range (0.01 unless the
-  /// description says otherwise).
-  sensor::CalibrationConfig calibration{kGlovesFlatRule, sensor::CalibrationConfig{}.clamp_limit};
+  /// Flat-sensor and noise-only thresholds and the clamp of normalised values. A negative
+  /// min_relative_range (the default) takes the glove's: its description's
+  /// calibration.flat_relative_range (0.01 unless the description says otherwise); a negative
+  /// min_range_to_noise (the default) its calibration.min_range_to_noise (12 unless it says otherwise).
+  sensor::CalibrationConfig calibration{kGlovesFlatRule, sensor::CalibrationConfig{}.clamp_limit, kGlovesNoiseRule};
   /// Frames of the on-the-fly calibration's median. 0 (the default): the glove's
   /// calibration.median_seconds over the time between two frames taken (20 frames for the built-in
   /// glove: a third of a second, as in the paper and in the training data's calibration).

@@ -22,7 +22,7 @@
 ///     ...
 ///   ],
 ///   "rate_hz": 20,
-///   "calibration": {"median_seconds": 0.333, "flat_relative_range": 0.0005}
+///   "calibration": {"median_seconds": 0.333, "flat_relative_range": 0.0005, "min_range_to_noise": 12}
 /// }
 /// ```
 ///
@@ -41,7 +41,9 @@
 ///   on-the-fly calibration's running median spans (positive; default 1/3 s, the paper's 20 frames
 ///   at 60 Hz); `calibration.flat_relative_range`: a sensor whose calibrated range is within this
 ///   fraction of its absolute value is flat and zeroed (>= 0; default 0.01, tuned for capacitance: a
-///   resistive sensor with a large DC offset needs a smaller one).
+///   resistive sensor with a large DC offset needs a smaller one); `calibration.min_range_to_noise`: a
+///   sensor whose calibrated range is below this many times its noise SD is noise only (a dead
+///   channel) and zeroed (finite, >= 0; default 12; 0: off).
 /// - Every other listed key is required and no other key is accepted (a misspelt key is an error, not a
 ///   silently ignored field); slot numbers are non-negative integers written without fraction or
 ///   exponent.
@@ -86,11 +88,14 @@ struct GloveCalibration {
   double median_seconds = 1.0 / 3.0;
   /// A sensor whose calibrated range is within this fraction of max(|min|, |max|) is flat (zeroed).
   double flat_relative_range = 0.01;  // sensor::CalibrationConfig's default (test_glove_description checks)
+  /// A sensor whose range is below this many times its noise SD is noise only (zeroed); 0: off.
+  double min_range_to_noise = 12.0;  // sensor::CalibrationConfig's default (test_glove_description checks)
 
-  /// @brief The calibration settings with this flat rule and the default clamp.
+  /// @brief The calibration settings with this flat rule, this noise rule and the default clamp.
   sensor::CalibrationConfig config() const noexcept {
     sensor::CalibrationConfig c;
     c.min_relative_range = flat_relative_range;
+    c.min_range_to_noise = min_range_to_noise;
     return c;
   }
   /// @brief The median window in frames at `frames_per_second` (at least 1).
@@ -100,7 +105,8 @@ struct GloveCalibration {
   }
   /// @brief Same settings.
   friend bool operator==(const GloveCalibration& a, const GloveCalibration& b) noexcept {
-    return a.median_seconds == b.median_seconds && a.flat_relative_range == b.flat_relative_range;
+    return a.median_seconds == b.median_seconds && a.flat_relative_range == b.flat_relative_range &&
+           a.min_range_to_noise == b.min_range_to_noise;
   }
 };
 
@@ -245,7 +251,12 @@ class GloveDescription {
     if (settings_.rate_hz) out += ",\n  \"rate_hz\": " + io::number_text(*settings_.rate_hz);
     if (!(settings_.calibration == GloveCalibration{}))
       out += ",\n  \"calibration\": {\"median_seconds\": " + io::number_text(settings_.calibration.median_seconds) +
-             ", \"flat_relative_range\": " + io::number_text(settings_.calibration.flat_relative_range) + "}";
+             ", \"flat_relative_range\": " + io::number_text(settings_.calibration.flat_relative_range) +
+             // Only when set: descriptions written before the key existed keep their text.
+             (settings_.calibration.min_range_to_noise == GloveCalibration{}.min_range_to_noise
+                  ? std::string()
+                  : ", \"min_range_to_noise\": " + io::number_text(settings_.calibration.min_range_to_noise)) +
+             "}";
     return out + "\n}\n";
   }
 
@@ -277,11 +288,13 @@ class GloveDescription {
       const std::string where = "'calibration'";
       if (!calibration->is_object())
         throw fail(where + " is " + io::json::describe(*calibration) +
-                   ", expected an object {\"median_seconds\", \"flat_relative_range\"}");
-      f.only(*calibration, {"median_seconds", "flat_relative_range"}, where);
+                   ", expected an object {\"median_seconds\", \"flat_relative_range\", \"min_range_to_noise\"}");
+      f.only(*calibration, {"median_seconds", "flat_relative_range", "min_range_to_noise"}, where);
       if (calibration->contains("median_seconds")) settings.calibration.median_seconds = f.number(*calibration, "median_seconds", where);
       if (calibration->contains("flat_relative_range"))
         settings.calibration.flat_relative_range = f.number(*calibration, "flat_relative_range", where);
+      if (calibration->contains("min_range_to_noise"))
+        settings.calibration.min_range_to_noise = f.number(*calibration, "min_range_to_noise", where);
     }
     try {
       check_settings(settings, "");
@@ -421,6 +434,7 @@ class GloveDescription {
  private:
   static constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
   static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
+  static constexpr double kMaxRangeToNoise = 1000.0;  // moving cells of simulated corpora reach 32-119: more would zero them
 
   static constexpr const char* kFailPrefix = "glove description: ";
   static Error fail(const std::string& what) { return Error(kFailPrefix + what); }
@@ -436,6 +450,10 @@ class GloveDescription {
     if (!(s.calibration.flat_relative_range >= 0.0 && s.calibration.flat_relative_range < 1.0))
       throw Error(prefix + "'calibration.flat_relative_range' is " + io::number_text(s.calibration.flat_relative_range) +
                   ", expected a fraction >= 0 and < 1 (0.01: a range within 1% of the value is flat)");
+    if (!(s.calibration.min_range_to_noise >= 0.0 && s.calibration.min_range_to_noise <= kMaxRangeToNoise))
+      throw Error(prefix + "'calibration.min_range_to_noise' is " + io::number_text(s.calibration.min_range_to_noise) +
+                  ", expected a multiple of the noise SD >= 0 and at most " + io::number_text(kMaxRangeToNoise) +
+                  " (12: a range below 12 x its noise SD is noise only; 0: off)");
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
         throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + io::number_text(own->min) + ", " +
