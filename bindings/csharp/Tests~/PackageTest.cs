@@ -2,6 +2,7 @@
 // package's Runtime/*.cs and run against the native library (CTest `capi_csharp`).
 //
 // Usage: mono PackageTest.exe MODEL REFERENCE MALFORMED_FILE HEADER PACKAGE_JSON
+// Compiled with Runtime/*.cs, EngineStandIns.cs and the ```csharp blocks of capi/README.md.
 // REFERENCE is what capi/tests/csharp_reference.c (C, the C compiler's view) wrote: struct sizes and
 // field offsets, the header's constants, the message of loading MALFORMED_FILE, and a session of
 // rows pushed through the C ABI with every pose, joint list, OpenXR hand and aim state as the bits
@@ -435,6 +436,87 @@ static class PackageTest
               "angular velocity in session space = the composed orientation's rate: " + angular + " vs " + numericAngular);
     }
 
+    static Vector3f V(UnityEngine.Vector3 v) { return new Vector3f(v.x, v.y, v.z); }
+    static Vector3f V(Godot.Vector3 v) { return new Vector3f(v.X, v.Y, v.Z); }
+
+    static unsafe void ClearVelocityFlags(ref XrHand hand, int joint)
+    {
+        fixed (byte* p = hand.Velocities) ((XrJointVelocity*)p)[joint].VelocityFlags = 0;
+    }
+
+    // The engine code of capi/README.md (its ```csharp blocks, compiled into this test with the
+    // stand-ins of Tests~/EngineStandIns.cs): the Glove class streams the reference rows, then the
+    // Unity and Godot code place the hand at a wrist rotated and moved in session space.
+    static void TestReadmeEngineCode(string[] reference, string modelPath)
+    {
+        var glove = new Glove(modelPath, GlovePose.Hand.Right);
+        var hand = XrHand.Create();
+        var godotIdle = new GloveHandTracker(GlovePose.Hand.Left);
+        godotIdle.Update(glove, 0.0, new Godot.Quaternion(0, 0, 0, 1), new Godot.Vector3(0, 0, 0), new Godot.Vector3(0, 0, 0), new Godot.Vector3(0, 0, 0));
+        Check(!glove.ReadXrHand(0.0, ref hand) && !godotIdle.Tracker.HasTrackingData && !godotIdle.Tracker.Poses.ContainsKey("default"),
+              "README Godot: no tracking data before the first pose");
+        double last = 0.0;
+        int solved = 0;
+        foreach (string line in reference)
+        {
+            string[] w = line.Split(' ');
+            if (w[0] == "start") glove.Estimator.StartCalibration();
+            else if (w[0] == "finish") glove.Estimator.FinishCalibration();
+            else if (w[0] == "push" && glove.OnReading(int.Parse(w[1]), D(w[2]), D(w[3])) == Status.Solved) { last = D(w[3]); ++solved; }
+        }
+        double time = last + 0.01;
+        Check(solved > 0 && glove.ReadXrHand(time, ref hand), "README Glove: " + solved + " poses streamed, the hand read back");
+
+        // The wrist in session space, OpenXR's frame; the finger's direction there.
+        var tracker = new Posef(AxisAngle(-0.3, 1, 0.2, 2.5), new Vector3f(-0.4f, 1.2f, 0.7f));
+        Vector3f forward = HandSpace.Rotate(tracker.Orientation, new Vector3f(0, 0, -1));
+        float wristToTip = Distance(hand.Location(10).Position, hand.Location(1).Position);
+
+        // Unity: the wrist given in Unity's frame; the joints come back in it.
+        Posef uw = HandSpace.MirrorZ(tracker);
+        var unityWrist = new UnityEngine.Pose(new UnityEngine.Vector3(uw.Position.X, uw.Position.Y, uw.Position.Z),
+                                              new UnityEngine.Quaternion(uw.Orientation.X, uw.Orientation.Y, uw.Orientation.Z, uw.Orientation.W));
+        var joints = new Unity.Collections.NativeArray<UnityEngine.XR.Hands.XRHandJoint>(26);
+        GloveXRHandJoints.Fill(ref hand, unityWrist, new UnityEngine.Vector3(0, 0, 0), new UnityEngine.Vector3(0, 0, 0), joints);
+        Func<UnityEngine.XR.Hands.XRHandJointID, Vector3f> at = id =>
+            HandSpace.MirrorZ(V(joints[UnityEngine.XR.Hands.XRHandJointIDUtility.ToIndex(id)].pose.position));  // back to OpenXR's frame
+        Vector3f uWrist = at(UnityEngine.XR.Hands.XRHandJointID.Wrist), uProximal = at(UnityEngine.XR.Hands.XRHandJointID.IndexProximal),
+                 uTip = at(UnityEngine.XR.Hands.XRHandJointID.IndexTip);
+        Check(Distance(uWrist, tracker.Position) < 1e-5f, "README Unity: the wrist joint lands on the tracker's wrist");
+        float tipAlong = Dot(Minus(uTip, uWrist), forward), proximalAlong = Dot(Minus(uProximal, uWrist), forward);
+        Check(tipAlong > proximalAlong && proximalAlong > 0.05f && Math.Abs(Distance(uTip, uWrist) - wristToTip) < 1e-5f,
+              "README Unity: the index tip lands beyond the proximal joint along the finger, " + tipAlong.ToString("F4") + " > " + proximalAlong.ToString("F4") + " m, at its distance from the wrist");
+        var all = UnityEngine.XR.Hands.XRHandJointTrackingState.Pose | UnityEngine.XR.Hands.XRHandJointTrackingState.Radius |
+                  UnityEngine.XR.Hands.XRHandJointTrackingState.LinearVelocity | UnityEngine.XR.Hands.XRHandJointTrackingState.AngularVelocity;
+        int tipIndex = UnityEngine.XR.Hands.XRHandJointIDUtility.ToIndex(UnityEngine.XR.Hands.XRHandJointID.IndexTip);
+        Check((joints[tipIndex].trackingState & all) == all && joints[tipIndex].handedness == UnityEngine.XR.Hands.Handedness.Right,
+              "README Unity: pose, radius and velocities flagged for a located joint (" + joints[tipIndex].trackingState + ")");
+        ClearVelocityFlags(ref hand, 10);
+        GloveXRHandJoints.Fill(ref hand, unityWrist, new UnityEngine.Vector3(0, 0, 0), new UnityEngine.Vector3(0, 0, 0), joints);
+        Check((joints[tipIndex].trackingState & (UnityEngine.XR.Hands.XRHandJointTrackingState.LinearVelocity | UnityEngine.XR.Hands.XRHandJointTrackingState.AngularVelocity)) == 0 &&
+              (joints[tipIndex].trackingState & UnityEngine.XR.Hands.XRHandJointTrackingState.Pose) != 0,
+              "README Unity: velocities not flagged when the library does not flag them");
+
+        // Godot: the tracker XRHandModifier3D looks up, the joints in the origin's space (right-handed).
+        var godot = new GloveHandTracker(GlovePose.Hand.Right);
+        Check(Godot.XRServer.Trackers.Contains(godot.Tracker) && godot.Tracker.Name.ToString() == "/user/hand_tracker/right" &&
+              godot.Tracker.Hand == Godot.XRPositionalTracker.TrackerHand.Right && godotIdle.Tracker.Name.ToString() == "/user/hand_tracker/left",
+              "README Godot: trackers registered as /user/hand_tracker/right and /left");
+        godot.Update(glove, time, new Godot.Quaternion(tracker.Orientation.X, tracker.Orientation.Y, tracker.Orientation.Z, tracker.Orientation.W),
+                     new Godot.Vector3(tracker.Position.X, tracker.Position.Y, tracker.Position.Z), new Godot.Vector3(0, 0, 0), new Godot.Vector3(0, 0, 0));
+        Vector3f gWrist = V(godot.Tracker.Transforms[1].Origin), gProximal = V(godot.Tracker.Transforms[7].Origin), gTip = V(godot.Tracker.Transforms[10].Origin);
+        tipAlong = Dot(Minus(gTip, gWrist), forward);
+        proximalAlong = Dot(Minus(gProximal, gWrist), forward);
+        Check(godot.Tracker.HasTrackingData && Distance(gWrist, tracker.Position) < 1e-5f && tipAlong > proximalAlong && proximalAlong > 0.05f &&
+              Math.Abs(Distance(gTip, gWrist) - wristToTip) < 1e-5f,
+              "README Godot: the wrist on the tracker's wrist, the index tip beyond the proximal joint (" + tipAlong.ToString("F4") + " > " + proximalAlong.ToString("F4") + ")");
+        var located = Godot.XRHandTracker.HandJointFlags.OrientationValid | Godot.XRHandTracker.HandJointFlags.PositionValid |
+                      Godot.XRHandTracker.HandJointFlags.LinearVelocityValid | Godot.XRHandTracker.HandJointFlags.AngularVelocityValid;
+        Check((godot.Tracker.Flags[10] & located) == located && godot.Tracker.Radii[10] > 0f && godot.Tracker.Poses.ContainsKey("default"),
+              "README Godot: flags, radius and the default pose set");
+        glove.Dispose();
+    }
+
     // The per-frame calls allocate no managed memory (the structs are reused, passed by reference).
     static void TestNoAllocation(string modelPath)
     {
@@ -490,6 +572,7 @@ static class PackageTest
         TestSession(reference, args[0], out estimator, out lastTimestamp);
         TestHandSpace(estimator, lastTimestamp);
         estimator.Dispose();
+        TestReadmeEngineCode(reference, args[0]);
         TestNoAllocation(args[0]);
         Console.WriteLine(passed + " passed, " + failed + " failed");
         return failed == 0 ? 0 : 1;
