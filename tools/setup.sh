@@ -5,7 +5,7 @@ set -euo pipefail
 # python3-torch: the PyTorch reference the numerics tests compare with (Debian's, for /usr/bin/python3).
 # libopenblas0-pthread: the BLAS Debian's PyTorch then uses (it links the reference libblas3 otherwise:
 #   a 1024x1024 float product at 6 GFLOP/s instead of 174 on 2 cores).
-# mono-mcs: the C# compiler (and Mono runtime) of the C ABI's P/Invoke test.
+# mono-mcs: the C# compiler (and Mono runtime) of the C# package's test (capi_csharp).
 # clang: tools/test.sh builds and runs the suite with clang as well (warnings are errors in CI).
 # libopenxr-dev: <openxr/openxr.h>, the OpenXR joint layout's test compares our structs with it.
 # nlohmann-json3-dev: JSON, for the file formats the library reads (model files, glove descriptions) and the tools.
