@@ -2,7 +2,7 @@
  * says about the ABI's structs and constants, and a session streamed through the C ABI from C,
  * written to a file the C# test replays and compares with, bit for bit.
  *
- * Usage: capi_csharp_reference MODEL MALFORMED_FILE OUT
+ * Usage: capi_csharp_reference MODEL MALFORMED_FILE OUT RANGE_FILE   (RANGE_FILE: the calibration it saves)
  * Lines of OUT (doubles and floats as the hex of their bits, so nothing is lost in decimal):
  *   size STRUCT BYTES / offset STRUCT FIELD BYTES   sizeof and offsetof of every struct and field
  *   const GROUP NAME VALUE                          a header constant, under the C# enum it maps to
@@ -10,7 +10,9 @@
  *   start / finish CODE                             calibration start and finish, in stream order
  *   push ROW VALUE TIMESTAMP CODE                   one glovepose_estimator_push_row and its result
  *   pose ... / joints ... / xr ... / aim ...        after each solved push (formats in the writers below)
+ *   calibration_step CODE STEP SECONDS             the guided step under way, mid-calibration and after
  *   latest_pose ... / latest_joints ... / latest_xr ... / latest_aim ...   a reader's view at the end
+ *   pose_at / cells / progress / range / save / model / step + instruction    the other reads (write_rest)
  * Exit code 0 when every call answered as expected. */
 #include "glovepose_c.h"
 
@@ -250,6 +252,52 @@ static void write_aim(const char* tag, glovepose_result result, const glovepose_
   fprintf(out, "\n");
 }
 
+static void write_doubles(const double* v, int n) {
+  int i;
+  for (i = 0; i < n; ++i) put_double(v[i]);
+}
+
+/* The reads not written per pose, after the session: each line holds the call's result and output. */
+static void write_rest(const glovepose_model* model, const glovepose_estimator* estimator, double time, const char* range_path) {
+  glovepose_predicted_pose at;
+  glovepose_calibration_progress progress;
+  glovepose_calibration_step step;
+  double cells[44], lo[44], hi[44];
+  glovepose_result result;
+  int k;
+  glovepose_predicted_pose_init(&at);
+  result = glovepose_estimator_get_pose_at(estimator, time, &at);
+  fprintf(out, "pose_at");
+  put_double(time);
+  fprintf(out, " %d %u %d %d %d %d", (int)result, (unsigned)at.flags, (int)at.predicted, (int)at.clamped, (int)at.has_rate, (int)at.trusted);
+  put_double(at.time);
+  put_double(at.horizon);
+  write_doubles(at.angles, GLOVEPOSE_DOF_COUNT);
+  write_doubles(at.rate, GLOVEPOSE_DOF_COUNT);
+  fprintf(out, "\ncells %d", (int)glovepose_estimator_get_cells(estimator, cells, 44));
+  write_doubles(cells, 44);
+  glovepose_calibration_progress_init(&progress);
+  result = glovepose_calibration_get_progress(estimator, &progress);
+  fprintf(out, "\nprogress %d %d %lld %d %d %d %d\n", (int)result, (int)progress.collecting, (long long)progress.frames,
+          (int)progress.frames_needed, (int)progress.ready, (int)progress.source, (int)progress.flat_cells);
+  fprintf(out, "range %d", (int)glovepose_calibration_get_range(estimator, lo, hi, 44));
+  write_doubles(lo, 44);
+  write_doubles(hi, 44);
+  fprintf(out, "\nsave %d\n", (int)glovepose_calibration_save(estimator, range_path));
+  fprintf(out, "model %d %d %d %d %s %s %s\n", (int)glovepose_model_cell_count(model), (int)glovepose_model_row_count(model),
+          (int)glovepose_model_has_training_range(model), (int)glovepose_model_calibration_step_count(model),
+          glovepose_model_glove_id(model), glovepose_model_cell_name(model, 0), glovepose_model_cell_name(model, 43));
+  for (k = 0; k < glovepose_model_calibration_step_count(model); ++k) {
+    glovepose_calibration_step_init(&step);
+    result = glovepose_model_get_calibration_step(model, k, &step);
+    fprintf(out, "step %d %d %d %d", k, (int)result, (int)step.step, (int)step.step_count);
+    put_floats(step.pose, GLOVEPOSE_DOF_COUNT);
+    put_double(step.start_seconds);
+    put_double(step.seconds);
+    fprintf(out, " %s\ninstruction %s\n", step.name, step.instruction);
+  }
+}
+
 /* The session's settings; PackageTest.cs sets the same three fields on the defaults. */
 static void session_config(glovepose_estimator_config* config) {
   glovepose_estimator_config_default(config);
@@ -275,8 +323,8 @@ int main(int argc, char** argv) {
   const int calibration_frames = 30, frames = 60, rows = 180;
   int f, r, poses = 0;
   double last_timestamp = 0.0;
-  if (argc != 4) {
-    fprintf(stderr, "usage: %s MODEL MALFORMED_FILE OUT\n", argv[0]);
+  if (argc != 5) {
+    fprintf(stderr, "usage: %s MODEL MALFORMED_FILE OUT RANGE_FILE\n", argv[0]);
     return 2;
   }
   out = fopen(argv[3], "w");
@@ -309,6 +357,14 @@ int main(int argc, char** argv) {
   fprintf(out, "start %d\n", (int)glovepose_calibration_start(estimator));
   for (f = 0; f < frames; ++f) {
     if (f == calibration_frames) fprintf(out, "finish %d\n", (int)glovepose_calibration_finish(estimator));
+    if (f == calibration_frames / 2 || f == calibration_frames + 1) { /* the guided step under way, and none after finishing */
+      int32_t step = -9;
+      double seconds = -9.0;
+      result = glovepose_calibration_get_step(estimator, &step, &seconds);
+      fprintf(out, "calibration_step %d %d", (int)result, (int)step);
+      put_double(seconds);
+      fprintf(out, "\n");
+    }
     for (r = 0; r < rows; ++r) {
       const double t = f / 60.0 + r / (rows * 60.0);
       const double value = row_value(r, t);
@@ -342,6 +398,7 @@ int main(int argc, char** argv) {
   result = glovepose_latest_get_xr_aim(latest, &aim, &sequence);
   fprintf(out, "latest_sequence %llu\n", (unsigned long long)sequence);
   write_aim("latest_aim", result, &aim);
+  write_rest(model, estimator, last_timestamp + 0.03, argv[4]);
   fprintf(out, "end %d\n", poses);
   glovepose_latest_free(latest);
   glovepose_estimator_free(estimator);

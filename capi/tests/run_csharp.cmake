@@ -5,8 +5,9 @@
 #              -DREADME=capi/README.md -DOUT_DIR=dir -DLIBRARY_DIR=dir -DMODEL=model -P run_csharp.cmake
 set(malformed "${OUT_DIR}/csharp_malformed.safetensors")
 set(reference "${OUT_DIR}/csharp_reference.txt")
+set(range "${OUT_DIR}/csharp_range.txt")
 file(WRITE ${malformed} "not a safetensors file")
-execute_process(COMMAND ${REFERENCE} ${MODEL} ${malformed} ${reference} RESULT_VARIABLE rc)
+execute_process(COMMAND ${REFERENCE} ${MODEL} ${malformed} ${reference} ${range} RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the C reference failed (${rc})")
 endif()
@@ -42,7 +43,8 @@ if(NOT rc EQUAL 0)
 endif()
 # Mono's DllImport("glovepose_c") finds libglovepose_c.so through the dynamic loader's path.
 set(ENV{LD_LIBRARY_PATH} "${LIBRARY_DIR}:$ENV{LD_LIBRARY_PATH}")
-execute_process(COMMAND ${MONO} ${exe} ${MODEL} ${reference} ${malformed} ${HEADER} ${PACKAGE_DIR}/package.json RESULT_VARIABLE rc)
+execute_process(COMMAND ${MONO} ${exe} ${MODEL} ${reference} ${malformed} ${HEADER} ${PACKAGE_DIR}/package.json ${range}
+                RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the C# package test failed (${rc})")
 endif()

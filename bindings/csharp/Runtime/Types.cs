@@ -281,7 +281,10 @@ namespace GlovePose
         public int Trusted;
 
         public static PredictedPose Create() { var p = new PredictedPose(); p.StructSize = (uint)sizeof(PredictedPose); return p; }
-        public double Angle(int dof) { if ((uint)dof >= Counts.Dof) throw new ArgumentOutOfRangeException("dof"); fixed (double* a = Angles) return a[dof]; }
+        public double Angle(int dof) { Check(dof); fixed (double* a = Angles) return a[dof]; }
+        /// <summary>Rate of change of angle dof, rad/s.</summary>
+        public double AngleRate(int dof) { Check(dof); fixed (double* a = Rate) return a[dof]; }
+        static void Check(int dof) { if ((uint)dof >= Counts.Dof) throw new ArgumentOutOfRangeException("dof"); }
     }
 
     /// <summary>glovepose_calibration_progress. Make one with CalibrationProgress.Create().</summary>
@@ -314,6 +317,8 @@ namespace GlovePose
         public fixed byte Instruction[1024];
 
         public static CalibrationStep Create() { var s = new CalibrationStep(); s.StructSize = (uint)sizeof(CalibrationStep); return s; }
+        /// <summary>Angle dof of the pose to copy, radians.</summary>
+        public float PoseAngle(int dof) { if ((uint)dof >= Counts.Dof) throw new ArgumentOutOfRangeException("dof"); fixed (float* a = Pose) return a[dof]; }
         /// <summary>Short id, e.g. "flat_on_table" (allocates: set-up use).</summary>
         public string NameText { get { fixed (byte* p = Name) return Library.Utf8(p, 32); } }
         /// <summary>What to tell the user (allocates: set-up use).</summary>

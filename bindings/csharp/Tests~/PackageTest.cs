@@ -1,12 +1,13 @@
 // The C# package's test, a console program (Mono's mcs + mono; no NUnit), compiled with the
 // package's Runtime/*.cs and run against the native library (CTest `capi_csharp`).
 //
-// Usage: mono PackageTest.exe MODEL REFERENCE MALFORMED_FILE HEADER PACKAGE_JSON
+// Usage: mono PackageTest.exe MODEL REFERENCE MALFORMED_FILE HEADER PACKAGE_JSON RANGE_FILE
 // Compiled with Runtime/*.cs, EngineStandIns.cs and the ```csharp blocks of capi/README.md.
 // REFERENCE is what capi/tests/csharp_reference.c (C, the C compiler's view) wrote: struct sizes and
 // field offsets, the header's constants, the message of loading MALFORMED_FILE, and a session of
 // rows pushed through the C ABI with every pose, joint list, OpenXR hand and aim state as the bits
-// of their floats. This test replays the same rows through the package and compares bit for bit.
+// of their floats, then its other reads (predicted pose, cells, calibration state, range, steps),
+// and RANGE_FILE, the calibration C saved. This test replays the same rows through the package and compares bit for bit.
 // Prints each failed check and, last, "N passed, N failed"; exit code 0 when none failed.
 using System;
 using System.Collections.Generic;
@@ -182,6 +183,12 @@ static class PackageTest
             {
                 e = Catch(() => estimator.FinishCalibration());
                 Check(e != null && e.Status == Status.ErrorCalibrationState, "finish before start: ErrorCalibrationState");
+                e = Catch(() => estimator.UseTrainingCalibration());
+                Check(!model.HasTrainingRange && e != null && e.Status == Status.ErrorCalibrationState, "no training range in the shipped model: ErrorCalibrationState");
+                Check(estimator.PushMeasurements(new double[179], 0.0) == Status.SizeMismatch, "a frame of 179 measurements: SizeMismatch");
+                var frame = new double[180];
+                for (int r = 0; r < frame.Length; ++r) frame[r] = 40.0 + 0.05 * r;
+                Check((int)estimator.PushMeasurements(frame, 0.0) >= 0, "a frame of 180 measurements is accepted");
                 var pose = Pose.Create();
                 Check(estimator.GetPose(ref pose) == Status.Ok && pose.Valid == 0, "no pose yet");
                 pose.StructSize = 100;
@@ -201,6 +208,7 @@ static class PackageTest
     static double D(string hex) { return BitConverter.Int64BitsToDouble(Convert.ToInt64(hex, 16)); }
     static string H(Vector3f v) { return " " + H(v.X) + " " + H(v.Y) + " " + H(v.Z); }
     static string H(Quaternionf q) { return " " + H(q.X) + " " + H(q.Y) + " " + H(q.Z) + " " + H(q.W); }
+    static string Hex(double[] v) { var b = new StringBuilder(); foreach (double x in v) b.Append(" " + H(x)); return b.ToString(); }
 
     // The lines of csharp_reference.c's writers, from the package's structs.
     static string PoseLine(string tag, Pose p)
@@ -244,7 +252,7 @@ static class PackageTest
 
     // The reference session's rows through the package: every result code, pose, joint list,
     // OpenXR hand and aim state equal to the C ABI's, bit for bit; a reader thread's view too.
-    static void TestSession(string[] reference, string modelPath, out Estimator estimatorOut, out double lastTimestamp)
+    static void TestSession(string[] reference, string modelPath, string rangePath, out Estimator estimatorOut, out double lastTimestamp)
     {
         Model model = Model.Load(modelPath);
         EstimatorConfig config = Estimator.DefaultConfig();
@@ -261,6 +269,7 @@ static class PackageTest
         int pushes = 0, pushMismatches = 0, compared = 0, mismatches = 0, poses = 0, expectedPoses = -1;
         double firstAngle = double.NaN, angleRange = 0.0;
         lastTimestamp = 0.0;
+        string instruction = null;
         string readerPose = null, readerJoints = null, readerXr = null, readerAim = null, readerHeader = null, readerSequence = null;
         foreach (string line in reference)
         {
@@ -330,6 +339,90 @@ static class PackageTest
                 case "latest_xr": got = readerXr; break;
                 case "latest_sequence": got = readerSequence; break;
                 case "latest_aim": got = readerAim; break;
+                case "calibration_step":
+                {
+                    int step;
+                    double seconds;
+                    Status status = estimator.GetCalibrationStep(out step, out seconds);
+                    got = "calibration_step " + (int)status + " " + step + " " + H(seconds);
+                    break;
+                }
+                case "pose_at":
+                {
+                    double time = D(w[1]);
+                    var at = PredictedPose.Create();
+                    Status status = estimator.GetPoseAt(time, ref at);
+                    var b = new StringBuilder("pose_at " + H(time) + " " + (int)status + " " + (uint)at.Flags + " " + at.Predicted + " " + at.Clamped + " " +
+                                              at.HasRate + " " + at.Trusted + " " + H(at.Time) + " " + H(at.Horizon));
+                    for (int d = 0; d < Counts.Dof; ++d) b.Append(" " + H(at.Angle(d)));
+                    for (int d = 0; d < Counts.Dof; ++d) b.Append(" " + H(at.AngleRate(d)));
+                    got = b.ToString();
+                    break;
+                }
+                case "cells":
+                {
+                    var cells = new double[44];
+                    got = "cells " + (int)estimator.GetCells(cells) + Hex(cells);
+                    break;
+                }
+                case "progress":
+                {
+                    var p = CalibrationProgress.Create();
+                    Status status = estimator.GetCalibrationProgress(ref p);
+                    got = "progress " + (int)status + " " + p.Collecting + " " + p.Frames + " " + p.FramesNeeded + " " + p.Ready + " " + (int)p.Source + " " + p.FlatCells;
+                    break;
+                }
+                case "range":
+                {
+                    var lo = new double[44];
+                    var hi = new double[44];
+                    got = "range " + (int)estimator.GetCalibrationRange(lo, hi) + Hex(lo) + Hex(hi);
+                    break;
+                }
+                case "save":
+                {
+                    // The same range saved from C# is the same file; loaded, or set, it is the same range.
+                    string mine = rangePath + ".cs";
+                    estimator.SaveCalibration(mine);
+                    got = "save 0";
+                    Check(File.ReadAllText(mine) == File.ReadAllText(rangePath), "the calibration saved through C# is the file C saved");
+                    var lo = new double[44];
+                    var hi = new double[44];
+                    var lo2 = new double[44];
+                    var hi2 = new double[44];
+                    estimator.GetCalibrationRange(lo, hi);
+                    using (Model m = Model.Load(modelPath))
+                    using (var loaded = new Estimator(m))
+                    using (var set = new Estimator(m))
+                    {
+                        loaded.LoadCalibration(rangePath);
+                        Check(loaded.GetCalibrationRange(lo2, hi2) == Status.Ok && Hex(lo2) == Hex(lo) && Hex(hi2) == Hex(hi), "C's saved calibration loads into C#, the same range");
+                        set.SetCalibrationRange(lo, hi);
+                        Check(set.GetCalibrationRange(lo2, hi2) == Status.Ok && Hex(lo2) == Hex(lo) && Hex(hi2) == Hex(hi), "a range set from C# reads back");
+                        GlovePoseException e = Catch(() => loaded.LoadCalibration(modelPath));
+                        Check(e != null && e.Status == Status.ErrorInvalidFile && e.Message.Contains(modelPath), "a model file is no calibration: ErrorInvalidFile naming it");
+                        e = Catch(() => set.SetCalibrationRange(hi, lo));
+                        Check(e != null && e.Status == Status.ErrorInvalidArgument, "min > max refused with the library's message: " + (e == null ? "none" : e.Message));
+                    }
+                    break;
+                }
+                case "model":
+                    using (Model m = Model.Load(modelPath))
+                        got = "model " + m.CellCount + " " + m.RowCount + " " + (m.HasTrainingRange ? 1 : 0) + " " + m.CalibrationStepCount + " " + m.GloveId + " " +
+                              m.CellName(0) + " " + m.CellName(43);
+                    break;
+                case "step":
+                    using (Model m = Model.Load(modelPath))
+                    {
+                        CalibrationStep step = m.CalibrationStep(int.Parse(w[1]));
+                        var b = new StringBuilder("step " + w[1] + " 0 " + step.Step + " " + step.StepCount);
+                        for (int d = 0; d < Counts.Dof; ++d) b.Append(" " + H(step.PoseAngle(d)));
+                        b.Append(" " + H(step.StartSeconds) + " " + H(step.Seconds) + " " + step.NameText);
+                        got = b.ToString();
+                        instruction = "instruction " + step.InstructionText;
+                    }
+                    break;
+                case "instruction": got = instruction; break;
                 case "end": expectedPoses = int.Parse(w[1]); break;
             }
             if (got == null) continue;
@@ -341,8 +434,8 @@ static class PackageTest
         }
         Check(pushes > 10000 && pushMismatches == 0, pushes + " pushes, each with the C ABI's result (" + pushMismatches + " differ)");
         Check(poses == expectedPoses && poses >= 30, poses + " poses, as many as through C (" + expectedPoses + ")");
-        Check(compared == 4 * poses + 6 && mismatches == 0,
-              compared + " poses, joint lists, OpenXR hands, aim states and a reader thread's view equal to the C ABI's, bit for bit (" + mismatches + " differ)");
+        Check(compared == 4 * poses + 2 + 6 + 6 + 2 * 10 && mismatches == 0,
+              compared + " poses, joint lists, OpenXR hands, aim states, a reader thread's view, the calibration's state and steps, predicted pose and cells equal to the C ABI's, bit for bit (" + mismatches + " differ)");
         Check(angleRange > 0.01, "the poses move (index flexion spans " + angleRange.ToString("F3") + " rad): the comparison is not vacuous");
         latest.Dispose();
         estimatorOut = estimator;
@@ -556,9 +649,9 @@ static class PackageTest
 
     static int Main(string[] args)
     {
-        if (args.Length != 5)
+        if (args.Length != 6)
         {
-            Console.WriteLine("usage: mono PackageTest.exe MODEL REFERENCE MALFORMED_FILE HEADER PACKAGE_JSON");
+            Console.WriteLine("usage: mono PackageTest.exe MODEL REFERENCE MALFORMED_FILE HEADER PACKAGE_JSON RANGE_FILE");
             return 2;
         }
         string[] reference = File.ReadAllLines(args[1]);
@@ -569,7 +662,7 @@ static class PackageTest
         TestErrors(reference, args[0], args[2]);
         Estimator estimator;
         double lastTimestamp;
-        TestSession(reference, args[0], out estimator, out lastTimestamp);
+        TestSession(reference, args[0], args[5], out estimator, out lastTimestamp);
         TestHandSpace(estimator, lastTimestamp);
         estimator.Dispose();
         TestReadmeEngineCode(reference, args[0]);
