@@ -89,7 +89,7 @@ std::optional<train::Augmentation> augmentation(const std::string& text) {
 }
 
 struct Options {
-  std::string command, command_line, data, model, out, glove_file, sequence_file, predictions_file;
+  std::string command, command_line, data, model, out, glove_file, sequence_file, predictions_file, pinch_distances_file;
   Architecture architecture;  // train: the network to train (--model)
   bool replay = false;
   int mean_window = 0;      // --replay-rows: the readout's mean window; 0: the estimator's default
@@ -492,6 +492,20 @@ int eval_command(Options o) {
   // run at every recording (and wherever time does not go forward).
   const SubjectHands hands = subject_hands(data);
   train::FingertipAccumulator tips;
+  // --pinch-distances: per frame the true and the predicted thumb-to-fingertip distances and the true
+  // pinch flags (hand/pinch.hpp's rule), for sweeping a detector's threshold offline.
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> distances(nullptr, &std::fclose);
+  if (!o.pinch_distances_file.empty()) {
+    distances.reset(std::fopen(o.pinch_distances_file.c_str(), "w"));
+    if (!distances) throw Error("--pinch-distances: cannot open '" + o.pinch_distances_file + "' for writing");
+    std::fprintf(distances.get(), "frame,time,subject,session,run_start");
+    for (const char* prefix : {"true_mm_", "pred_mm_", "true_on_"})
+      for (std::size_t k = 0; k < hand::kPinchPairCount; ++k)
+        std::fprintf(distances.get(), ",%s%s", prefix, hand::to_string(static_cast<hand::Finger>(k + 1)));
+    std::fprintf(distances.get(), "\n");
+  }
+  hand::Kinematics run_hand;
+  hand::PinchTracker true_pinch;
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
@@ -509,13 +523,27 @@ int eval_command(Options o) {
     errors.add(p, t);
     if (with_truth) truth_errors.add(p, q);
     const double time = data.timestamps[source];
-    if (f == 0 || samples.run[static_cast<std::size_t>(f)] != samples.run[static_cast<std::size_t>(f) - 1] ||
-        !(time > data.timestamps[static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f) - 1])]))
-      tips.begin_run(hands.of(data.subject[source]));
+    const bool run_start = f == 0 || samples.run[static_cast<std::size_t>(f)] != samples.run[static_cast<std::size_t>(f) - 1] ||
+                           !(time > data.timestamps[static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f) - 1])]);
+    if (run_start) {
+      run_hand = hands.of(data.subject[source]);
+      tips.begin_run(run_hand);
+      true_pinch.reset();
+    }
     hand::Angles reference{};
     std::copy(with_truth ? q : t, (with_truth ? q : t) + hand::kDofCount, reference.begin());
     tips.add(radians, reference, time);
+    if (distances) {
+      const hand::PinchDistances truth_mm = hand::pinch_distances(run_hand, reference), pred_mm = hand::pinch_distances(run_hand, radians);
+      const hand::PinchState state = true_pinch.update(truth_mm);
+      std::fprintf(distances.get(), "%zu,%.9g,%d,%d,%d", source, time, data.subject[source], data.session[source], run_start ? 1 : 0);
+      for (double d : truth_mm) std::fprintf(distances.get(), ",%.4f", d);
+      for (double d : pred_mm) std::fprintf(distances.get(), ",%.4f", d);
+      for (bool on : state.pinching) std::fprintf(distances.get(), ",%d", on ? 1 : 0);
+      std::fprintf(distances.get(), "\n");
+    }
   }
+  if (distances && std::fclose(distances.release()) != 0) throw Error("--pinch-distances: writing '" + o.pinch_distances_file + "' failed");
   const std::optional<train::FingertipReport> tips_report = tips.empty() ? std::nullopt : std::optional(tips.report());
   const std::string tips_against = with_truth ? "the true angles" : "the labels";
   const train::AngleErrorReport report = errors.report();
@@ -640,6 +668,10 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
         ->check(at_least(1))
         ->needs(replay);
     command->add_option("--predictions", o->predictions_file, "write every frame's true and predicted angles (CSV)")->type_name("FILE.csv");
+    command
+        ->add_option("--pinch-distances", o->pinch_distances_file,
+                     "write every frame's true and predicted thumb-to-fingertip distances (mm) and true pinch flags (CSV)")
+        ->type_name("FILE.csv");
     finish(command, o, eval_command);
   }
   {
