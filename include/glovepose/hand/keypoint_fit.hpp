@@ -7,7 +7,7 @@
 /// to the template palm frame by frame (Kabsch) and averaged, which places each digit's base; each
 /// bone's length is the distance between the keypoints at its two ends, its mean square corrected
 /// for the keypoints' noise (estimated from the palm points' scatter). The bases' rest orientations
-/// are the template's. Per frame: damped least squares (Levenberg-Marquardt) over the hand's
+/// are the template's. Per frame: damped least squares (damped_least_squares.hpp) over the hand's
 /// rotation and position and the 25 angles, analytic derivatives (Kinematics' DoF axes), each step
 /// projected into the joint limits, with weak pulls toward the previous frame's angles and the rest
 /// pose that hold the DoFs the keypoints do not see (a straight finger's twist).
@@ -24,6 +24,7 @@
 #include <Eigen/Geometry>
 
 #include "../config.hpp"
+#include "damped_least_squares.hpp"
 #include "dofs.hpp"
 #include "kinematics.hpp"
 #include "keypoints.hpp"
@@ -254,11 +255,9 @@ class KeypointIk {
     };
     double residual = 0.0;
     double cost = cost_of(out.angles, out.root, residual);
-    double lambda = 1e-3;
-    for (int iteration = 0; iteration < config_.max_iterations; ++iteration) {
-      // Normal equations at the current pose (skeleton, axes and `at` are current).
-      Eigen::Matrix<double, P, P> h = Eigen::Matrix<double, P, P>::Zero();
-      Eigen::Matrix<double, P, 1> g = Eigen::Matrix<double, P, 1>::Zero();
+    // Normal equations at the current pose (skeleton, axes and `at` are current: the accepted
+    // trial's cost_of left them there).
+    const auto normal_equations = [&](Eigen::Matrix<double, P, P>& h, Eigen::Matrix<double, P, 1>& g) {
       const Eigen::Vector3d centre = out.root.translation();
       for (std::size_t k = 0; k < count; ++k) {
         if (!seen[k]) continue;
@@ -267,8 +266,7 @@ class KeypointIk {
         for (int a = 0; a < 3; ++a) j.col(a) = Eigen::Vector3d::Unit(a).cross(arm);
         j.block<3, 3>(0, 3).setIdentity();
         for (std::size_t d = 0; d < kDofCount; ++d)
-          if (model_.moves(d, k))
-            j.col(6 + static_cast<int>(d)) = axes[d].cross(at[k] - skeleton[static_cast<std::size_t>(kDofs[d].phalanx)].translation());
+          if (model_.moves(d, k)) j.col(6 + static_cast<int>(d)) = dof_derivative(axes, skeleton, d, at[k]);
         const Eigen::Vector3d r = at[k] - observed[k];
         h.noalias() += j.transpose() * j;
         g.noalias() += j.transpose() * r;
@@ -278,37 +276,25 @@ class KeypointIk {
         h(i, i) += previous_weight + config_.rest_weight;
         g(i) += previous_weight * (out.angles[d] - toward[d]) + config_.rest_weight * (out.angles[d] - rest[d]);
       }
-      bool accepted = false;
-      double moved = 0.0;
-      while (!accepted && lambda < 1e8) {
-        Eigen::Matrix<double, P, P> damped = h;
-        for (int i = 0; i < P; ++i) damped(i, i) += lambda * (h(i, i) + 1e-9);
-        const Eigen::Matrix<double, P, 1> step = -damped.ldlt().solve(g);
-        Eigen::Affine3d root = out.root;
-        const Eigen::Vector3d turn = step.head<3>();
-        if (turn.norm() > 0) root.linear() = Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix() * root.linear();
-        root.translation() += step.segment<3>(3);
-        Angles q = out.angles;
-        for (std::size_t d = 0; d < kDofCount; ++d) q[d] += step(6 + static_cast<int>(d));
-        q = limits_.clamp(q);
-        double trial_residual = 0.0;
-        const double trial = cost_of(q, root, trial_residual);
-        if (std::isfinite(trial) && trial <= cost) {
-          moved = step.cwiseAbs().maxCoeff();
-          out.angles = q;
-          out.root = root;
-          cost = trial;
-          residual = trial_residual;
-          lambda = std::max(lambda / 3.0, 1e-9);
-          accepted = true;
-        } else {
-          lambda *= 4.0;
-        }
-      }
-      if (!accepted) break;
-      // cost_of left the skeleton at the accepted pose; on a rejection the loop has ended.
-      if (moved < config_.step_tolerance) break;
-    }
+    };
+    Eigen::Affine3d trial_root = out.root;
+    Angles trial_angles = out.angles;
+    double trial_residual = 0.0;
+    const auto trial = [&](const Eigen::Matrix<double, P, 1>& step) {
+      trial_root = out.root;
+      const Eigen::Vector3d turn = step.template head<3>();
+      if (turn.norm() > 0) trial_root.linear() = Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix() * trial_root.linear();
+      trial_root.translation() += step.template segment<3>(3);
+      for (std::size_t d = 0; d < kDofCount; ++d) trial_angles[d] = out.angles[d] + step(6 + static_cast<int>(d));
+      trial_angles = limits_.clamp(trial_angles);
+      return cost_of(trial_angles, trial_root, trial_residual);
+    };
+    const auto accept = [&] {
+      out.angles = trial_angles;
+      out.root = trial_root;
+      residual = trial_residual;
+    };
+    (void)damped_least_squares<P>(cost, config_.max_iterations, config_.step_tolerance, normal_equations, trial, accept);
     cost_of(out.angles, out.root, residual);
     out.rms_mm = std::sqrt(residual / static_cast<double>(seen_n));
     return out;

@@ -1,0 +1,201 @@
+// The contact stage (hand/contact.hpp): a known gap between thumb and index tips closed to the
+// contact distance (the two distal radii of collision.hpp, summed here), only the two chains' angles
+// moved and within the joint limits, the other pairs kept apart, the detection's hysteresis, poses
+// without contact (the gallery's non-pinches, a pose between threshold and release) left bit for
+// bit, no allocation per frame; the shared damped least squares unchanged for the keypoint fit.
+#include <glovepose/hand/contact.hpp>
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstddef>
+#include <string>
+
+#include <glovepose/sim/pose_gallery.hpp>
+
+#include "alloc_counter.hpp"
+
+using namespace glovepose;
+
+namespace {
+
+// Thumb tip to the tip of `finger` (mm), from the kinematics' skeleton directly.
+double contact_tip_distance(const hand::Kinematics& fk, const hand::Angles& angles, hand::Finger finger) {
+  hand::Skeleton s;
+  fk.pose(angles, s);
+  return (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, finger)).norm();
+}
+
+// pinch_index with the index's base flexion opened by `open` rad: the tips part as it grows.
+hand::Angles contact_opened_pinch(double open) {
+  hand::Angles q = sim::gallery_pose("pinch_index").angles;
+  q[hand::dof_of(hand::Finger::Index, hand::Motion::BaseFlexion)] -= open;
+  return q;
+}
+
+// The opening of pinch_index whose tips are `target` mm apart (bisection on the distance, which grows with the opening).
+hand::Angles contact_pinch_at(const hand::Kinematics& fk, double target) {
+  double lo = -0.3, hi = 0.6;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (contact_tip_distance(fk, contact_opened_pinch(mid), hand::Finger::Index) < target ? lo : hi) = mid;
+  }
+  return contact_opened_pinch(0.5 * (lo + hi));
+}
+
+// The index's tip and the thumb's radius sum from collision.hpp's table by phalanx id: thumb distal 3, index distal 15.
+constexpr double kThumbIndexContactMm = 7.03 + 5.17;
+
+}  // namespace
+
+TEST_CASE("contact stage: a known thumb-index gap is closed to the two tips' radii, only the two chains move") {
+  const hand::Kinematics fk;
+  hand::ContactStage stage(fk, hand::JointLimits{});
+  CHECK(stage.contact_distance(0) == doctest::Approx(kThumbIndexContactMm));
+  for (const double start : {14.9, 14.2, 13.9}) {
+    CAPTURE(start);
+    stage.reset();
+    hand::Angles q = contact_pinch_at(fk, start);
+    REQUIRE(contact_tip_distance(fk, q, hand::Finger::Index) == doctest::Approx(start).epsilon(1e-6));
+    const hand::Angles before = q;
+    hand::Skeleton skeleton;
+    fk.pose(q, skeleton);
+    const hand::ContactResult r = stage.apply(q, skeleton);
+    CHECK(r.contact[0]);
+    CHECK_FALSE(r.refused);
+    CHECK(r.closed == 0);
+    CHECK(r.gap_before_mm == doctest::Approx(start - kThumbIndexContactMm).epsilon(1e-6));
+    CHECK(std::abs(contact_tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
+    CHECK(std::abs(r.gap_after_mm) < 0.1);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const hand::Finger f = hand::kDofs[d].finger;
+      if (f != hand::Finger::Thumb && f != hand::Finger::Index) CHECK(q[d] == before[d]);
+    }
+    // The skeleton is the adjusted pose's.
+    hand::Skeleton expected;
+    fk.pose(q, expected);
+    for (std::size_t p = 0; p < hand::kPhalanxCount; ++p) CHECK((skeleton[p].matrix() - expected[p].matrix()).norm() < 1e-9);
+    // The other pairs not brought closer than the release distance (pinch_index's are far beyond it).
+    for (hand::Finger f : {hand::Finger::Middle, hand::Finger::Ring, hand::Finger::Pinky})
+      CHECK(contact_tip_distance(fk, q, f) >= std::min(18.0, contact_tip_distance(fk, before, f)) - 1e-6);
+  }
+}
+
+TEST_CASE("contact stage: the adjusted angles stay within the joint limits") {
+  const hand::Kinematics fk;
+  const hand::Angles q0 = contact_pinch_at(fk, 14.5);
+  // Limits that leave the thumb and index chains 0.01 rad of room about the estimate: too little
+  // to close a 2.3 mm gap, so the solve presses against them.
+  hand::Angles lo = hand::JointLimits{}.min(), hi = hand::JointLimits{}.max();
+  for (std::size_t m = 0; m < hand::kFingerCount; ++m)
+    for (hand::Finger f : {hand::Finger::Thumb, hand::Finger::Index}) {
+      const std::size_t d = hand::kDofIndex[static_cast<std::size_t>(f)][m];
+      lo[d] = q0[d] - 0.01;
+      hi[d] = q0[d] + 0.01;
+    }
+  const hand::JointLimits tight(lo, hi);
+  hand::ContactStage stage(fk, tight);
+  hand::Angles q = q0;
+  hand::Skeleton skeleton;
+  fk.pose(q, skeleton);
+  const hand::ContactResult r = stage.apply(q, skeleton);
+  REQUIRE(r.closed == 0);
+  bool moved = false;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    CHECK(q[d] >= lo[d]);
+    CHECK(q[d] <= hi[d]);
+    moved = moved || q[d] != q0[d];
+  }
+  CHECK(moved);
+  const double after = contact_tip_distance(fk, q, hand::Finger::Index);
+  CHECK(after < 14.5);                       // closer ...
+  CHECK(after > kThumbIndexContactMm + 0.1);  // ... but not closed: the limits hold
+  // The unconstrained stage closes the same gap.
+  hand::ContactStage free_stage(fk, hand::JointLimits{});
+  hand::Angles q2 = q0;
+  fk.pose(q2, skeleton);
+  (void)free_stage.apply(q2, skeleton);
+  CHECK(std::abs(contact_tip_distance(fk, q2, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
+}
+
+TEST_CASE("contact stage: no contact detected, nothing changes") {
+  const hand::Kinematics fk;
+  hand::ContactStage stage(fk, hand::JointLimits{});
+  const auto unchanged = [&](const hand::Angles& pose) {
+    hand::Angles q = pose;
+    hand::Skeleton skeleton, expected;
+    fk.pose(q, skeleton);
+    expected = skeleton;
+    const hand::ContactResult r = stage.apply(q, skeleton);
+    CHECK(r.closed == -1);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(q[d] == pose[d]);  // bit for bit
+    for (std::size_t p = 0; p < hand::kPhalanxCount; ++p) CHECK(skeleton[p].matrix() == expected[p].matrix());
+    return r;
+  };
+  for (const sim::KeyPose& k : sim::pose_gallery()) {
+    bool pinch = false;
+    for (hand::Finger f : {hand::Finger::Index, hand::Finger::Middle, hand::Finger::Ring, hand::Finger::Pinky})
+      pinch = pinch || contact_tip_distance(fk, k.angles, f) < 15.0;
+    if (pinch) continue;
+    CAPTURE(k.name);
+    stage.reset();
+    const hand::ContactResult r = unchanged(k.angles);
+    for (bool on : r.contact) CHECK_FALSE(on);
+  }
+  // Between the threshold and the release, coming from apart: still apart.
+  stage.reset();
+  (void)unchanged(contact_pinch_at(fk, 30.0));
+  (void)unchanged(contact_pinch_at(fk, 16.5));
+  // A non-finite angle: left as it came, and the contact state forgotten.
+  hand::Angles q = contact_pinch_at(fk, 14.0);
+  hand::Skeleton skeleton;
+  fk.pose(q, skeleton);
+  CHECK(stage.apply(q, skeleton).contact[0]);
+  q[0] = NAN;
+  const hand::ContactResult r = stage.apply(q, skeleton);
+  CHECK(r.closed == -1);
+  CHECK_FALSE(r.contact[0]);
+  CHECK(std::isnan(q[0]));
+}
+
+TEST_CASE("contact stage: the detection's hysteresis, 15 mm on and 18 mm off") {
+  const hand::Kinematics fk;
+  hand::ContactStage stage(fk, hand::JointLimits{});
+  const auto step = [&](double distance) {
+    hand::Angles q = contact_pinch_at(fk, distance);
+    hand::Skeleton skeleton;
+    fk.pose(q, skeleton);
+    const hand::ContactResult r = stage.apply(q, skeleton);
+    return r.closed == 0 && std::abs(contact_tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1;
+  };
+  CHECK_FALSE(step(16.0));
+  CHECK(step(14.0));
+  CHECK(step(17.5));  // on: held until beyond 18 mm
+  CHECK_FALSE(step(18.5));
+  CHECK_FALSE(step(17.0));  // off again: needs 15 mm
+}
+
+TEST_CASE("contact stage: apply allocates nothing; bad settings are refused at set-up") {
+  const hand::Kinematics fk;
+  hand::ContactStage stage(fk, hand::JointLimits{});
+  hand::Angles q = contact_pinch_at(fk, 14.0), open = sim::gallery_pose("spread").angles;
+  hand::Skeleton skeleton, open_skeleton;
+  fk.pose(q, skeleton);
+  fk.pose(open, open_skeleton);
+  const std::size_t allocations = test::allocations_during([&] {
+    for (int i = 0; i < 10; ++i) {
+      (void)stage.apply(q, skeleton);
+      (void)stage.apply(open, open_skeleton);
+    }
+  });
+  CHECK(allocations == 0);
+  hand::ContactConfig bad;
+  bad.max_iterations = 0;
+  CHECK_THROWS_WITH_AS(hand::ContactStage(fk, hand::JointLimits{}, bad), doctest::Contains("max_iterations"), Error);
+  bad = {};
+  bad.detection.release_mm = 10.0;
+  CHECK_THROWS_WITH_AS(hand::ContactStage(fk, hand::JointLimits{}, bad), doctest::Contains("release_mm"), Error);
+  bad = {};
+  bad.change_weight = 0.0;
+  CHECK_THROWS_WITH_AS(hand::ContactStage(fk, hand::JointLimits{}, bad), doctest::Contains("change_weight"), Error);
+}
