@@ -418,6 +418,14 @@ DescribedGlove main14_glove(const std::string& tag) {
   grid::GloveDescription("main14", g.names, grid::GridMap(slots, paper.dof_slots())).write(g.glove_file);
   return g;
 }
+// A small real-time model of `glove` (an FCN of width 16, one epoch, subject 2 held out), written to `name`.
+std::string main14_model(const DescribedGlove& glove, const std::string& name) {
+  const std::string model_file = temp(name);
+  const Run r = run("train --data " + glove.data + " --glove " + glove.glove_file +
+                    " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --quiet --out " + model_file);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  return model_file;
+}
 }  // namespace
 
 TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and predicts") {
@@ -665,8 +673,9 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   r = run("predict --model " + kModel + " --in " + temp("import_take_1.csv"));
   CHECK(r.status == 1);
   CHECK(r.out.find("line 1: '") != std::string::npos);
-  CHECK(r.out.find("looks like a header, expected rows of calibrated cell values without one; a recording with named columns is "
-                   "imported with glovepose import") != std::string::npos);
+  CHECK(r.out.find("looks like a header, expected rows of calibrated cell values without one; the glove's own readings with a header "
+                   "naming its cells are read by --raw, a recording with named columns is imported with glovepose import") !=
+        std::string::npos);
 
   // A calibration take where a sensor does not move: refused, or kept and reported with --allow-flat.
   {
@@ -764,10 +773,8 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   // calibration first. One cell is a dead channel (noise only around 29,000 counts); one line is
   // garbage.
   const DescribedGlove glove = main14_glove("view14");
-  const std::string model_file = temp("t_view14.safetensors");
-  Run r = run("train --data " + glove.data + " --glove " + glove.glove_file +
-              " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --quiet --out " + model_file);
-  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const std::string model_file = main14_model(glove, "t_view14.safetensors");
+  Run r;
   const io::Dataset& d = glove.dataset;
   const std::size_t cells = d.cell_count, dead = 3;
   std::mt19937 rng(5);
@@ -821,7 +828,7 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   const std::string told = slurp(temp("view14_stderr.txt"));
   CHECK_MESSAGE(told.find("glovepose view: stdin line 103: 2 fields, expected 15") == 0, told);
   CHECK(told.find("glovepose view: calibration: 1 of 14 sensors read 0: cell_22 (") != std::string::npos);
-  CHECK(told.find("glovepose view: 1 of 2401 lines on stdin not understood and skipped (the first: line 103: ") != std::string::npos);
+  CHECK(told.find("glovepose view: 1 of 2401 lines of stdin not understood and skipped (the first: line 103: ") != std::string::npos);
 
   // Streams it cannot use: a non-zero exit and the reason.
   std::ofstream(temp("view14_garbage.txt")) << "hello glove\n\nnot,a,frame\n# comment\n1;2;3\n";
@@ -864,6 +871,17 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   CHECK_MESSAGE(r.status == 0, r.out);
   CHECK_MESSAGE(r.out.find("stdin: 2400 lines, 2400 understood, 0 skipped, 0 refused by the estimator; 1800 poses") != std::string::npos,
                 r.out);
+  // A saved calibration instead of the on-the-fly one: every frame gives a pose.
+  {
+    std::ofstream out(temp("view14.calibration"));
+    out << "glovepose-calibration 2\nglove\tmain14\nsensors\t" << cells << "\n";
+    for (std::size_t c = 0; c < cells; ++c)
+      out << glove.names[c] << "\t" << (c == dead ? 28000 : 1) << "\t" << (c == dead ? 30000 : 20) << "\t0\n";
+  }
+  r = run("view --stdin --port 0 --calibration " + temp("view14.calibration") + " --model " + model_file + " < " + stream);
+  CHECK_MESSAGE(r.status == 0, r.out);
+  CHECK_MESSAGE(r.out.find("stdin: 2401 lines, 2400 understood, 1 skipped, 0 refused by the estimator; 2400 poses") != std::string::npos,
+                r.out);
   // A calibration too short for its running median (20 frames: a third of a second at 60 Hz).
   r = run("view --stdin --port 0 --calibration-seconds 0.1 --model " + model_file + " < " + stream);
   CHECK(r.status == 1);
@@ -875,6 +893,179 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   CHECK(r.status == 1);
   CHECK_MESSAGE(r.out.find("glovepose view: stdin ended after 4.98333") != std::string::npos, r.out);  // 299 frames at 60 Hz
   CHECK(r.out.find(" s of stream time, within the calibration (--calibration-seconds 10): no pose was computed") != std::string::npos);
+}
+
+namespace {
+// The rows of a CSV of numbers (a header line skipped when `header`).
+std::vector<std::vector<double>> csv_numbers(const std::string& text, bool header) {
+  std::vector<std::vector<double>> rows;
+  std::istringstream lines(text);
+  std::string line;
+  if (header) std::getline(lines, line);
+  while (std::getline(lines, line)) {
+    std::vector<double> row;
+    std::istringstream fields(line);
+    std::string field;
+    while (std::getline(fields, field, ',')) row.push_back(std::stod(field));
+    rows.push_back(row);
+  }
+  return rows;
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose predict --raw takes a described glove's own readings, calibrated by a saved calibration or on the fly") {
+  // A model of the 14-cell glove, and subject 2's frames as the glove sends them ("timestamp,cell_0,...",
+  // 60 Hz, 10 s of calibration first), with one garbage line.
+  const DescribedGlove glove = main14_glove("raw14");
+  const std::string model_file = main14_model(glove, "t_raw14.safetensors");
+  Run r;
+  const io::Dataset& d = glove.dataset;
+  const std::size_t cells = d.cell_count;
+  std::vector<std::vector<double>> frames;
+  for (std::size_t f = 0; f < d.frames(); ++f)
+    if (d.subject[f] == 2 && d.session[f] == 0)
+      frames.emplace_back(d.cells.begin() + static_cast<long>(f * cells), d.cells.begin() + static_cast<long>((f + 1) * cells));
+  REQUIRE(frames.size() == 2400);
+  const std::string stream = temp("raw14_stream.csv");
+  {
+    std::ofstream out(stream);
+    out << "timestamp";
+    for (const std::string& name : glove.names) out << "," << name;
+    out << "\n";
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (i == 700) out << "12.5,oops\n";
+      out << number17(static_cast<double>(i) / 60.0);
+      for (double v : frames[i]) out << "," << number17(v);
+      out << "\n";
+    }
+  }
+  const std::string predict = "predict --model " + model_file + " --raw ";
+
+  // A saved calibration written here (each cell's range a little inside its readings' over the
+  // calibration, so some session readings clamp at +-1.5; noise unknown), against the
+  // calibrated rows computed here from it and given to predict's calibrated-cells mode.
+  std::vector<double> lo(cells, HUGE_VAL), hi(cells, -HUGE_VAL);
+  for (std::size_t i = 0; i < 600; ++i)
+    for (std::size_t c = 0; c < cells; ++c) {
+      lo[c] = std::min(lo[c], frames[i][c]);
+      hi[c] = std::max(hi[c], frames[i][c]);
+    }
+  {
+    std::ofstream out(temp("raw14.calibration"));
+    out << "glovepose-calibration 2\nglove\tmain14\nsensors\t" << cells << "\n";
+    for (std::size_t c = 0; c < cells; ++c) {
+      const double inset = 0.1 * (hi[c] - lo[c]);
+      lo[c] += inset;
+      hi[c] -= inset;
+      out << glove.names[c] << "\t" << number17(lo[c]) << "\t" << number17(hi[c]) << "\t0\n";
+    }
+  }
+  std::size_t clamped = 0;
+  {
+    std::ofstream out(temp("raw14_calibrated.csv"));
+    for (const auto& frame : frames)
+      for (std::size_t c = 0; c < cells; ++c) {
+        const double v = 2.0 * (frame[c] - lo[c]) / (hi[c] - lo[c]) - 1.0;
+        clamped += std::abs(v) > 1.5;
+        out << number17(std::clamp(v, -1.5, 1.5)) << (c + 1 < cells ? "," : "\n");
+      }
+  }
+  CHECK(clamped > 0);
+  r = run_stream(predict + "--calibration " + temp("raw14.calibration") + " --in " + stream, 1);
+  REQUIRE(r.status == 0);
+  const auto from_raw = csv_numbers(r.out, true);
+  r = run_stream("predict --model " + model_file + " --in " + temp("raw14_calibrated.csv"), 1);
+  REQUIRE(r.status == 0);
+  const auto from_calibrated = csv_numbers(r.out, true);
+  REQUIRE(from_raw.size() == 2400);  // every frame, the garbage line skipped
+  REQUIRE(from_calibrated.size() == 2400);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < from_raw.size(); ++i) {
+    REQUIRE(from_raw[i].size() == 25);
+    for (std::size_t k = 0; k < 25; ++k) worst = std::max(worst, std::abs(from_raw[i][k] - from_calibrated[i][k]));
+  }
+  CHECK(worst < 1e-6);  // radians: the same network on the same calibrated cells
+  // The garbage line: told on stderr when it came, counted at the end.
+  r = run_stream(predict + "--calibration " + temp("raw14.calibration") + " --in " + stream, 2);
+  CHECK_MESSAGE(r.out.find("glovepose predict: '" + stream +
+                           "' line 702: 2 fields, expected 15 (a timestamp in seconds and the 14 cells "
+                           "of glove 'main14': cell_0,cell_20,") == 0,
+                r.out);
+  CHECK(r.out.find("glovepose predict: 1 of 2401 lines of '" + stream + "' not understood and skipped (the first: line 702: ") !=
+        std::string::npos);
+  CHECK(r.out.find("glovepose predict: '" + stream + "': 2401 lines, 2400 understood, 1 skipped, 0 refused by the estimator; 2400 poses") !=
+        std::string::npos);
+
+  // On the fly: the first 10 s calibrate (no rows for them), the rest give a row each. The saved
+  // calibration is the running median's (20 frames, a third of a second at 60 Hz) min and max over
+  // the calibration's 600 frames, computed here, and gives the same poses when loaded.
+  r = run_stream(predict + "--calibration-seconds 10 --save-calibration " + temp("raw14_fly.calibration") + " < " + stream, 1);
+  REQUIRE(r.status == 0);
+  const auto on_the_fly = csv_numbers(r.out, true);
+  REQUIRE(on_the_fly.size() == 1800);
+  std::ifstream saved(temp("raw14_fly.calibration"));
+  std::string line;
+  for (int skip = 0; skip < 3; ++skip) std::getline(saved, line);
+  for (std::size_t c = 0; c < cells; ++c) {
+    REQUIRE(std::getline(saved, line));
+    std::istringstream fields(line);
+    std::string name;
+    double min = 0.0, max = 0.0;
+    fields >> name >> min >> max;
+    CHECK(name == glove.names[c]);
+    double median_lo = HUGE_VAL, median_hi = -HUGE_VAL;
+    for (std::size_t end = 20; end <= 600; ++end) {
+      std::vector<double> window;
+      for (std::size_t i = end - 20; i < end; ++i) window.push_back(frames[i][c]);
+      std::sort(window.begin(), window.end());
+      median_lo = std::min(median_lo, 0.5 * (window[9] + window[10]));
+      median_hi = std::max(median_hi, 0.5 * (window[9] + window[10]));
+    }
+    CHECK(min == doctest::Approx(median_lo).epsilon(1e-9));
+    CHECK(max == doctest::Approx(median_hi).epsilon(1e-9));
+  }
+  r = run_stream(predict + "--calibration " + temp("raw14_fly.calibration") + " --in " + stream, 1);
+  REQUIRE(r.status == 0);
+  const auto reloaded = csv_numbers(r.out, true);
+  REQUIRE(reloaded.size() == 2400);
+  for (std::size_t i = 0; i < on_the_fly.size(); ++i) CHECK(on_the_fly[i] == reloaded[600 + i]);
+
+  // Streams it cannot use: a non-zero exit and the reason.
+  std::ofstream(temp("raw14_garbage.txt")) << "hello glove\n\nnot,a,frame\n# comment\n1;2;3\n";
+  r = run(predict + "--calibration " + temp("raw14.calibration") + " --in " + temp("raw14_garbage.txt"));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("glovepose predict: no line of '" + temp("raw14_garbage.txt") +
+                           "' understood (3 lines, the first not understood: line 1: 1 field, expected 15 ") != std::string::npos,
+                r.out);
+  r = run(predict + "< " + temp("raw14_garbage.txt"));  // on the fly (30 s by default), from stdin
+  CHECK(r.status == 1);
+  CHECK(r.out.find("glovepose predict: no line of stdin understood (3 lines, ") != std::string::npos);
+  // Every frame refused (a reading the glove dropped in each): no pose, said so.
+  {
+    std::ofstream out(temp("raw14_nan.csv"));
+    for (std::size_t i = 0; i < 5; ++i) {
+      out << i;
+      for (std::size_t c = 0; c < cells; ++c) out << (c == 3 ? ",nan" : ",1");
+      out << "\n";
+    }
+  }
+  r = run(predict + "--calibration " + temp("raw14.calibration") + " --in " + temp("raw14_nan.csv"));
+  CHECK(r.status == 1);
+  CHECK_MESSAGE(r.out.find("no pose computed from the 5 inputs of '" + temp("raw14_nan.csv") +
+                           "' (5 refused by the estimator, the first: line 1: non-finite value;") != std::string::npos,
+                r.out);
+  // A calibration of another glove.
+  {
+    std::ofstream out(temp("raw14_other.calibration"));
+    out << "glovepose-calibration 2\nglove\tglauser2019-44\nsensors\t1\ncell_0\t0\t1\t0\n";
+  }
+  r = run(predict + "--calibration " + temp("raw14_other.calibration") + " --in " + stream);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("line 2: 'glove\tglauser2019-44', expected 'glove\tmain14'") != std::string::npos);
+  // A saved calibration or its seconds without --raw: a usage error.
+  r = run("predict --model " + model_file + " --calibration " + temp("raw14.calibration") + " --in " + stream);
+  CHECK(r.status == 2);
+  CHECK(r.out.find("--calibration requires --raw") != std::string::npos);
 }
 
 TEST_CASE("cli: glovepose demo streams a new user through the shipped model and writes the table and pictures") {

@@ -184,4 +184,27 @@ inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) {
       if (flag != other) flag->excludes(other);
 }
 
+/// Default of --calibration-seconds: stream time the user moves through extreme poses.
+inline constexpr double kDefaultCalibrationSeconds = 30.0;
+
+/// Adds how a glove's stream is calibrated: `--calibration-seconds S` (on the fly, `seconds`) or
+/// `--calibration FILE` (a saved one, `file`), one or the other, both needing `needs` when given.
+inline void add_glove_line_calibration(CLI::App& command, double& seconds, std::string& file, CLI::Option* needs) {
+  CLI::Option* on_the_fly =
+      add_number(command, "--calibration-seconds", "S", seconds,
+                 "the first S seconds of stream time calibrate on the fly while the user moves through extreme poses (default 30)")
+          ->check(above(0.0));
+  CLI::Option* saved = command
+                           .add_option("--calibration", file,
+                                       "a saved calibration of this user and glove (glovepose predict --save-calibration, or the "
+                                       "estimator's save_calibration()) instead of calibrating on the fly")
+                           ->check(existing_file())
+                           ->type_name("FILE")
+                           ->excludes(on_the_fly);
+  if (needs != nullptr) {
+    on_the_fly->needs(needs);
+    saved->needs(needs);
+  }
+}
+
 }  // namespace glovepose::cli

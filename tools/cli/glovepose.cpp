@@ -1,7 +1,10 @@
 // The glovepose command-line tool.
 //   glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]
+//       [--raw [--calibration FILE | --calibration-seconds S [--save-calibration FILE]]]
 //       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
-//       radians out (theta 9..33 of the hand model), one row per input row.
+//       radians out (theta 9..33 of the hand model), one row per input row; with --raw, the glove's own
+//       readings ("timestamp,cell,...,cell", as view --stdin reads them, glove_lines.hpp) through the
+//       estimator, calibrated by a saved calibration or on the fly, one row per pose.
 //   glovepose info --model FILE
 //       what a model file holds.
 //   glovepose simulate ...
@@ -38,6 +41,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "glove_lines.hpp"
 
 using namespace glovepose;
 
@@ -47,7 +51,32 @@ struct PredictOptions {
   std::string model, input;  // input empty: stdin
   nn::WeightStorage storage = nn::WeightStorage::F32;
   bool no_header = false;
+  bool raw = false;  // the glove's own readings, calibrated here
+  double calibration_seconds = cli::kDefaultCalibrationSeconds;
+  std::string calibration, save_calibration;  // --raw: a saved calibration to use; where to save the one made on the fly
 };
+
+void print_angles(const hand::Angles& angles) {
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%.9g", d ? "," : "", angles[d]);
+  std::printf("\n");
+}
+
+// --raw: the glove's lines through an estimator, as view --stdin reads them; a row of angles per pose.
+void predict_raw(const PredictOptions& o, std::shared_ptr<const PoseModel> model, std::istream& in) {
+  GlovePoseEstimator estimator(model);
+  if (!o.calibration.empty()) estimator.load_calibration(o.calibration);
+  const cli::GloveLineFormat format(*model, false);
+  cli::GloveLineCounts counts;
+  const std::string source = o.input.empty() ? "stdin" : "'" + o.input + "'";
+  cli::read_glove_lines(cli::GloveLineSource{in, source, "glovepose predict"}, format, estimator,
+                        cli::on_the_fly_seconds(o.calibration_seconds, o.calibration), counts, [&](Status status) {
+                          if (status == Status::Solved) print_angles(estimator.pose().angles);
+                        });
+  std::fflush(stdout);
+  if (!o.save_calibration.empty()) estimator.save_calibration(o.save_calibration);
+  std::fprintf(stderr, "glovepose predict: %s: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n",
+               source.c_str(), counts.lines, counts.inputs, counts.skipped, counts.rejected, counts.poses);
+}
 
 // One row of `count` numbers; throws Error naming the line and column.
 std::vector<double> parse_row(const std::string& line, std::size_t line_no, std::size_t count) {
@@ -89,9 +118,6 @@ int predict(const PredictOptions& o) {
   PoseModelOptions options;
   options.storage = o.storage;
   const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model, options);  // the glove: from the file, or built in
-  const grid::GridMap& map = model->glove().map();
-  auto ws = model->network().make_workspace();
-
   std::ifstream file;
   if (!o.input.empty()) {
     file.open(o.input);
@@ -102,6 +128,12 @@ int predict(const PredictOptions& o) {
     for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%s", d ? "," : "", hand::kDofs[d].name);
     std::printf("\n");
   }
+  if (o.raw) {
+    predict_raw(o, model, in);
+    return 0;
+  }
+  const grid::GridMap& map = model->glove().map();
+  auto ws = model->network().make_workspace();
   std::string line;
   std::size_t line_no = 0;
   bool first_row = true;
@@ -111,16 +143,15 @@ int predict(const PredictOptions& o) {
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     if (first_row && looks_like_header(line))
       throw Error("line " + std::to_string(line_no) + ": '" + line.substr(0, 60) + (line.size() > 60 ? "...'" : "'") +
-                  " looks like a header, expected rows of calibrated cell values without one; a recording with named "
-                  "columns is imported with glovepose import and evaluated with glovepose eval");
+                  " looks like a header, expected rows of calibrated cell values without one; the glove's own readings "
+                  "with a header naming its cells are read by --raw, a recording with named columns is imported with "
+                  "glovepose import and evaluated with glovepose eval");
     first_row = false;
     const std::vector<double> values = parse_row(line, line_no, cells);
     hand::Angles normalized{};
     if (model->network().normalized_dofs(map, values.data(), normalized, ws) != Status::Ok)
       throw Error("line " + std::to_string(line_no) + ": the network refused the input (a result beyond float's range)");
-    const hand::Angles angles = model->joint_limits().denormalize(model->model_outputs(normalized));
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) std::printf("%s%.9g", d ? "," : "", angles[d]);
-    std::printf("\n");
+    print_angles(model->joint_limits().denormalize(model->model_outputs(normalized)));
   }
   return 0;
 }
@@ -160,14 +191,28 @@ cli::Command add_predict(CLI::App& tool) {
   auto o = std::make_shared<PredictOptions>();
   CLI::App* command = tool.add_subcommand(
       "predict",
-      "Rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in radians "
-      "out (theta 9..33 of the hand model), one row per input row.");
+      "Rows of calibrated cell values (the model's glove's cells in the order of its description, 44 for the built-in glove; "
+      "comma-separated, in [-1, 1]) in, 25 joint angles in radians out (theta 9..33 of the hand model), one row per input row. "
+      "With --raw, the glove's own readings in, as glovepose view --stdin reads them: one frame per line, "
+      "'timestamp,cell,...,cell' (seconds, then the cells in the glove's unit; an optional first line 'timestamp,<cell names>' "
+      "or 'timestamp_ms,...'), calibrated by a saved calibration (--calibration) or on the fly from the first "
+      "--calibration-seconds of stream time; one row of angles per pose (none for the frames of the on-the-fly calibration), "
+      "lines that do not parse counted and skipped, a count on stderr.");
   cli::add_model_file(*command, o->model, "the model file")->required();
-  command->add_option("--in", o->input, "the rows, a CSV file without a header (default: stdin)")
+  command->add_option("--in", o->input, "the rows, a CSV file without a header (--raw: with one or without) (default: stdin)")
       ->check(cli::existing_file())
       ->type_name("CSV");
   cli::add_storage_flags(*command, o->storage);
   command->add_flag("--no-header", o->no_header, "leave out the first output line (the DoF names)");
+  CLI::Option* raw =
+      command->add_flag("--raw", o->raw,
+                        "the glove's own readings, uncalibrated: 'timestamp,cell,...,cell' per line (or, for the built-in glove, raw rows "
+                        "'row,value,timestamp' of its wiring)");
+  cli::add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, raw);
+  command->add_option("--save-calibration", o->save_calibration, "--raw: save the calibration made on the fly to FILE (for --calibration)")
+      ->type_name("FILE")
+      ->needs(raw)
+      ->excludes("--calibration");
   return {command, [o] { return predict(*o); }};
 }
 

@@ -4,11 +4,10 @@
 //   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove on stdin
 //   (--stdin): any glove's frames, one "timestamp,cell,...,cell" line each (the model's glove's cells in
 //   the order of its description), or the built-in glove's raw rows, one "row,value,timestamp" line each;
-//   the first 30 s of stream time, or --calibration-seconds, are the calibration (docs/own_glove.md,
-//   "Live viewing"). The page asks for the newest hand (GET /state) about 30 times a second.
+//   the first 30 s of stream time, or --calibration-seconds, are the calibration, or --calibration FILE
+//   is a saved one (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing"). The page asks for
+//   the newest hand (GET /state) about 30 times a second.
 #include <glovepose/estimator.hpp>
-#include <glovepose/io/csv_fields.hpp>
-#include <glovepose/io/number_text.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -20,18 +19,16 @@
 
 #include <algorithm>
 #include <atomic>
-#include <charconv>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
-#include <vector>
 
 #include "commands.hpp"
+#include "glove_lines.hpp"
 #include "new_user.hpp"
 #include "view_page.hpp"
 
@@ -47,104 +44,9 @@ struct ViewOptions {
   std::uint64_t seed = 2026;
   std::string replay;
   bool from_stdin = false;
-  double calibration_seconds = 30.0;  // --stdin: stream time the user moves through extreme poses
+  double calibration_seconds = kDefaultCalibrationSeconds;  // --stdin
+  std::string calibration;                                  // --stdin: a saved calibration instead (empty: none)
   double seconds = 0.0;               // 0: until the glove's stream ends (or Ctrl-C)
-};
-
-// The lines of a glove on stdin, for the model's glove: a frame of its cells, "timestamp,v_0,...,v_{n-1}"
-// (seconds, then the n cells in the order of its description, in the glove's own unit), for any glove;
-// or, when the model knows the glove's wiring (the built-in glove), a raw row "row,value,timestamp".
-// A first line "timestamp,<the cell names>" (or "timestamp_ms,...", as import reads a take) names the
-// columns; it must name the glove's cells in order.
-class StdinFormat {
- public:
-  enum class Kind { Header, Cells, Row };
-
-  StdinFormat(const PoseModel& model, bool shipped_model) : glove_(model.glove()), shipped_(shipped_model) {
-    if (model.solver()) rows_ = model.solver()->layout().row_count();
-  }
-
-  // One line (not blank, not a comment) into `cells` (a frame) or `row`, `value`, `t`; throws Error
-  // "line N: why" for a line that is neither.
-  Kind parse(const std::string& line, long line_no, std::vector<double>& cells, int& row, double& value, double& t) const {
-    const std::vector<std::string> fields = io::split_csv_line(line);
-    const std::string at = "line " + std::to_string(line_no);
-    const auto field = [&](std::size_t i) { return at + ", field " + std::to_string(i + 1) + " ('" + clip(fields[i]) + "')"; };
-    if (fields[0] == "timestamp" || fields[0] == "timestamp_ms") return Kind::Header;
-    if (fields.size() == cells.size() + 1) {
-      t = io::parse_csv_number<double>(fields[0], field(0));
-      for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = reading(fields[c + 1], field(c + 1));
-      return Kind::Cells;
-    }
-    if (rows_ > 0 && fields.size() == 3) {
-      const std::int32_t r = io::parse_csv_id(fields[0], field(0));
-      if (r >= rows_) throw Error(field(0) + " is not a row of the glove's wiring, expected 0.." + std::to_string(rows_ - 1));
-      row = r;
-      value = reading(fields[1], field(1));
-      t = io::parse_csv_number<double>(fields[2], field(2));
-      return Kind::Row;
-    }
-    throw Error(at + ": " + std::to_string(fields.size()) + (fields.size() == 1 ? " field" : " fields") + ", expected " + expected());
-  }
-
-  // The units per second of the time column a header line names ('timestamp': 1, 'timestamp_ms':
-  // 1000); throws Error unless it names a time column and the glove's cells, in order.
-  double check_header(const std::string& line, long line_no) const {
-    std::vector<std::string> fields = io::split_csv_line(line), names{fields[0]};
-    names.insert(names.end(), glove_.cell_names().begin(), glove_.cell_names().end());
-    if (fields != names)
-      throw Error("stdin line " + std::to_string(line_no) + " names the columns '" + clip(line) +
-                  "', expected 'timestamp' (seconds) or 'timestamp_ms' and the " + std::to_string(glove_.cell_count()) +
-                  " cells of glove '" + glove_.id() + "' in the order of its description: " + join(names));
-    return fields[0] == "timestamp_ms" ? 1000.0 : 1.0;
-  }
-
-  // What a line holds, for messages.
-  std::string expected() const {
-    std::string out = std::to_string(glove_.cell_count() + 1) + " (a timestamp in seconds and the " + std::to_string(glove_.cell_count()) +
-                      " cells of glove '" + glove_.id() + "': " + clip(join(glove_.cell_names())) + ")";
-    if (rows_ > 0) out = "3 (row,value,timestamp: a raw row of its wiring) or " + out;
-    if (shipped_) out += "; the glove is the shipped model's: another glove's lines need --model, a model trained for it";
-    return out;
-  }
-
-  // A frame is one line of cells; raw rows make one once each of the wiring's rows arrived.
-  std::string frames_from() const {
-    return rows_ > 0 ? "one per line of cells, or once every one of the wiring's " + std::to_string(rows_) + " rows has arrived"
-                     : "one per line of cells";
-  }
-
- private:
-  static std::string join(const std::vector<std::string>& names) {
-    std::string out;
-    for (const std::string& n : names) out += (out.empty() ? "" : ",") + n;
-    return out;
-  }
-  static std::string clip(const std::string& text) { return text.size() > 80 ? text.substr(0, 77) + "..." : text; }
-  // A reading: a number, or nan/inf (a reading the glove dropped), which the estimator refuses and
-  // counts in the pose's flags, as it does from any source.
-  static double reading(const std::string& text, const std::string& where) {
-    double v = 0.0;
-    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (!text.empty() && r.ec == std::errc() && r.ptr == text.data() + text.size()) return v;
-    return io::parse_csv_number<double>(text, where);  // a leading '+', or the reason it is no number
-  }
-
-  const grid::GloveDescription& glove_;
-  int rows_ = 0;
-  bool shipped_ = false;
-};
-
-// What the glove's stream has told so far, for the page and the end of the run.
-struct StreamNotes {
-  mutable std::mutex lock;
-  long lines = 0;             // lines read (but blank lines, comments and the header)
-  long inputs = 0;            // frames of cells and rows understood
-  long skipped = 0;           // lines not understood
-  long rejected = 0;          // inputs the estimator refused (readout.hpp statuses: e.g. a timestamp going back)
-  long poses = 0;             // poses computed
-  std::string first_skipped;  // "line N: why"
-  std::string calibration;    // the calibration's report of sensors read as 0, once it finished
 };
 
 // The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
@@ -168,90 +70,20 @@ class GloveStream {
     }
   }
 
-  // Lines of `format` from stdin until it ends (or stop). Throws Error when the stream cannot
-  // serve a pose: no line understood, a header naming other columns, a calibration without enough
-  // frames, or a stream that ends within the calibration. Lines not understood are counted in
-  // `notes`; the first is told on stderr when it comes, the count when stdin ends, with a summary
-  // on stdout.
-  void from_stdin(const StdinFormat& format, double calibration_seconds, StreamNotes& notes) {
-    std::string line;
-    long line_no = 0;
-    bool header_allowed = true;
-    double units_per_second = 1.0;  // of the time column; a header may say milliseconds
-    double first = std::nan(""), last = std::nan("");
-    std::vector<double> cells(static_cast<std::size_t>(estimator_.model().cell_count()));
-    estimator_.start_calibration();
-    while (!stop_ && std::getline(std::cin, line)) {
-      ++line_no;
-      if (io::blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#') continue;
-      StdinFormat::Kind kind;
-      int row = 0;
-      double value = 0.0, t = 0.0;
-      try {
-        kind = format.parse(line, line_no, cells, row, value, t);
-      } catch (const Error& e) {
-        const std::lock_guard<std::mutex> hold(notes.lock);
-        ++notes.lines;
-        if (notes.skipped++ == 0) {
-          notes.first_skipped = e.what();
-          std::cerr << "glovepose view: stdin " << e.what() << "; skipped (lines that do not parse are counted, the first is told)\n";
-        }
-        continue;
-      }
-      if (kind == StdinFormat::Kind::Header) {
-        if (!header_allowed)
-          throw Error("stdin line " + std::to_string(line_no) + " names columns after the first line, expected rows of values");
-        units_per_second = format.check_header(line, line_no);
-        header_allowed = false;
-        continue;
-      }
-      header_allowed = false;
-      t /= units_per_second;
-      if (std::isnan(first)) first = t;
-      last = t;
-      if (estimator_.calibration_progress().collecting && t - first >= calibration_seconds)
-        finish_calibration(format, calibration_seconds, notes);
-      const Status status = kind == StdinFormat::Kind::Cells ? estimator_.push_cells(cells.data(), static_cast<int>(cells.size()), t)
-                                                             : estimator_.push_row(row, value, t);
-      latest_.publish(estimator_.state());
-      const std::lock_guard<std::mutex> hold(notes.lock);
-      ++notes.lines;
-      ++notes.inputs;
-      notes.poses += status == Status::Solved;
-      notes.rejected += status != Status::Solved && status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated;
-    }
+  // Lines of `format` from stdin until it ends (or stop): read_glove_lines, publishing the hand
+  // after each input, with a summary on stdout.
+  void from_stdin(const GloveLineFormat& format, std::optional<double> calibration_seconds, GloveLineCounts& counts) {
+    read_glove_lines(
+        GloveLineSource{std::cin, "stdin", "glovepose view"}, format, estimator_, calibration_seconds, counts,
+        [this](Status) { latest_.publish(estimator_.state()); }, &stop_);
     if (stop_) return;
-    const std::lock_guard<std::mutex> hold(notes.lock);
-    if (notes.inputs == 0)
-      throw Error("no line of stdin understood (" + std::to_string(notes.lines) + (notes.lines == 1 ? " line" : " lines") +
-                  (notes.skipped > 0 ? ", the first not understood: " + notes.first_skipped : "") + "), expected lines of " +
-                  format.expected());
-    if (estimator_.calibration_progress().collecting)
-      throw Error("stdin ended after " + io::number_text(last - first) +
-                  " s of stream time, within the calibration (--calibration-seconds " + io::number_text(calibration_seconds) +
-                  "): no pose was computed, expected a stream that goes on after the calibration");
-    if (notes.skipped > 0)
-      std::cerr << "glovepose view: " << notes.skipped << " of " << notes.lines
-                << " lines on stdin not understood and skipped (the first: " << notes.first_skipped << ")\n";
-    std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", notes.lines, notes.inputs,
-                notes.skipped, notes.rejected, notes.poses);
+    const std::lock_guard<std::mutex> hold(counts.lock);
+    std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", counts.lines, counts.inputs,
+                counts.skipped, counts.rejected, counts.poses);
     std::fflush(stdout);
   }
 
  private:
-  // Ends the calibration at its time: enough frames, or an Error saying how many came.
-  void finish_calibration(const StdinFormat& format, double seconds, StreamNotes& notes) {
-    const CalibrationProgress progress = estimator_.calibration_progress();
-    if (!progress.ready)
-      throw Error("the calibration took " + std::to_string(progress.frames) + " frames in the first " + io::number_text(seconds) +
-                  " s of stream time (--calibration-seconds), expected at least " + std::to_string(progress.frames_needed) +
-                  " (its running median's window; frames: " + format.frames_from() + ")");
-    const std::string report = estimator_.finish_calibration().flat_report();
-    if (!report.empty()) std::cerr << "glovepose view: calibration: " << report << "\n";
-    const std::lock_guard<std::mutex> hold(notes.lock);
-    notes.calibration = report;
-  }
-
   GlovePoseEstimator& estimator_;
   LatestHand& latest_;
   std::atomic<bool>& stop_;
@@ -259,7 +91,7 @@ class GloveStream {
 
 // The newest hand as the page's JSON: pose, OpenXR joints (wrist frame, metres), the calibration
 // step and its target pose's joints, latency.
-json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, const StreamNotes& notes, Clock::time_point stream_start,
+json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, const GloveLineCounts& notes, Clock::time_point stream_start,
                 double stream_t0) {
   HandState state;
   (void)latest.read(state);
@@ -345,10 +177,10 @@ void respond(int fd, const char* status, const char* type, const std::string& bo
 struct ViewShared {
   ViewShared(std::shared_ptr<const PoseModel> model, bool shipped_model)
       : format(*model, shipped_model), estimator(std::move(model), EstimatorConfig{}) {}
-  StdinFormat format;  // refers to the glove of the estimator's model
+  GloveLineFormat format;  // refers to the glove of the estimator's model
   GlovePoseEstimator estimator;
   LatestHand latest;
-  StreamNotes notes;
+  GloveLineCounts notes;
   std::string failure;  // why the glove's stream stopped; written before stream_done
   std::atomic<bool> stop{false}, stream_done{false};
 };
@@ -377,7 +209,9 @@ int view(const ViewOptions& o) {
   std::fflush(stdout);
   const Clock::time_point start = Clock::now();
   const double stream_t0 = o.from_stdin ? 0.0 : row_time(*user, 0, 0);
-  std::thread glove([shared, user, from_stdin = o.from_stdin, calibration_seconds = o.calibration_seconds] {
+  if (!o.calibration.empty()) shared->estimator.load_calibration(o.calibration);
+  const std::optional<double> calibration_seconds = on_the_fly_seconds(o.calibration_seconds, o.calibration);
+  std::thread glove([shared, user, from_stdin = o.from_stdin, calibration_seconds] {
     try {
       GloveStream stream(shared->estimator, shared->latest, shared->stop);
       if (from_stdin)
@@ -445,11 +279,9 @@ Command add_view(CLI::App& tool) {
           ->add_flag("--stdin", o->from_stdin,
                      "a real glove on stdin: one frame per line, 'timestamp,cell,...,cell' (the model's glove's cells "
                      "in the order of its description), or for the built-in glove one raw row per line, "
-                     "'row,value,timestamp'; the first --calibration-seconds of stream time calibrate")
+                     "'row,value,timestamp'; the first --calibration-seconds of stream time calibrate, or --calibration FILE")
           ->excludes(replay);
-  add_number(*command, "--calibration-seconds", "S", o->calibration_seconds, "--stdin: stream time of the calibration (default 30)")
-      ->check(above(0.0))
-      ->needs(from_stdin);
+  add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, from_stdin);
   add_number(*command, "--seconds", "N", o->seconds, "stop serving after N seconds (default: when the stream ends)")->check(at_least(0.0));
   return {command, [o] { return view(*o); }};
 }
