@@ -2,7 +2,8 @@
 // contact distance (the two distal radii of collision.hpp, summed here), only the two chains' angles
 // moved and within the joint limits, the other pairs kept apart, the detection's hysteresis, poses
 // without contact (the gallery's non-pinches, a pose between threshold and release) left bit for
-// bit, no allocation per frame; the shared damped least squares unchanged for the keypoint fit.
+// bit, no allocation per frame; in the estimator (EstimatorConfig::contact), the poses of a
+// simulated stream equal the stage-off estimator's except where the stage closed a pair.
 #include <glovepose/hand/contact.hpp>
 
 #include <doctest/doctest.h>
@@ -10,7 +11,10 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <vector>
 
+#include <glovepose/estimator.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/sim/pose_gallery.hpp>
 
 #include "alloc_counter.hpp"
@@ -175,7 +179,7 @@ TEST_CASE("contact stage: the detection's hysteresis, 15 mm on and 18 mm off") {
   CHECK_FALSE(step(17.0));  // off again: needs 15 mm
 }
 
-TEST_CASE("contact stage: apply allocates nothing; bad settings are refused at set-up") {
+TEST_CASE("contact stage: apply allocates nothing, bad settings are refused at set-up") {
   const hand::Kinematics fk;
   hand::ContactStage stage(fk, hand::JointLimits{});
   hand::Angles q = contact_pinch_at(fk, 14.0), open = sim::gallery_pose("spread").angles;
@@ -198,4 +202,55 @@ TEST_CASE("contact stage: apply allocates nothing; bad settings are refused at s
   bad = {};
   bad.change_weight = 0.0;
   CHECK_THROWS_WITH_AS(hand::ContactStage(fk, hand::JointLimits{}, bad), doctest::Contains("change_weight"), Error);
+}
+
+TEST_CASE("contact stage in the estimator: off by default, when on only the poses it closes change, without allocating") {
+  CHECK_FALSE(EstimatorConfig{}.contact.has_value());
+  sim::CorpusConfig config;
+  config.seed = 31;
+  config.subjects = config.sessions = config.gloves = 1;
+  config.minutes = 40.0 / 60.0;
+  config.calibration_seconds = 3.0;
+  config.threads = 1;
+  const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
+  const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors");
+  EstimatorConfig with;
+  with.contact = hand::ContactConfig{};
+  GlovePoseEstimator off(model), on(model, with);
+  off.start_calibration();
+  on.start_calibration();
+  const hand::Kinematics fk;
+  std::size_t poses = 0, adjusted = 0, allocations = 0;
+  std::vector<double> cells(data.cell_count);
+  for (std::size_t f = 0; f < data.frames(); ++f) {
+    if (data.kind[f] == io::kKindRecording && off.calibration_progress().collecting) {
+      off.finish_calibration();
+      on.finish_calibration();
+    }
+    for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = data.cells[f * data.cell_count + c];
+    const Status status = off.push_cells(cells.data(), static_cast<int>(cells.size()), data.timestamps[f]);
+    Status status_on = Status::Ok;
+    allocations += test::allocations_during([&] { status_on = on.push_cells(cells.data(), static_cast<int>(cells.size()), data.timestamps[f]); });
+    REQUIRE(status == status_on);
+    if (status != Status::Solved) continue;
+    ++poses;
+    const hand::Angles &a = off.pose().angles, &b = on.pose().angles;
+    const hand::ContactResult& r = on.contact();
+    if (r.closed < 0) {
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(b[d] == a[d]);
+      continue;
+    }
+    ++adjusted;
+    const auto finger = static_cast<hand::Finger>(r.closed + 1);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d)
+      if (hand::kDofs[d].finger != hand::Finger::Thumb && hand::kDofs[d].finger != finger) CHECK(b[d] == a[d]);
+    CHECK(contact_tip_distance(fk, a, finger) < 18.0);  // the evidence: the stage-off pose's tips were close
+    // Closed to the two distal radii (collision.hpp's table: the thumb's distal phalanx is id 3).
+    const double touch = hand::kReferenceDistalRadius[3] + hand::kReferenceDistalRadius[static_cast<std::size_t>(hand::kFingerBase[static_cast<std::size_t>(finger)]) + 2];
+    CHECK(std::abs(contact_tip_distance(fk, b, finger) - touch) < 0.1);
+  }
+  MESSAGE(poses << " poses, " << adjusted << " adjusted by the contact stage");
+  CHECK(poses > 1000);
+  CHECK(adjusted > 0);
+  CHECK(allocations == 0);
 }

@@ -85,6 +85,7 @@ class GlovePoseEstimator {
     if (config_.clock_restart_frames < 1)
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
+    if (config_.contact) contact_.emplace(kinematics_, model_->joint_limits(), *config_.contact);
     if (config_.network_threads > 1 && model_->network().unet() != nullptr) team_ = std::make_unique<core::Team>(config_.network_threads);
     if (model_->solver()) {
       readout_.emplace(model_->solver(), config_.readout);
@@ -149,6 +150,7 @@ class GlovePoseEstimator {
     const auto start = std::chrono::steady_clock::now();
     const bool restarted = !std::isfinite(last_cells_timestamp_) || timestamp - last_cells_timestamp_ > config_.readout.gap_seconds;
     if (restarted && smoothing_) smoothing_->reset();
+    if (restarted && contact_) contact_->reset();
     cells_backwards_run_ = 0;
     cells_ = Eigen::Map<const Eigen::VectorXd>(cells, count);
     last_cells_timestamp_ = timestamp;
@@ -161,6 +163,9 @@ class GlovePoseEstimator {
   const Pose& pose() const noexcept { return pose_; }
   /// @brief The latest skeleton (reference chain, mm; posed with every pose: the pinch state reads its fingertips).
   const hand::Skeleton& skeleton() const noexcept { return skeleton_; }
+  /// @brief What the contact stage (EstimatorConfig::contact) did to the latest pose: the pairs in
+  /// contact and the one adjusted (none when the stage is off).
+  const hand::ContactResult& contact() const noexcept { return contact_result_; }
   /// @brief The latest joint list (metres, quaternions; hand/joint_list.hpp), when joint_transforms is on.
   const hand::JointList& joints() const noexcept { return joints_; }
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
@@ -300,6 +305,7 @@ class GlovePoseEstimator {
   void reset() noexcept {
     if (readout_) readout_->reset();
     if (smoothing_) smoothing_->reset();
+    if (contact_) contact_->reset();
     trend_.reset();
     aim_tracker_.reset();
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
@@ -395,6 +401,7 @@ class GlovePoseEstimator {
     // history belong to the stream before).
     if (frame.health.restarts != readout_restarts_) {
       if (smoothing_) smoothing_->reset();
+      if (contact_) contact_->reset();
       trend_.reset();
     }
     readout_restarts_ = frame.health.restarts;
@@ -439,6 +446,7 @@ class GlovePoseEstimator {
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
     kinematics_.pose(pose_.angles, skeleton_);  // the pinch state's fingertips, and the joints when asked
+    if (contact_) contact_result_ = contact_->apply(pose_.angles, skeleton_);  // adjusts the skeleton with the angles
     if (config_.joint_transforms) hand::to_joint_list(kinematics_, skeleton_, joints_);
     (void)trend_.add(timestamp, pose_.angles);  // refuses non-finite angles, keeping the trend as it was
     pose_.timestamp = timestamp;
@@ -471,6 +479,8 @@ class GlovePoseEstimator {
   double sequence_start_ = std::numeric_limits<double>::quiet_NaN();
   double sequence_now_ = 0.0;
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
+  std::optional<hand::ContactStage> contact_;  // EstimatorConfig::contact
+  hand::ContactResult contact_result_;
   typename Model::Network::Workspace workspace_;
   std::unique_ptr<core::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;

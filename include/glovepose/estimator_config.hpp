@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "filter/one_euro.hpp"
+#include "hand/contact.hpp"
 #include "hand/handedness.hpp"
 #include "hand/kinematics.hpp"
 #include "sensor/calibration.hpp"
@@ -68,6 +69,12 @@ struct EstimatorConfig {
   int clock_restart_frames = 10;
   std::optional<filter::OneEuroConfig> smoothing;       ///< 1-euro smoothing of the angles; none: the network's output.
   bool joint_transforms = false;                        ///< Compute the joint list with every pose (the skeleton is always posed).
+  /// The contact stage (hand/contact.hpp), after the smoothing: when the pose says thumb and a
+  /// finger touch (the pinch rule, 15 mm on / 18 mm off), the two chains' angles are adjusted so
+  /// that the tips meet; other poses are untouched. None (the default): off. It cannot make a pinch
+  /// the pose does not show, nor drop one it does: detection is the pose's own (docs/results.md,
+  /// "Contact-consistent poses").
+  std::optional<hand::ContactConfig> contact;
   hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
   /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
   /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,
