@@ -297,9 +297,29 @@ TEST_CASE("fingertip metrics: the JSON form has every key, undefined figures nul
   CHECK(json.at("pinches")[1].at("precision").is_null());
   for (const char* key :
        {"frames", "distance_error_mean_mm", "distance_error_p95_mm", "true_frames", "predicted_frames", "both_frames", "precision",
-        "recall", "onsets", "detected_onsets", "missed_onsets", "false_onsets", "latency_median_ms", "latency_mean_ms"})
+        "recall", "onsets", "detected_onsets", "missed_onsets", "false_onsets", "latency_median_ms", "latency_mean_ms",
+        "pinch_tip_error_mean_mm", "pinch_distance_error_mean_mm"})
     CHECK(index.contains(key));
   const std::string table = format_table(r, "the true angles");
   for (const char* row : {"thumb", "index", "middle", "ring", "pinky", "all", "Pinches", "10 ms"})
     CHECK(table.find(row) != std::string::npos);
+}
+
+TEST_CASE("fingertip metrics: in the true pinches, the two tips' mean error and the distance error") {
+  // Truth: pinch_index every frame; prediction: the same with the index's tip flexion off by 0.2 rad,
+  // which moves the index tip by the chord 2 L sin(0.1) and leaves the thumb's where it was.
+  const hand::Angles pinch = sim::gallery_pose("pinch_index").angles;
+  hand::Angles predicted = pinch;
+  predicted[hand::dof_of(hand::Finger::Index, hand::Motion::TipFlexion)] += 0.2;
+  FingertipAccumulator acc;
+  for (int i = 0; i < 3; ++i) acc.add(predicted, pinch, i / kRate);
+  acc.add(predicted, sim::gallery_pose("flat").angles, 3 / kRate);  // not a true pinch: not counted
+  const PinchScore s = acc.report().pinches[0];
+  REQUIRE(s.true_frames == 3);
+  const double chord = 2.0 * hand::kReferenceTipLength[1] * std::sin(0.1);
+  CHECK(s.pinch_tip_error_mean_mm == doctest::Approx(chord / 2.0).epsilon(1e-6));
+  CHECK(s.pinch_distance_error_mean_mm ==
+        doctest::Approx(std::abs(tip_distance(predicted, hand::Finger::Index) - tip_distance(pinch, hand::Finger::Index))));
+  CHECK(std::isnan(acc.report().pinches[1].pinch_tip_error_mean_mm));  // thumb-middle never pinches
+  CHECK(acc.report().all_pinches.pinch_tip_error_mean_mm == doctest::Approx(chord / 2.0).epsilon(1e-6));
 }

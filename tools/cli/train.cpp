@@ -3,6 +3,7 @@
 //   was not trained on (guided_calibration.hpp).
 #include <glovepose/train/metrics_report.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/hand/contact.hpp>
 #include <glovepose/io/json.hpp>
 #include <glovepose/sim/subject.hpp>
 #include <glovepose/train/fingertip_metrics.hpp>
@@ -13,7 +14,11 @@
 #include <glovepose/train/metrics.hpp>
 #include <glovepose/train/model_file.hpp>
 
-#include <unistd.h>
+#ifdef _WIN32
+#  include <io.h>  // _isatty
+#else
+#  include <unistd.h>
+#endif
 
 #include <atomic>
 #include <charconv>
@@ -101,6 +106,7 @@ struct Options {
   double validation = 0.1;
   io::DType dtype = io::DType::F32;  // storage of the written model
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
+  bool contact = false;  // eval: the contact stage (hand/contact.hpp) on the predicted poses
 };
 
 // Adds option `name` taking one of `choices` (their names are the value's name in the help).
@@ -213,7 +219,11 @@ std::string duration(double seconds) {
 // A progress bar on stderr: redrawn in place on a terminal, a line per epoch otherwise.
 std::function<void(const train::Progress&)> progress_bar(bool quiet) {
   if (quiet) return {};
+#ifdef _WIN32
+  const bool terminal = _isatty(2) != 0;
+#else
   const bool terminal = isatty(2) != 0;
+#endif
   auto last = std::make_shared<std::chrono::steady_clock::time_point>();
   return [terminal, last](const train::Progress& p) {
     const bool epoch_end = p.step == p.steps_per_epoch;
@@ -506,6 +516,10 @@ int eval_command(Options o) {
   }
   hand::Kinematics run_hand;
   hand::PinchTracker true_pinch;
+  // --contact: the stage on each person's own hand (as an estimator configured with the user's
+  // hand), its state starting over with every recording; poses adjusted and refused counted.
+  std::optional<hand::ContactStage> contact;
+  std::size_t contact_adjusted = 0, contact_refused = 0;
   for (long f = 0; f < samples.frames(); ++f) {
     hand::Angles n{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = normalized[static_cast<std::size_t>(f) * hand::kDofCount + d];
@@ -513,6 +527,23 @@ int eval_command(Options o) {
     if (guided) radians = calibration::with_offsets(radians, offsets.at(samples.run[static_cast<std::size_t>(f)]), limits);
     double p[hand::kDofCount], t[hand::kDofCount], q[hand::kDofCount];
     const auto source = static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f)]);
+    const double time = data.timestamps[source];
+    const bool run_start = f == 0 || samples.run[static_cast<std::size_t>(f)] != samples.run[static_cast<std::size_t>(f) - 1] ||
+                           !(time > data.timestamps[static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f) - 1])]);
+    if (run_start) {
+      run_hand = hands.of(data.subject[source]);
+      tips.begin_run(run_hand);
+      true_pinch.reset();
+      if (o.contact) contact.emplace(run_hand, limits);
+    }
+    const hand::Angles estimate = radians;  // what the contact stage sees
+    if (contact) {
+      hand::Skeleton skeleton;
+      run_hand.pose(radians, skeleton);
+      const hand::ContactResult r = contact->apply(radians, skeleton);
+      contact_adjusted += r.closed >= 0;
+      contact_refused += r.refused;
+    }
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const std::size_t i = static_cast<std::size_t>(f) * hand::kDofCount + d;
       p[d] = radians[d];
@@ -522,19 +553,11 @@ int eval_command(Options o) {
     }
     errors.add(p, t);
     if (with_truth) truth_errors.add(p, q);
-    const double time = data.timestamps[source];
-    const bool run_start = f == 0 || samples.run[static_cast<std::size_t>(f)] != samples.run[static_cast<std::size_t>(f) - 1] ||
-                           !(time > data.timestamps[static_cast<std::size_t>(samples.source[static_cast<std::size_t>(f) - 1])]);
-    if (run_start) {
-      run_hand = hands.of(data.subject[source]);
-      tips.begin_run(run_hand);
-      true_pinch.reset();
-    }
     hand::Angles reference{};
     std::copy(with_truth ? q : t, (with_truth ? q : t) + hand::kDofCount, reference.begin());
     tips.add(radians, reference, time);
     if (distances) {
-      const hand::PinchDistances truth_mm = hand::pinch_distances(run_hand, reference), pred_mm = hand::pinch_distances(run_hand, radians);
+      const hand::PinchDistances truth_mm = hand::pinch_distances(run_hand, reference), pred_mm = hand::pinch_distances(run_hand, estimate);
       const hand::PinchState state = true_pinch.update(truth_mm);
       std::fprintf(distances.get(), "%zu,%.9g,%d,%d,%d", source, time, data.subject[source], data.session[source], run_start ? 1 : 0);
       for (double d : truth_mm) std::fprintf(distances.get(), ",%.4f", d);
@@ -556,6 +579,10 @@ int eval_command(Options o) {
   const std::string calibration = guided ? "guided" : model::to_string(mode);
   const auto window = data.metadata.find("mean_window");
   const std::string mean_window = window == data.metadata.end() ? "null" : window->second;
+  const double scored_frames = static_cast<double>(std::max<long>(samples.frames(), 1));
+  const std::string contact_json = o.contact ? "{\"adjusted_frames\": " + std::to_string(contact_adjusted) + ", \"refused_frames\": " +
+                                                   std::to_string(contact_refused) + "}"
+                                             : "null";
   if (o.json) {
     const std::string tips_json = tips_report ? train::to_json(*tips_report, {{"scored_against", with_truth ? "\"truth\"" : "\"labels\""},
                                                                               {"hands", "\"" + hands.description + "\""}})
@@ -568,7 +595,8 @@ int eval_command(Options o) {
                                                 {"scored_against", "\"labels\""},
                                                 {"vs_labels", train::summary_json(report, lag_ms)},
                                                 {"vs_truth", truth_report ? train::summary_json(*truth_report, truth_lag_ms) : "null"},
-                                                {"fingertips", tips_json}})
+                                                {"fingertips", tips_json},
+                                                {"contact", contact_json}})
                              .c_str());
   } else {
     std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(),
@@ -578,6 +606,9 @@ int eval_command(Options o) {
     if (truth_report)
       std::printf("Against the true angles behind the labels (simulated data): mean %.2f deg, p95 %.1f deg, %.1f%% under 15 deg, lag %.1f ms\n",
                   truth_report->overall.mean_deg, truth_report->p95_deg, 100.0 * truth_report->share_under_15deg, truth_lag_ms);
+    if (o.contact)
+      std::printf("Contact stage: %zu poses adjusted (%.1f%%), %zu adjustments refused (collision)\n", contact_adjusted,
+                  100.0 * static_cast<double>(contact_adjusted) / scored_frames, contact_refused);
     if (tips_report) std::printf("\n%s", train::format_table(*tips_report, tips_against + ", " + hands.description).c_str());
   }
   return 0;
@@ -672,6 +703,9 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
         ->add_option("--pinch-distances", o->pinch_distances_file,
                      "write every frame's true and predicted thumb-to-fingertip distances (mm) and true pinch flags (CSV)")
         ->type_name("FILE.csv");
+    command->add_flag("--contact", o->contact,
+                      "adjust the predicted poses with the contact stage (thumb and finger tips brought together when the pose "
+                      "says they touch) before scoring");
     finish(command, o, eval_command);
   }
   {

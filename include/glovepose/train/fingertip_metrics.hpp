@@ -14,7 +14,9 @@
 ///   prediction); per-frame precision and recall of the predicted pinch against the
 ///   true one; and, for each true pinch onset, the predicted onset matched to it within
 ///   kPinchOnsetWindowS either side (its latency: predicted minus true onset time, negative when the
-///   prediction was early), the median latency and the onsets missed.
+///   prediction was early), the median latency and the onsets missed;
+/// - in the frames a pair pinches in truth: the mean position error of its two tips (thumb and
+///   finger pooled) and of their distance, what a contact stage (hand/contact.hpp) is for.
 ///
 /// The threshold and the release, and why 15 and 18 mm: hand/pinch.hpp. docs/results.md,
 /// "Fingertips and pinches", has the measurement.
@@ -107,6 +109,8 @@ struct PinchScore {
   std::size_t false_onsets = 0;         ///< Predicted onsets matched to no true onset.
   double latency_median_ms = NAN;       ///< Median (predicted - true onset time) over detected onsets.
   double latency_mean_ms = NAN;         ///< Their mean.
+  double pinch_tip_error_mean_mm = NAN;       ///< Over the true pinching frames: mean tip position error, thumb and finger pooled.
+  double pinch_distance_error_mean_mm = NAN;  ///< ... and mean |d_pred - d_true| there.
 };
 
 /// @brief What FingertipAccumulator::report() measured.
@@ -194,6 +198,10 @@ class FingertipAccumulator {
       pair.true_frames += true_on;
       pair.predicted_frames += pred_on;
       pair.both_frames += true_on && pred_on;
+      if (true_on) {
+        pair.pinch_tip_error_sum += (pred_tips[0] - true_tips[0]).norm() + (pred_tips[f] - true_tips[f]).norm();
+        pair.pinch_distance_error_sum += std::abs(d_pred - d_true);
+      }
       if (s.known && true_on && !s.true_on) pair.true_onsets.push_back({run_, time_s});
       if (s.known && pred_on && !s.pred_on) pair.predicted_onsets.push_back({run_, time_s});
       s = PairState{true, true_on, pred_on};
@@ -233,6 +241,8 @@ class FingertipAccumulator {
       all.true_frames += pair.true_frames;
       all.predicted_frames += pair.predicted_frames;
       all.both_frames += pair.both_frames;
+      all.pinch_tip_error_sum += pair.pinch_tip_error_sum;
+      all.pinch_distance_error_sum += pair.pinch_distance_error_sum;
     }
     std::vector<double> none;
     r.all_pinches = score("all", all, none);
@@ -254,6 +264,7 @@ class FingertipAccumulator {
   struct Pair {
     std::vector<double> distance_errors;
     std::size_t true_frames = 0, predicted_frames = 0, both_frames = 0;
+    double pinch_tip_error_sum = 0.0, pinch_distance_error_sum = 0.0;  // over the true pinching frames (tips: two per frame)
     std::vector<Onset> true_onsets, predicted_onsets;  // in time order within each run, runs in order
   };
   struct PairState {
@@ -302,7 +313,11 @@ class FingertipAccumulator {
     s.predicted_frames = pair.predicted_frames;
     s.both_frames = pair.both_frames;
     if (pair.predicted_frames > 0) s.precision = static_cast<double>(pair.both_frames) / static_cast<double>(pair.predicted_frames);
-    if (pair.true_frames > 0) s.recall = static_cast<double>(pair.both_frames) / static_cast<double>(pair.true_frames);
+    if (pair.true_frames > 0) {
+      s.recall = static_cast<double>(pair.both_frames) / static_cast<double>(pair.true_frames);
+      s.pinch_tip_error_mean_mm = pair.pinch_tip_error_sum / (2.0 * static_cast<double>(pair.true_frames));
+      s.pinch_distance_error_mean_mm = pair.pinch_distance_error_sum / static_cast<double>(pair.true_frames);
+    }
     const double window = config_.onset_window_s;
     std::vector<bool> used(pair.predicted_onsets.size(), false);
     std::size_t first = 0;  // predicted onsets before it are of earlier runs or too early for every later true onset

@@ -113,7 +113,8 @@ inline std::string format_table(const AngleErrorReport& r) {
 /// {"finger", "frames", "mean_mm", "median_mm", "p95_mm", "max_mm"}, thumb..pinky then "all") and
 /// "pinches" (array of {"finger", "frames", "distance_error_mean_mm", "distance_error_p95_mm",
 /// "true_frames", "predicted_frames", "both_frames", "precision", "recall", "onsets",
-/// "detected_onsets", "missed_onsets", "false_onsets", "latency_median_ms", "latency_mean_ms"},
+/// "detected_onsets", "missed_onsets", "false_onsets", "latency_median_ms", "latency_mean_ms",
+/// "pinch_tip_error_mean_mm", "pinch_distance_error_mean_mm"},
 /// index..pinky then "all"). Undefined figures (no frame, no pinch, no onset) are null.
 inline std::string to_json(const FingertipReport& r, const std::vector<std::pair<std::string, std::string>>& extra = {}) {
   const auto number = detail::json_number;
@@ -137,7 +138,9 @@ inline std::string to_json(const FingertipReport& r, const std::vector<std::pair
            ", \"precision\": " + number(p.precision) + ", \"recall\": " + number(p.recall) + ", \"onsets\": " + std::to_string(p.onsets) +
            ", \"detected_onsets\": " + std::to_string(p.detected_onsets) + ", \"missed_onsets\": " + std::to_string(p.missed_onsets) +
            ", \"false_onsets\": " + std::to_string(p.false_onsets) + ", \"latency_median_ms\": " + number(p.latency_median_ms) +
-           ", \"latency_mean_ms\": " + number(p.latency_mean_ms) + "}";
+           ", \"latency_mean_ms\": " + number(p.latency_mean_ms) +
+           ", \"pinch_tip_error_mean_mm\": " + number(p.pinch_tip_error_mean_mm) +
+           ", \"pinch_distance_error_mean_mm\": " + number(p.pinch_distance_error_mean_mm) + "}";
   };
   for (const PinchScore& p : r.pinches) out += "\n      " + pinch(p) + ",";
   out += "\n      " + pinch(r.all_pinches) + "]}";
