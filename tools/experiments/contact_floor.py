@@ -11,7 +11,9 @@ threshold T; T is swept from 5 to 60 mm in 0.25 mm steps. Per pair and pooled, p
 and recall against the true flag are printed at the pinch rule's 15 mm, at the break-even point
 (the T where min(precision, recall) is largest), and the best recall at precision >= 0.95 and the
 best precision at recall >= 0.95. Any detector thresholding a monotone function of the distance
-lies on this curve; "reachable" says whether one T gives both >= 0.95.
+lies on this curve; "reachable" says whether one T gives both >= 0.95. --margin N leaves out the
+frames within N frames of a true pinch's start or end (the transitions): what remains is the held
+pinch poses and the poses well apart, an easier test.
 """
 import argparse
 import csv
@@ -42,6 +44,29 @@ def smoothed(rows, pair, n):
             window.pop(0)
         out.append(sum(window) / len(window))
     return out
+
+
+def kept_frames(rows, pair, margin):
+    """Per frame whether it is more than `margin` frames from a change of the true flag in its recording."""
+    n = len(rows)
+    distance = [n] * n
+    last = None
+    for i, r in enumerate(rows):  # frames since the last change (a recording's start is not a change)
+        if r["run_start"] == "1":
+            last = None
+        elif rows[i - 1]["true_on_" + pair] != r["true_on_" + pair]:
+            last = i
+        if last is not None:
+            distance[i] = i - last
+    nxt = None
+    for i in range(n - 1, -1, -1):  # frames until the next change
+        if i + 1 < n and rows[i + 1]["run_start"] == "0" and rows[i + 1]["true_on_" + pair] != rows[i]["true_on_" + pair]:
+            nxt = i + 1
+        if i + 1 < n and rows[i + 1]["run_start"] == "1":
+            nxt = None
+        if nxt is not None:
+            distance[i] = min(distance[i], nxt - i)
+    return [d > margin for d in distance]
 
 
 def curve(scores, truth):
@@ -82,16 +107,21 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("distances", help="CSV of glovepose eval --pinch-distances")
     parser.add_argument("--smooth", type=int, nargs="*", default=[1, 5, 15], help="frames of the mean (1: the pose's own distance)")
+    parser.add_argument("--margin", type=int, default=0, help="leave out frames within this many of a true pinch's start or end")
     args = parser.parse_args()
     rows = read(args.distances)
     subjects = sorted({int(r["subject"]) for r in rows})
-    print(f"{len(rows)} frames, subjects {subjects}")
+    print(f"{len(rows)} frames, subjects {subjects}" + (f", frames within {args.margin} of a true pinch's start or end left out" if args.margin else ""))
     for n in args.smooth:
         print(f"detector: predicted distance{'' if n == 1 else f', mean of the last {n} frames'} < T")
         all_scores, all_truth = [], []
         for pair in PAIRS:
             scores = smoothed(rows, pair, n) if n > 1 else [float(r["pred_mm_" + pair]) for r in rows]
             truth = [int(r["true_on_" + pair]) for r in rows]
+            if args.margin:
+                keep = kept_frames(rows, pair, args.margin)
+                scores = [x for x, k in zip(scores, keep) if k]
+                truth = [x for x, k in zip(truth, keep) if k]
             summary(pair, curve(scores, truth))
             all_scores += scores
             all_truth += truth
