@@ -18,17 +18,12 @@
 #include <glovepose/sim/pose_gallery.hpp>
 
 #include "alloc_counter.hpp"
+#include "tip_distance.hpp"
 
 using namespace glovepose;
+using glovepose::test::tip_distance;
 
 namespace {
-
-// Thumb tip to the tip of `finger` (mm), from the kinematics' skeleton directly.
-double contact_tip_distance(const hand::Kinematics& fk, const hand::Angles& angles, hand::Finger finger) {
-  hand::Skeleton s;
-  fk.pose(angles, s);
-  return (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, finger)).norm();
-}
 
 // pinch_index with the index's base flexion opened by `open` rad: the tips part as it grows.
 hand::Angles contact_opened_pinch(double open) {
@@ -42,7 +37,7 @@ hand::Angles contact_pinch_at(const hand::Kinematics& fk, double target) {
   double lo = -0.3, hi = 0.6;
   for (int i = 0; i < 60; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (contact_tip_distance(fk, contact_opened_pinch(mid), hand::Finger::Index) < target ? lo : hi) = mid;
+    (tip_distance(fk, contact_opened_pinch(mid), hand::Finger::Index) < target ? lo : hi) = mid;
   }
   return contact_opened_pinch(0.5 * (lo + hi));
 }
@@ -60,7 +55,7 @@ TEST_CASE("contact stage: a known thumb-index gap is closed to the two tips' rad
     CAPTURE(start);
     stage.reset();
     hand::Angles q = contact_pinch_at(fk, start);
-    REQUIRE(contact_tip_distance(fk, q, hand::Finger::Index) == doctest::Approx(start).epsilon(1e-6));
+    REQUIRE(tip_distance(fk, q, hand::Finger::Index) == doctest::Approx(start).epsilon(1e-6));
     const hand::Angles before = q;
     hand::Skeleton skeleton;
     fk.pose(q, skeleton);
@@ -69,7 +64,7 @@ TEST_CASE("contact stage: a known thumb-index gap is closed to the two tips' rad
     CHECK_FALSE(r.refused);
     CHECK(r.closed == 0);
     CHECK(r.gap_before_mm == doctest::Approx(start - kThumbIndexContactMm).epsilon(1e-6));
-    CHECK(std::abs(contact_tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
+    CHECK(std::abs(tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
     CHECK(std::abs(r.gap_after_mm) < 0.1);
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const hand::Finger f = hand::kDofs[d].finger;
@@ -81,7 +76,7 @@ TEST_CASE("contact stage: a known thumb-index gap is closed to the two tips' rad
     for (std::size_t p = 0; p < hand::kPhalanxCount; ++p) CHECK((skeleton[p].matrix() - expected[p].matrix()).norm() < 1e-9);
     // The other pairs not brought closer than the release distance (pinch_index's are far beyond it).
     for (hand::Finger f : {hand::Finger::Middle, hand::Finger::Ring, hand::Finger::Pinky})
-      CHECK(contact_tip_distance(fk, q, f) >= std::min(18.0, contact_tip_distance(fk, before, f)) - 1e-6);
+      CHECK(tip_distance(fk, q, f) >= std::min(18.0, tip_distance(fk, before, f)) - 1e-6);
   }
 }
 
@@ -111,7 +106,7 @@ TEST_CASE("contact stage: the adjusted angles stay within the joint limits") {
     moved = moved || q[d] != q0[d];
   }
   CHECK(moved);
-  const double after = contact_tip_distance(fk, q, hand::Finger::Index);
+  const double after = tip_distance(fk, q, hand::Finger::Index);
   CHECK(after < 14.5);                       // closer ...
   CHECK(after > kThumbIndexContactMm + 0.1);  // ... but not closed: the limits hold
   // The unconstrained stage closes the same gap.
@@ -119,7 +114,7 @@ TEST_CASE("contact stage: the adjusted angles stay within the joint limits") {
   hand::Angles q2 = q0;
   fk.pose(q2, skeleton);
   (void)free_stage.apply(q2, skeleton);
-  CHECK(std::abs(contact_tip_distance(fk, q2, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
+  CHECK(std::abs(tip_distance(fk, q2, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
 }
 
 TEST_CASE("contact stage: no contact detected, nothing changes") {
@@ -139,7 +134,7 @@ TEST_CASE("contact stage: no contact detected, nothing changes") {
   for (const sim::KeyPose& k : sim::pose_gallery()) {
     bool pinch = false;
     for (hand::Finger f : {hand::Finger::Index, hand::Finger::Middle, hand::Finger::Ring, hand::Finger::Pinky})
-      pinch = pinch || contact_tip_distance(fk, k.angles, f) < 15.0;
+      pinch = pinch || tip_distance(fk, k.angles, f) < 15.0;
     if (pinch) continue;
     CAPTURE(k.name);
     stage.reset();
@@ -170,7 +165,7 @@ TEST_CASE("contact stage: the detection's hysteresis, 15 mm on and 18 mm off") {
     hand::Skeleton skeleton;
     fk.pose(q, skeleton);
     const hand::ContactResult r = stage.apply(q, skeleton);
-    return r.closed == 0 && std::abs(contact_tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1;
+    return r.closed == 0 && std::abs(tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1;
   };
   CHECK_FALSE(step(16.0));
   CHECK(step(14.0));
@@ -244,10 +239,10 @@ TEST_CASE("contact stage in the estimator: off by default, when on only the pose
     const auto finger = static_cast<hand::Finger>(r.closed + 1);
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (hand::kDofs[d].finger != hand::Finger::Thumb && hand::kDofs[d].finger != finger) CHECK(b[d] == a[d]);
-    CHECK(contact_tip_distance(fk, a, finger) < 18.0);  // the evidence: the stage-off pose's tips were close
+    CHECK(tip_distance(fk, a, finger) < 18.0);  // the evidence: the stage-off pose's tips were close
     // Closed to the two distal radii (collision.hpp's table: the thumb's distal phalanx is id 3).
     const double touch = hand::kReferenceDistalRadius[3] + hand::kReferenceDistalRadius[static_cast<std::size_t>(hand::kFingerBase[static_cast<std::size_t>(finger)]) + 2];
-    CHECK(std::abs(contact_tip_distance(fk, b, finger) - touch) < 0.1);
+    CHECK(std::abs(tip_distance(fk, b, finger) - touch) < 0.1);
   }
   MESSAGE(poses << " poses, " << adjusted << " adjusted by the contact stage");
   CHECK(poses > 1000);

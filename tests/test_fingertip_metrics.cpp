@@ -11,21 +11,16 @@
 #include <glovepose/io/json.hpp>
 #include <glovepose/sim/pose_gallery.hpp>
 
+#include "tip_distance.hpp"
+
 using namespace glovepose;
 using namespace glovepose::train;
+using glovepose::test::tip_distance;
 
 namespace {
 
 constexpr double kRate = 100.0;  // frames per second of the sequences below
 
-
-// Thumb-tip-to-fingertip distance (mm) on the reference hand, from the skeleton directly.
-double tip_distance(const hand::Angles& angles, hand::Finger finger) {
-  const hand::Kinematics fk;
-  hand::Skeleton s;
-  fk.pose(angles, s);
-  return (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, finger)).norm();
-}
 
 // A pose between `from` (a = 0) and `to` (a = 1), angle by angle.
 hand::Angles blend(const hand::Angles& from, const hand::Angles& to, double a) {

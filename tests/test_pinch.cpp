@@ -22,19 +22,15 @@
 
 #include "../capi/glovepose_c.h"
 #include "alloc_counter.hpp"
+#include "tip_distance.hpp"
 
 using namespace glovepose;
+using glovepose::test::tip_distance;
 
 namespace {
 
 
-// Thumb tip to the tip of `finger` (mm), from the skeleton directly, and the strength the file
-// comment of pinch.hpp defines: 1 up to 15 mm, 0 from 40 mm, the smoothstep between.
-double tip_distance(const hand::Kinematics& fk, const hand::Angles& angles, hand::Finger finger) {
-  hand::Skeleton s;
-  fk.pose(angles, s);
-  return (fk.fingertip(s, hand::Finger::Thumb) - fk.fingertip(s, finger)).norm();
-}
+// The strength the file comment of pinch.hpp defines: 1 up to 15 mm, 0 from 40 mm, the smoothstep between.
 double expected_strength(double d) {
   if (d <= 15.0) return 1.0;
   if (d >= 40.0) return 0.0;
