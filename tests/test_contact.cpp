@@ -249,3 +249,31 @@ TEST_CASE("contact stage in the estimator: off by default, when on only the pose
   CHECK(adjusted > 0);
   CHECK(allocations == 0);
 }
+
+TEST_CASE("contact stage: closing one pair does not bring the thumb closer to the other fingers than apart_mm") {
+  // pinch_index with the middle finger curled as the index is, its base flexion 0.2 rad more: its
+  // tip lies near the thumb's path, so closing thumb-index pulls the thumb toward it.
+  const hand::Kinematics fk;
+  hand::Angles pose = contact_pinch_at(fk, 14.8);
+  for (std::size_t m = 0; m < hand::kFingerCount; ++m)
+    pose[hand::kDofIndex[2][m]] = sim::gallery_pose("pinch_index").angles[hand::kDofIndex[1][m]];
+  pose[hand::dof_of(hand::Finger::Middle, hand::Motion::BaseFlexion)] += 0.2;
+  const double middle_before = tip_distance(fk, pose, hand::Finger::Middle);
+  REQUIRE(middle_before > 18.0);
+  REQUIRE(middle_before < 25.0);
+  const auto closed = [&](double apart_mm) {
+    hand::ContactConfig config;
+    config.apart_mm = apart_mm;
+    hand::ContactStage stage(fk, hand::JointLimits{}, config);
+    hand::Angles q = pose;
+    hand::Skeleton skeleton;
+    fk.pose(q, skeleton);
+    REQUIRE(stage.apply(q, skeleton).closed == 0);
+    CHECK(std::abs(tip_distance(fk, q, hand::Finger::Index) - kThumbIndexContactMm) < 0.1);
+    return tip_distance(fk, q, hand::Finger::Middle);
+  };
+  // No floor: the thumb passes closer to the middle tip. A floor of 25 mm (above the estimate's
+  // distance): the middle tip is kept where the estimate had it.
+  CHECK(closed(0.0) < middle_before - 1.0);
+  CHECK(closed(25.0) > middle_before - 0.05);
+}
