@@ -1,6 +1,7 @@
 // The contact stage (hand/contact.hpp): a known gap between thumb and index tips closed to the
 // contact distance (the two distal radii of collision.hpp, summed here), only the two chains' angles
-// moved and within the joint limits, the other pairs kept apart, the detection's hysteresis, poses
+// moved and within the joint limits, the other pairs kept apart, an adjustment past the collision
+// limit refused, the detection's hysteresis, poses
 // without contact (the gallery's non-pinches, a pose between threshold and release) left bit for
 // bit, no allocation per frame; in the estimator (EstimatorConfig::contact), the poses of a
 // simulated stream equal the stage-off estimator's except where the stage closed a pair.
@@ -276,4 +277,37 @@ TEST_CASE("contact stage: closing one pair does not bring the thumb closer to th
   // distance): the middle tip is kept where the estimate had it.
   CHECK(closed(0.0) < middle_before - 1.0);
   CHECK(closed(25.0) > middle_before - 0.05);
+}
+
+TEST_CASE("contact stage: an adjustment whose collision energy passes max_collision is refused, the pose kept") {
+  // Closing pinch_index from 14.1 mm presses the neighbouring capsules: the collision energy rises
+  // from the estimate's 0.01 mm^2 to about 1.3 (collision.hpp, computed here on both poses).
+  const hand::Kinematics fk;
+  const hand::Angles pose = contact_pinch_at(fk, 14.1);
+  hand::Skeleton before;
+  fk.pose(pose, before);
+  hand::ContactStage free_stage(fk, hand::JointLimits{});
+  hand::Angles closed = pose;
+  hand::Skeleton skeleton = before;
+  REQUIRE(free_stage.apply(closed, skeleton).closed == 0);
+  const double energy_before = hand::collision_energy(fk, before), energy_after = hand::collision_energy(fk, skeleton);
+  REQUIRE(energy_after > energy_before + 0.1);
+  // A limit between the two: refused, angles and skeleton as they came.
+  hand::ContactConfig config;
+  config.max_collision = 0.5 * (energy_before + energy_after);
+  hand::ContactStage stage(fk, hand::JointLimits{}, config);
+  hand::Angles q = pose;
+  skeleton = before;
+  const hand::ContactResult r = stage.apply(q, skeleton);
+  CHECK(r.refused);
+  CHECK(r.closed == -1);
+  CHECK(r.contact[0]);  // still in contact by the evidence
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(q[d] == pose[d]);
+  for (std::size_t p = 0; p < hand::kPhalanxCount; ++p) CHECK(skeleton[p].matrix() == before[p].matrix());
+  // A limit above the adjusted pose's energy: accepted.
+  config.max_collision = energy_after + 0.01;
+  hand::ContactStage lenient(fk, hand::JointLimits{}, config);
+  q = pose;
+  skeleton = before;
+  CHECK(lenient.apply(q, skeleton).closed == 0);
 }
