@@ -1,10 +1,10 @@
 // The contact stage (hand/contact.hpp): a known gap between thumb and index tips closed to the
 // contact distance (the two distal radii of collision.hpp, summed here), only the two chains' angles
 // moved and within the joint limits, the other pairs kept apart, an adjustment past the collision
-// limit refused, the detection's hysteresis, poses
-// without contact (the gallery's non-pinches, a pose between threshold and release) left bit for
-// bit, no allocation per frame; in the estimator (EstimatorConfig::contact), the poses of a
-// simulated stream equal the stage-off estimator's except where the stage closed a pair.
+// limit refused, the detection's hysteresis, poses without contact (the gallery's non-pinches, a
+// pose between threshold and release) left bit for bit, no allocation per frame; in the estimator
+// (EstimatorConfig::contact), the poses of a simulated stream equal the stage-off estimator's
+// except where the stage closed a pair.
 #include <glovepose/hand/contact.hpp>
 
 #include <doctest/doctest.h>
