@@ -22,6 +22,10 @@
 #include <utility>
 #include <vector>
 
+#ifdef _WIN32
+#  include <windows.h>  // GetModuleFileNameW
+#endif
+
 namespace glovepose::cli {
 
 /// A command of the tool: its options (a subcommand of the tool's CLI::App) and what runs it once
@@ -55,8 +59,15 @@ Command add_view(CLI::App& tool);
 inline std::string shipped_model_path(const std::string& name) {
   namespace fs = std::filesystem;
   std::error_code error;
+#ifdef _WIN32
+  std::wstring buffer(32768, L'\0');  // the longest path Windows has
+  const DWORD length = GetModuleFileNameW(nullptr, buffer.data(), static_cast<DWORD>(buffer.size()));
+  if (length == 0 || length >= buffer.size()) throw Error("cannot find this executable (GetModuleFileNameW), expected --model FILE");
+  const fs::path executable(buffer.substr(0, length));
+#else
   const fs::path executable = fs::read_symlink("/proc/self/exe", error);
   if (error) throw Error("cannot find this executable (/proc/self/exe: " + error.message() + "), expected --model FILE");
+#endif
   const fs::path candidate = (executable.parent_path() / GLOVEPOSE_MODELS_FROM_BIN / name).lexically_normal();
   if (!fs::is_regular_file(candidate, error))
     throw Error("the shipped file '" + candidate.string() +

@@ -5,7 +5,9 @@
 //   (sim/faults.hpp). Prints frames, faults by kind, recoveries, memory and allocations; exits 0
 //   when every check held, 1 when one failed (or the run could not start), 2 on bad options.
 
-#include <dlfcn.h>
+#ifndef _WIN32
+#  include <dlfcn.h>
+#endif
 
 #include <cstdio>
 #include <iostream>
@@ -32,8 +34,11 @@ struct SoakOptions {
 int soak(SoakOptions o) {
   // The installed tool does not replace operator new; the allocation counter of the test suite
   // can be preloaded (LD_PRELOAD=.../libglovepose_alloc_counter.so), and is then used.
+  // (Linux: Windows has no preloading; there the report says allocations were not counted.)
+#ifndef _WIN32
   if (void* counter = dlsym(RTLD_DEFAULT, "glovepose_allocation_count"))
     o.soak.allocation_count = reinterpret_cast<std::size_t (*)()>(counter);
+#endif
   const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
   std::cout << "simulating " << o.source_minutes << " min of motion to loop ..." << std::endl;
   // The simulated user is the fault seed's, so one seed reproduces the whole run.

@@ -11,11 +11,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -29,6 +24,7 @@
 
 #include "commands.hpp"
 #include "glove_lines.hpp"
+#include "loopback_socket.hpp"
 #include "new_user.hpp"
 #include "view_page.hpp"
 
@@ -139,35 +135,7 @@ json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, c
   return out;
 }
 
-// A listening socket on 127.0.0.1:port (0: any free port); returns it and the port it got.
-std::pair<int, int> listen_on_loopback(int port) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) throw Error("cannot create a socket");
-  const int yes = 1;
-  (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  address.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 || ::listen(fd, 16) != 0) {
-    ::close(fd);
-    throw Error("cannot listen on 127.0.0.1:" + std::to_string(port) + ", expected a free port (--port)");
-  }
-  socklen_t length = sizeof address;
-  (void)::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
-  return {fd, ntohs(address.sin_port)};
-}
-
-void send_all(int fd, const std::string& data) {
-  std::size_t sent = 0;
-  while (sent < data.size()) {
-    const ssize_t n = ::send(fd, data.data() + sent, data.size() - sent, MSG_NOSIGNAL);
-    if (n <= 0) return;  // the browser went away
-    sent += static_cast<std::size_t>(n);
-  }
-}
-
-void respond(int fd, const char* status, const char* type, const std::string& body) {
+void respond(Socket fd, const char* status, const char* type, const std::string& body) {
   send_all(fd, std::string("HTTP/1.1 ") + status + "\r\nContent-Type: " + type + "\r\nContent-Length: " + std::to_string(body.size()) +
                    "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + body);
 }
@@ -204,6 +172,7 @@ int view(const ViewOptions& o) {
     *user = simulate_new_user(o.seed, 10.0, *model);
   }
   const auto shared = std::make_shared<ViewShared>(model, o.model.empty());
+  const SocketLibrary sockets;
   const auto [server, port] = listen_on_loopback(o.port);
   std::printf("glovepose view: http://127.0.0.1:%d/\n", port);
   std::fflush(stdout);
@@ -230,25 +199,21 @@ int view(const ViewOptions& o) {
            (o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : shared->stream_done.load());
   };
   while (!finished()) {
-    pollfd waiting{server, POLLIN, 0};
-    if (::poll(&waiting, 1, 100) <= 0) continue;
-    const int client = ::accept(server, nullptr, nullptr);
-    if (client < 0) continue;
-    char request[2048];
-    const ssize_t n = ::recv(client, request, sizeof request - 1, 0);
-    const std::string line =
-        n > 0 ? std::string(request, static_cast<std::size_t>(n)).substr(0, std::string(request, static_cast<std::size_t>(n)).find('\r'))
-              : "";
+    if (!wait_readable(server, 100)) continue;
+    const Socket client = ::accept(server, nullptr, nullptr);
+    if (client == kNoSocket) continue;
+    const std::string request = receive_some(client, 2047);
+    const std::string line = request.substr(0, request.find('\r'));
     if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0)
       respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
     else if (line.rfind("GET /state", 0) == 0)
       respond(client, "200 OK", "application/json", state_json(shared->latest, shared->estimator, shared->notes, start, stream_t0).dump());
     else
       respond(client, "404 Not Found", "text/plain", "not found\n");
-    ::close(client);
+    close_socket(client);
   }
   shared->stop = true;
-  ::close(server);
+  close_socket(server);
   if (shared->stream_done || !o.from_stdin)
     glove.join();  // a recording stops at its next frame
   else

@@ -39,8 +39,13 @@
 #include <thread>
 #include <vector>
 
-#include <sys/resource.h>
-#include <unistd.h>
+#ifdef _WIN32
+#  include <windows.h>
+#  include <psapi.h>
+#else
+#  include <sys/resource.h>
+#  include <unistd.h>
+#endif
 
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
@@ -297,6 +302,17 @@ struct SoakReport {
   }
 };
 
+#ifdef _WIN32
+/// @brief The process's working set now and at its peak, KiB (Windows' resident set).
+inline long resident_kib() {
+  PROCESS_MEMORY_COUNTERS counters{};
+  return GetProcessMemoryInfo(GetCurrentProcess(), &counters, sizeof counters) ? static_cast<long>(counters.WorkingSetSize / 1024) : 0;
+}
+inline long peak_resident_kib() {
+  PROCESS_MEMORY_COUNTERS counters{};
+  return GetProcessMemoryInfo(GetCurrentProcess(), &counters, sizeof counters) ? static_cast<long>(counters.PeakWorkingSetSize / 1024) : 0;
+}
+#else
 /// @brief The process's resident set now, KiB (Linux /proc/self/statm; 0 where unavailable).
 inline long resident_kib() {
   std::FILE* f = std::fopen("/proc/self/statm", "r");
@@ -312,6 +328,7 @@ inline long peak_resident_kib() {
   rusage usage{};
   return getrusage(RUSAGE_SELF, &usage) == 0 ? usage.ru_maxrss : 0;  // Linux reports KiB
 }
+#endif
 
 namespace detail {
 
