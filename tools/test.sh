@@ -6,6 +6,9 @@
 #                 a compiler and an instruction set can change (GLOVEPOSE_TEST_SCOPE=isa, tests/CMakeLists.txt:
 #                 kernels, storages, networks, solver, estimator, threads, gradients, the C ABI) and the
 #                 header check, without the tool, examples and benchmarks
+#   build-windows/, build-arm64/  Windows x64 (mingw-w64, under Wine) and 64-bit ARM Linux (under
+#                 qemu-user): the same tests as build-clang/, cross-built with the tool (tools/cross.sh,
+#                 docs/platforms.md)
 # Usage: tools/test.sh   (from anywhere; builds into ./build and ./build-clang of the repository)
 # With CI=true, warnings in our own code are errors in both (GLOVEPOSE_WERROR=ON).
 # The sanitizer runs (ASan+UBSan, TSan) are a separate command: tools/sanitize.sh address|thread.
@@ -28,3 +31,6 @@ cmake -S . -B build-clang -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang+
   -DGLOVEPOSE_BUILD_TOOLS=OFF -DGLOVEPOSE_BUILD_EXAMPLES=OFF -DGLOVEPOSE_BUILD_BENCHMARKS=OFF
 cmake --build build-clang -j"$(nproc)"
 ctest --test-dir build-clang --output-on-failure -j"$(nproc)"
+echo "== Windows x64 and 64-bit ARM, cross-built, under Wine and qemu-user (build-windows/, build-arm64/)"
+GLOVEPOSE_WERROR=$werror bash tools/cross.sh windows
+GLOVEPOSE_WERROR=$werror bash tools/cross.sh arm64

@@ -1,16 +1,32 @@
 # The shared library exports exactly the functions glovepose_c.h declares: hidden visibility keeps
 # Eigen, xsimd, glovepose and std:: template instances out of the dynamic symbol table.
 # Usage: cmake -DNM=nm -DLIBRARY=libglovepose_c.so -DHEADER=glovepose_c.h -P check_exports.cmake
-execute_process(COMMAND ${NM} -D --defined-only ${LIBRARY} OUTPUT_VARIABLE table RESULT_VARIABLE rc)
+# A Windows DLL (glovepose_c.dll): the export table of `objdump -p` instead (-DOBJDUMP=...).
+# Usage there: cmake -DOBJDUMP=x86_64-w64-mingw32-objdump -DLIBRARY=glovepose_c.dll -DHEADER=... -P ...
+if(LIBRARY MATCHES "\\.dll$")
+  set(command ${OBJDUMP} -p ${LIBRARY})
+  # The names follow "[Ordinal/Name Pointer] Table" as "[   0] name".
+  set(pattern "^[ \t]*\\[ *[0-9]+\\] ([^ ]+)$")
+else()
+  set(command ${NM} -D --defined-only ${LIBRARY})
+  # "address type name"; only code and data symbols (T, D, B, R, W, V, u) count.
+  # The version node GLOVEPOSE_C_1 itself shows as an absolute symbol (A): not a function.
+  set(pattern "^[0-9a-fA-F]+ [TDBRWVu] ([^ @]+)(@.*)?$")
+endif()
+execute_process(COMMAND ${command} OUTPUT_VARIABLE table RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "${NM} -D failed on ${LIBRARY}")
+  message(FATAL_ERROR "'${command}' failed")
+endif()
+if(LIBRARY MATCHES "\\.dll$")  # only the export name table, up to the next blank line
+  string(REGEX MATCH "\\[Ordinal/Name Pointer\\] Table[^\n]*\n([^\n]+\n)*" table "${table}")
+  if(table STREQUAL "")
+    message(FATAL_ERROR "${LIBRARY} has no export name table (objdump -p)")
+  endif()
 endif()
 set(exported "")
 string(REPLACE "\n" ";" lines "${table}")
 foreach(line IN LISTS lines)
-  # "address type name"; only code and data symbols (T, D, B, R, W, V, u) count.
-  # The version node GLOVEPOSE_C_1 itself shows as an absolute symbol (A): not a function.
-  if(line MATCHES "^[0-9a-fA-F]+ [TDBRWVu] ([^ @]+)(@.*)?$")
+  if(line MATCHES "${pattern}")
     list(APPEND exported ${CMAKE_MATCH_1})
   endif()
 endforeach()
