@@ -54,6 +54,9 @@ echo "   python3 loads only its own libraries), the C# test (its Mono, likewise)
 echo "   check (compile-only: the clang tree), the tests an instruction set cannot change (simulator, data,"
 echo "   import, evaluation, the tool's commands: GLOVEPOSE_TEST_SCOPE=isa)$( [ "$platform" = arm64 ] &&
   echo "; under qemu-user the thread team's two tests (spin-waits)"). docs/platforms.md says more."
+# The PyTorch comparisons there use the committed fixtures: the Windows program cannot start the
+# build machine's python3 (CI requires it in the native trees, where the fixtures are regenerated).
+unset GLOVEPOSE_REQUIRE_TORCH
 set +e
 ctest --test-dir "$build" --output-on-failure -j"$(nproc)" "${skip[@]}" | tee "$build/ctest.log"
 status=${PIPESTATUS[0]}
