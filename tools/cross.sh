@@ -5,7 +5,7 @@
 # Builds into build-arm64/ or build-windows/ of the repository and prints the count of tests passed
 # and what is not run there, with the reason. tools/test.sh calls it for both.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.."  # the path as called (tools/test.sh may call it through a link: "$PWD", not ".")
 platform="${1:-}"
 case "$platform" in
   arm64)   toolchain=cmake/toolchains/aarch64-linux-gnu.cmake; packages=(g++-aarch64-linux-gnu qemu-user); emulator=qemu-user ;;
@@ -32,7 +32,7 @@ cp -r "/usr/lib/$(gcc -print-multiarch)/cmake/xsimd" "$stage/usr/lib/any/cmake/"
 sed -i 's|^set(_IMPORT_PREFIX "/usr")$|get_filename_component(_IMPORT_PREFIX "${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLUTE)|' \
   "$stage/usr/lib/cmake/doctest/doctestTargets.cmake"
 
-cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DGLOVEPOSE_HEADER_PACKAGES="$stage" \
+cmake -S "$PWD" -B "$PWD/$build" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DGLOVEPOSE_HEADER_PACKAGES="$stage" \
   -Dxsimd_DIR="$stage/usr/lib/any/cmake/xsimd" -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_NATIVE=OFF \
   -DGLOVEPOSE_WERROR="${GLOVEPOSE_WERROR:-OFF}" -DGLOVEPOSE_TEST_SCOPE=isa -DGLOVEPOSE_UNITY_BUILD=ON \
   -DGLOVEPOSE_BUILD_EXAMPLES=OFF -DGLOVEPOSE_BUILD_BENCHMARKS=OFF -DGLOVEPOSE_HEADER_CHECK=OFF

@@ -12,9 +12,10 @@ set -euo pipefail
 # libcli11-dev: CLI11, the glovepose tool's command-line parsing (the library headers do not need it).
 # python3-pip, python3-setuptools, python3-venv: `pip install ./python` (the Python package) into a
 #   virtual environment (Debian's pip refuses the system's Python, PEP 668) without any registry.
+# ccache: tools/test.sh and tools/cross.sh compile through it (objects kept between runs).
 # chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch libopenblas0-pthread python3-numpy mono-mcs
-          libopenxr-dev nlohmann-json3-dev libcli11-dev python3-pip python3-setuptools python3-venv chromium "$@")
+          libopenxr-dev nlohmann-json3-dev libcli11-dev python3-pip python3-setuptools python3-venv chromium ccache "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
