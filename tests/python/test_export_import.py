@@ -10,36 +10,22 @@ from __future__ import annotations
 import json
 import struct
 import sys
-import tempfile
-import traceback
 from pathlib import Path
-from typing import Callable, List
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tools" / "python"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import torch  # noqa: E402
 
+from runner import Suite, expect_error  # noqa: E402
 from glovepose_ref import UNet, count_parameters, export_model, import_model, randomize  # noqa: E402
 from glovepose_ref import safetensors_io  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
 
-TMP = Path(tempfile.mkdtemp(prefix="glovepose_pytest_"))
-TESTS: List[Callable[[], None]] = []
-
-
-def test(fn: Callable[[], None]) -> Callable[[], None]:
-    TESTS.append(fn)
-    return fn
-
-
-def expect_error(fn: Callable[[], object], exc: type, fragment: str) -> None:
-    try:
-        fn()
-    except exc as e:
-        assert fragment in str(e), f"error message {str(e)!r} does not mention {fragment!r}"
-        return
-    raise AssertionError(f"expected {exc.__name__} mentioning {fragment!r}")
+SUITE = Suite(prefix="glovepose_pytest_")
+TMP = SUITE.tmp
+test = SUITE.test
 
 
 @test
@@ -224,20 +210,5 @@ def test_fixtures_consistent() -> None:
     assert float(y.std()) > 0.01, "outputs are nearly constant: the fixture would test little"
 
 
-def main() -> int:
-    passed = failed = 0
-    for fn in TESTS:
-        try:
-            fn()
-            passed += 1
-            print(f"PASS {fn.__name__}")
-        except Exception:  # noqa: BLE001 - report every failure and keep going
-            failed += 1
-            print(f"FAIL {fn.__name__}")
-            traceback.print_exc()
-    print(f"{passed} passed, {failed} failed")
-    return 0 if failed == 0 else 1
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(SUITE.run())

@@ -23,22 +23,21 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
-import traceback
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tools" / "python"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import torch  # noqa: E402
 from torch import nn  # noqa: E402
 
 torch.set_num_threads(1)
 
+from runner import Skip, Suite, expect_error  # noqa: E402
 from glovepose_ref import FCN, UNet, export_model, import_model, randomize, randomize_fcn  # noqa: E402
 from glovepose_ref import glove, safetensors_io  # noqa: E402
 from glovepose_ref.glove import BUILTIN_DOF_SLOTS, DOF_NAMES, builtin_cell_slots  # noqa: E402
@@ -51,34 +50,15 @@ from glovepose_ref.export import (  # noqa: E402
     model_metadata,
 )
 
-TMP = Path(tempfile.mkdtemp(prefix="glovepose_model_files_"))
+SUITE = Suite(prefix="glovepose_model_files_")
+TMP = SUITE.tmp
+test = SUITE.test
 DTYPES = {"F32": torch.float32, "F16": torch.float16, "BF16": torch.bfloat16}
 TOLERANCE_RAD = 1e-4
 
 _cli_env = os.environ.get("GLOVEPOSE_CLI")
 CLI = Path(_cli_env) if _cli_env else ROOT / "build" / "tools" / "glovepose"
 CLI_REQUIRED = bool(_cli_env)
-
-
-class Skip(Exception):
-    """A check that cannot run here (no glovepose binary)."""
-
-
-TESTS: List[Callable[[], None]] = []
-
-
-def test(fn: Callable[[], None]) -> Callable[[], None]:
-    TESTS.append(fn)
-    return fn
-
-
-def expect_error(fn: Callable[[], object], exc: type, fragment: str) -> None:
-    try:
-        fn()
-    except exc as e:
-        assert fragment in str(e), f"error message {str(e)!r} does not mention {fragment!r}"
-        return
-    raise AssertionError(f"expected {exc.__name__} mentioning {fragment!r}")
 
 
 def stored_tensors(model: nn.Module) -> Dict[str, torch.Tensor]:
@@ -572,26 +552,5 @@ def test_cli_eval_matches() -> None:
         print(f"     {stem}: mean error {mean:.6f} deg (glovepose eval {report['mean_deg']:.6f}), {report['frames']} frames")
 
 
-def main() -> int:
-    passed = failed = skipped = 0
-    try:
-        for fn in TESTS:
-            try:
-                fn()
-                passed += 1
-                print(f"PASS {fn.__name__}")
-            except Skip as e:
-                skipped += 1
-                print(f"SKIP {fn.__name__}: {e}")
-            except Exception:  # noqa: BLE001 - report every failure and keep going
-                failed += 1
-                print(f"FAIL {fn.__name__}")
-                traceback.print_exc()
-    finally:
-        shutil.rmtree(TMP, ignore_errors=True)
-    print(f"{passed} passed, {failed} failed, {skipped} skipped")
-    return 0 if failed == 0 else 1
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(SUITE.run())
