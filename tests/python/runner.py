@@ -1,14 +1,17 @@
 """The one runner of the plain-Python test scripts (no pytest in Debian's base install): a script
 registers its checks with @test, and run() calls each, reports PASS/FAIL/SKIP per check, removes
-the script's temporary folder and returns the exit code."""
+the script's temporary folder and returns the exit code. Scripts that run one scenario collect
+their failures and end with conclude(); run_command() runs a program a scenario needs."""
 
 from __future__ import annotations
 
 import shutil
+import subprocess
+import sys
 import tempfile
 import traceback
 from pathlib import Path
-from typing import Callable, List
+from typing import Callable, List, Sequence
 
 
 def expect_error(fn: Callable[[], object], exc: type, fragment: str) -> None:
@@ -53,3 +56,18 @@ class Suite:
             shutil.rmtree(self.tmp, ignore_errors=True)
         print(f"{passed} passed, {failed} failed, {skipped} skipped")
         return 0 if failed == 0 else 1
+
+
+def run_command(args: Sequence[str], cwd: str) -> str:
+    """args' stdout; exits the test with its output when it fails."""
+    result = subprocess.run(list(args), cwd=cwd, capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.exit(f"FAIL: {' '.join(map(str, args))}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
+    return result.stdout
+
+
+def conclude(failures: List[str]) -> None:
+    """Exits with every failure named, or prints PASS."""
+    if failures:
+        sys.exit("FAIL: " + "; ".join(failures))
+    print("PASS")

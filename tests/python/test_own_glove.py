@@ -23,6 +23,7 @@ import tempfile
 import numpy as np
 
 from readme_blocks import sh_commands
+from runner import conclude
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
@@ -132,9 +133,7 @@ def main():
         failures.append(f"glovepose's linear map {linear:.4f} deg differs from the fit here {reference:.4f} by more than 1%")
     if not unet <= 1.1 * reference:
         failures.append(f"the U-Net's {unet:.4f} deg is worse than 1.1x the least-squares fit ({reference:.4f})")
-    if failures:
-        sys.exit("FAIL: " + "; ".join(failures))
-    print("PASS")
+    conclude(failures)
 
 
 if __name__ == "__main__":

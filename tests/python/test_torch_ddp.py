@@ -11,48 +11,38 @@ Environment: GLOVEPOSE_CLI (the tool). Needs Debian's python3-torch.
 """
 import json
 import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
+from runner import conclude, run_command
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI = os.environ["GLOVEPOSE_CLI"]
 EPOCHS, BATCH = "20", "256"
 
 
-def run(args, cwd):
-    result = subprocess.run(args, cwd=cwd, capture_output=True, text=True)
-    if result.returncode != 0:
-        sys.exit(f"FAIL: {' '.join(args)}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
-    return result.stdout
-
-
 def main():
     with tempfile.TemporaryDirectory() as work:
-        run([CLI, "simulate", "--world", "clean", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
+        run_command([CLI, "simulate", "--world", "clean", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
              "--calibration-seconds", "10", "--out", "corpus.safetensors"], work)
-        out = run(["torchrun", "--nproc_per_node=2", "--redirects", "1", "--tee", "1", "--log_dir", os.path.join(work, "logs"),
+        out = run_command(["torchrun", "--nproc_per_node=2", "--redirects", "1", "--tee", "1", "--log_dir", os.path.join(work, "logs"),
                    str(ROOT / "tools" / "python" / "train_torch.py"), "--data", "corpus.safetensors", "--model", "unet:8",
                    "--exclude-subjects", "2", "--epochs", EPOCHS, "--batch", BATCH, "--seed", "3", "--out", "torch.safetensors"], work)
         print(out.strip().splitlines()[-1])
-        run([CLI, "train", "--data", "corpus.safetensors", "--model", "unet:8", "--exclude-subjects", "2", "--epochs", EPOCHS,
+        run_command([CLI, "train", "--data", "corpus.safetensors", "--model", "unet:8", "--exclude-subjects", "2", "--epochs", EPOCHS,
              "--batch", BATCH, "--seed", "3", "--quiet", "--out", "cpp.safetensors"], work)
         errors = {}
         for name in ("torch", "cpp"):
-            report = json.loads(run([CLI, "eval", "--model", f"{name}.safetensors", "--data", "corpus.safetensors", "--subjects", "2",
+            report = json.loads(run_command([CLI, "eval", "--model", f"{name}.safetensors", "--data", "corpus.safetensors", "--subjects", "2",
                                      "--json"], work))
             errors[name] = report["mean_deg"]
-        info = run([CLI, "info", "--model", "torch.safetensors"], work)
+        info = run_command([CLI, "info", "--model", "torch.safetensors"], work)
     print(f"held-out mean error: PyTorch DDP (2 processes) {errors['torch']:.3f} deg, C++ trainer {errors['cpp']:.3f} deg")
     failures = []
     if "architecture: unet" not in info or "width: 8" not in info:
         failures.append(f"glovepose info does not read the PyTorch model as a U-Net w = 8: {info}")
     if not abs(errors["torch"] - errors["cpp"]) <= 0.1 * errors["cpp"]:
         failures.append(f"the PyTorch model's {errors['torch']:.3f} deg is not within 10% of the C++ trainer's {errors['cpp']:.3f}")
-    if failures:
-        sys.exit("FAIL: " + "; ".join(failures))
-    print("PASS")
+    conclude(failures)
 
 
 if __name__ == "__main__":

@@ -9,7 +9,6 @@ Environment: GLOVEPOSE_CLI (the tool). Needs Debian's python3-torch.
 """
 import json
 import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -19,16 +18,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tools" / "python"))
 from glovepose_ref import safetensors_io  # noqa: E402
+from runner import conclude, run_command  # noqa: E402
 
 CLI = os.environ["GLOVEPOSE_CLI"]
 SCRIPT = str(ROOT / "tools" / "experiments" / "torch_networks.py")
-
-
-def run(args, cwd):
-    result = subprocess.run(args, cwd=cwd, capture_output=True, text=True)
-    if result.returncode != 0:
-        sys.exit(f"FAIL: {' '.join(args)}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
-    return result.stdout
 
 
 def mean_pose_error(corpus: str) -> float:
@@ -43,13 +36,13 @@ def mean_pose_error(corpus: str) -> float:
 def main():
     failures = []
     with tempfile.TemporaryDirectory() as work:
-        run([CLI, "simulate", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
+        run_command([CLI, "simulate", "--seed", "5", "--subjects", "3", "--sessions", "2", "--minutes", "0.5", "--gloves", "1",
              "--calibration-seconds", "10", "--out", "corpus.safetensors"], work)
         # The score: a glovepose model through both
-        run([CLI, "train", "--data", "corpus.safetensors", "--model", "unet:8", "--exclude-subjects", "2", "--epochs", "2",
+        run_command([CLI, "train", "--data", "corpus.safetensors", "--model", "unet:8", "--exclude-subjects", "2", "--epochs", "2",
              "--seed", "3", "--quiet", "--out", "cpp.safetensors"], work)
-        cpp = json.loads(run([CLI, "eval", "--model", "cpp.safetensors", "--data", "corpus.safetensors", "--subjects", "2", "--json"], work))
-        run([sys.executable, SCRIPT, "--data", "corpus.safetensors", "--check-model", "cpp.safetensors", "--eval-subjects", "2",
+        cpp = json.loads(run_command([CLI, "eval", "--model", "cpp.safetensors", "--data", "corpus.safetensors", "--subjects", "2", "--json"], work))
+        run_command([sys.executable, SCRIPT, "--data", "corpus.safetensors", "--check-model", "cpp.safetensors", "--eval-subjects", "2",
              "--json", "check.json"], work)
         check = json.loads(Path(work, "check.json").read_text())
         print(f"glovepose eval {cpp['mean_deg']:.4f} / {cpp['vs_truth']['mean_deg']:.4f} deg, "
@@ -61,15 +54,13 @@ def main():
         # The paper's other networks learn
         baseline = mean_pose_error(str(Path(work, "corpus.safetensors")))
         for model in ("lstm:32", "resnet:16", "cgan:8"):
-            run([sys.executable, SCRIPT, "--data", "corpus.safetensors", "--model", model, "--exclude-subjects", "2",
+            run_command([sys.executable, SCRIPT, "--data", "corpus.safetensors", "--model", model, "--exclude-subjects", "2",
                  "--eval-subjects", "2", "--epochs", "4", "--batch", "64", "--seed", "3", "--json", "net.json"], work)
             error = json.loads(Path(work, "net.json").read_text())["mean_deg"]
             print(f"{model}: {error:.3f} deg on person 2; the training people's mean pose: {baseline:.3f} deg")
             if not error < baseline:
                 failures.append(f"{model} scores {error:.3f} deg, not below the mean pose's {baseline:.3f}")
-    if failures:
-        sys.exit("FAIL: " + "; ".join(failures))
-    print("PASS")
+    conclude(failures)
 
 
 if __name__ == "__main__":
