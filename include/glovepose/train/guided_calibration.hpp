@@ -116,13 +116,11 @@ inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, 
   const auto features =
       guided_features(model, offsets.sequence(), calibration_runs(data, filter, model.glove.calibration()), pool, &incomplete);
   if (!incomplete.empty())
-    throw Error("subject " + std::to_string(incomplete.front() >> 40) + ", session " + std::to_string(incomplete.front() & 0xfffff) +
-                ": the calibration sequence was not performed to the end, expected every step of '" + offsets.sequence().id() + "'");
+    throw Error(RunId::of(incomplete.front()).text() + ": the calibration sequence was not performed to the end, expected every step of '" + offsets.sequence().id() + "'");
   std::map<std::int64_t, hand::Angles> out;
   for (const auto& [key, f] : features) {
     if (!offsets.followed(f))
-      throw Error("subject " + std::to_string(key >> 40) + ", session " + std::to_string(key & 0xfffff) +
-                  ": the calibration does not look like sequence '" + offsets.sequence().id() + "' (RMS z-score " +
+      throw Error(RunId::of(key).text() + ": the calibration does not look like sequence '" + offsets.sequence().id() + "' (RMS z-score " +
                   std::to_string(offsets.rms_z(f)) + " against at most " +
                   std::to_string(calibration::kFollowedMargin * offsets.max_rms_z()) + " among the fitted people)");
     out.emplace(key, offsets.offsets(f));

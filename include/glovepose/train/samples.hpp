@@ -90,11 +90,27 @@ struct Samples {
   }
 };
 
-/// @brief (subject, glove, session) of frame `i`, packed in one number.
+/// @brief (subject, glove, session) of frame `i`, packed in one number (RunId reads it back).
 inline std::int64_t run_key(const io::Dataset& data, std::size_t i) noexcept {
   return (static_cast<std::int64_t>(data.subject[i]) << 40) | (static_cast<std::int64_t>(data.glove[i]) << 20) |
          static_cast<std::int64_t>(data.session[i]);
 }
+
+/// @brief The fields of a run key (run_key): one person's recording session with one glove.
+struct RunId {
+  int subject = 0;  ///< The person.
+  int glove = 0;    ///< The glove.
+  int session = 0;  ///< The session.
+
+  /// @brief The fields packed in `key` (a run_key of a dataset frame, so >= 0).
+  static RunId of(std::int64_t key) noexcept {
+    return {static_cast<int>(key >> 40), static_cast<int>((key >> 20) & 0xfffff), static_cast<int>(key & 0xfffff)};
+  }
+  /// @brief "subject S, glove G, session N", as messages name a run.
+  std::string text() const {
+    return "subject " + std::to_string(subject) + ", glove " + std::to_string(glove) + ", session " + std::to_string(session);
+  }
+};
 
 /// @brief Per-cell min and max over the kept frames: the "training" calibration, flat sensors by
 /// the glove's rule. Throws glovepose::Error when no frame is kept.
