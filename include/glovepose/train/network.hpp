@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "../hand/dofs.hpp"
@@ -39,6 +40,8 @@ class TrainableNetwork {
   virtual ParameterSet& parameters() = 0;
   /// @brief The tensors (PyTorch names).
   virtual const ParameterSet& parameters() const = 0;
+  /// @brief Fresh initial weights (the architecture's own scheme); the draw depends only on `seed`.
+  virtual void initialize(std::uint64_t seed) = 0;
 };
 
 /// @brief Mean squared error over n values (torch.nn.functional.mse_loss, mean reduction); writes
