@@ -53,7 +53,7 @@ class TrainableFcn final : public TrainableNetwork {
   const ParameterSet& parameters() const override { return params_; }
 
   /// @brief Xavier-uniform weights, zero biases; the draw depends only on `seed`.
-  void initialize(std::uint64_t seed) {
+  void initialize(std::uint64_t seed) override {
     core::Rng rng(seed);
     for (std::size_t l = 0; l < weights_.size(); ++l) {
       Parameter& w = params_[weights_[l]];

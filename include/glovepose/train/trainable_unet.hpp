@@ -106,7 +106,7 @@ class TrainableUNet final : public TrainableNetwork {
 
   /// @brief Xavier-uniform convolution weights (torch.nn.init.xavier_uniform_'s fans), zero biases,
   /// batch norm scale 1, shift 0, running mean 0 and variance 1; the draw depends only on `seed`.
-  void initialize(std::uint64_t seed) {
+  void initialize(std::uint64_t seed) override {
     core::Rng rng(seed);
     for (Parameter& p : params_.all()) {
       const bool conv_weight = p.layout != Layout::Plain;

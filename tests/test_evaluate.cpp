@@ -1,0 +1,148 @@
+// train::evaluate (train/evaluate.hpp), what `glovepose eval` and glovepose.evaluate() print: on a
+// dataset whose predictions are known in closed form (a linear model reading a delayed copy of the
+// labels), the angle errors, the lag and the per-frame predictions against the same figures
+// computed here from the formula; the zeroed-sensor report's typed run and glove names.
+#include <glovepose/train/evaluate.hpp>
+#include <glovepose/io/json.hpp>
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace glovepose {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRate = 60.0;
+constexpr int kDelay = 3;      // frames the model's prediction trails the labels by
+constexpr double kTruthShift = 0.02;  // radians the true angles sit above the labels
+
+// Label of DoF d at frame f of run `run`: a sine within the joint limits (normalised 0.6 sin).
+double normalized_label(int run, long f, std::size_t d) {
+  return 0.6 * std::sin(2.0 * kPi * static_cast<double>(f) / (40.0 + 3.0 * static_cast<double>(d)) + 0.7 * static_cast<double>(d) + run);
+}
+
+double label(const hand::JointLimits& limits, int run, long f, std::size_t d) {
+  return limits.min()[d] + (normalized_label(run, f, d) + 1.0) * 0.5 * (limits.max()[d] - limits.min()[d]);
+}
+
+TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form") {
+  const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+  const hand::JointLimits limits = glove.joint_limits();
+  // Two people, 240 frames each; the cells hold the normalised labels kDelay frames back.
+  const std::size_t cells = static_cast<std::size_t>(glove.cell_count());
+  const long per_run = 240;
+  io::Dataset data(cells, 0, glove.id(), kRate);
+  for (int run = 0; run < 2; ++run)
+    for (long f = 0; f < per_run; ++f) {
+      for (std::size_t c = 0; c < cells; ++c)
+        data.cells.push_back(c < hand::kDofCount ? static_cast<float>(normalized_label(run, f - kDelay, c)) : 0.0f);
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+        data.angles.push_back(static_cast<float>(label(limits, run, f, d)));
+        data.true_angles.push_back(static_cast<float>(label(limits, run, f, d) + kTruthShift));
+      }
+      data.timestamps.push_back(static_cast<double>(f) / kRate);
+      data.subject.push_back(run);
+      data.session.push_back(0);
+      data.glove.push_back(0);
+      data.donning.push_back(0);
+      data.kind.push_back(io::kKindRecording);
+      data.outlier.push_back(0);
+    }
+  // The model: output d = cell d (d < 25), no calibration of the inputs.
+  std::vector<float> weight(hand::kDofCount * cells, 0.0f), bias(hand::kDofCount, 0.0f);
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) weight[d * cells + d] = 1.0f;
+  const nn::LinearMap map(static_cast<int>(cells), train::kTargets, weight, bias);
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_linear.safetensors";
+  train::save_model(path, train::make_model_info("linear", 0, glove, model::CalibrationMode::None, nullptr), train::linear_tensors(map));
+  train::TrainedModel model = train::load_model(path);
+
+  train::EvaluationOptions options;
+  options.threads = 1;
+  const train::EvaluationResult r = train::evaluate(model, data, options);
+  REQUIRE(r.frames() == 2 * per_run);
+  CHECK(r.calibration == "none");
+  CHECK(!r.rows_replayed);
+  CHECK(r.zeroed.empty());
+  // Mean absolute error in degrees, against the labels and the truth, from the formula.
+  const double degrees = 180.0 / kPi;
+  double sum = 0.0, truth_sum = 0.0, max_error = 0.0;
+  for (int run = 0; run < 2; ++run)
+    for (long f = 0; f < per_run; ++f)
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+        const double predicted = label(limits, run, f - kDelay, d), labelled = label(limits, run, f, d);
+        const std::size_t i = (static_cast<std::size_t>(run * per_run + f)) * hand::kDofCount + d;
+        REQUIRE(r.predicted[i] == doctest::Approx(predicted).epsilon(1e-5));
+        CHECK(r.labels[i] == static_cast<float>(labelled));
+        sum += std::abs(predicted - labelled);
+        truth_sum += std::abs(predicted - labelled - kTruthShift);
+        max_error = std::max(max_error, std::abs(predicted - labelled));
+      }
+  const double angles = 2.0 * per_run * hand::kDofCount;
+  CHECK(r.vs_labels.overall.mean_deg == doctest::Approx(sum / angles * degrees).epsilon(1e-5));
+  CHECK(r.vs_labels.overall.max_deg == doctest::Approx(max_error * degrees).epsilon(1e-4));
+  REQUIRE(r.vs_truth.has_value());
+  CHECK(r.vs_truth->overall.mean_deg == doctest::Approx(truth_sum / angles * degrees).epsilon(1e-5));
+  CHECK(r.vs_truth->overall.mean_deg != doctest::Approx(r.vs_labels.overall.mean_deg).epsilon(1e-3));
+  // The prediction trails by kDelay frames: the lag is that many frame periods (a constant offset
+  // against the truth changes nothing).
+  CHECK(r.lag_ms == doctest::Approx(kDelay * 1000.0 / kRate).epsilon(0.02));
+  CHECK(r.truth_lag_ms == doctest::Approx(r.lag_ms).epsilon(1e-9));
+  REQUIRE(r.fingertips.has_value());
+  CHECK(r.fingertips->frames == static_cast<std::size_t>(2 * per_run));
+  CHECK(r.fingertips_vs_truth);
+  CHECK(r.hands == "the reference hand");
+
+  // The JSON carries the same figures.
+  const io::json::Value json = io::json::parse(train::to_json(r));
+  CHECK(json.at("mean_deg").get<double>() == doctest::Approx(r.vs_labels.overall.mean_deg).epsilon(1e-12));
+  CHECK(json.at("vs_truth").at("mean_deg").get<double>() == doctest::Approx(r.vs_truth->overall.mean_deg).epsilon(1e-12));
+  CHECK(json.at("lag_ms").get<double>() == doctest::Approx(r.lag_ms).epsilon(1e-4));
+  CHECK(json.at("calibration") == "none");
+  CHECK(json.at("mean_window").is_null());
+  CHECK(json.at("contact").is_null());
+  CHECK(json.at("frames").get<long>() == 2 * per_run);
+
+  // A selection scores only its frames: the second person alone.
+  options.filter.subjects = {1};
+  const train::EvaluationResult one = train::evaluate(model, data, options);
+  CHECK(one.frames() == per_run);
+  for (std::int64_t source : one.source) CHECK(data.subject[static_cast<std::size_t>(source)] == 1);
+  // A calibration the data cannot give is refused by name.
+  options.calibration = "sideways";
+  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("expected none, training, onthefly or guided"), Error);
+  options.calibration = "onthefly";
+  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("has no calibration sequence"), Error);
+}
+
+TEST_CASE("evaluate: zeroed sensors name their run's fields and the glove's cells") {
+  // A glove whose cells have names of their own (the built-in glove's are "cell_<i>").
+  const grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
+  std::vector<std::string> names;
+  for (std::size_t c = 0; c < builtin.cell_names().size(); ++c) names.push_back("strip" + std::to_string(c) + "_x");
+  const grid::GloveDescription glove("named-44", names, builtin.map());
+  io::Dataset data(44, 0, glove.id(), kRate);
+  data.subject = {7};
+  data.glove = {3};
+  data.session = {12};
+  train::Samples samples;
+  samples.zeroed[train::run_key(data, 0)] = {"cell_5", "cell_43"};
+  samples.zeroed[-1] = {"cell_0"};
+  const std::vector<train::ZeroedSensors> zeroed = train::zeroed_sensors(samples, glove);
+  REQUIRE(zeroed.size() == 2);
+  CHECK(!zeroed[0].run.has_value());  // -1: the training range comes first
+  CHECK(zeroed[0].sensors == std::vector<std::string>{glove.cell_names()[0]});
+  REQUIRE(zeroed[1].run.has_value());
+  CHECK(zeroed[1].run->subject == 7);
+  CHECK(zeroed[1].run->glove == 3);
+  CHECK(zeroed[1].run->session == 12);
+  CHECK(zeroed[1].sensors == std::vector<std::string>{glove.cell_names()[5], glove.cell_names()[43]});
+  CHECK(zeroed[1].text() == "calibration of subject 7, glove 3, session 12: 2 flat sensors read 0: " + glove.cell_names()[5] + ", " +
+                                glove.cell_names()[43]);
+  CHECK(zeroed[1].sensors.front() == "strip5_x");  // the glove's own names, not the samples' positions
+}
+
+}  // namespace
+}  // namespace glovepose
