@@ -14,8 +14,11 @@ set -euo pipefail
 #   virtual environment (Debian's pip refuses the system's Python, PEP 668) without any registry.
 # ccache: tools/test.sh and tools/cross.sh compile through it (objects kept between runs).
 # chromium: the browser test opens glovepose view's page headless (tests/python/test_view.py).
+# npm: installs the JavaScript glovepose view's page runs (three.js, tools/cli/web), embedded at build time
+#   (Debian's, unless one is there already, e.g. with NodeSource's nodejs, which bundles it).
 packages=(cmake make g++ clang libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev python3-torch libopenblas0-pthread python3-numpy mono-mcs
           libopenxr-dev nlohmann-json3-dev libcli11-dev python3-pip python3-setuptools python3-venv chromium ccache "$@")
+command -v npm >/dev/null || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -26,4 +29,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   [ "$(id -u)" -ne 0 ] && sudo="sudo"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+# The view page's JavaScript from the npm registry, as tools/cli/web/package-lock.json pins it
+# (the build embeds it in the tool; nothing is fetched when it runs): again when the lock changed.
+web="$(cd "$(dirname "$0")" && pwd)/cli/web"
+if [ ! -f "$web/node_modules/.package-lock.json" ] || [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
 fi
