@@ -1,5 +1,9 @@
 // The few socket calls glovepose view's loopback server makes, on POSIX and on Windows (Winsock 2),
-// so that the tool builds and serves the same page on both.
+// so that the tool builds and serves the same page on both, and the reading of a request's head
+// within limits. Why our own and not an HTTP library: Debian's cpp-httplib (libcpp-httplib-dev)
+// ships a compiled Linux library only, which the mingw-w64 cross build for Windows cannot link,
+// and the server needs little: GET of a few embedded files, a JSON state and an event stream on
+// 127.0.0.1, one thread per connection.
 #pragma once
 
 #include <glovepose/config.hpp>
@@ -15,6 +19,9 @@
 #  include <unistd.h>
 #endif
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -67,8 +74,9 @@ inline bool wait_readable(Socket s, int milliseconds) noexcept {
 #endif
 }
 
-/// @brief Sends all of `data`; stops quietly when the peer went away (no SIGPIPE on Linux).
-inline void send_all(Socket s, const std::string& data) noexcept {
+/// @brief Sends all of `data`; false when the peer went away or took nothing for the send time-out
+/// (no SIGPIPE on Linux).
+inline bool send_all(Socket s, const std::string& data) noexcept {
   std::size_t sent = 0;
   while (sent < data.size()) {
 #ifdef _WIN32
@@ -76,9 +84,21 @@ inline void send_all(Socket s, const std::string& data) noexcept {
 #else
     const ssize_t n = ::send(s, data.data() + sent, data.size() - sent, MSG_NOSIGNAL);
 #endif
-    if (n <= 0) return;
+    if (n <= 0) return false;
     sent += static_cast<std::size_t>(n);
   }
+  return true;
+}
+
+/// @brief A send that waits longer than `milliseconds` fails (a reader that stopped reading).
+inline void set_send_timeout(Socket s, int milliseconds) noexcept {
+#ifdef _WIN32
+  const DWORD wait = static_cast<DWORD>(milliseconds);
+  (void)::setsockopt(s, SOL_SOCKET, SO_SNDTIMEO, reinterpret_cast<const char*>(&wait), sizeof wait);
+#else
+  timeval wait{milliseconds / 1000, (milliseconds % 1000) * 1000};
+  (void)::setsockopt(s, SOL_SOCKET, SO_SNDTIMEO, &wait, sizeof wait);
+#endif
 }
 
 /// @brief Up to `size` bytes received from `s` (empty when the peer closed or failed).
@@ -91,6 +111,77 @@ inline std::string receive_some(Socket s, std::size_t size) {
 #endif
   buffer.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
   return buffer;
+}
+
+/// @brief The head of an HTTP/1.x request: status 200 when it was read and its request line is
+/// well formed; else the status to answer with (400 malformed, 408 not complete within the time,
+/// 431 longer than allowed); 0 when the peer closed first or the server is stopping.
+struct RequestHead {
+  int status = 0;
+  std::string method, target;
+};
+
+/// @brief Reads a request's head (up to the blank line) from `s`: at most `max_bytes`, within
+/// `milliseconds`, giving up when `stop` is set.
+inline RequestHead read_request_head(Socket s, std::size_t max_bytes, int milliseconds, const std::atomic<bool>& stop) {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(milliseconds);
+  std::string head;
+  RequestHead out;
+  std::size_t end = std::string::npos;
+  while ((end = head.find("\r\n\r\n")) == std::string::npos) {
+    if (head.size() > max_bytes) {
+      out.status = 431;
+      return out;
+    }
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+    if (left <= 0) {
+      out.status = 408;
+      return out;
+    }
+    if (stop) return out;
+    if (!wait_readable(s, static_cast<int>(std::min<long long>(left, 100)))) continue;
+    const std::string more = receive_some(s, max_bytes + 1 - head.size());
+    if (more.empty()) return out;  // closed
+    head += more;
+  }
+  if (end > max_bytes) {
+    out.status = 431;
+    return out;
+  }
+  // The request line: METHOD SP target SP HTTP/1.x, the method in capitals, the target a path.
+  const std::string line = head.substr(0, head.find("\r\n"));
+  const std::size_t a = line.find(' '), b = a == std::string::npos ? a : line.find(' ', a + 1);
+  out.status = 400;
+  if (a == std::string::npos || b == std::string::npos || line.find(' ', b + 1) != std::string::npos) return out;
+  out.method = line.substr(0, a);
+  out.target = line.substr(a + 1, b - a - 1);
+  const std::string version = line.substr(b + 1);
+  if (out.method.empty() || out.method.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ") != std::string::npos) return out;
+  if (out.target.empty() || out.target[0] != '/' || out.target.find_first_of("\t\"<>\\") != std::string::npos) return out;
+  for (char c : out.target)
+    if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e) return out;
+  if (version != "HTTP/1.1" && version != "HTTP/1.0") return out;
+  out.status = 200;
+  return out;
+}
+
+/// @brief Answers with an error status and a one-line reason, then the connection closes.
+inline void send_error(Socket s, int status) noexcept {
+  const char* reason = status == 400   ? "Bad Request"
+                       : status == 404 ? "Not Found"
+                       : status == 405 ? "Method Not Allowed"
+                       : status == 408 ? "Request Timeout"
+                       : status == 431 ? "Request Header Fields Too Large"
+                       : status == 503 ? "Service Unavailable"
+                                       : "Error";
+  try {
+    const std::string body = std::to_string(status) + " " + reason + "\n";
+    (void)send_all(s, "HTTP/1.1 " + body.substr(0, body.size() - 1) + "\r\nContent-Type: text/plain\r\nContent-Length: " +
+                          std::to_string(body.size()) + (status == 405 ? "\r\nAllow: GET, HEAD" : "") +
+                          "\r\nConnection: close\r\n\r\n" + body);
+  } catch (...) {  // out of memory for a few dozen bytes: the client sees the connection close
+  }
 }
 
 /// @brief A listening socket on 127.0.0.1:port (0: any free port) and the port it got.

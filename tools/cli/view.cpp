@@ -1,21 +1,28 @@
-// glovepose view: a live view of the hand in the browser: a local web server (loopback only) whose page draws the
-//   estimator's OpenXR joints in 3D with WebGL, the 25 angles, the trust flags, the calibration step
-//   with its target pose, and the latency. The glove is a simulated new user streamed in real time
-//   (default), a recorded dataset with raw rows replayed in real time (--replay), or a real glove on stdin
-//   (--stdin): any glove's frames, one "timestamp,cell,...,cell" line each (the model's glove's cells in
-//   the order of its description), or the built-in glove's raw rows, one "row,value,timestamp" line each;
-//   the first 30 s of stream time, or --calibration-seconds, are the calibration, or --calibration FILE
-//   is a saved one (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing"). The page asks for
-//   the newest hand (GET /state) about 30 times a second.
+// glovepose view: a live view of the hand in the browser. A local web server (loopback only) serves
+//   a page (tools/cli/web: three.js, embedded at build time) that draws the hand model's own spheres
+//   and capsules (the OpenXR joints with their radii, on the subject's hand), the truth overlaid when
+//   the source is simulated, the two 5x5 stretch maps and the 5x5 pose map, angle traces, the pinch
+//   state, the trust flags, the calibration step with its target pose, and the latency; the server
+//   pushes the newest hand to every open page about 30 times a second (Server-Sent Events, GET /events).
+//   The glove is a simulated new user streamed in real time (default), a recorded dataset with raw rows
+//   replayed in real time (--replay), or a real glove on stdin (--stdin): any glove's frames, one
+//   "timestamp,cell,...,cell" line each (the model's glove's cells in the order of its description),
+//   or the built-in glove's raw rows, one "row,value,timestamp" line each; the first 30 s of stream
+//   time, or --calibration-seconds, are the calibration, or --calibration FILE is a saved one
+//   (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing").
 #include <glovepose/estimator.hpp>
+#include <glovepose/sim/subject.hpp>
 
 #include <nlohmann/json.hpp>
 
-
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <list>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -34,6 +41,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
+// The server's limits: a request head is at most 8 KB and must arrive within 2 s (else 431 or
+// 408); a page that takes no data for 2 s is dropped; at most 32 connections at once (else 503).
+// Events go out about 30 times a second, the rate the page draws at.
+constexpr std::size_t kMaxRequestHead = 8192;
+constexpr int kRequestTimeoutMs = 2000;
+constexpr int kSendTimeoutMs = 2000;
+constexpr std::size_t kMaxConnections = 32;
+constexpr std::chrono::duration<double> kEventPeriod(1.0 / 30.0);
+
 struct ViewOptions {
   int port = 8765;
   std::string model;  // empty: the shipped one
@@ -42,19 +58,35 @@ struct ViewOptions {
   bool from_stdin = false;
   double calibration_seconds = kDefaultCalibrationSeconds;  // --stdin
   std::string calibration;                                  // --stdin: a saved calibration instead (empty: none)
-  double seconds = 0.0;               // 0: until the glove's stream ends (or Ctrl-C)
+  double seconds = 0.0;                                     // 0: until the glove's stream ends (or Ctrl-C)
+};
+
+// What the glove's thread hands to the server's threads after each input (through a Latest: copied
+// as words, never torn): the hand, its pinch state, the maps the network read and wrote, the truth.
+struct ViewFrame {
+  HandState hand;
+  XrHandAim aim;
+  std::array<float, grid::kStretchValues> stretch{};  // the calibrated cells on the two 5x5 stretch maps
+  std::array<float, grid::kMapSlots> pose_map{};      // the pose's angles normalised by the joint limits, on the 5x5 pose map
+  bool maps = false;                                  // stretch and pose_map hold the latest pose's
+  hand::Angles truth{};                               // the simulated person's true angles at this frame
+  bool has_truth = false;
+  double stream_time = 0.0;  // the glove stream's clock at this frame (s)
 };
 
 // The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
-// 0 is `start`), publishing the hand after each pose and the calibration's progress after each frame.
+// 0 is `start`), publishing a ViewFrame after each frame.
 class GloveStream {
  public:
-  GloveStream(GlovePoseEstimator& estimator, LatestHand& latest, std::atomic<bool>& stop)
-      : estimator_(estimator), latest_(latest), stop_(stop) {}
+  GloveStream(GlovePoseEstimator& estimator, Latest<ViewFrame>& latest, std::atomic<bool>& stop)
+      : estimator_(estimator), latest_(latest), stop_(stop), normalized_(estimator.model().cell_count()) {}
 
-  void recorded(const NewUser& user) {
+  // `clock`: set to the stream's time at `served_from` (the recording's clock against the server's).
+  void recorded(const NewUser& user, Clock::time_point served_from, std::atomic<double>& clock) {
     const Clock::time_point start = Clock::now();
     const double t0 = row_time(user, 0, 0);
+    clock = t0 - std::chrono::duration<double>(start - served_from).count();
+    const bool truth = user.data.has_true_angles();
     estimator_.start_calibration();
     for (std::size_t f = 0; f < user.data.frames() && !stop_; ++f) {
       if (f == user.first_session_frame) estimator_.finish_calibration();
@@ -62,16 +94,19 @@ class GloveStream {
           start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
       for (std::size_t r = 0; r < user.data.row_count; ++r)
         (void)estimator_.push_row(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
-      latest_.publish(estimator_.state());
+      frame_.has_truth = truth;
+      if (truth)
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) frame_.truth[d] = user.data.true_angles[f * hand::kDofCount + d];
+      publish(user.data.timestamps[f]);
     }
   }
 
-  // Lines of `format` from stdin until it ends (or stop): read_glove_lines, publishing the hand
-  // after each input, with a summary on stdout.
+  // Lines of `format` from stdin until it ends (or stop): read_glove_lines, publishing after each
+  // input, with a summary on stdout.
   void from_stdin(const GloveLineFormat& format, std::optional<double> calibration_seconds, GloveLineCounts& counts) {
     read_glove_lines(
         GloveLineSource{std::cin, "stdin", "glovepose view"}, format, estimator_, calibration_seconds, counts,
-        [this](Status) { latest_.publish(estimator_.state()); }, &stop_);
+        [this](Status) { publish(estimator_.pose().timestamp); }, &stop_);
     if (stop_) return;
     const std::lock_guard<std::mutex> hold(counts.lock);
     std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", counts.lines, counts.inputs,
@@ -80,77 +115,296 @@ class GloveStream {
   }
 
  private:
+  void publish(double stream_time) {
+    frame_.hand = estimator_.state();
+    frame_.aim = estimator_.aim();
+    frame_.stream_time = stream_time;
+    const auto& range = estimator_.calibration();
+    frame_.maps = frame_.hand.pose.valid && range && range->normalize(estimator_.cells(), normalized_) == Status::Ok &&
+                  estimator_.model().glove().map().to_stretch_maps(normalized_.data(), frame_.stretch) == Status::Ok;
+    if (frame_.maps)
+      estimator_.model().glove().map().to_pose_map(estimator_.model().joint_limits().normalize(frame_.hand.pose.angles), frame_.pose_map);
+    latest_.publish(frame_);
+  }
+
   GlovePoseEstimator& estimator_;
-  LatestHand& latest_;
+  Latest<ViewFrame>& latest_;
   std::atomic<bool>& stop_;
+  Eigen::VectorXd normalized_;
+  ViewFrame frame_;
 };
 
-// The newest hand as the page's JSON: pose, OpenXR joints (wrist frame, metres), the calibration
-// step and its target pose's joints, latency.
-json state_json(const LatestHand& latest, const GlovePoseEstimator& estimator, const GloveLineCounts& notes, Clock::time_point stream_start,
-                double stream_t0) {
-  HandState state;
-  (void)latest.read(state);
-  json out = {{"active", state.pose.valid}, {"calibrating", state.calibration.collecting}};
+// What the server and the glove's thread share. The thread holds it too: detached while it waits
+// for stdin, it outlives view().
+struct ViewShared {
+  ViewShared(std::shared_ptr<const PoseModel> model, bool shipped_model, const EstimatorConfig& config)
+      : format(*model, shipped_model), estimator(std::move(model), config) {}
+  GloveLineFormat format;  // refers to the glove of the estimator's model
+  GlovePoseEstimator estimator;
+  Latest<ViewFrame> latest;
+  GloveLineCounts notes;
+  std::string failure;  // why the glove's stream stopped; written before stream_done
+  std::atomic<bool> stop{false}, stream_done{false};
+  Clock::time_point served_from = Clock::now();  // when the server started
+  std::atomic<double> stream_clock{0.0};         // the glove stream's time at served_from (stdin: 0)
+};
+
+constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+
+json degrees(const hand::Angles& angles) {
+  json out = json::array();
+  for (double a : angles) out.push_back(std::round(a * kDegrees * 100.0) / 100.0);
+  return out;
+}
+
+// The OpenXR joints' positions (wrist frame, millimetres) of `angles` on the estimator's hand.
+json joints_mm(const XrHandLocator& locator, const hand::Angles& angles) {
+  XrHandJoints joints;
+  locator.locate(angles, nullptr, 0, joints);
+  json list = json::array();
+  for (const auto& j : joints.locations)
+    list.push_back({std::round(j.pose.position.x * 1e4) / 10.0, std::round(j.pose.position.y * 1e4) / 10.0,
+                    std::round(j.pose.position.z * 1e4) / 10.0});
+  return list;
+}
+
+// What does not change while the tool runs, sent once to each page: the hand's geometry (the joints'
+// parents and radii), readable names, the maps' layouts, the calibration sequence.
+json meta_json(const GlovePoseEstimator& estimator, bool has_truth, const std::string& source) {
+  const PoseModel& model = estimator.model();
+  XrHandJoints rest;
+  estimator.locator().locate(hand::Angles{}, nullptr, 0, rest);
+  json radii = json::array(), parents = json::array(), joint_names = json::array();
+  for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
+    radii.push_back(std::round(rest.locations[j].radius * 1e4) / 10.0);
+    parents.push_back(hand::kXrJointParent[j]);
+    joint_names.push_back(hand::kXrJointNames[j]);
+  }
+  json dof_names = json::array(), dof_fingers = json::array();
+  for (const hand::Dof& dof : hand::kDofs) {
+    dof_names.push_back(dof.name);
+    dof_fingers.push_back(static_cast<int>(dof.finger));
+  }
+  // Each map as 5 rows of 5 names (null: an empty slot).
+  const auto grid = [] { return json(std::vector<std::vector<json>>(grid::kGridSize, std::vector<json>(grid::kGridSize, nullptr))); };
+  json stretch = json::array({grid(), grid()}), pose = grid();
+  const grid::GridMap& map = model.glove().map();
+  for (std::size_t c = 0; c < map.cell_slots().size(); ++c) {
+    const grid::Slot& s = map.cell_slots()[c];
+    if (s.on_maps()) stretch[s.channel][s.row][s.col] = model.glove().cell_names()[c];
+  }
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) pose[map.dof_slots()[d].row][map.dof_slots()[d].col] = hand::kDofs[d].name;
+  json steps = json::array();
+  if (model.pose_offset())
+    for (const auto& step : model.pose_offset()->sequence().steps())
+      steps.push_back({{"name", step.name}, {"instruction", step.instruction}, {"seconds", step.seconds}});
+  json fault = json::array();
+  for (int b = 0; b < kPoseFlagCount; ++b) fault.push_back((kPoseFaultFlags & (1u << b)) != 0);
+  return {{"source", source},
+          {"has_truth", has_truth},
+          {"side", estimator.config().handedness == hand::Handedness::Left ? "left" : "right"},
+          {"radii_mm", radii},
+          {"parents", parents},
+          {"joint_names", joint_names},
+          {"dof_names", dof_names},
+          {"dof_fingers", dof_fingers},
+          {"stretch_names", stretch},
+          {"pose_names", pose},
+          {"glove", model.glove().id()},
+          {"steps", steps},
+          {"flag_is_fault", fault},
+          {"pinch_threshold_mm", hand::kPinchThresholdMm},
+          {"pinch_release_mm", hand::kPinchReleaseMm},
+          {"event_hz", 1.0 / kEventPeriod.count()}};
+}
+
+// The newest frame as the page's JSON (angles in degrees, positions in millimetres in the wrist
+// frame, maps in [-1, 1] as 5 x 5 rows).
+json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& shared) {
+  const HandState& state = frame.hand;
+  const GlovePoseEstimator& estimator = shared.estimator;
+  json out = {{"active", state.pose.valid}, {"calibrating", state.calibration.collecting}, {"published", number}};
   {
-    const std::lock_guard<std::mutex> hold(notes.lock);
-    out["lines"] = notes.lines;
-    out["skipped"] = notes.skipped;
-    out["first_skipped"] = notes.first_skipped;
-    out["zeroed"] = notes.calibration;
+    const std::lock_guard<std::mutex> hold(shared.notes.lock);
+    out["lines"] = shared.notes.lines;
+    out["skipped"] = shared.notes.skipped;
+    out["first_skipped"] = shared.notes.first_skipped;
+    out["zeroed"] = shared.notes.calibration;
   }
   const XrHandLocator& locator = estimator.locator();
-  const auto joints_of = [&](const hand::Angles& angles) {
-    XrHandJoints joints;
-    locator.locate(angles, nullptr, 0, joints);
-    json list = json::array();
-    for (const auto& j : joints.locations) list.push_back({j.pose.position.x, j.pose.position.y, j.pose.position.z});
-    return list;
-  };
+  out["t"] = frame.stream_time;
   out["step"] = state.calibration.step;
-  out["step_name"] = "";
+  out["calibration_frames"] = state.calibration.frames;
+  out["sequence_seconds"] = state.calibration.sequence_seconds;
   out["target_joints"] = nullptr;
   if (state.calibration.collecting && state.calibration.step >= 0 && estimator.model().pose_offset()) {
     const auto& steps = estimator.model().pose_offset()->sequence().steps();
     const auto& step = steps[static_cast<std::size_t>(state.calibration.step)];
     out["step_name"] = step.name;
     out["instruction"] = step.instruction;
-    out["target_joints"] = joints_of(step.pose);
+    out["target_joints"] = joints_mm(locator, step.pose);
   }
+  out["truth_joints"] = frame.has_truth ? joints_mm(locator, frame.truth) : json(nullptr);
+  out["truth_deg"] = frame.has_truth ? degrees(frame.truth) : json(nullptr);
   if (!state.pose.valid) return out;
-  json names = json::array(), flags = json::array();
-  for (const hand::Dof& dof : hand::kDofs) names.push_back(dof.name);
+  json flags = json::array();
   for (int b = 0; b < kPoseFlagCount; ++b)
     if (state.pose.flags & (1u << b)) flags.push_back(pose_flag_name(b));
-  const double stream_now = stream_t0 + std::chrono::duration<double>(Clock::now() - stream_start).count();
+  const double stream_now = shared.stream_clock + std::chrono::duration<double>(Clock::now() - shared.served_from).count();
   out["seq"] = state.pose.sequence;
-  out["angles"] = state.pose.angles;
-  out["dof_names"] = names;
+  out["angles"] = state.pose.angles;  // radians, for tools reading GET /state
+  out["angles_deg"] = degrees(state.pose.angles);
   out["trusted"] = state.pose.trusted();
+  out["flags"] = state.pose.flags;
   out["flag_names"] = flags;
-  out["joints"] = joints_of(state.pose.angles);
-  out["compute_us"] = 1e6 * state.pose.compute_seconds;
-  out["oldest_age_ms"] = 1e3 * state.pose.oldest_age;
-  out["age_ms"] = 1e3 * std::max(0.0, stream_now - state.pose.timestamp);
+  out["joints"] = joints_mm(locator, state.pose.angles);
+  out["compute_us"] = std::round(1e7 * state.pose.compute_seconds) / 10.0;
+  out["oldest_age_ms"] = std::round(1e4 * state.pose.oldest_age) / 10.0;
+  out["age_ms"] = std::round(1e4 * std::max(0.0, stream_now - state.pose.timestamp)) / 10.0;
+  json pinch = json::array();
+  for (std::size_t p = 0; p < hand::kPinchPairCount; ++p)
+    pinch.push_back({{"strength", frame.aim.pinch_strength[p]},
+                     {"distance_mm", std::isfinite(frame.aim.distance_mm[p]) ? json(std::round(frame.aim.distance_mm[p] * 10.0) / 10.0)
+                                                                             : json(nullptr)},
+                     {"pinching", (frame.aim.status & (kXrAimIndexPinching << p)) != 0}});
+  out["pinch"] = pinch;
+  out["aim_valid"] = (frame.aim.status & kXrAimValid) != 0;
+  if (frame.maps) {
+    const auto rows = [](const float* values) {
+      json map = json::array();
+      for (int r = 0; r < grid::kGridSize; ++r)
+        map.push_back(std::vector<float>(values + r * grid::kGridSize, values + (r + 1) * grid::kGridSize));
+      return map;
+    };
+    out["stretch"] = json::array({rows(frame.stretch.data()), rows(frame.stretch.data() + grid::kMapSlots)});
+    out["pose_map"] = rows(frame.pose_map.data());
+  }
   return out;
 }
 
-void respond(Socket fd, const char* status, const char* type, const std::string& body) {
-  send_all(fd, std::string("HTTP/1.1 ") + status + "\r\nContent-Type: " + type + "\r\nContent-Length: " + std::to_string(body.size()) +
-                   "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + body);
+const ViewAsset* find_asset(const std::string& path) {
+  for (const ViewAsset& asset : kViewAssets)
+    if (path == asset.path || (path == "/index.html" && std::strcmp(asset.path, "/") == 0)) return &asset;
+  return nullptr;
 }
 
-// What the server and the glove's thread share. The thread holds it too: detached while it waits
-// for stdin, it outlives view().
-struct ViewShared {
-  ViewShared(std::shared_ptr<const PoseModel> model, bool shipped_model)
-      : format(*model, shipped_model), estimator(std::move(model), EstimatorConfig{}) {}
-  GloveLineFormat format;  // refers to the glove of the estimator's model
-  GlovePoseEstimator estimator;
-  LatestHand latest;
-  GloveLineCounts notes;
-  std::string failure;  // why the glove's stream stopped; written before stream_done
-  std::atomic<bool> stop{false}, stream_done{false};
+const char* content_type(const std::string& path) {
+  const auto ends = [&](const char* tail) {
+    const std::size_t n = std::strlen(tail);
+    return path.size() >= n && path.compare(path.size() - n, n, tail) == 0;
+  };
+  if (ends(".js")) return "text/javascript; charset=utf-8";
+  if (ends(".txt")) return "text/plain; charset=utf-8";
+  return "text/html; charset=utf-8";
+}
+
+// One connection, on its own thread (so a slow or stalled client holds up only itself): its request
+// head within the limits, then a file, the state, or the event stream until the tool stops or the
+// page goes away.
+void serve_connection(Socket client, const ViewShared& shared, const std::string& meta) {
+  const std::atomic<bool>& stop = shared.stop;
+  set_send_timeout(client, kSendTimeoutMs);
+  const RequestHead head = read_request_head(client, kMaxRequestHead, kRequestTimeoutMs, stop);
+  if (head.status == 0) return;  // the peer went away
+  if (head.status != 200) {
+    send_error(client, head.status);
+    return;
+  }
+  const bool get = head.method == "GET";
+  if (!get && head.method != "HEAD") {
+    send_error(client, 405);
+    return;
+  }
+  const std::string path = head.target.substr(0, head.target.find('?'));
+  const auto answer = [&](const char* type, const std::string& body) {
+    send_all(client, std::string("HTTP/1.1 200 OK\r\nContent-Type: ") + type + "\r\nContent-Length: " + std::to_string(body.size()) +
+                         "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + (get ? body : std::string()));
+  };
+  if (path == "/state") {
+    ViewFrame frame;
+    const std::uint64_t number = shared.latest.read(frame);
+    answer("application/json", state_json(frame, number, shared).dump());
+    return;
+  }
+  if (path == "/meta") {
+    answer("application/json", meta);
+    return;
+  }
+  if (path == "/events") {
+    if (!send_all(client,
+                  "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\nevent: meta\ndata: " +
+                      meta + "\n\n") ||
+        !get)
+      return;
+    // The newest frame at each tick, when there is a new one; a comment every second otherwise, so
+    // that a page whose tool went quiet still finds out when it went away.
+    std::uint64_t sent = 0;
+    Clock::time_point tick = Clock::now(), quiet_since = tick;
+    while (!stop) {
+      ViewFrame frame;
+      const std::uint64_t number = shared.latest.read(frame);
+      if (number != sent) {
+        if (!send_all(client, "data: " + state_json(frame, number, shared).dump() + "\n\n")) return;
+        sent = number;
+        quiet_since = tick;
+      } else if (tick - quiet_since > std::chrono::seconds(1)) {
+        if (!send_all(client, ": waiting for the glove\n\n")) return;
+        quiet_since = tick;
+      }
+      tick += std::chrono::duration_cast<Clock::duration>(kEventPeriod);
+      std::this_thread::sleep_until(tick);
+    }
+    return;
+  }
+  const ViewAsset* asset = find_asset(path);
+  if (asset == nullptr) {
+    send_error(client, 404);
+    return;
+  }
+  std::string body;
+  body.reserve(asset->size);
+  for (const char* const* chunk = asset->chunks; *chunk != nullptr; ++chunk) body += *chunk;
+  answer(content_type(path), body);
+}
+
+// The connections being served: one thread each; finished ones are joined as new ones come.
+class Connections {
+ public:
+  ~Connections() { join_all(); }
+  bool full() {
+    reap();
+    return running_.size() >= kMaxConnections;
+  }
+  template <typename Serve>
+  void start(Socket client, Serve serve) {
+    auto& c = running_.emplace_back();
+    c.done = std::make_shared<std::atomic<bool>>(false);
+    c.thread = std::thread([client, serve, done = c.done] {
+      serve(client);
+      close_socket(client);
+      *done = true;
+    });
+  }
+  void join_all() {
+    for (auto& c : running_) c.thread.join();
+    running_.clear();
+  }
+
+ private:
+  struct Running {
+    std::thread thread;
+    std::shared_ptr<std::atomic<bool>> done;
+  };
+  void reap() {
+    for (auto it = running_.begin(); it != running_.end();)
+      if (*it->done) {
+        it->thread.join();
+        it = running_.erase(it);
+      } else {
+        ++it;
+      }
+  }
+  std::list<Running> running_;
 };
 
 int view(const ViewOptions& o) {
@@ -168,25 +422,32 @@ int view(const ViewOptions& o) {
       ++user->first_session_frame;
     if (user->first_session_frame == 0)
       throw Error("'" + o.replay + "' starts with no calibration frames (kind 1), expected a calibration sequence before the session");
-  } else if (!o.from_stdin) {
-    *user = simulate_new_user(o.seed, 10.0, *model);
   }
-  const auto shared = std::make_shared<ViewShared>(model, o.model.empty());
+  const bool simulated = o.replay.empty() && !o.from_stdin;
+  // The simulated person's own hand (subject 0 of the seed, as simulate_new_user draws it): the page
+  // draws it at their size. A replay or a real glove: the reference hand.
+  EstimatorConfig config;
+  if (simulated) config.hand = sim::make_subjects(1, o.seed, sim::default_world().people)[0].hand_model();
+  const auto shared = std::make_shared<ViewShared>(model, o.model.empty(), config);
   const SocketLibrary sockets;
   const auto [server, port] = listen_on_loopback(o.port);
-  std::printf("glovepose view: http://127.0.0.1:%d/\n", port);
+  std::printf("glovepose view: http://127.0.0.1:%d/\n", port);  // at once: the simulated user is made on the glove's thread
   std::fflush(stdout);
-  const Clock::time_point start = Clock::now();
-  const double stream_t0 = o.from_stdin ? 0.0 : row_time(*user, 0, 0);
+  const bool has_truth = simulated || user->data.has_true_angles();
+  const std::string meta =
+      meta_json(shared->estimator, has_truth, o.from_stdin ? "stdin" : (simulated ? "simulated new user" : "replay of " + o.replay)).dump();
+  const Clock::time_point start = shared->served_from;
   if (!o.calibration.empty()) shared->estimator.load_calibration(o.calibration);
   const std::optional<double> calibration_seconds = on_the_fly_seconds(o.calibration_seconds, o.calibration);
-  std::thread glove([shared, user, from_stdin = o.from_stdin, calibration_seconds] {
+  std::thread glove([shared, user, simulated, seed = o.seed, from_stdin = o.from_stdin, calibration_seconds] {
     try {
       GloveStream stream(shared->estimator, shared->latest, shared->stop);
-      if (from_stdin)
+      if (from_stdin) {
         stream.from_stdin(shared->format, calibration_seconds, shared->notes);
-      else
-        stream.recorded(*user);
+      } else {
+        if (simulated) *user = simulate_new_user(seed, 10.0, shared->estimator.model());
+        stream.recorded(*user, shared->served_from, shared->stream_clock);
+      }
     } catch (const Error& e) {
       shared->failure = e.what();
     }
@@ -198,21 +459,21 @@ int view(const ViewOptions& o) {
     return failed() ||
            (o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : shared->stream_done.load());
   };
-  while (!finished()) {
-    if (!wait_readable(server, 100)) continue;
-    const Socket client = ::accept(server, nullptr, nullptr);
-    if (client == kNoSocket) continue;
-    const std::string request = receive_some(client, 2047);
-    const std::string line = request.substr(0, request.find('\r'));
-    if (line.rfind("GET / ", 0) == 0 || line.rfind("GET /index.html ", 0) == 0)
-      respond(client, "200 OK", "text/html; charset=utf-8", kViewPage);
-    else if (line.rfind("GET /state", 0) == 0)
-      respond(client, "200 OK", "application/json", state_json(shared->latest, shared->estimator, shared->notes, start, stream_t0).dump());
-    else
-      respond(client, "404 Not Found", "text/plain", "not found\n");
-    close_socket(client);
+  {
+    Connections connections;
+    while (!finished()) {
+      if (!wait_readable(server, 100)) continue;
+      const Socket client = ::accept(server, nullptr, nullptr);
+      if (client == kNoSocket) continue;
+      if (connections.full()) {  // refused at once rather than queued behind the open streams
+        send_error(client, 503);
+        close_socket(client);
+        continue;
+      }
+      connections.start(client, [&shared = *shared, &meta](Socket c) { serve_connection(c, shared, meta); });
+    }
+    shared->stop = true;  // the event streams end at their next tick
   }
-  shared->stop = true;
   close_socket(server);
   if (shared->stream_done || !o.from_stdin)
     glove.join();  // a recording stops at its next frame
@@ -228,9 +489,10 @@ Command add_view(CLI::App& tool) {
   auto o = std::make_shared<ViewOptions>();
   CLI::App* command = tool.add_subcommand(
       "view",
-      "A live view of the hand in the browser: a local web server (loopback only) whose page draws the estimator's joints in 3D, "
-      "the 25 angles, the trust flags, the calibration step with its target pose, and the latency. The glove is a simulated new "
-      "user streamed in real time (default), a recorded dataset replayed (--replay), or a real glove on stdin (--stdin).");
+      "A live view of the hand in the browser: a local web server (loopback only) whose page draws the hand in 3D (the truth beside "
+      "it when simulated), the glove's stretch maps and the pose map, angle traces, pinch state, the trust flags, the calibration "
+      "step with its target pose, and the latency. The glove is a simulated new user streamed in real time (default), a recorded "
+      "dataset replayed (--replay), or a real glove on stdin (--stdin).");
   add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")
       ->check(CLI::Range(0, 65535));
   add_model_file(*command, o->model, "weights (default: the shipped model)");

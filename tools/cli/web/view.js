@@ -52,9 +52,9 @@ scene.add(fill);
 // fingers up the screen; the orbit turns about the hand's long axis.
 const camera = new THREE.PerspectiveCamera(34, canvas.width / canvas.height, 5, 3000);
 camera.up.set(0, 0, -1);
-camera.position.set(230, 250, 40);
+camera.position.set(170, 190, 20);
 const controls = renderer ? new OrbitControls(camera, canvas) : null;
-const centre = new THREE.Vector3(0, -10, -75);
+const centre = new THREE.Vector3(0, -10, -62);
 if (controls) { controls.target.copy(centre); controls.enableDamping = true; controls.update(); }
 camera.lookAt(centre);
 
