@@ -545,6 +545,26 @@ GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_joints(const glovepose_
 GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_aim(const glovepose_latest* latest, glovepose_xr_aim_state* out,
                                                              uint64_t* sequence) GLOVEPOSE_C_NOEXCEPT;
 
+/* ---- evaluation (set-up, not per frame) --------------------------------------------------- */
+
+/**
+ * @brief Scores a model file on a dataset file (glovepose simulate or import): what
+ * `glovepose eval --json` prints (train::evaluate and its to_json in the C++ library).
+ * @param model_path the .safetensors model file.
+ * @param dataset_path the dataset file.
+ * @param options_json NULL or "{}" for the defaults, or a JSON object with any of: "subjects",
+ * "exclude_subjects", "sessions", "gloves" (arrays of ids >= 0), "stride" (>= 1), "calibration_mode"
+ * ("none", "training", "onthefly" or "guided"; default the model's), "replay_rows" (true: replay the
+ * raw rows through the estimator's readout), "mean_window" (>= 1, with replay_rows), "contact"
+ * (true: the contact stage before scoring), "threads" (>= 0; 0: all cores).
+ * @param out_json receives the report, NUL-terminated UTF-8 JSON, owned by the library and valid on
+ * this thread until its next glovepose_evaluate call (NULL on failure).
+ * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE (a file, or data the model
+ * cannot score) / _INVALID_ARGUMENT (the options) / _OUT_OF_MEMORY, with a message.
+ */
+GLOVEPOSE_C_API glovepose_result glovepose_evaluate(const char* model_path, const char* dataset_path, const char* options_json,
+                                                    const char** out_json) GLOVEPOSE_C_NOEXCEPT;
+
 /* ---- struct helpers ------------------------------------------------------------------------ */
 
 /** @brief Zeroes *pose and sets its struct_size (call once before glovepose_estimator_get_pose). */

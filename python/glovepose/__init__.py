@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import ctypes
 import enum
+import json
 
 import numpy as np
 
@@ -27,7 +28,7 @@ from . import _library
 from .dataset import load_dataset
 
 __all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "XrAim", "XrAimFlag", "Latest", "LatestHand", "CalibrationStep",
-           "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "Status", "OK", "SOLVED",
+           "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "evaluate", "Status", "OK", "SOLVED",
            "NOT_READY", "UNCALIBRATED", "DOF_NAMES", "JOINT_NAMES", "JOINT_PARENTS", "XR_JOINT_NAMES", "XR_JOINT_PARENTS",
            "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED", "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID",
            "XR_ANGULAR_VELOCITY_VALID"]
@@ -583,3 +584,25 @@ class Latest(_Closing):
         if getattr(self, "_handle", None):
             _lib.glovepose_latest_free(self._handle)
             self._handle = ctypes.c_void_p()
+
+
+def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None, gloves=None, stride: int = 1,
+             calibration_mode: str | None = None, replay_rows: bool = False, mean_window: int | None = None, contact: bool = False,
+             threads: int = 0) -> dict:
+    """Scores model file `model` on dataset file `data` (glovepose simulate or import): the report
+    `glovepose eval --json` prints, as a dict (the library's train::evaluate through
+    glovepose_evaluate). The options are eval's: subjects, exclude_subjects, sessions, gloves (lists
+    of ids; None: all), stride, calibration_mode ("none", "training", "onthefly", "guided"; None: the
+    model's), replay_rows with mean_window, contact, threads (0: all cores). Raises GloveposeError
+    with the library's message."""
+    options = {"stride": stride, "replay_rows": replay_rows, "contact": contact, "threads": threads}
+    for key, ids in (("subjects", subjects), ("exclude_subjects", exclude_subjects), ("sessions", sessions), ("gloves", gloves)):
+        if ids is not None:
+            options[key] = [int(i) for i in ids]
+    if calibration_mode is not None:
+        options["calibration_mode"] = calibration_mode
+    if mean_window is not None:
+        options["mean_window"] = mean_window
+    report = ctypes.c_char_p()
+    _check(_lib.glovepose_evaluate(str(model).encode(), str(data).encode(), json.dumps(options).encode(), ctypes.byref(report)))
+    return json.loads(report.value.decode())

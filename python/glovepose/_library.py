@@ -219,6 +219,7 @@ _SIGNATURES = {
     "glovepose_xr_hand_init": (None, [_P(XrHand)]),
     "glovepose_predicted_pose_init": (None, [_P(PredictedPose)]),
     "glovepose_xr_aim_state_init": (None, [_P(XrAimState)]),
+    "glovepose_evaluate": (ctypes.c_int32, [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, _P(ctypes.c_char_p)]),
 }
 
 

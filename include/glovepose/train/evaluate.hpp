@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "../config.hpp"
@@ -165,7 +166,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   r.rows_replayed = replayed.has_value();
   r.zeroed = zeroed_sensors(samples, model.glove);
   const hand::JointLimits limits = model.info.joint_limits();
-  core::ThreadPool pool(options.threads);
+  core::ThreadPool pool(options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
   const bool guided = detail::evaluate_guided(choice, model, data);
   const std::map<std::int64_t, hand::Angles> offsets =
       guided ? guided_offsets(model, data, options.filter, pool) : std::map<std::int64_t, hand::Angles>{};

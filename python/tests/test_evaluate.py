@@ -1,0 +1,97 @@
+"""glovepose.evaluate (the library's train::evaluate through the C ABI's glovepose_evaluate) against
+`glovepose eval --json` on the same model and dataset files: the same report, key for key, every
+string and count equal and every other number within a relative 1e-5 (the C library is built for
+baseline x86-64, the tool for this machine's instruction set: sums of floats in another order), with
+the default options and with eval's selection, calibration, row replay and
+contact options; bad options and files raise GloveposeError with the library's message.
+
+Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CLI.
+"""
+import json
+import os
+import subprocess
+import tempfile
+import unittest
+from pathlib import Path
+
+import glovepose
+
+ROOT = Path(__file__).resolve().parents[2]
+MODEL = ROOT / "models" / "glovepose_fcn512.safetensors"
+
+
+def cli_eval(*args: str) -> dict:
+    done = subprocess.run([os.environ["GLOVEPOSE_CLI"], "eval", *args, "--json"], check=True, capture_output=True, text=True)
+    return json.loads(done.stdout)
+
+
+def differences(a, b, path: str = "") -> list:
+    """Where two reports differ: keys, types, strings and whole numbers exactly; other numbers
+    beyond a relative 1e-5."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        if list(a) != list(b):
+            return [f"{path}: keys {list(a)} != {list(b)}"]
+        return [d for k in a for d in differences(a[k], b[k], f"{path}/{k}")]
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} != {len(b)} items"]
+        return [d for i, (x, y) in enumerate(zip(a, b)) for d in differences(x, y, f"{path}[{i}]")]
+    if isinstance(a, float) or isinstance(b, float):
+        ok = isinstance(a, (int, float)) and isinstance(b, (int, float)) and abs(a - b) <= 1e-5 * max(abs(a), abs(b), 1e-9)
+    else:
+        ok = type(a) is type(b) and a == b
+    return [] if ok else [f"{path}: {a!r} != {b!r}"]
+
+
+class Evaluate(unittest.TestCase):
+    def assertSameReport(self, a: dict, b: dict):
+        self.assertEqual(differences(a, b), [])
+
+    @classmethod
+    def setUpClass(cls):
+        cls.work = tempfile.TemporaryDirectory()
+        cls.data = Path(cls.work.name) / "corpus.safetensors"
+        subprocess.run([os.environ["GLOVEPOSE_CLI"], "simulate", "--seed", "43", "--subjects", "2", "--sessions", "1", "--gloves", "1",
+                        "--minutes", "0.1", "--calibration-seconds", "3", "--raw-rows", "--threads", "1", "--out", str(cls.data)],
+                       check=True, stdout=subprocess.DEVNULL)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.work.cleanup()
+
+    def test_the_defaults_give_the_tools_report(self):
+        report = glovepose.evaluate(MODEL, self.data, threads=1)
+        self.assertSameReport(report, cli_eval("--model", str(MODEL), "--data", str(self.data), "--threads", "1"))
+        self.assertEqual(report["format"], "glovepose-angle-errors")
+        self.assertGreater(report["frames"], 100)
+        self.assertEqual(report["calibration"], "onthefly")
+        self.assertIsNotNone(report["vs_truth"])  # simulated data: the truth behind the labels too
+
+    def test_the_options_are_evals(self):
+        report = glovepose.evaluate(MODEL, self.data, subjects=[1], sessions=[0], calibration_mode="onthefly", replay_rows=True, mean_window=3,
+                                    contact=True, threads=1)
+        self.assertSameReport(report, cli_eval("--model", str(MODEL), "--data", str(self.data), "--subjects", "1", "--sessions", "0",
+                                               "--calibration-mode", "onthefly", "--replay-rows", "--mean-window", "3", "--contact",
+                                               "--threads", "1"))
+        self.assertEqual(report["mean_window"], 3)
+        self.assertIsNotNone(report["contact"])
+        whole = glovepose.evaluate(MODEL, self.data, threads=1)
+        self.assertLess(report["frames"], whole["frames"] * 0.6)  # one of two people
+        excluded = glovepose.evaluate(MODEL, self.data, exclude_subjects=[0], threads=1)
+        self.assertEqual(excluded, glovepose.evaluate(MODEL, self.data, subjects=[1], threads=1))  # the same library: equal
+
+    def test_bad_options_and_files_raise_with_the_librarys_message(self):
+        with self.assertRaisesRegex(glovepose.GloveposeError, "calibration 'sideways', expected none, training, onthefly or guided"):
+            glovepose.evaluate(MODEL, self.data, calibration_mode="sideways")
+        with self.assertRaisesRegex(glovepose.GloveposeError, "mean_window.*needs.*replay_rows"):
+            glovepose.evaluate(MODEL, self.data, mean_window=3)
+        with self.assertRaisesRegex(glovepose.GloveposeError, "stride.*expected a whole number >= 1"):
+            glovepose.evaluate(MODEL, self.data, stride=0)
+        with self.assertRaisesRegex(glovepose.GloveposeError, "file not found"):
+            glovepose.evaluate(MODEL, Path(self.work.name) / "missing.safetensors")
+        with self.assertRaisesRegex(glovepose.GloveposeError, "records no guided calibration"):
+            glovepose.evaluate(MODEL, self.data, calibration_mode="guided")
+
+
+if __name__ == "__main__":
+    unittest.main()
