@@ -42,12 +42,12 @@ linear_data=$OUT/linear_seed${LINEAR_SEED}.safetensors
 [ -f "$linear_data" ] || log "$G" simulate "${WORLD_ARGS[@]}" --seed "$LINEAR_SEED" --subjects 10 --sessions 2 --minutes 2 --gloves 1 \
   --threads "$THREADS" --out "$linear_data" > /dev/null
 linear=$OUT/linear_seed${LINEAR_SEED}.model.safetensors
-[ -f "$linear" ] || log "$G" train --data "$linear_data" --model linear --out "$linear" > /dev/null
+[ -f "$linear" ] || log "$G" train --data "$linear_data" --architecture linear --out "$linear" > /dev/null
 
 rm -f "$OUT/rows.tsv"
 row() {  # model label calibration window: eval -> JSON, and each person's mean error against the truth
   local json=$OUT/$(basename "$1" .safetensors)_$3_w$4.json csv=$OUT/predictions.csv
-  if ! log "$G" eval --model "$1" --data "$test_data" --calibration "$3" --replay-rows --mean-window "$4" --threads "$THREADS" --json \
+  if ! log "$G" eval --model "$1" --data "$test_data" --calibration-mode "$3" --replay-rows --mean-window "$4" --threads "$THREADS" --json \
     --predictions "$csv" > "$json" 2> "$OUT/eval.err"; then  # e.g. a calibration unlike the model's sequence: a row saying why
     printf '%s\t%s\t%s\trefused\t%s\n' "$2" "$3" "$4" "$(tr '\n\t' '  ' < "$OUT/eval.err")" >> "$OUT/rows.tsv"
     return

@@ -340,37 +340,37 @@ finish_experiment() {  # EXPERIMENT "EXTRA KNOBS" [SVG]
 T1=$OUT/table1
 personal_intra() {  # (1): sessions 0, 1 -> session 2
   local s=$1 m=$T1/s${1}_intra.safetensors
-  train_model "$m" "s$s (1) intra" train --data "$CORPUS" --model "unet:$WIDTH" --subjects "$s" --gloves 0 --sessions 0,1 \
-    --calibration onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED"
+  train_model "$m" "s$s (1) intra" train --data "$CORPUS" --architecture "unet:$WIDTH" --subjects "$s" --gloves 0 --sessions 0,1 \
+    --calibration-mode onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED"
   JSON=$T1/s${s}_intra.json
-  eval_json "$JSON" "s$s (1) intra" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 2 --calibration onthefly
+  eval_json "$JSON" "s$s (1) intra" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 2 --calibration-mode onthefly
 }
 personal_inter() {  # (2): sessions 0-3 -> session 4; [STRIDE TAG DIR EPOCHS] for Table 2
   local s=$1 stride=${2:-1} tag=${3:-inter} dir=${4:-$T1} epochs=${5:-$EPOCHS}
   local m=$dir/s${s}_$tag.safetensors
-  train_model "$m" "s$s (2) $tag" train --data "$CORPUS" --model "unet:$WIDTH" --subjects "$s" --gloves 0 --sessions 0-3 \
-    --stride "$stride" --calibration onthefly --batch 256 --epochs "$epochs" --seed "$SEED"
+  train_model "$m" "s$s (2) $tag" train --data "$CORPUS" --architecture "unet:$WIDTH" --subjects "$s" --gloves 0 --sessions 0-3 \
+    --stride "$stride" --calibration-mode onthefly --batch 256 --epochs "$epochs" --seed "$SEED"
   JSON=$dir/s${s}_$tag.json
-  eval_json "$JSON" "s$s (2) $tag" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration onthefly
+  eval_json "$JSON" "s$s (2) $tag" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration-mode onthefly
 }
 generic_nocal() {  # (3): other subjects, training-data min-max -> all sessions of s
   local s=$1 m=$T1/s${1}_nocal.safetensors
-  train_model "$m" "s$s (3) generic w/o calib" train --data "$CORPUS" --model "unet:$WIDTH" --exclude-subjects "$s" --gloves 0 \
-    --stride "$STRIDE" --calibration training --batch 1024 --epochs "$EPOCHS" --seed "$SEED"
+  train_model "$m" "s$s (3) generic w/o calib" train --data "$CORPUS" --architecture "unet:$WIDTH" --exclude-subjects "$s" --gloves 0 \
+    --stride "$STRIDE" --calibration-mode training --batch 1024 --epochs "$EPOCHS" --seed "$SEED"
   JSON=$T1/s${s}_nocal.json
-  eval_json "$JSON" "s$s (3) generic w/o calib" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration training
+  eval_json "$JSON" "s$s (3) generic w/o calib" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration-mode training
 }
 generic_cal_model() {  # (4)'s model; [STRIDE TAG DIR EPOCHS] for Table 2
   local s=$1 stride=${2:-$STRIDE} tag=${3:-cal} dir=${4:-$T1} epochs=${5:-$EPOCHS}
   MODEL=$dir/s${s}_$tag.safetensors
-  train_model "$MODEL" "s$s (4) $tag" train --data "$CORPUS" --model "unet:$WIDTH" --exclude-subjects "$s" --gloves 0 \
-    --stride "$stride" --calibration onthefly --batch 1024 --epochs "$epochs" --seed "$SEED"
+  train_model "$MODEL" "s$s (4) $tag" train --data "$CORPUS" --architecture "unet:$WIDTH" --exclude-subjects "$s" --gloves 0 \
+    --stride "$stride" --calibration-mode onthefly --batch 1024 --epochs "$epochs" --seed "$SEED"
 }
 generic_cal() {  # (4): other subjects, on-the-fly calibration -> all sessions of s
   local s=$1 tag=${3:-cal} dir=${4:-$T1}
   generic_cal_model "$@"
   JSON=$dir/s${s}_$tag.json
-  eval_json "$JSON" "s$s (4) $tag" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration onthefly
+  eval_json "$JSON" "s$s (4) $tag" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration-mode onthefly
 }
 finetuned() {  # (5): (4) fine-tuned on session 0 of s -> sessions 1-4
   local s=$1 m=$T1/s${1}_tuned.safetensors
@@ -378,13 +378,13 @@ finetuned() {  # (5): (4) fine-tuned on session 0 of s -> sessions 1-4
   train_model "$m" "s$s (5) fine-tuned" finetune --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 0 \
     --epochs "$FINETUNE_EPOCHS" --seed "$SEED"
   JSON=$T1/s${s}_tuned.json
-  eval_json "$JSON" "s$s (5) fine-tuned" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 1-4 --calibration onthefly
+  eval_json "$JSON" "s$s (5) fine-tuned" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 1-4 --calibration-mode onthefly
 }
 generic_cal_s14() {  # (4) on sessions 1-4 only: (5)'s test sessions, for a like-for-like comparison
   local s=$1
   generic_cal_model "$s"
   JSON=$T1/s${s}_cal_s1-4.json
-  eval_json "$JSON" "s$s (4) on sessions 1-4" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 1-4 --calibration onthefly
+  eval_json "$JSON" "s$s (4) on sessions 1-4" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 1-4 --calibration-mode onthefly
 }
 
 # ---------------------------------------------------------------------------------------------
@@ -445,19 +445,19 @@ run_table3() {
     generic_cal_model "$s"  # Table 1's (4): the other subjects, glove I only
     JSON=$dir/s${s}_glove1.json
     eval_json "$JSON" "s$s glove II, generic (glove I)" --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 \
-      --calibration onthefly
+      --calibration-mode onthefly
     record "$s" "column=glove1" "$JSON"
     m=$dir/s${s}_tuned.safetensors
     train_model "$m" "s$s glove II, fine-tuned" finetune --model "$MODEL" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 0 \
       --epochs "$FINETUNE_EPOCHS" --seed "$SEED"
     JSON=$dir/s${s}_tuned.json
-    eval_json "$JSON" "s$s glove II, fine-tuned" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration onthefly
+    eval_json "$JSON" "s$s glove II, fine-tuned" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration-mode onthefly
     record "$s" "column=tuned" "$JSON"
     m=$dir/s${s}_personal.safetensors
-    train_model "$m" "s$s glove II, personalised" train --data "$CORPUS" --model "unet:$WIDTH" --subjects "$s" --gloves 1 --sessions 0 \
-      --calibration onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED"
+    train_model "$m" "s$s glove II, personalised" train --data "$CORPUS" --architecture "unet:$WIDTH" --subjects "$s" --gloves 1 --sessions 0 \
+      --calibration-mode onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED"
     JSON=$dir/s${s}_personal.json
-    eval_json "$JSON" "s$s glove II, personalised" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration onthefly
+    eval_json "$JSON" "s$s glove II, personalised" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 1 --sessions 1 --calibration-mode onthefly
     record "$s" "column=personal" "$JSON"
   done
   finish_experiment table3 "TABLE3_SUBJECTS=$TABLE3_SUBJECTS"
@@ -479,15 +479,15 @@ run_table45() {
         if [[ $arch == fcn:* ]]; then name+=_$FCN_OPTIMIZER; extra=("${opt[@]}"); fi
         # personalised (2): sessions 0-3 -> 4
         m=$dir/s${s}_inter_$name.safetensors
-        train_model "$m" "s$s (2) $name" train --data "$CORPUS" --model "$arch" --subjects "$s" --gloves 0 --sessions 0-3 \
-          --calibration onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED" "${extra[@]}"
-        eval_json "${m%.safetensors}.json" "s$s (2) $name" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration onthefly
+        train_model "$m" "s$s (2) $name" train --data "$CORPUS" --architecture "$arch" --subjects "$s" --gloves 0 --sessions 0-3 \
+          --calibration-mode onthefly --batch 256 --epochs "$EPOCHS" --seed "$SEED" "${extra[@]}"
+        eval_json "${m%.safetensors}.json" "s$s (2) $name" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration-mode onthefly
         record "$s" "column=inter arch=${arch%%:*} width=${arch#*:} size=$size" "${m%.safetensors}.json"
         # generic (4): other subjects, on-the-fly calibration -> all sessions of s
         m=$dir/s${s}_cal_$name.safetensors
-        train_model "$m" "s$s (4) $name" train --data "$CORPUS" --model "$arch" --exclude-subjects "$s" --gloves 0 \
-          --stride "$STRIDE" --calibration onthefly --batch 1024 --epochs "$EPOCHS" --seed "$SEED" "${extra[@]}"
-        eval_json "${m%.safetensors}.json" "s$s (4) $name" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration onthefly
+        train_model "$m" "s$s (4) $name" train --data "$CORPUS" --architecture "$arch" --exclude-subjects "$s" --gloves 0 \
+          --stride "$STRIDE" --calibration-mode onthefly --batch 1024 --epochs "$EPOCHS" --seed "$SEED" "${extra[@]}"
+        eval_json "${m%.safetensors}.json" "s$s (4) $name" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration-mode onthefly
         record "$s" "column=cal arch=${arch%%:*} width=${arch#*:} size=$size" "${m%.safetensors}.json"
       done
       # The paper's other networks (and, to compare the trainers, its U-Net) with PyTorch, of the U-Net's size
@@ -505,12 +505,12 @@ run_table45() {
       done
     done
     m=$dir/s${s}_inter_linear.safetensors
-    train_model "$m" "s$s (2) linear" train --data "$CORPUS" --model linear --subjects "$s" --gloves 0 --sessions 0-3 --calibration onthefly
-    eval_json "${m%.safetensors}.json" "s$s (2) linear" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration onthefly
+    train_model "$m" "s$s (2) linear" train --data "$CORPUS" --architecture linear --subjects "$s" --gloves 0 --sessions 0-3 --calibration-mode onthefly
+    eval_json "${m%.safetensors}.json" "s$s (2) linear" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --sessions 4 --calibration-mode onthefly
     record "$s" "column=inter arch=linear" "${m%.safetensors}.json"
     m=$dir/s${s}_cal_linear.safetensors
-    train_model "$m" "s$s (4) linear" train --data "$CORPUS" --model linear --exclude-subjects "$s" --gloves 0 --stride "$STRIDE" --calibration onthefly
-    eval_json "${m%.safetensors}.json" "s$s (4) linear" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration onthefly
+    train_model "$m" "s$s (4) linear" train --data "$CORPUS" --architecture linear --exclude-subjects "$s" --gloves 0 --stride "$STRIDE" --calibration-mode onthefly
+    eval_json "${m%.safetensors}.json" "s$s (4) linear" --model "$m" --data "$CORPUS" --subjects "$s" --gloves 0 --calibration-mode onthefly
     record "$s" "column=cal arch=linear" "${m%.safetensors}.json"
   done
   finish_experiment table45 "TABLE45_SUBJECTS=$TABLE45_SUBJECTS TABLE45_UNET_WIDTHS='$TABLE45_UNET_WIDTHS'${TABLE45_TORCH:+ TABLE45_TORCH='$TABLE45_TORCH'} FCN_OPTIMIZER=$FCN_OPTIMIZER"
@@ -533,9 +533,9 @@ run_fig12() {
     record "$s" "cells=44" "$JSON"
     JOB_CMDS="$(show "${cmd[@]}") ; "
     m=$dir/s${s}_cal_main14.safetensors
-    train_model "$m" "s$s (4) 14 cells" train --data "$data14" --glove "$glove14" --model "unet:$WIDTH" --exclude-subjects "$s" \
-      --gloves 0 --stride "$STRIDE" --calibration onthefly --batch 1024 --epochs "$EPOCHS" --seed "$SEED"
-    eval_json "${m%.safetensors}.json" "s$s (4) 14 cells" --model "$m" --data "$data14" --subjects "$s" --gloves 0 --calibration onthefly
+    train_model "$m" "s$s (4) 14 cells" train --data "$data14" --glove "$glove14" --architecture "unet:$WIDTH" --exclude-subjects "$s" \
+      --gloves 0 --stride "$STRIDE" --calibration-mode onthefly --batch 1024 --epochs "$EPOCHS" --seed "$SEED"
+    eval_json "${m%.safetensors}.json" "s$s (4) 14 cells" --model "$m" --data "$data14" --subjects "$s" --gloves 0 --calibration-mode onthefly
     record "$s" "cells=14" "${m%.safetensors}.json"
   done
   finish_experiment fig12 "FIG12_SUBJECTS=$FIG12_SUBJECTS"

@@ -36,7 +36,7 @@ log() { echo "+ $*" >> "$OUT/commands.log"; "$@"; }
   --calibration-sequence "$SEQUENCE" --raw-rows --threads "$THREADS" --out "$TEST" > /dev/null
 
 mean() {  # model calibration -> "mean lag" of glovepose eval on the test people, one reading per row
-  log "$G" eval --model "$1" --data "$TEST" --calibration "$2" --replay-rows --mean-window 1 --threads "$THREADS" --json |
+  log "$G" eval --model "$1" --data "$TEST" --calibration-mode "$2" --replay-rows --mean-window 1 --threads "$THREADS" --json |
     /usr/bin/python3 -c 'import json, sys; r = json.load(sys.stdin); print("%.3f %.1f" % (r["mean_deg"], r["lag_ms"]))'
 }
 
@@ -51,8 +51,8 @@ for model in $MODELS; do
       name=${name}_aug$(echo "$augment" | tr ',' '_')
       extra=(--augment "$augment")
     fi
-    [ -f "$name.safetensors" ] || log "$G" train --data "$CORPUS" --model "$model" --gloves 0 --subjects "0-$((n - 1))" --stride 2 \
-      --epochs 10 --seed 1 --dtype f16 --threads "$THREADS" --quiet "${extra[@]}" --out "$name.safetensors" > /dev/null
+    [ -f "$name.safetensors" ] || log "$G" train --data "$CORPUS" --architecture "$model" --gloves 0 --subjects "0-$((n - 1))" --stride 2 \
+      --epochs 10 --seed 1 --weights f16 --threads "$THREADS" --quiet "${extra[@]}" --out "$name.safetensors" > /dev/null
     [ -f "${name}_g.safetensors" ] || log "$G" fit-guided --model "$name.safetensors" --data "$FIT" --threads "$THREADS" \
       --out "${name}_g.safetensors" > /dev/null
     minmax=$(mean "${name}_g.safetensors" onthefly)
