@@ -52,7 +52,7 @@ scene.add(fill);
 // fingers up the screen; the orbit turns about the hand's long axis.
 const camera = new THREE.PerspectiveCamera(34, canvas.width / canvas.height, 5, 3000);
 camera.up.set(0, 0, -1);
-camera.position.set(170, 190, 20);
+camera.position.set(115, 245, 25);
 const controls = renderer ? new OrbitControls(camera, canvas) : null;
 const centre = new THREE.Vector3(0, -10, -62);
 if (controls) { controls.target.copy(centre); controls.enableDamping = true; controls.update(); }
@@ -101,7 +101,7 @@ class HandMesh {
     const ring = [1, 6, 7, 12, 17, 22, 21].map((j) => new THREE.Vector3(...joints[j]));
     const normal = new THREE.Vector3().subVectors(ring[1], ring[0]).cross(new THREE.Vector3().subVectors(ring[6], ring[0])).normalize();
     if (normal.y < 0) normal.negate();
-    const half = 0.8 * this.radii[0];
+    const half = this.radii[0];  // the palm joint's radius: the palm's half thickness there
     const points = [];
     for (const side of [1, -1]) for (const v of ring) points.push(v.clone().addScaledVector(normal, side * half));
     const n = ring.length, index = [];
