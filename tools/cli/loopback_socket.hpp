@@ -177,9 +177,9 @@ inline void send_error(Socket s, int status) noexcept {
                                        : "Error";
   try {
     const std::string body = std::to_string(status) + " " + reason + "\n";
-    (void)send_all(s, "HTTP/1.1 " + body.substr(0, body.size() - 1) + "\r\nContent-Type: text/plain\r\nContent-Length: " +
-                          std::to_string(body.size()) + (status == 405 ? "\r\nAllow: GET, HEAD" : "") +
-                          "\r\nConnection: close\r\n\r\n" + body);
+    (void)send_all(s, "HTTP/1.1 " + body.substr(0, body.size() - 1) +
+                          "\r\nContent-Type: text/plain\r\nContent-Length: " + std::to_string(body.size()) +
+                          (status == 405 ? "\r\nAllow: GET, HEAD" : "") + "\r\nConnection: close\r\n\r\n" + body);
   } catch (...) {  // out of memory for a few dozen bytes: the client sees the connection close
   }
 }

@@ -264,8 +264,8 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& 
   json pinch = json::array();
   for (std::size_t p = 0; p < hand::kPinchPairCount; ++p)
     pinch.push_back({{"strength", frame.aim.pinch_strength[p]},
-                     {"distance_mm", std::isfinite(frame.aim.distance_mm[p]) ? json(std::round(frame.aim.distance_mm[p] * 10.0) / 10.0)
-                                                                             : json(nullptr)},
+                     {"distance_mm",
+                      std::isfinite(frame.aim.distance_mm[p]) ? json(std::round(frame.aim.distance_mm[p] * 10.0) / 10.0) : json(nullptr)},
                      {"pinching", (frame.aim.status & (kXrAimIndexPinching << p)) != 0}});
   out["pinch"] = pinch;
   out["aim_valid"] = (frame.aim.status & kXrAimValid) != 0;
@@ -331,11 +331,12 @@ void serve_connection(Socket client, const ViewShared& shared, const std::string
     return;
   }
   if (path == "/events") {
-    if (!send_all(client,
-                  "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\nevent: meta\ndata: " +
-                      meta + "\n\n") ||
-        !get)
+    const std::string head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n";
+    if (!get) {
+      (void)send_all(client, head);
       return;
+    }
+    if (!send_all(client, head + "event: meta\ndata: " + meta + "\n\n")) return;
     // The newest frame at each tick, when there is a new one; a comment every second otherwise, so
     // that a page whose tool went quiet still finds out when it went away.
     std::uint64_t sent = 0;

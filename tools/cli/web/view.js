@@ -227,6 +227,9 @@ function drawTraces() {
 // ---- the state ------------------------------------------------------------------------------------
 function onMeta(meta) {
   viewer.meta = meta;
+  // A reconnect (the tool restarted) sends the meta event again: the new hand replaces the old.
+  if (hands) for (const hand of Object.values(hands)) scene.remove(hand.group);
+  history.length = 0;
   hands = { estimate: new HandMesh(meta, materials.estimate), truth: new HandMesh(meta, materials.truth), target: new HandMesh(meta, materials.target) };
   hands.truth.group.renderOrder = 1; hands.target.group.renderOrder = 2;
   viewer.hands = hands;
