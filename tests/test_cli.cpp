@@ -79,8 +79,8 @@ TEST_CASE(
 
 TEST_CASE("cli: each command's --help describes its options") {
   const std::pair<std::string, std::vector<std::string>> commands[] = {
-      {"predict", {"--model", "--in", "--fixed16", "--f16", "--bf16", "--no-header"}},
-      {"info", {"--model"}},
+      {"predict", {"--model", "--in", "--weights", "--glove", "--fixed16", "--f16", "--bf16", "--no-header"}},
+      {"info", {"FILE", "--model"}},
       {"simulate",
        {"--seed", "--subjects", "--sessions", "--minutes", "--gloves", "--calibration-seconds", "--calibration-sequence", "--raw-rows",
         "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence"}},
@@ -96,7 +96,7 @@ TEST_CASE("cli: each command's --help describes its options") {
        {"--data", "--model", "--subjects", "--stride", "--threads", "--calibration", "--json", "--replay-rows", "--mean-window",
         "--predictions"}},
       {"fit-guided", {"--data", "--model", "--out", "--sequence", "--subjects", "--threads"}},
-      {"demo", {"--model", "--out", "--seed", "--minutes", "--fixed16", "--f16", "--bf16"}},
+      {"demo", {"--model", "--out", "--seed", "--minutes", "--weights", "--fixed16", "--f16", "--bf16"}},
       {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
       {"bench", {"--model", "--poses", "--json"}},
       {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}}};
@@ -135,7 +135,7 @@ TEST_CASE("cli: a bad number, a missing required option and clashing options are
       {"eval --data " + kModel + " --model " + kModel + " --calibration sometimes", "--calibration"},
       {"train --data " + kModel + " --model linear --out x --calibration guided", "--calibration"},
       {"predict --model " + kModel + " --f16 --bf16", "--f16 excludes --bf16"},
-      {"demo --fixed16 --f16", "--fixed16 excludes --f16"},
+      {"demo --fixed16 --f16", "--f16 excludes --fixed16"},
       {"predict --in " + kModel, "--model is required"},
       {"eval --model " + kModel, "--data is required"},
       {"train --data " + kModel + " --model linear", "--out is required"},
@@ -1268,4 +1268,115 @@ TEST_CASE("cli: glovepose bench --json times every stage for every weight storag
   }
   CHECK(storages == std::vector<std::string>{"F32", "F16", "BF16", "Fixed16"});
   CHECK(run_stream("bench --poses 3", 2).status == 2);  // too few poses to say anything
+}
+
+namespace {
+// The text of a whole file.
+std::string file_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  REQUIRE(in);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+}  // namespace
+
+TEST_CASE("cli: glovepose --version prints config.hpp's version, which the Python and C# packages carry too") {
+  const Run r = run_stream("--version", 1);
+  CHECK(r.status == 0);
+  CHECK(r.out == std::string("glovepose ") + kVersion + "\n");
+  // kVersion is the three macros; CMakeLists.txt reads them. The packages write it again (they are
+  // built without CMake): they must agree.
+  CHECK(std::string(kVersion) == std::to_string(GLOVEPOSE_VERSION_MAJOR) + "." + std::to_string(GLOVEPOSE_VERSION_MINOR) + "." +
+                                     std::to_string(GLOVEPOSE_VERSION_PATCH));
+  CHECK(file_text(std::string(GLOVEPOSE_SOURCE_DIR) + "/python/pyproject.toml").find(std::string("\nversion = \"") + kVersion + "\"\n") !=
+        std::string::npos);
+  CHECK(nlohmann::json::parse(file_text(std::string(GLOVEPOSE_SOURCE_DIR) + "/bindings/csharp/package.json"))["version"] == kVersion);
+}
+
+// One vocabulary: a model file is --model FILE, the weights' storage --weights WORD, a glove
+// description --glove FILE, in every command that takes them; a command without one says why here.
+TEST_CASE("cli: every command spells the model file, the weight storage and the glove the same way") {
+  struct Spelling {
+    std::string command;
+    bool model_file, weights, glove;
+  };
+  const Spelling spellings[] = {
+      {"predict", true, true, true},
+      {"info", true, false, false},      // reads the file; shows its glove and on-disk dtype
+      {"simulate", false, false, false},  // simulates the built-in glove
+      {"import", false, false, true},
+      {"train", false, true, true},  // the file's dtype (f32|f16|bf16); --model is the old spelling of --architecture
+      {"finetune", true, true, false},    // the glove is the model's
+      {"eval", true, false, false},       // scores the F32 weights; the glove is the model's and the data's
+      {"fit-guided", true, false, false},  // writes the model's own dtype and glove
+      {"demo", true, true, false},   // a simulated user of the built-in glove
+      {"soak", true, false, false},  // the real-time storage of the machine
+      {"bench", true, false, false},  // times every storage
+      {"view", true, false, false},  // not yet: --weights and --glove (issue 43) wait for view.cpp
+  };
+  for (const Spelling& s : spellings) {
+    const Run help = run_stream(s.command + " --help", 1);
+    REQUIRE(help.status == 0);
+    INFO(s.command, "\n", help.out);
+    CHECK((help.out.find("  --model FILE") != std::string::npos) == s.model_file);
+    CHECK((help.out.find("  --weights f32|f16|bf16") != std::string::npos) == s.weights);
+    CHECK((help.out.find("  --glove FILE") != std::string::npos) == s.glove);
+  }
+
+  // predict takes each spelling, and the old flags are the same as --weights.
+  std::ofstream csv(temp("vocabulary.csv"));
+  for (int c = 0; c < 44; ++c) csv << (c ? "," : "") << 0.01 * c - 0.2;
+  csv << "\n";
+  csv.close();
+  const std::string glove = temp("vocabulary_glove.json"), other = temp("vocabulary_other_glove.json");
+  const std::string description = grid::GloveDescription::glauser2019().to_json();
+  std::ofstream(glove) << description;
+  std::string renamed = description;
+  const std::string id = grid::GloveDescription::glauser2019().id();
+  renamed.replace(renamed.find("\"" + id + "\""), id.size() + 2, "\"another-glove\"");
+  std::ofstream(other) << renamed;
+  const std::string predict = "predict --model " + kModel + " --in " + temp("vocabulary.csv");
+  for (const std::string word : {"f32", "f16", "bf16", "fixed16"}) {
+    CAPTURE(word);
+    const Run spelled = run_stream(predict + " --weights " + word + " --glove " + glove, 1);
+    CHECK(spelled.status == 0);
+    if (std::string(word) != "f32") CHECK(spelled.out == run_stream(predict + " --" + word, 1).out);
+  }
+  CHECK(run_stream(predict + " --weights f16", 1).out != run_stream(predict + " --weights bf16", 1).out);  // the option does something
+  const std::pair<std::string, std::string> refused[] = {
+      {predict + " --weights f64", "--weights: 'f64', expected one of f32|f16|bf16|fixed16"},
+      {predict + " --weights f16 --bf16", "excludes"},
+      {predict + " --glove " + temp("no_such_glove.json"), "--glove: File does not exist"},
+      {"info", "FILE or --model FILE is required"}};
+  for (const auto& entry : refused) {
+    const Run r = run_stream(entry.first, 2);
+    INFO(entry.first, "\n", r.out);
+    CHECK(r.status == 2);
+    CHECK(r.out.find(entry.second) != std::string::npos);
+  }
+  const Run wrong_glove = run_stream(predict + " --glove " + other, 2);
+  CHECK(wrong_glove.status == 1);
+  CHECK(wrong_glove.out.find("'another-glove', 44 cells) is not the one the model") != std::string::npos);
+}
+
+TEST_CASE("cli: glovepose info FILE shows the weights' dtype on disk, the calibration mode and the provenance the file records") {
+  const std::string shipped = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors";
+  const Run positional = run_stream("info " + shipped, 1);
+  REQUIRE(positional.status == 0);
+  CHECK(positional.out == run_stream("info --model " + shipped, 1).out);
+  // The header read here, apart from the library: 8 bytes of length, then JSON.
+  const std::string bytes = file_text(shipped);
+  std::uint64_t length = 0;
+  for (int i = 7; i >= 0; --i) length = length << 8 | static_cast<unsigned char>(bytes[static_cast<std::size_t>(i)]);
+  const nlohmann::json header = nlohmann::json::parse(bytes.substr(8, length));
+  std::set<std::string> dtypes;
+  for (const auto& [name, tensor] : header.items())
+    if (name != "__metadata__") dtypes.insert(tensor["dtype"].get<std::string>());
+  REQUIRE(dtypes.size() == 1);
+  INFO(positional.out);
+  CHECK(positional.out.find("weights on disk: " + *dtypes.begin() + "\n") != std::string::npos);
+  const nlohmann::json& metadata = header["__metadata__"];
+  CHECK(positional.out.find("calibration mode: " + metadata["calibration"].get<std::string>() + "\n") != std::string::npos);
+  for (const std::string key : {"training_command", "training_data", "training_seed", "pose_offset_command"})
+    CHECK(positional.out.find(key + ": " + metadata[key].get<std::string>() + "\n") != std::string::npos);
+  CHECK(positional.out.find("joint_limits_min") == std::string::npos);  // the model's own fields are shown by name, not dumped
 }

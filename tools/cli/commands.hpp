@@ -6,6 +6,8 @@
 #include <glovepose/io/number_text.hpp>
 #include <glovepose/nn/weight_storage.hpp>
 #include <glovepose/io/dataset.hpp>
+#include <glovepose/grid/glove_description.hpp>
+#include <glovepose/io/tensor_file.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -175,24 +177,75 @@ CLI::Option* add_model_file(CLI::App& command, Target& path, const std::string& 
   return command.add_option("--model", path, description)->check(existing_file())->type_name("FILE");
 }
 
-/// Adds `--fixed16 | --f16 | --bf16`: how a loaded model keeps its weights in memory (default F32).
-inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) {
-  struct Flag {
-    const char* name;
+/// Adds `--weights f32|f16|bf16|fixed16`, the tool's one spelling of how a loaded model keeps its
+/// weights in memory (default F32; train's --weights is the same words for the file it writes), and
+/// the older flags `--fixed16`, `--f16`, `--bf16` as aliases; any two of them exclude each other.
+inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage) {
+  struct Choice {
+    const char* word;
     nn::WeightStorage storage;
     const char* description;
   };
-  const Flag flags[] = {{"--fixed16", nn::WeightStorage::Fixed16,
-                         "keep the weights as Fixed16 in memory (16-bit, within 0.005 degree of F32 on the shipped model)"},
-                        {"--f16", nn::WeightStorage::F16, "keep the weights as F16 in memory"},
-                        {"--bf16", nn::WeightStorage::BF16, "keep the weights as BF16 in memory (the fastest)"}};
-  std::vector<CLI::Option*> added;
-  for (const Flag& flag : flags)
-    added.push_back(command.add_flag_callback(
-        flag.name, [&storage, chosen = flag.storage] { storage = chosen; }, flag.description));
-  for (CLI::Option* flag : added)
+  static const Choice choices[] = {
+      {"f32", nn::WeightStorage::F32, "F32 (exact)"},
+      {"f16", nn::WeightStorage::F16, "F16"},
+      {"bf16", nn::WeightStorage::BF16, "BF16 (the fastest)"},
+      {"fixed16", nn::WeightStorage::Fixed16, "Fixed16 (16-bit, within 0.005 degree of F32 on the shipped model)"}};
+  std::string words;
+  for (const Choice& c : choices) words += (words.empty() ? "" : "|") + std::string(c.word);
+  std::vector<CLI::Option*> added{add_parsed_option<nn::WeightStorage>(
+      command, "--weights", words,
+      [](const std::string& text) -> std::optional<nn::WeightStorage> {
+        for (const Choice& c : choices)
+          if (text == c.word) return c.storage;
+        return std::nullopt;
+      },
+      [&storage](nn::WeightStorage chosen) { storage = chosen; }, "one of " + words,
+      "how the weights are kept in memory: f32 (default), f16, bf16 (the fastest) or fixed16 (16-bit, within 0.005 "
+      "degree of F32 on the shipped model)")};
+  for (const Choice& c : choices)
+    if (c.storage != nn::WeightStorage::F32)
+      added.push_back(command
+                          .add_flag_callback(
+                              std::string("--") + c.word, [&storage, chosen = c.storage] { storage = chosen; },
+                              std::string("the same as --weights ") + c.word)
+                          ->group("Old spellings"));
+  for (CLI::Option* option : added)
     for (CLI::Option* other : added)
-      if (flag != other) flag->excludes(other);
+      if (option != other) option->excludes(other);
+}
+
+/// The former name of add_weight_storage, until demo.cpp calls it by its name.
+inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) { add_weight_storage(command, storage); }
+
+/// What a model file stores its weights as on disk ("F16", or "F16 and F32" when mixed), read from
+/// the file's header: the memory storage (--weights) can differ.
+inline std::string stored_dtypes(const std::string& model_path) {
+  std::vector<io::DType> seen;
+  for (const auto& [name, tensor] : io::TensorFile::read(model_path, "model file").tensors)
+    if (std::find(seen.begin(), seen.end(), tensor.dtype) == seen.end()) seen.push_back(tensor.dtype);
+  std::sort(seen.begin(), seen.end());
+  std::string text;
+  for (std::size_t i = 0; i < seen.size(); ++i) text += (i == 0 ? "" : (i + 1 == seen.size() ? " and " : ", ")) + std::string(io::dtype_name(seen[i]));
+  return text;
+}
+
+/// Adds `--glove FILE`, the tool's one spelling of a glove description (JSON, docs/own_glove.md):
+/// where data is made or imported it says which glove recorded it; where a model meets the glove's
+/// readings (check_glove) it must be the glove the model was trained for.
+inline CLI::Option* add_glove_file(CLI::App& command, std::string& path, const std::string& description) {
+  return command.add_option("--glove", path, description)->check(existing_file())->type_name("FILE");
+}
+
+/// The glove of `path` (--glove) against the glove the model reads: a model trained for another
+/// glove would read the cells in the wrong places, so a difference is refused. Nothing when empty.
+inline void check_glove(const std::string& path, const grid::GloveDescription& model_glove, const std::string& model_path) {
+  if (path.empty()) return;
+  const grid::GloveDescription glove = grid::GloveDescription::read(path);
+  if (glove != model_glove)
+    throw Error("the glove of '" + path + "' ('" + glove.id() + "', " + std::to_string(glove.cell_count()) +
+                " cells) is not the one the model '" + model_path + "' was trained for ('" + model_glove.id() + "', " +
+                std::to_string(model_glove.cell_count()) + " cells; glovepose info shows it), expected the same description");
 }
 
 /// Default of --calibration-seconds: stream time the user moves through extreme poses.

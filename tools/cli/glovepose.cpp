@@ -1,19 +1,22 @@
 // The glovepose command-line tool.
-//   glovepose predict --model FILE [--in CSV] [--fixed16 | --f16 | --bf16] [--no-header]
+//   glovepose --version
+//       the library's version (config.hpp).
+//   glovepose predict --model FILE [--in CSV] [--weights f32|f16|bf16|fixed16] [--glove FILE] [--no-header]
 //       [--raw [--calibration FILE | --calibration-seconds S [--save-calibration FILE]]]
 //       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
 //       radians out (theta 9..33 of the hand model), one row per input row; with --raw, the glove's own
 //       readings ("timestamp,cell,...,cell", as view --stdin reads them, glove_lines.hpp) through the
 //       estimator, calibrated by a saved calibration or on the fly, one row per pose.
-//   glovepose info --model FILE
-//       what a model file holds.
+//   glovepose info FILE | --model FILE
+//       what a model file holds: the network, the glove, the weights' dtype on disk, the calibration
+//       mode and the provenance (the commands and data that made it).
 //   glovepose simulate ...
 //       the simulated glove corpus (simulate.cpp).
 //   glovepose import ...
 //       CSV recordings of any glove with named columns into one dataset file (import.cpp).
 //   glovepose train | finetune | eval | fit-guided ...
 //       train, fine-tune and evaluate models on dataset files (train.cpp).
-//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--fixed16 | --f16 | --bf16]
+//   glovepose demo [--model FILE] [--out DIR] [--seed S] [--minutes M] [--weights f32|f16|bf16|fixed16]
 //       a simulated new user calibrates and streams a session through the estimator (demo.cpp).
 //   glovepose soak [--minutes M] [--estimators N] [--seed S] [--source-minutes X] [--model FILE]
 //       estimators on threads stream hours of simulated rows with random faults; prints the figures (soak.cpp).
@@ -49,6 +52,7 @@ namespace {
 
 struct PredictOptions {
   std::string model, input;  // input empty: stdin
+  std::string glove;         // --glove: checked against the model's
   nn::WeightStorage storage = nn::WeightStorage::F32;
   bool no_header = false;
   bool raw = false;  // the glove's own readings, calibrated here
@@ -118,6 +122,7 @@ int predict(const PredictOptions& o) {
   PoseModelOptions options;
   options.storage = o.storage;
   const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model, options);  // the glove: from the file, or built in
+  cli::check_glove(o.glove, model->glove(), o.model);
   std::ifstream file;
   if (!o.input.empty()) {
     file.open(o.input);
@@ -174,8 +179,10 @@ int info(const std::string& model_path) {
   if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
   if (!model.info().labelled_dofs.empty())
     std::printf("trained DoFs: %s (the others read the rest pose)\n", model.info().labelled_dofs.c_str());
-  std::printf("packed weight bytes (F32): %zu\nmultiply-adds per frame: %zu\ntraining-set calibration: %s\n", net.weight_bytes(),
-              net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count(), model.info().calibration_min ? "yes" : "no");
+  std::printf("weights on disk: %s\npacked weight bytes (F32): %zu\nmultiply-adds per frame: %zu\n", cli::stored_dtypes(model_path).c_str(),
+              net.weight_bytes(), net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count());
+  std::printf("calibration mode: %s\ntraining-set calibration: %s\n", model::to_string(model.info().calibration),
+              model.info().calibration_min ? "yes" : "no");
   if (!model.pose_offset()) {
     std::printf("pose-guided calibration: none\n");
   } else {
@@ -184,6 +191,13 @@ int info(const std::string& model_path) {
                 offsets.sequence().steps().size(), offsets.sequence().total_seconds(),
                 static_cast<std::ptrdiff_t>(offsets.feature_count()));
   }
+  // Provenance: the file's metadata beyond the model's own fields (those ModelInfo writes), such as
+  // training_command, training_data and training_seed; pose_offset is shown above.
+  nn::WeightFile fields;
+  model.info().to(fields);
+  const nn::WeightFile file = nn::WeightFile::read(model_path);
+  for (const auto& [key, value] : file.metadata)
+    if (!fields.metadata.count(key) && key != "pose_offset") std::printf("%s: %s\n", key.c_str(), value.c_str());
   return 0;
 }
 
@@ -202,7 +216,8 @@ cli::Command add_predict(CLI::App& tool) {
   command->add_option("--in", o->input, "the rows, a CSV file without a header (--raw: with one or without) (default: stdin)")
       ->check(cli::existing_file())
       ->type_name("CSV");
-  cli::add_storage_flags(*command, o->storage);
+  cli::add_weight_storage(*command, o->storage);
+  cli::add_glove_file(*command, o->glove, "the glove the rows come from; refused unless the model was trained for it (default: the model's)");
   command->add_flag("--no-header", o->no_header, "leave out the first output line (the DoF names)");
   CLI::Option* raw =
       command->add_flag("--raw", o->raw,
@@ -218,9 +233,14 @@ cli::Command add_predict(CLI::App& tool) {
 
 cli::Command add_info(CLI::App& tool) {
   auto model = std::make_shared<std::string>();
-  CLI::App* command = tool.add_subcommand("info", "What a model file holds.");
-  cli::add_model_file(*command, *model, "the model file")->required();
-  return {command, [model] { return info(*model); }};
+  CLI::App* command = tool.add_subcommand(
+      "info", "What a model file holds: the network, the glove, the weights' dtype on disk, the calibration mode and the provenance.");
+  CLI::Option* positional = command->add_option("FILE", *model, "the model file")->check(cli::existing_file())->type_name("FILE");
+  cli::add_model_file(*command, *model, "the model file (the same as FILE)")->excludes(positional);
+  return {command, [model] {
+            if (model->empty()) throw CLI::RequiredError("FILE or --model FILE");
+            return info(*model);
+          }};
 }
 
 // A usage error: the command and the problem on stderr, and where its options are described.
@@ -242,6 +262,7 @@ int main(int argc, char** argv) {
   tool.require_subcommand(0, 1);  // an unknown command is then named as unexpected; none is refused below
   tool.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // an option given twice: the last counts
   tool.failure_message(usage_error);
+  const CLI::Option* version = tool.add_flag("--version", "print the version of glovepose (its library's, config.hpp) and exit");
   std::vector<cli::Command> commands{add_predict(tool), add_info(tool), cli::add_simulate(tool), cli::add_import(tool)};
   std::string command_line = "glovepose";
   for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
@@ -249,6 +270,10 @@ int main(int argc, char** argv) {
   for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view}) commands.push_back(add(tool));
   try {
     tool.parse(argc, argv);
+    if (*version) {
+      std::printf("glovepose %s\n", kVersion);
+      return 0;
+    }
     if (tool.get_subcommands().empty()) throw CLI::RequiredError("A command");
     const CLI::App* chosen = tool.get_subcommands().front();
     return std::find_if(commands.begin(), commands.end(), [&](const cli::Command& c) { return c.options == chosen; })->run();
