@@ -221,8 +221,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   std::string flat;
   for (const std::string& name : calibration.flat_sensors) flat += (flat.empty() ? "" : ", ") + name;
 
-  add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s weights)\n", static_cast<unsigned long long>(o.seed),
-      model_path.c_str(), nn::storage_name(o.storage));
+  add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s on disk, %s in memory)\n",
+      static_cast<unsigned long long>(o.seed), model_path.c_str(), stored_dtypes(model_path).c_str(), nn::storage_name(o.storage));
   add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s; %s\n", calibration.seconds, calibration.frames,
       flat.empty() ? "none" : flat.c_str(), calibration.guided ? "pose-guided" : "min-max");
   add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
@@ -437,7 +437,7 @@ Command add_demo(CLI::App& tool) {
   add_number(*command, "--seed", "S", o->seed, "simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)");
   add_number(*command, "--minutes", "M", o->minutes, "length of the session after the 30 s calibration (default 1.5)")
       ->check(above(0.0, 600.0));
-  add_storage_flags(*command, o->storage);
+  add_weight_storage(*command, o->storage);
   return {command, [o] { return demo(*o); }};
 }
 
