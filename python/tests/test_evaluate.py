@@ -3,12 +3,14 @@
 string and count equal and every other number within a relative 1e-5 (the C library is built for
 baseline x86-64, the tool for this machine's instruction set: sums of floats in another order), with
 the default options and with eval's selection, calibration, row replay and
-contact options; bad options and files raise GloveposeError with the library's message.
+contact options; bad options and files raise GloveposeError with the library's message. The tool's
+old spellings (train --model ARCH, --calibration MODE, --dtype) do what the new ones do and say so.
 
 Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CLI.
 """
 import json
 import os
+import struct
 import subprocess
 import tempfile
 import unittest
@@ -91,6 +93,27 @@ class Evaluate(unittest.TestCase):
             glovepose.evaluate(MODEL, Path(self.work.name) / "missing.safetensors")
         with self.assertRaisesRegex(glovepose.GloveposeError, "records no guided calibration"):
             glovepose.evaluate(MODEL, self.data, calibration_mode="guided")
+
+    def test_the_old_spellings_do_what_the_new_ones_do(self):
+        cli = os.environ["GLOVEPOSE_CLI"]
+        models = {}
+        for name, spelling in {"new": ["--architecture", "linear", "--calibration-mode", "onthefly", "--weights", "f16"],
+                               "old": ["--model", "linear", "--calibration", "onthefly", "--dtype", "f16"]}.items():
+            models[name] = Path(self.work.name) / f"linear_{name}.safetensors"
+            done = subprocess.run([cli, "train", "--data", str(self.data), *spelling, "--exclude-subjects", "1", "--threads", "1", "--out",
+                                   str(models[name])], check=True, capture_output=True, text=True)
+            said = [line for line in done.stderr.splitlines() if "is now" in line]
+            self.assertEqual(said, [] if name == "new" else ["train: --model is now --architecture (the old spelling still works)",
+                                                              "train: --calibration is now --calibration-mode (the old spelling still works)"])
+            with open(models[name], "rb") as f:
+                header = json.loads(f.read(struct.unpack("<Q", f.read(8))[0]))
+            self.assertEqual({t["dtype"] for k, t in header.items() if k != "__metadata__"}, {"F16"})
+            self.assertEqual(header["__metadata__"]["architecture"], "linear")
+        self.assertEqual(glovepose.evaluate(models["old"], self.data, subjects=[1], threads=1),
+                         glovepose.evaluate(models["new"], self.data, subjects=[1], threads=1))
+        self.assertSameReport(glovepose.evaluate(models["new"], self.data, subjects=[1], calibration_mode="none", threads=1),
+                              cli_eval("--model", str(models["new"]), "--data", str(self.data), "--subjects", "1", "--calibration", "none",
+                                       "--threads", "1"))
 
 
 if __name__ == "__main__":
