@@ -1097,6 +1097,8 @@ TEST_CASE("cli: glovepose demo streams a new user through the shipped model and 
   CHECK(r.out.find("; pose-guided") != std::string::npos);              // the user followed the model's sequence
   CHECK(number_after(r.out, "sequence streamed row by row:") >= 20.0);  // at least the median window
   CHECK(r.out.find("3.0 s: 32400 rows streamed") != std::string::npos);
+  // The shipped model is stored as F16 and kept as F32 unless --weights says otherwise.
+  CHECK(r.out.find("glovepose_fcn512.safetensors (F16 on disk, F32 in memory)") != std::string::npos);
 
   const std::string summary = slurp(out + "/summary.txt");
   CHECK(!summary.empty());

@@ -215,9 +215,6 @@ inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage) {
       if (option != other) option->excludes(other);
 }
 
-/// The former name of add_weight_storage, until demo.cpp calls it by its name.
-inline void add_storage_flags(CLI::App& command, nn::WeightStorage& storage) { add_weight_storage(command, storage); }
-
 /// What a model file stores its weights as on disk ("F16", or "F16 and F32" when mixed), read from
 /// the file's header: the memory storage (--weights) can differ.
 inline std::string stored_dtypes(const std::string& model_path) {
