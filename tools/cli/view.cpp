@@ -145,6 +145,7 @@ struct ViewShared {
   GloveLineCounts notes;
   std::string failure;  // why the glove's stream stopped; written before stream_done
   std::atomic<bool> stop{false}, stream_done{false};
+  std::atomic<bool> preparing{false};            // the simulated user is being made
   Clock::time_point served_from = Clock::now();  // when the server started
   std::atomic<double> stream_clock{0.0};         // the glove stream's time at served_from (stdin: 0)
 };
@@ -223,7 +224,10 @@ json meta_json(const GlovePoseEstimator& estimator, bool has_truth, const std::s
 json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& shared) {
   const HandState& state = frame.hand;
   const GlovePoseEstimator& estimator = shared.estimator;
-  json out = {{"active", state.pose.valid}, {"calibrating", state.calibration.collecting}, {"published", number}};
+  json out = {{"active", state.pose.valid},
+              {"calibrating", state.calibration.collecting},
+              {"published", number},
+              {"preparing", shared.preparing.load()}};
   {
     const std::lock_guard<std::mutex> hold(shared.notes.lock);
     out["lines"] = shared.notes.lines;
@@ -430,6 +434,7 @@ int view(const ViewOptions& o) {
   EstimatorConfig config;
   if (simulated) config.hand = sim::make_subjects(1, o.seed, sim::default_world().people)[0].hand_model();
   const auto shared = std::make_shared<ViewShared>(model, o.model.empty(), config);
+  shared->preparing = simulated;  // until the glove's thread has made the simulated user
   const SocketLibrary sockets;
   const auto [server, port] = listen_on_loopback(o.port);
   std::printf("glovepose view: http://127.0.0.1:%d/\n", port);  // at once: the simulated user is made on the glove's thread
@@ -446,7 +451,10 @@ int view(const ViewOptions& o) {
       if (from_stdin) {
         stream.from_stdin(shared->format, calibration_seconds, shared->notes);
       } else {
-        if (simulated) *user = simulate_new_user(seed, 10.0, shared->estimator.model());
+        if (simulated) {
+          *user = simulate_new_user(seed, 10.0, shared->estimator.model());
+          shared->preparing = false;
+        }
         stream.recorded(*user, shared->served_from, shared->stream_clock);
       }
     } catch (const Error& e) {

@@ -264,7 +264,8 @@ function show(state) {
   if (state.skipped) notes.push(`${state.skipped} of ${state.lines} lines not understood (the first: ${state.first_skipped})`);
   if (state.zeroed) notes.push(`calibration: ${state.zeroed}`);
   if (!state.active) {
-    $("trust").textContent = state.calibrating ? "calibrating: no pose yet" : "waiting for the glove";
+    $("trust").textContent = state.preparing ? "simulating a new user of the glove (a few seconds)…"
+      : state.calibrating ? "calibrating: no pose yet" : "waiting for the glove";
     $("trust").className = "dim";
     $("notes").textContent = notes.join("\n");
     report(state);
