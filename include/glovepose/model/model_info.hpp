@@ -59,6 +59,9 @@ struct ModelInfo {
   /// The others were trained toward the rest pose and read it (PoseModel).
   std::string labelled_dofs;
 
+  /// @brief The architecture as the file spells it ("unet", "fcn" or "linear").
+  std::string architecture_name() const { return architecture; }
+
   /// @brief labelled_dofs as a set (every DoF when empty).
   hand::DofSet labelled() const {
     return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'");
