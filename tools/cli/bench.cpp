@@ -174,7 +174,7 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   }
   Result result;
   result.model = path;
-  result.architecture = model->info().architecture;
+  result.architecture = model->info().architecture_name();
   result.storage = nn::storage_name(storage);
   for (std::size_t s = 0; s < names.size(); ++s) result.stages.emplace_back(names[s], spread_of(times[s]));
   result.frame = spread_of(whole);

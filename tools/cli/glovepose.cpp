@@ -165,7 +165,7 @@ int info(const std::string& model_path) {
   const std::shared_ptr<const PoseModel> loaded = PoseModel::load(model_path);
   const PoseModel& model = *loaded;
   const auto& net = model.network();
-  std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture.c_str(), model.info().width,
+  std::printf("architecture: %s\nwidth: %d\nglove: %s\nparameters: %zu\n", model.info().architecture_name().c_str(), model.info().width,
               model.info().glove.c_str(), net.parameter_count());
   const grid::GloveDescription& glove = model.glove();
   std::string extra;  // the inputs that are not on the stretch maps, by name

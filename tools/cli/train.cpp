@@ -61,7 +61,7 @@ int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo&
   std::signal(SIGINT, on_interrupt);
   if (!o.quiet)
     std::fprintf(stderr, "%s %s (%zu parameters): %ld training frames, %ld validation frames, batch %d, %d threads\n", o.command.c_str(),
-                 info.architecture.c_str(), net.parameters().trainable_count(), training.frames(), validation.frames(), o.training.batch,
+                 info.architecture_name().c_str(), net.parameters().trainable_count(), training.frames(), validation.frames(), o.training.batch,
                  o.threads);
   const train::TrainResult result = train::train_network(net, training, validation, info.joint_limits(), config, pool);
   std::signal(SIGINT, SIG_DFL);
@@ -113,7 +113,7 @@ int finetune_command(Options o) {
   if (!o.epochs_set) o.training.epochs = 5;
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
   if (!model.network)
-    throw Error("model '" + o.model + "' is " + model.info.architecture + ", expected a network (unet or fcn) to fine-tune");
+    throw Error("model '" + o.model + "' is " + model.info.architecture_name() + ", expected a network (unet or fcn) to fine-tune");
   const io::Dataset data = read_dataset(o.data);
   o.filter = train::exclude_subjects(o.filter, data, o.exclude_subjects);
   const train::Samples all = train::samples_for_model(model, data, o.filter, o.stride, o.calibration).first;
@@ -146,7 +146,7 @@ int eval_command(Options o) {
   if (o.json) {
     std::printf("%s\n", train::to_json(result).c_str());
   } else {
-    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture.c_str(),
+    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture_name().c_str(),
                 o.data.c_str(), result.calibration.c_str(), result.mean_window.value_or("null").c_str(),
                 result.rows_replayed ? " (rows replayed)" : "");
     std::printf("%s", train::format_text(result).c_str());
