@@ -11,7 +11,8 @@
 #include <string>
 #include <vector>
 
-namespace glovepose {
+// A namespace of its own: the unity build puts this file beside others with their own kPi, kRate.
+namespace glovepose::evaluate_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -145,4 +146,4 @@ TEST_CASE("evaluate: zeroed sensors name their run's fields and the glove's cell
 }
 
 }  // namespace
-}  // namespace glovepose
+}  // namespace glovepose::evaluate_test
