@@ -30,6 +30,7 @@
 #include <Eigen/Core>
 
 #include "calibration/pose_offset.hpp"
+#include "calibration_session.hpp"
 #include "calibration/user_calibration.hpp"
 #include "config.hpp"
 #include "estimator_config.hpp"
@@ -62,22 +63,19 @@ namespace glovepose {
 /// One estimator is used by one thread at a time; estimators sharing a model may run concurrently.
 class GlovePoseEstimator {
  public:
-  /// @brief The shared model type.
-  using Model = PoseModel;
-
   /// @brief An estimator over a shared model. Throws glovepose::Error for a null model or bad settings.
-  explicit GlovePoseEstimator(std::shared_ptr<const Model> model, EstimatorConfig config = {})
+  explicit GlovePoseEstimator(std::shared_ptr<const PoseModel> model, EstimatorConfig config = {})
       : model_(checked(std::move(model))),
         config_(with_glove_calibration(std::move(config), model_->glove())),
-        calibrator_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration),
+        calibration_session_(model_->glove().cell_names(), config_.calibration_median_window, config_.calibration,
+                             config_.calibration_sample_period,
+                             model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax ? &model_->pose_offset()->sequence()
+                                                                                                                 : nullptr),
         workspace_(model_->network().make_workspace(checked_threads(config_.network_threads))),
         kinematics_(config_.hand, config_.handedness),
         trend_(config_.prediction_window),
         locator_(config_.hand, config_.handedness, model_->joint_limits()),
         aim_tracker_(locator_.mapper()) {
-    if (!(config_.calibration_sample_period >= 0.0) || !std::isfinite(config_.calibration_sample_period))
-      throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config_.calibration_sample_period) +
-                  " s, expected a finite value >= 0");
     if (!(config_.prediction_window > 0.0) || !std::isfinite(config_.prediction_window))
       throw Error("GlovePoseEstimator: prediction_window " + std::to_string(config_.prediction_window) + " s, expected a positive time");
     if (!(config_.max_prediction >= 0.0) || !std::isfinite(config_.max_prediction))
@@ -98,13 +96,6 @@ class GlovePoseEstimator {
       throw Error(
           "GlovePoseEstimator: calibration_method PoseGuided, but the model carries no pose-guided calibration, expected a model fitted by "
           "glovepose fit-guided");
-    if (model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax) {
-      // Room for every frame the calibrator takes during the sequence (set-up: the per-frame path only copies).
-      const double period = std::max(config_.calibration_sample_period, 1e-3);
-      const auto capacity = static_cast<Eigen::Index>(std::ceil(model_->pose_offset()->sequence().total_seconds() / period)) + 2;
-      guided_cells_.resize(capacity, model_->cell_count());
-      guided_times_.resize(static_cast<std::size_t>(capacity));
-    }
   }
 
   // ---- input -------------------------------------------------------------------------------
@@ -215,23 +206,9 @@ class GlovePoseEstimator {
   /// extreme poses; poses keep coming from the previous range, if any, flagged kPoseCalibrating.
   /// With a pose-guided calibration the user follows the model's calibration sequence, whose clock
   /// starts at the first frame taken (calibration_progress() says which step is under way).
-  void start_calibration() noexcept {
-    calibrator_.reset();
-    collecting_ = true;
-    next_calibration_sample_ = -std::numeric_limits<double>::infinity();
-    guided_count_ = 0;
-    sequence_start_ = std::numeric_limits<double>::quiet_NaN();
-    sequence_now_ = 0.0;
-  }
+  void start_calibration() noexcept { calibration_session_.start(); }
   /// @brief How far the calibration has come.
-  CalibrationProgress calibration_progress() const noexcept {
-    CalibrationProgress p{collecting_, calibrator_.frames(), calibrator_.median_window(), calibrator_.ready()};
-    if (collecting_ && model_->pose_offset() && !std::isnan(sequence_start_)) {
-      p.sequence_seconds = sequence_now_;
-      p.step = model_->pose_offset()->sequence().step_at(sequence_now_);
-    }
-    return p;
-  }
+  CalibrationProgress calibration_progress() const noexcept { return calibration_session_.progress(); }
   /// @brief Ends the calibration and uses its range. Throws glovepose::Error (and keeps collecting)
   /// when fewer frames than the median window arrived or no calibration was started. The range's
   /// flat sensors (too small a range) are listed by CalibrationRange::flat_sensors().
@@ -240,16 +217,17 @@ class GlovePoseEstimator {
   /// throws glovepose::Error naming the first step that was not held. Bounded time: one network
   /// forward per held frame of the sequence.
   const sensor::CalibrationRange& finish_calibration() {
-    if (!collecting_) throw Error("GlovePoseEstimator::finish_calibration: no calibration running, expected start_calibration() first");
-    sensor::CalibrationRange range = calibrator_.finish();
+    if (!calibration_session_.collecting())
+      throw Error("GlovePoseEstimator::finish_calibration: no calibration running, expected start_calibration() first");
+    sensor::CalibrationRange range = calibration_session_.range();
     std::optional<hand::Angles> offsets;
     if (model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax) offsets = guided_offsets(range);
     set_range(std::move(range), CalibrationSource::OnTheFly, offsets);
-    collecting_ = false;
+    calibration_session_.stop();
     return *range_;
   }
   /// @brief Stops collecting and keeps the previous range.
-  void cancel_calibration() noexcept { collecting_ = false; }
+  void cancel_calibration() noexcept { calibration_session_.stop(); }
   /// @brief Uses a range the caller has (e.g. a saved user calibration). Throws glovepose::Error
   /// when its size or sensor names differ from the glove's.
   void set_calibration(const sensor::CalibrationRange& range) {
@@ -310,10 +288,10 @@ class GlovePoseEstimator {
     aim_tracker_.reset();
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
     cells_backwards_run_ = 0;
-    next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+    calibration_session_.restart_clock();
   }
   /// @brief The shared model.
-  const Model& model() const noexcept { return *model_; }
+  const PoseModel& model() const noexcept { return *model_; }
   /// @brief The settings in use, the glove's filled in where the given ones said "the glove's"
   /// (calibration_median_window 0, a negative calibration.min_relative_range or min_range_to_noise).
   const EstimatorConfig& config() const noexcept { return config_; }
@@ -323,6 +301,9 @@ class GlovePoseEstimator {
   // spanning its median_seconds at the period frames are taken. Frames are taken no faster than the
   // glove's rate (its frame period when that is longer than the sample period), as training saw them.
   static EstimatorConfig with_glove_calibration(EstimatorConfig config, const grid::GloveDescription& glove) {
+    if (!(config.calibration_sample_period >= 0.0) || !std::isfinite(config.calibration_sample_period))
+      throw Error("GlovePoseEstimator: calibration_sample_period " + std::to_string(config.calibration_sample_period) +
+                  " s, expected a finite value >= 0");
     const grid::GloveCalibration& own = glove.calibration();
     if (config.calibration.min_relative_range < 0.0) config.calibration.min_relative_range = own.flat_relative_range;
     if (config.calibration.min_range_to_noise < 0.0) config.calibration.min_range_to_noise = own.min_range_to_noise;
@@ -330,13 +311,13 @@ class GlovePoseEstimator {
       config.calibration_sample_period = std::max(config.calibration_sample_period, 1.0 / *glove.rate_hz());
     if (config.calibration_median_window == 0) {
       double period = config.calibration_sample_period;
-      if (!(period > 0.0) || !std::isfinite(period)) period = 1.0 / 60.0;  // a bad sample period is refused below
+      if (!(period > 0.0)) period = 1.0 / 60.0;  // 0: every frame is taken, at the 60 Hz the glove streams
       config.calibration_median_window = own.median_frames(1.0 / period);
     }
     return config;
   }
 
-  static std::shared_ptr<const Model> checked(std::shared_ptr<const Model> model) {
+  static std::shared_ptr<const PoseModel> checked(std::shared_ptr<const PoseModel> model) {
     if (!model) throw Error("GlovePoseEstimator: no model given, expected a loaded PoseModel");
     return model;
   }
@@ -370,10 +351,10 @@ class GlovePoseEstimator {
     calibration::StepHoldMeans means(model.sequence(), model_->cell_count());
     Eigen::VectorXd raw(model_->cell_count()), normalized(model_->cell_count());
     std::vector<float> cells(static_cast<std::size_t>(model_->cell_count()));
-    for (Eigen::Index f = 0; f < guided_count_; ++f) {
-      const double t = guided_times_[static_cast<std::size_t>(f)];
+    for (Eigen::Index f = 0; f < calibration_session_.sequence_frames(); ++f) {
+      const double t = calibration_session_.sequence_time(f);
       if (!means.holding(t)) continue;
-      raw = guided_cells_.row(f).transpose();
+      raw = calibration_session_.sequence_cells(f).transpose();
       hand::Angles angles{};
       if (range.normalize(raw, normalized) != Status::Ok || network_angles(normalized, angles) != Status::Ok) continue;
       for (Eigen::Index c = 0; c < normalized.size(); ++c) cells[static_cast<std::size_t>(c)] = static_cast<float>(normalized(c));
@@ -422,24 +403,13 @@ class GlovePoseEstimator {
                   const sensor::ReadoutHealth& health, std::chrono::steady_clock::time_point start) noexcept {
     if (&cells != &cells_) cells_ = cells;
     rejected_ += rejected;
-    if (collecting_ && timestamp >= next_calibration_sample_) {
-      // A small tolerance keeps frames that arrive on a period's grid from slipping by one.
-      if (calibrator_.add(cells) != Status::NonFinite) {
-        next_calibration_sample_ = timestamp + config_.calibration_sample_period * (1.0 - 1e-6);
-        if (std::isnan(sequence_start_)) sequence_start_ = timestamp;
-        sequence_now_ = timestamp - sequence_start_;
-        if (guided_count_ < guided_cells_.rows()) {  // the sequence's frames, for finish_calibration()
-          guided_cells_.row(guided_count_) = cells.transpose();
-          guided_times_[static_cast<std::size_t>(guided_count_++)] = sequence_now_;
-        }
-      }
-    }
+    calibration_session_.add(cells, timestamp);  // takes the frame while a calibration collects
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells, normalized_) != Status::Ok) return Status::NonFinite;
     std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u);
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
-    if (collecting_) flags |= kPoseCalibrating;
+    if (calibration_session_.collecting()) flags |= kPoseCalibrating;
     const Status net = network_angles(normalized_, pose_.raw_angles);
     if (net != Status::Ok) return net;
     if (guided_) pose_.raw_angles = calibration::with_offsets(pose_.raw_angles, offsets_, model_->joint_limits());
@@ -463,25 +433,18 @@ class GlovePoseEstimator {
     return Status::Solved;
   }
 
-  std::shared_ptr<const Model> model_;
+  std::shared_ptr<const PoseModel> model_;
   EstimatorConfig config_;
   std::optional<sensor::Readout> readout_;
-  sensor::OnTheFlyCalibrator calibrator_;
-  bool collecting_ = false;
-  double next_calibration_sample_ = -std::numeric_limits<double>::infinity();
+  CalibrationSession calibration_session_;  // an on-the-fly calibration while it runs
   std::optional<sensor::CalibrationRange> range_;
   CalibrationSource source_ = CalibrationSource::None;
   bool guided_ = false;               // offsets_ apply (pose-guided calibration in use)
   hand::Angles offsets_{};            // per-user angle offsets, radians
-  Eigen::MatrixXd guided_cells_;      // frames the calibrator took during the sequence (rows), C_c
-  std::vector<double> guided_times_;  // their seconds since the sequence's first frame
-  Eigen::Index guided_count_ = 0;
-  double sequence_start_ = std::numeric_limits<double>::quiet_NaN();
-  double sequence_now_ = 0.0;
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   std::optional<hand::ContactStage> contact_;  // EstimatorConfig::contact
   hand::ContactResult contact_result_;
-  typename Model::Network::Workspace workspace_;
+  PoseNetwork::Workspace workspace_;
   std::unique_ptr<core::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;
