@@ -53,6 +53,8 @@ constexpr std::chrono::duration<double> kEventPeriod(1.0 / 30.0);
 struct ViewOptions {
   int port = 8765;
   std::string model;  // empty: the shipped one
+  nn::WeightStorage storage = nn::WeightStorage::F32;
+  std::string glove;  // --glove: checked against the model's
   std::uint64_t seed = 2026;
   std::string replay;
   bool from_stdin = false;
@@ -413,7 +415,11 @@ class Connections {
 };
 
 int view(const ViewOptions& o) {
-  const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
+  const std::string model_path = o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model;
+  PoseModelOptions model_options;
+  model_options.storage = o.storage;
+  const auto model = PoseModel::load(model_path, model_options);
+  check_glove(o.glove, model->glove(), model_path);
   if (!model->solver() && !o.from_stdin)
     throw Error("the model's glove '" + model->glove().id() + "' has no wiring to simulate or replay raw rows of, expected --stdin (its " +
                 std::to_string(model->cell_count()) + " cells, one frame per line) or a model of a glove with a trace layout");
@@ -505,6 +511,8 @@ Command add_view(CLI::App& tool) {
   add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")
       ->check(CLI::Range(0, 65535));
   add_model_file(*command, o->model, "weights (default: the shipped model)");
+  add_weight_storage(*command, o->storage);
+  add_glove_file(*command, o->glove, "the glove the readings come from; refused unless the model was trained for it (default: the model's)");
   add_number(*command, "--seed", "S", o->seed, "simulation seed of the simulated user (default 2026)");
   CLI::Option* replay =
       command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
