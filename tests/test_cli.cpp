@@ -1304,7 +1304,7 @@ TEST_CASE("cli: every command spells the model file, the weight storage and the 
       {"demo", true, true, false},   // a simulated user of the built-in glove
       {"soak", true, false, false},  // F32, the library's default: its figures are fault counts, not speed
       {"bench", true, false, false},  // times every storage
-      {"view", true, false, false},  // not yet: --weights and --glove (issue 43) wait for view.cpp
+      {"view", true, true, true},
   };
   for (const Spelling& s : spellings) {
     const Run help = run_stream(s.command + " --help", 1);
@@ -1346,9 +1346,12 @@ TEST_CASE("cli: every command spells the model file, the weight storage and the 
     CHECK(r.status == 2);
     CHECK(r.out.find(entry.second) != std::string::npos);
   }
-  const Run wrong_glove = run_stream(predict + " --glove " + other, 2);
-  CHECK(wrong_glove.status == 1);
-  CHECK(wrong_glove.out.find("'another-glove', 44 cells) is not the one the model") != std::string::npos);
+  for (const std::string& command : {predict, "view --model " + kModel + " --weights fixed16 --stdin"}) {
+    const Run wrong_glove = run_stream(command + " --glove " + other + " </dev/null", 2);
+    INFO(command, "\n", wrong_glove.out);
+    CHECK(wrong_glove.status == 1);
+    CHECK(wrong_glove.out.find("'another-glove', 44 cells) is not the one the model") != std::string::npos);
+  }
 }
 
 TEST_CASE("cli: glovepose info FILE shows the weights' dtype on disk, the calibration mode and the provenance the file records") {
