@@ -178,11 +178,15 @@ int fit_guided_command(Options o) {
 }  // namespace
 
 std::vector<Command> add_training_commands(CLI::App& tool, const std::string& command_line) {
-  const auto add = [&](const char* name, const std::string& description) {
+  // A command reading --model FILE (`model_help`, unless null) and writing --out FILE (`writes`).
+  const auto add = [&](const char* name, const std::string& description, const char* model_help, bool writes) {
     auto o = std::make_shared<Options>();
     o->command = name;
     o->command_line = command_line;
-    return std::pair{tool.add_subcommand(name, description), o};
+    CLI::App* command = tool.add_subcommand(name, description);
+    if (model_help) add_model_file(*command, o->model, model_help)->required();
+    if (writes) command->add_option("--out", o->out, "the model file written")->required()->type_name("FILE");
+    return std::pair{command, o};
   };
   std::vector<Command> commands;
   const auto finish = [&](CLI::App* command, const std::shared_ptr<Options>& o, int (*run)(Options)) {
@@ -191,11 +195,11 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
                           return run(*o);
                         }});
   };
-  const std::string out_help = "the model file written";
   {
     auto [command, o] = add("train",
                             "Trains a model on a dataset file on all cores, saving the best so far at every improvement "
-                            "(Ctrl-C stops and keeps it).");
+                            "(Ctrl-C stops and keeps it).",
+                            nullptr, true);
     const auto store = [o = o](training::Architecture a) { o->architecture = std::move(a); };
     CLI::Option* architecture = add_parsed_option<training::Architecture>(
         *command, "--architecture", "unet:W|fcn[:H]|linear", training::architecture, store, "unet:W, fcn[:H] or linear",
@@ -208,7 +212,6 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
                           store(*a);
                         })
         ->excludes(architecture);
-    command->add_option("--out", o->out, out_help)->required()->type_name("FILE");
     training::add_data_options(*command, *o, true);
     training::add_training_options(
         *command, o,
@@ -221,9 +224,8 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
   {
     auto [command, o] = add("finetune",
                             "Fine-tunes every parameter of a model on a dataset file (the paper's defaults: lr 1e-6, batch 64, "
-                            "5 epochs).");
-    add_model_file(*command, o->model, "the model to fine-tune")->required();
-    command->add_option("--out", o->out, out_help)->required()->type_name("FILE");
+                            "5 epochs).",
+                            "the model to fine-tune", true);
     training::add_data_options(*command, *o, true);
     training::add_training_options(*command, o, {"5", "64", "1e-6"});
     finish(command, o, finetune_command);
@@ -231,8 +233,8 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
   {
     auto [command, o] = add("eval",
                             "Evaluates a model on a dataset file: angle errors per DoF and overall, the motion lag, fingertip "
-                            "position errors and pinch detection.");
-    add_model_file(*command, o->model, "the model to evaluate")->required();
+                            "position errors and pinch detection.",
+                            "the model to evaluate", false);
     training::add_data_options(*command, *o, true);
     training::add_eval_options(*command, *o);
     finish(command, o, eval_command);
@@ -240,9 +242,8 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
   {
     auto [command, o] = add("fit-guided",
                             "Fits the model's pose-guided calibration on people it was not trained on and writes the model "
-                            "with it.");
-    add_model_file(*command, o->model, "the model")->required();
-    command->add_option("--out", o->out, out_help)->required()->type_name("FILE");
+                            "with it.",
+                            "the model", true);
     training::add_data_options(*command, *o, false);
     command->add_option("--sequence", o->sequence_file, "the calibration sequence (default: the shipped calibration_glauser2019.json)")
         ->check(existing_file())
