@@ -197,7 +197,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
   const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
   train::TrainableFcn trainer(glove.cell_count(), hidden, frames);
   trainer.initialize(12);
-  const model::ModelInfo info = train::make_model_info("fcn", hidden, glove, model::CalibrationMode::OnTheFly, nullptr);
+  const model::ModelInfo info = train::make_model_info(model::Architecture::Fcn, hidden, glove, model::CalibrationMode::OnTheFly, nullptr);
   const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/fcn_estimator.safetensors";
   train::save_model(path, info, trainer.parameters().to_tensors());
 
@@ -234,7 +234,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
     PoseModelOptions options;
     options.storage = storage;
     const std::shared_ptr<const PoseModel> model = PoseModel::load(path, options);
-    CHECK(model->network().architecture() == "fcn");
+    CHECK(model->network().architecture() == model::Architecture::Fcn);
     CHECK(model->network().fcn()->hidden() == hidden);
     CHECK(worst(model->predict(cells.data(), frames, range, 2)) < bound_deg);
     GlovePoseEstimator estimator(model);

@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include <cstring>
+#include <iterator>
 #include <limits>
 
 #include "unet_reference.hpp"
@@ -174,13 +175,15 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
   file.tensors = good;
   CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'format' is missing"), Error);
   model::ModelInfo info;
-  info.architecture = "unet";
+  info.architecture = model::Architecture::UNet;
   info.width = width;
   info.glove = "glauser2019-44";
   info.joint_limits_min = std::vector<double>(25, -1.0);
   info.joint_limits_max = std::vector<double>(25, 1.0);
   info.to(file);
+  CHECK(file.metadata.at("architecture") == "unet");  // the spelling of weights_format.md
   const model::ModelInfo back = model::ModelInfo::from(WeightFile::parse(file.serialize()));
+  CHECK(back.architecture == model::Architecture::UNet);
   CHECK(back.width == 4);
   CHECK(back.glove == "glauser2019-44");
   CHECK(back.joint_limits_max == info.joint_limits_max);
@@ -196,15 +199,37 @@ TEST_CASE("weights: a model file needs the right tensors, shapes and metadata, e
                        Error);
   file.metadata["calibration"] = "training";
   file.metadata["architecture"] = "lstm";
-  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("expected 'unet', 'fcn' or 'linear'"), Error);
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file),
+                       doctest::Contains("metadata 'architecture': architecture 'lstm', expected 'unet', 'fcn' or 'linear'"), Error);
+  file.metadata["architecture"] = "linear";  // a linear map has no width: the file's 'width' is not read
+  file.metadata["width"] = "four";
+  CHECK(model::ModelInfo::from(file).architecture == model::Architecture::Linear);
+  CHECK(model::ModelInfo::from(file).width == 0);
+  file.metadata["width"] = "4";
   file.metadata["architecture"] = "unet";
   file.metadata["joint_limits_min"] = "[1, 2]";
   CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("hold 2/25 numbers, expected 25 each"), Error);
 }
 
+TEST_CASE("model info: each architecture has one name, the model files' spelling, and reads back") {
+  // weights_format.md's spellings, by enum value: an independent copy of the name table.
+  const std::pair<model::Architecture, const char*> spelled[] = {
+      {model::Architecture::UNet, "unet"}, {model::Architecture::Fcn, "fcn"}, {model::Architecture::Linear, "linear"}};
+  CHECK(std::size(spelled) == static_cast<std::size_t>(model::Architecture::Count));
+  for (const auto& [a, name] : spelled) {
+    CHECK(std::string(model::to_string(a)) == name);
+    CHECK(model::parse_architecture(name) == a);
+    CHECK(model::architecture(name) == a);
+  }
+  CHECK(!model::parse_architecture("UNet"));  // spellings are exact
+  CHECK(!model::parse_architecture("unet:64"));
+  CHECK(!model::parse_architecture(""));
+  CHECK_THROWS_WITH_AS(model::architecture("lstm"), "architecture 'lstm', expected 'unet', 'fcn' or 'linear'", Error);
+}
+
 TEST_CASE("model info: joint limits, glove and training range come from the metadata, checked against each other") {
   model::ModelInfo info;
-  info.architecture = "fcn";
+  info.architecture = model::Architecture::Fcn;
   info.width = 8;
   info.glove = "glauser2019-44";
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {  // limits of its own, not the reference hand's

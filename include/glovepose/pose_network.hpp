@@ -41,14 +41,14 @@ class PoseNetwork {
   /// `storage`. Throws glovepose::Error for an architecture the real-time path does not run (a
   /// linear map: train::load_model evaluates it) or tensors that do not make the network.
   static PoseNetwork from_tensors(const model::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
-    if (info.architecture == "unet") return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
-    if (info.architecture == "fcn") return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
-    throw Error("architecture '" + info.architecture +
+    if (info.architecture == model::Architecture::UNet) return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
+    if (info.architecture == model::Architecture::Fcn) return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
+    throw Error("architecture '" + info.architecture_name() +
                 "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
   }
 
-  /// @brief "unet" or "fcn", as the model file names it.
-  std::string architecture() const { return unet() ? "unet" : "fcn"; }
+  /// @brief Architecture::UNet or Architecture::Fcn.
+  model::Architecture architecture() const noexcept { return unet() ? model::Architecture::UNet : model::Architecture::Fcn; }
   /// @brief The U-Net, or null for an FCN.
   const UNet* unet() const noexcept { return std::get_if<UNet>(&net_); }
   /// @brief The FCN, or null for a U-Net.

@@ -8,8 +8,10 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,9 +41,34 @@ inline CalibrationMode calibration_mode(const std::string& text) {
   throw Error("calibration mode '" + text + "', expected none, training or onthefly");
 }
 
+/// @brief The network a model file holds (metadata 'architecture'): the paper's U-Net, its fully
+/// connected baseline, or a linear map (evaluated by the trainer only).
+enum class Architecture : unsigned char { UNet, Fcn, Linear, Count };
+
+/// @brief The one name table: the spellings in model files and on the command line, by enum value.
+inline constexpr const char* kArchitectureNames[] = {"unet", "fcn", "linear"};
+static_assert(std::size(kArchitectureNames) == static_cast<std::size_t>(Architecture::Count),
+              "kArchitectureNames needs one name per Architecture");
+
+/// @brief "unet", "fcn" or "linear".
+constexpr const char* to_string(Architecture a) noexcept { return kArchitectureNames[static_cast<std::size_t>(a)]; }
+
+/// @brief The architecture `text` names, or nullopt when it names none.
+inline std::optional<Architecture> parse_architecture(std::string_view text) noexcept {
+  for (std::size_t i = 0; i < std::size(kArchitectureNames); ++i)
+    if (text == kArchitectureNames[i]) return static_cast<Architecture>(i);
+  return std::nullopt;
+}
+
+/// @brief The architecture `text` names; throws glovepose::Error naming the accepted spellings otherwise.
+inline Architecture architecture(const std::string& text) {
+  if (const std::optional<Architecture> a = parse_architecture(text)) return *a;
+  throw Error("architecture '" + text + "', expected 'unet', 'fcn' or 'linear'");
+}
+
 /// @brief The metadata of a model file.
 struct ModelInfo {
-  std::string architecture;       ///< "unet", "fcn" (the paper's fully connected baseline) or "linear".
+  Architecture architecture = Architecture::UNet;  ///< The network the file holds.
   int width = 0;                  ///< U-Net base width, FCN hidden width; 0 for linear.
   int inputs = 44;                ///< Cell values per frame the model takes.
   std::string glove;              ///< Sensor layout id the model was trained for.
@@ -60,7 +87,7 @@ struct ModelInfo {
   std::string labelled_dofs;
 
   /// @brief The architecture as the file spells it ("unet", "fcn" or "linear").
-  std::string architecture_name() const { return architecture; }
+  std::string architecture_name() const { return to_string(architecture); }
 
   /// @brief labelled_dofs as a set (every DoF when empty).
   hand::DofSet labelled() const {
@@ -107,10 +134,12 @@ struct ModelInfo {
     if (file.meta("format") != "glovepose-model")
       throw Error("metadata 'format' is '" + file.meta("format") + "', expected 'glovepose-model'");
     if (file.meta("format_version") != "1") throw Error("metadata 'format_version' is '" + file.meta("format_version") + "', expected '1'");
-    info.architecture = file.meta("architecture");
-    if (info.architecture != "unet" && info.architecture != "fcn" && info.architecture != "linear")
-      throw Error("metadata 'architecture' is '" + info.architecture + "', expected 'unet', 'fcn' or 'linear'");
-    if (info.architecture != "linear") info.width = parse_int(file.meta("width"), "width");
+    try {
+      info.architecture = model::architecture(file.meta("architecture"));
+    } catch (const Error& e) {
+      throw Error(std::string("metadata 'architecture': ") + e.what());
+    }
+    if (info.architecture != Architecture::Linear) info.width = parse_int(file.meta("width"), "width");
     if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs");
     if (file.metadata.count("glove_description")) info.glove_description = file.meta("glove_description");
     if (file.metadata.count("calibration")) {
@@ -145,8 +174,8 @@ struct ModelInfo {
   void to(nn::WeightFile& file) const {
     file.metadata["format"] = "glovepose-model";
     file.metadata["format_version"] = "1";
-    file.metadata["architecture"] = architecture;
-    if (architecture != "linear") file.metadata["width"] = std::to_string(width);
+    file.metadata["architecture"] = to_string(architecture);
+    if (architecture != Architecture::Linear) file.metadata["width"] = std::to_string(width);
     file.metadata["inputs"] = std::to_string(inputs);
     file.metadata["glove"] = glove;
     if (!glove_description.empty()) file.metadata["glove_description"] = glove_description;

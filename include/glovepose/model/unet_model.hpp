@@ -26,8 +26,8 @@ struct UNetModel {
     const nn::WeightFile file = nn::WeightFile::read(path);
     try {
       ModelInfo info = ModelInfo::from(file);
-      if (info.architecture != "unet")
-        throw Error("architecture '" + info.architecture +
+      if (info.architecture != Architecture::UNet)
+        throw Error("architecture '" + info.architecture_name() +
                     "' is not a U-Net; PoseModel::load runs U-Nets and FCNs, train::load_model every architecture");
       nn::UNet<Backend> net = nn::UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
       return UNetModel{std::move(info), std::move(net)};

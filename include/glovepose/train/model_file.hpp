@@ -30,11 +30,11 @@ namespace glovepose::train {
 /// @brief Metadata for a new model of `architecture` and `width` for `glove`, normalised by the
 /// glove's joint limits (its description's, else the reference's), with inputs calibrated by `mode`
 /// (`range`: the training range).
-inline model::ModelInfo make_model_info(const std::string& architecture, int width, const grid::GloveDescription& glove,
+inline model::ModelInfo make_model_info(model::Architecture architecture, int width, const grid::GloveDescription& glove,
                                         model::CalibrationMode mode, const sensor::CalibrationRange* range) {
   model::ModelInfo info;
   info.architecture = architecture;
-  info.width = architecture == "linear" ? 0 : width;
+  info.width = architecture == model::Architecture::Linear ? 0 : width;
   info.inputs = glove.cell_count();
   info.glove = glove.id();
   if (glove != grid::GloveDescription::glauser2019()) info.glove_description = glove.to_metadata();
@@ -49,11 +49,18 @@ inline model::ModelInfo make_model_info(const std::string& architecture, int wid
   return info;
 }
 
+/// @brief make_model_info for the architecture `architecture` spells; throws glovepose::Error for a
+/// name of none.
+inline model::ModelInfo make_model_info(const std::string& architecture, int width, const grid::GloveDescription& glove,
+                                        model::CalibrationMode mode, const sensor::CalibrationRange* range) {
+  return make_model_info(model::architecture(architecture), width, glove, mode, range);
+}
+
 /// @brief A network of the architecture `info` names, for `glove`, with zero tensors.
 inline std::unique_ptr<TrainableNetwork> make_network(const model::ModelInfo& info, const grid::GloveDescription& glove, int max_batch) {
-  if (info.architecture == "unet") return std::make_unique<TrainableUNet>(info.width, glove.map(), max_batch);
-  if (info.architecture == "fcn") return std::make_unique<TrainableFcn>(info.inputs, info.width, max_batch);
-  throw Error("architecture '" + info.architecture + "' has no trainable network, expected unet or fcn");
+  if (info.architecture == model::Architecture::UNet) return std::make_unique<TrainableUNet>(info.width, glove.map(), max_batch);
+  if (info.architecture == model::Architecture::Fcn) return std::make_unique<TrainableFcn>(info.inputs, info.width, max_batch);
+  throw Error("architecture '" + info.architecture_name() + "' has no trainable network, expected unet or fcn");
 }
 
 /// @brief A model read from a file: metadata, glove, and the network or linear map.
@@ -124,7 +131,7 @@ inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
     trained.info = model::ModelInfo::from(file);
     trained.metadata = file.metadata;
     trained.glove = trained.info.glove_of_model();
-    if (trained.info.architecture == "linear") {
+    if (trained.info.architecture == model::Architecture::Linear) {
       for (const char* name : {"weight", "bias"})
         if (!file.tensors.count(name))
           throw Error(std::string("tensor '") + name + "' is missing, expected a linear model's weight and bias");
