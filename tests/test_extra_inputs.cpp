@@ -136,22 +136,23 @@ TEST_CASE("extra inputs: a U-Net file whose enc1 reads another number of extra p
 TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with the trainer's angles and no allocation") {
   const grid::GloveDescription glove = glove_with_extra("wrist_imu");
   const int frames = 12, n = glove.cell_count();
-  for (const std::string architecture : {"fcn", "unet"}) {
-    CAPTURE(architecture);
+  for (const model::Architecture architecture : {model::Architecture::Fcn, model::Architecture::UNet}) {
+    const std::string name = model::to_string(architecture);
+    CAPTURE(name);
     // The FCN reads the inputs as a vector; the U-Net reads the extra one as a third input plane.
-    const int width = architecture == "fcn" ? 32 : 8;
+    const int width = architecture == model::Architecture::Fcn ? 32 : 8;
     const model::ModelInfo info = train::make_model_info(architecture, width, glove, model::CalibrationMode::OnTheFly, nullptr);
     const std::unique_ptr<train::TrainableNetwork> trainer = train::make_network(info, glove, frames);
     if (auto* unet = dynamic_cast<train::TrainableUNet*>(trainer.get()))
       unet->initialize(21);
     else
       dynamic_cast<train::TrainableFcn&>(*trainer).initialize(21);
-    const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + architecture + "_extra.safetensors";
+    const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name + "_extra.safetensors";
     train::save_model(path, info, trainer->parameters().to_tensors());
     const auto model = PoseModel::load(path);
     std::remove(path.c_str());
     REQUIRE(model->glove() == glove);
-    if (architecture == "unet") CHECK(model->network().unet()->extra_inputs() == 1);
+    if (architecture == model::Architecture::UNet) CHECK(model->network().unet()->extra_inputs() == 1);
 
     // Every input calibrated over 0..10: normalised x = 2 c / 10 - 1.
     const sensor::CalibrationRange range(Eigen::VectorXd::Zero(n), Eigen::VectorXd::Constant(n, 10.0), glove.cell_names());

@@ -46,7 +46,8 @@ inline std::optional<std::vector<int>> id_list(const std::string& text) {
 
 // A network to train: "unet:W", "fcn[:H]" or "linear" (W default 64, H default 2048).
 struct Architecture {
-  std::string name;
+  std::string name;  // as model files spell `kind`
+  model::Architecture kind = model::Architecture::UNet;
   int width = 0;
 };
 
@@ -54,11 +55,13 @@ inline std::optional<Architecture> architecture(const std::string& text) {
   const std::size_t colon = text.find(':');
   Architecture a;
   a.name = text.substr(0, colon);
-  if (a.name != "unet" && a.name != "fcn" && a.name != "linear") return std::nullopt;
-  a.width = a.name == "unet" ? 64 : (a.name == "fcn" ? 2048 : 0);
+  const std::optional<model::Architecture> kind = model::parse_architecture(a.name);
+  if (!kind) return std::nullopt;
+  a.kind = *kind;
+  a.width = a.kind == model::Architecture::UNet ? 64 : (a.kind == model::Architecture::Fcn ? 2048 : 0);
   if (colon == std::string::npos) return a;
   const std::optional<int> width = number_from_text<int>(text.substr(colon + 1));
-  if (a.name == "linear" || !width || *width < 1) return std::nullopt;
+  if (a.kind == model::Architecture::Linear || !width || *width < 1) return std::nullopt;
   a.width = *width;
   return a;
 }
