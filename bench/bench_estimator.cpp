@@ -107,7 +107,7 @@ nn::WeightStorage storage_of(const benchmark::State& state) {
 struct SessionClock {
   const Recording& r;
   std::size_t frames = r.data.frames() - r.first_session_frame;
-  double lap = r.data.timestamps.back() - r.data.timestamps[r.first_session_frame] + 1.0 / 60.0;
+  double lap = r.data.timestamps.back() - r.data.timestamps[r.first_session_frame] + 1.0 / r.data.frame_rate();
   std::size_t frame = 0;
   double offset = 0.0;
 
@@ -187,13 +187,12 @@ void BM_EstimatorFrameXr(benchmark::State& state) {
 void BM_EstimatorRow(benchmark::State& state) {
   GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
   const std::size_t rows = recording().data.row_count;
-  const double row_period = 1.0 / (60.0 * static_cast<double>(rows));
+  const io::RowClock row_clock = recording().data.row_clock();
   SessionClock clock{recording()};
   std::size_t row = 0;
   const std::uint64_t poses_before = estimator.pose().sequence;
   for (auto _ : state) {
-    // Row r of a frame was read (179 - r) row slots before the frame's end.
-    const double t = clock.timestamp() - static_cast<double>(rows - 1 - row) * row_period;
+    const double t = row_clock.time(clock.timestamp(), row);
     benchmark::DoNotOptimize(estimator.push_row(static_cast<int>(row), clock.rows()[row], t));
     if (++row == rows) {
       row = 0;

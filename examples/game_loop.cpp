@@ -33,12 +33,13 @@ namespace {
 // copy that the game reads whenever it likes, never waiting for this thread nor making it wait.
 void stream_glove(GlovePoseEstimator& estimator, const io::Dataset& glove, Clock::time_point start, LatestHand& latest) {
   const std::size_t rows = glove.row_count;
+  const io::RowClock clock = glove.row_clock();  // when each raw row was read
   estimator.start_calibration();
   for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
     if (glove.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting)
       estimator.finish_calibration();  // set-up call: may throw (too few frames)
     for (std::size_t r = 0; r < rows; ++r) {
-      const double t = glove.timestamps[frame] - static_cast<double>(rows - 1 - r) / (rows * 60.0);
+      const double t = clock.time(glove.timestamps[frame], r);
       std::this_thread::sleep_until(start + std::chrono::duration<double>(t));  // stands in for a blocking read from the glove
       const Status status = estimator.push_row(static_cast<int>(r), glove.raw_rows[frame * rows + r], t);
       if (status != Status::Solved && status != Status::Uncalibrated) continue;  // no frame solved by this row

@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
     person.recording.raw_rows = true;
     const io::Dataset glove = sim::to_dataset(sim::simulate_corpus(person), person);
     const std::size_t rows = glove.row_count;
+    const io::RowClock clock = glove.row_clock();  // when each raw row was read
 
     estimator.start_calibration();
     int shown = -1;
@@ -51,7 +52,7 @@ int main(int argc, char** argv) {
                                             : "min-max (the sequence was not followed)");
       }
       for (std::size_t r = 0; r < rows; ++r) {
-        const double t = glove.timestamps[frame] - static_cast<double>(rows - 1 - r) / (rows * 60.0);
+        const double t = clock.time(glove.timestamps[frame], r);
         (void)estimator.push_row(static_cast<int>(r), glove.raw_rows[frame * rows + r], t);
       }
       // What the app shows: the step under way, its instruction and target pose, and the progress.

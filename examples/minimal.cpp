@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
     glove.recording.raw_rows = true;
     const io::Dataset recording = sim::to_dataset(sim::simulate_corpus(glove), glove);
     const std::size_t rows = recording.row_count;
+    const io::RowClock clock = recording.row_clock();  // when each raw row was read
 
     // The user first moves through extreme poses while the estimator collects each cell's range.
     estimator.start_calibration();
@@ -40,10 +41,10 @@ int main(int argc, char** argv) {
         const sensor::CalibrationRange& range = estimator.finish_calibration();
         std::printf("calibrated on %ld frames, %zu flat sensors\n", frames, range.flat_sensors().size());
       }
-      // The per-frame path: no allocation, no exceptions, a Status per call. Row r of a cycle was
-      // read (179 - r) row slots before the cycle's end.
+      // The per-frame path: no allocation, no exceptions, a Status per call; each row at the time
+      // it was read.
       for (std::size_t r = 0; r < rows; ++r) {
-        const double timestamp = recording.timestamps[frame] - static_cast<double>(rows - 1 - r) / (rows * 60.0);
+        const double timestamp = clock.time(recording.timestamps[frame], r);
         const Status status = estimator.push_row(static_cast<int>(r), recording.raw_rows[frame * rows + r], timestamp);
         if (status != Status::Solved) continue;  // no new pose yet (or uncalibrated, or a rejected reading)
         const Pose& pose = estimator.pose();     // a new pose every 16 rows: 675 per second

@@ -94,12 +94,12 @@ int main(int argc, char** argv) {
     double slowest_pose = 0.0;
 
     const std::size_t rows = data.row_count;
-    const double frame_rate = data.frame_rate();
+    const io::RowClock clock = data.row_clock();  // when each raw row was read
     Clock::time_point session_start;  // when, on this computer's clock, the session's time 0 is replayed
     for (std::size_t f = 0; f < data.frames(); ++f) {
       if (f == 0 || !same_session(data, f - 1, f)) {  // a new session: its clock and stream start again
         estimator.reset();
-        session_start = Clock::now() - seconds(data.timestamps[f] - 1.0 / frame_rate);
+        session_start = Clock::now() - seconds(data.timestamps[f] - 1.0 / clock.frame_rate);
       }
       const bool calibrating = estimator.calibration_progress().collecting;
       if (data.kind[f] == io::kKindCalibration && !calibrating) estimator.start_calibration();
@@ -108,10 +108,10 @@ int main(int argc, char** argv) {
         throw Error("frame " + std::to_string(f) +
                     " is recorded before any calibration frame, expected the session's calibration sequence (kind 1) first");
 
-      // The frame's rows, each at its own time: row r was read (R - 1 - r) row slots before the frame's end.
+      // The frame's rows, each at its own time.
       const std::uint64_t poses_before = estimator.pose().sequence;
       for (std::size_t r = 0; r < rows; ++r) {
-        const double t = data.timestamps[f] - static_cast<double>(rows - 1 - r) / (static_cast<double>(rows) * frame_rate);
+        const double t = clock.time(data.timestamps[f], r);
         if (!options.fast) std::this_thread::sleep_until(session_start + seconds(t));
         if (estimator.push_row(static_cast<int>(r), data.raw_rows[f * rows + r], t) == Status::Solved)
           slowest_pose = std::max(slowest_pose, estimator.pose().compute_seconds);

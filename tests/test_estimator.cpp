@@ -68,18 +68,13 @@ EstimatorConfig cycle_config() {
   return config;
 }
 
-// Row r of a frame was read (179 - r) row slots before the frame's end (sim/recorder.hpp).
-double row_time(const io::Dataset& d, std::size_t frame, int row) {
-  return d.timestamps[frame] - static_cast<double>(d.row_count - 1 - static_cast<std::size_t>(row)) / (d.row_count * 60.0);
-}
-
 // Streams frames [begin, end) of `d` row by row; calls on_pose(frame) whenever a frame's rows produced a pose.
 template <typename Estimator, typename OnPose>
 void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPose on_pose, const io::Dataset& d = session().data) {
   for (std::size_t f = begin; f < end; ++f) {
     bool solved = false;
     for (int r = 0; r < static_cast<int>(d.row_count); ++r)
-      solved |= estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], row_time(d, f, r)) == Status::Solved;
+      solved |= estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], d.row_time(f, static_cast<std::size_t>(r))) == Status::Solved;
     if (solved) on_pose(f);
   }
 }
@@ -271,7 +266,7 @@ TEST_CASE("estimator: calibration state machine, saved calibrations, training ra
   // Without a range, solved frames give no pose.
   Status last = Status::Ok;
   stream_rows(estimator, 0, 6, [](std::size_t) {});
-  for (int r = 0; r < 180; ++r) last = estimator.push_row(r, d.raw_rows[6 * d.row_count + static_cast<std::size_t>(r)], row_time(d, 6, r));
+  for (int r = 0; r < 180; ++r) last = estimator.push_row(r, d.raw_rows[6 * d.row_count + static_cast<std::size_t>(r)], d.row_time(6, static_cast<std::size_t>(r)));
   CHECK(last == Status::Uncalibrated);
   CHECK_FALSE(estimator.pose().valid);
 
@@ -495,7 +490,7 @@ TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates the
   const std::size_t begin = session().first_session_frame;
   for (std::size_t f = begin; f < begin + 20; ++f)
     for (int r = 0; r < static_cast<int>(d.row_count); ++r)
-      if (estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], row_time(d, f, r)) == Status::Solved) {
+      if (estimator.push_row(r, d.raw_rows[f * d.row_count + static_cast<std::size_t>(r)], d.row_time(f, static_cast<std::size_t>(r))) == Status::Solved) {
         times.push_back(estimator.pose().timestamp);
         poses.push_back(estimator.pose().angles);
       }

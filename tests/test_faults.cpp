@@ -24,7 +24,6 @@ using namespace glovepose;
 namespace {
 
 constexpr std::size_t kFaultBegin = 120, kFaultEnd = 240;  // frames of the session (60 per second)
-constexpr double kRowSlot = 1.0 / (180 * 60.0);
 
 const io::Dataset& faults_session() {
   static const io::Dataset d = [] {
@@ -60,11 +59,12 @@ std::shared_ptr<const PoseModel> faults_model() {
 const sensor::CalibrationRange& faults_range() {
   static const sensor::CalibrationRange range = [] {
     const io::Dataset& d = faults_session();
+    const io::RowClock clock = d.row_clock();
     GlovePoseEstimator estimator(faults_model());
     estimator.start_calibration();
     for (std::size_t f = 0; f < first_session_frame(); ++f)
-      for (int r = 0; r < 180; ++r)
-        (void)estimator.push_row(r, d.raw_rows[f * 180 + static_cast<std::size_t>(r)], d.timestamps[f] - (179 - r) * kRowSlot);
+      for (std::size_t r = 0; r < 180; ++r)
+        (void)estimator.push_row(static_cast<int>(r), d.raw_rows[f * 180 + r], clock.time(d.timestamps[f], r));
     return estimator.finish_calibration();
   }();
   return range;
@@ -96,6 +96,7 @@ const int kDefaultWindow = realtime_readout().mean_window;
 // glove delivers.
 FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window) {
   const io::Dataset& d = faults_session();
+  const io::RowClock clock = d.row_clock();
   EstimatorConfig config;
   config.readout.mean_window = mean_window;
   GlovePoseEstimator estimator(faults_model(), config);
@@ -105,7 +106,7 @@ FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window) {
   const std::size_t first = first_session_frame();
   for (std::size_t f = first; f < d.frames(); ++f) {
     for (int r = 0; r < 180; ++r) {
-      const sim::Reading in{r, d.raw_rows[f * 180 + static_cast<std::size_t>(r)], d.timestamps[f] - (179 - r) * kRowSlot};
+      const sim::Reading in{r, d.raw_rows[f * 180 + static_cast<std::size_t>(r)], clock.time(d.timestamps[f], static_cast<std::size_t>(r))};
       sim::InjectedReadings out;
       if (fault && f - first >= kFaultBegin && f - first < kFaultEnd)
         out = fault->apply(in);

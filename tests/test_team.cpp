@@ -190,7 +190,7 @@ TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shippe
       shared.finish_calibration();
     }
     for (std::size_t r = 0; r < rows; ++r) {
-      const double t = data.timestamps[f] - static_cast<double>(rows - 1 - r) / (static_cast<double>(rows) * 60.0);
+      const double t = data.row_time(f, r);
       const double value = data.raw_rows[f * rows + r];
       const Status a = alone.push_row(static_cast<int>(r), value, t);
       Status b = Status::Ok;

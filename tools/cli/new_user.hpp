@@ -44,11 +44,9 @@ inline NewUser simulate_new_user(std::uint64_t seed, double minutes, const PoseM
   return user;
 }
 
-/// When row r of frame f was read: at the end of its slot in the frame's readout cycle
-/// (sim/recorder.hpp), the frame's timestamp being the cycle's end.
+/// When row r of frame f was read (io::RowClock at the user's cycle rate).
 inline double row_time(const NewUser& user, std::size_t f, std::size_t r) {
-  const std::size_t rows = user.data.row_count;
-  return user.data.timestamps[f] - static_cast<double>(rows - 1 - r) / (static_cast<double>(rows) * user.cycle_rate);
+  return io::RowClock{user.data.row_count, user.cycle_rate}.time(user.data.timestamps[f], r);
 }
 
 }  // namespace glovepose::cli

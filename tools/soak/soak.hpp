@@ -360,6 +360,7 @@ class SoakStream {
     session_frames_ = source.frames() - calibration_frames_;
     cycles_per_second_ = cycle_rate(source);
     cycle_seconds_ = 1.0 / cycles_per_second_;
+    row_clock_ = {source.row_count, cycles_per_second_};
     // Each estimator starts the loop at its own place, so they do not play the same motion.
     loop_offset_ = static_cast<std::size_t>(index) * session_frames_ / static_cast<std::size_t>(std::max(1, config.estimators));
     total_cycles_ = calibration_frames_ + seconds_to_cycles(config.stream_minutes * 60.0);
@@ -383,7 +384,7 @@ class SoakStream {
     std::array<bool, kStatusCount> seen{};
     std::uint64_t pushed = 0;
     for (int r = 0; r < rows_; ++r) {
-      const Reading clean{r, static_cast<double>(rows[r]), cycle_end - (rows_ - 1 - r) * cycle_seconds_ / rows_};
+      const Reading clean{r, static_cast<double>(rows[r]), row_clock_.time(cycle_end, static_cast<std::size_t>(r))};
       InjectedReadings delivered;
       if (fault_)
         delivered = fault_->apply(clean);
@@ -533,6 +534,7 @@ class SoakStream {
   std::size_t session_frames_ = 0;
   std::size_t loop_offset_ = 0;
   double cycle_seconds_ = 0.0;
+  io::RowClock row_clock_;
   double cycles_per_second_ = 0.0;
   std::uint64_t total_cycles_ = 0;
   std::uint64_t warmup_end_ = 0;

@@ -38,6 +38,20 @@ inline constexpr std::uint8_t kKindRecording = 0;
 /// @brief Value of `kind` for a frame of a calibration sequence.
 inline constexpr std::uint8_t kKindCalibration = 1;
 
+/// @brief The readout's clock: a frame's R raw rows fill one readout cycle of 1 / frame_rate seconds
+/// that ends at the frame's timestamp, row r completing at the end of its slot (sim/recorder.hpp
+/// records so). The one home of a raw row's time; Dataset::row_clock() gives a dataset's.
+struct RowClock {
+  std::size_t rows = 0;     ///< R, raw rows per frame (readout cycle).
+  double frame_rate = 0.0;  ///< Frames (readout cycles) per second.
+
+  /// @brief When row `row` of the cycle that ends at `frame_end` was read: R - 1 - row row slots
+  /// before the cycle's end.
+  double time(double frame_end, std::size_t row) const noexcept {
+    return frame_end - static_cast<double>(rows - 1 - row) / (static_cast<double>(rows) * frame_rate);
+  }
+};
+
 /// @brief N frames of glove recordings, one row per frame in every array (row-major).
 ///
 /// A frame is what the readout delivers when a solve ends: the cell capacitances solved from the
@@ -96,6 +110,12 @@ struct Dataset {
       throw Error("Dataset: metadata 'frame_rate' is '" + text + "', expected a positive number (frames per second)");
     return v;
   }
+
+  /// @brief The clock of the raw rows: row_count rows per frame at frame_rate(). Throws like frame_rate().
+  RowClock row_clock() const { return {row_count, frame_rate()}; }
+  /// @brief When raw row `row` of frame `frame` was read (RowClock::time). Reads the metadata at
+  /// each call: in a loop over rows, take row_clock() once.
+  double row_time(std::size_t frame, std::size_t row) const { return row_clock().time(timestamps[frame], row); }
 
   /// @brief The DoFs with reference angles: metadata "labelled_dofs", every DoF when it is absent.
   /// Throws glovepose::Error when the metadata does not name a set of DoFs.

@@ -2,8 +2,7 @@
 /// @brief Re-solving a recording's cells from its raw rows with another readout (e.g. another mean
 /// window): what an estimator with those settings would have solved from the same readings.
 ///
-/// Rows are replayed as the glove delivered them: row r of a frame was read (R - 1 - r) row slots
-/// before the frame's timestamp (a cycle of R rows per frame period, sim/recorder.hpp), one readout
+/// Rows are replayed as the glove delivered them, each at its time (io::RowClock), one readout
 /// per run (subject, glove, session: the calibration sequence and the session that continues it),
 /// and the frame's cells are the readout's latest solve at the frame's end.
 ///
@@ -30,7 +29,7 @@ inline void replay_rows(io::Dataset& data, const sensor::ReadoutConfig& config) 
     throw Error("replay: the dataset has " + std::to_string(data.row_count) + " raw rows per frame of glove '" + data.glove_layout() +
                 "', expected the " + std::to_string(layout.row_count()) + " rows of '" + layout.id() + "' (glovepose simulate --raw-rows)");
   const auto solver = std::make_shared<const sensor::CapacitanceSolver>(layout);
-  const double row_period = 1.0 / (data.frame_rate() * static_cast<double>(data.row_count));
+  const io::RowClock clock = data.row_clock();
   std::optional<sensor::Readout> readout;
   std::int64_t current = -1;
   bool solved = false;
@@ -38,7 +37,7 @@ inline void replay_rows(io::Dataset& data, const sensor::ReadoutConfig& config) 
     const std::int64_t key = run_key(data, f);
     if (key != current) readout.emplace(solver, config), current = key, solved = false;
     for (std::size_t r = 0; r < data.row_count; ++r) {
-      const double t = data.timestamps[f] - static_cast<double>(data.row_count - 1 - r) * row_period;
+      const double t = clock.time(data.timestamps[f], r);
       if (readout->push_row(static_cast<int>(r), data.raw_rows[f * data.row_count + r], t) == Status::Solved) solved = true;
     }
     if (!solved) continue;  // a run's first cycle, before the first solve: the recorded cells stay
