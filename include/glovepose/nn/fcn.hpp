@@ -146,21 +146,7 @@ class Fcn {
   /// workspace, in chunks of `chunk` frames. Set-up code: allocates; throws glovepose::Error naming
   /// the first frame with a non-finite input.
   void forward_batch(const float* input, float* output, long frames, int threads = 1, int chunk = kSparseMaxFrames) const {
-    if (frames <= 0) return;
-    if (threads < 1 || chunk < 1) throw Error("Fcn::forward_batch: threads and chunk must be >= 1");
-    const int in = inputs(), out = outputs();
-    for (long i = 0; i < frames * in; ++i)
-      if (!std::isfinite(input[i])) throw Error("Fcn::forward_batch: frame " + std::to_string(i / in) + " has a non-finite input");
-    chunk = std::min(chunk, kMaxBatch);
-    run_frame_shares(frames, threads, [&](long begin, long end) {
-      Workspace ws = make_workspace(chunk);
-      for (long f = begin; f < end; f += chunk) {
-        const int n = static_cast<int>(std::min<long>(chunk, end - f));
-        if (forward(input + f * in, output + f * out, n, ws) != Status::Ok)
-          throw Error("Fcn::forward_batch: frames " + std::to_string(f) + ".." + std::to_string(f + n - 1) +
-                      " overflowed inside the network (non-finite result)");
-      }
-    });
+    forward_batch_of(*this, "Fcn", inputs(), outputs(), input, output, frames, threads, chunk);
   }
 
  private:
