@@ -67,7 +67,7 @@ static int push_synthetic(glovepose_estimator* estimator, double t0, int frames)
 
 static void test_library(void) {
   CHECK(glovepose_abi_version() == GLOVEPOSE_C_ABI_VERSION);
-  CHECK(strcmp(glovepose_version(), "0.1.0") == 0);
+  CHECK(strcmp(glovepose_version(), GLOVEPOSE_EXPECTED_VERSION) == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_SOLVED), "solved") == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_UNCALIBRATED), "uncalibrated") == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_ERROR_FILE_NOT_FOUND), "file not found") == 0);
