@@ -82,7 +82,7 @@ Bone global_transform(const HandRig& rig, int joint) {
   return {up.position + up.rotation * rig[joint].position, up.rotation * rig[joint].rotation};
 }
 
-float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * 57.29578f; }
+float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * static_cast<float>(kDegreesPerRadian); }
 
 }  // namespace
 

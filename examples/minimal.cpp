@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
         const Pose& pose = estimator.pose();     // a new pose every 16 rows: 675 per second
         if (pose.sequence % 675 == 1) {
           const auto degrees = [&](hand::Finger finger, hand::Motion motion) {
-            return pose.angles[hand::dof_of(finger, motion)] * 180.0 / 3.14159265358979;
+            return pose.angles[hand::dof_of(finger, motion)] * kDegreesPerRadian;
           };
           std::printf(
               "t = %5.2f s  index flexion %5.1f %5.1f %5.1f deg  thumb abduction %5.1f deg  "

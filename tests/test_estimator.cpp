@@ -159,7 +159,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   double error = 0.0;
   for (std::size_t i = kSettle; i < streamed.size(); ++i)
     for (std::size_t k = 0; k < hand::kDofCount; ++k) error += std::abs(streamed[i][k] - d.angles[(begin + i) * hand::kDofCount + k]);
-  error *= 180.0 / 3.14159265358979 / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
+  error *= kDegreesPerRadian / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
   MESSAGE("mean angle error of the streamed poses: " << error << " degrees");
   CHECK(error < 10.0);
 }
@@ -181,7 +181,7 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 de
     const std::vector<hand::Angles> rounded = predict(storages[s]);
     for (std::size_t f = 0; f < exact.size(); ++f)
       for (std::size_t k = 0; k < hand::kDofCount; ++k) {
-        const double degrees = std::abs(exact[f][k] - rounded[f][k]) * 180.0 / 3.14159265358979;
+        const double degrees = std::abs(exact[f][k] - rounded[f][k]) * kDegreesPerRadian;
         worst[s] = std::max(worst[s], degrees);
         mean[s] += degrees / static_cast<double>(exact.size() * hand::kDofCount);
       }

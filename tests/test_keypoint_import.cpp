@@ -22,7 +22,6 @@ using namespace glovepose;
 
 namespace {
 
-using train::kDegreesPerRadian;
 const std::filesystem::path kTmp = std::filesystem::path(GLOVEPOSE_TEST_TMP_DIR) / "keypoint_import";
 
 // A simulated session of the built-in glove and the keypoints a tracker saw of it.

@@ -18,7 +18,6 @@ using namespace glovepose;
 
 namespace {
 
-using train::kDegreesPerRadian;
 
 // One simulated session: the corpus job, its recording and its motion.
 struct TrackedSession {

@@ -41,13 +41,13 @@ Recording true_motion(const MotionSequence& m, double seconds) {
 
 // Label error (degrees) of frame f, DoF d.
 double label_error(const Recording& r, std::size_t f, std::size_t d) {
-  return (double(r.labels[f * hand::kDofCount + d]) - r.angles[f * hand::kDofCount + d]) / calibration::kRadiansPerDegree;
+  return (double(r.labels[f * hand::kDofCount + d]) - r.angles[f * hand::kDofCount + d]) / kRadiansPerDegree;
 }
 
 // Whether DoF d's truth at frame f is at least `margin` degrees inside its joint limits (no clamping of the label there).
 bool inside(const Recording& r, std::size_t f, std::size_t d, double margin) {
   const double a = r.angles[f * hand::kDofCount + d];
-  return a - hand::kDofs[d].min > margin * calibration::kRadiansPerDegree && hand::kDofs[d].max - a > margin * calibration::kRadiansPerDegree;
+  return a - hand::kDofs[d].min > margin * kRadiansPerDegree && hand::kDofs[d].max - a > margin * kRadiansPerDegree;
 }
 
 CellArray cells_at(const GlovePhysics& p, const hand::Angles& a) {
@@ -381,7 +381,7 @@ TEST_CASE("sim tracker: a perfect tracker copies the truth, the wandering error 
     for (std::size_t f = 0; f < n; ++f) {
       const double flexion = r.angles[f * hand::kDofCount + hand::dof_of(dof.finger, hand::Motion::BaseFlexion)] +
                              r.angles[f * hand::kDofCount + d];
-      const double sd = 4.0 * (1.0 + std::clamp(flexion / (180.0 * calibration::kRadiansPerDegree), 0.0, 1.0));
+      const double sd = 4.0 * (1.0 + std::clamp(flexion / (180.0 * kRadiansPerDegree), 0.0, 1.0));
       if (!inside(r, f, d, 4.0 * sd)) continue;
       normalised += std::pow(label_error(r, f, d) / sd, 2);
       frames += 1.0;

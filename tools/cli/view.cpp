@@ -152,11 +152,10 @@ struct ViewShared {
   std::atomic<double> stream_clock{0.0};         // the glove stream's time at served_from (stdin: 0)
 };
 
-constexpr double kDegrees = 180.0 / 3.14159265358979323846;
 
 json degrees(const hand::Angles& angles) {
   json out = json::array();
-  for (double a : angles) out.push_back(std::round(a * kDegrees * 100.0) / 100.0);
+  for (double a : angles) out.push_back(std::round(a * kDegreesPerRadian * 100.0) / 100.0);
   return out;
 }
 

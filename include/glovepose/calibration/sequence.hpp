@@ -22,14 +22,12 @@
 #include <string>
 #include <vector>
 
+#include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/json.hpp"
 
 namespace glovepose::calibration {
-
-/// @brief Radians per degree (the file stores degrees).
-inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 
 /// @brief One step: what the user is asked to do, for how long, and what it means for the angles.
 struct Step {

@@ -64,6 +64,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../io/json.hpp"
@@ -432,7 +433,6 @@ class GloveDescription {
   static GloveDescription from_metadata(const std::string& text) { return from_json(text); }
 
  private:
-  static constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
   static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
   static constexpr double kMaxRangeToNoise = 1000.0;  // moving cells of simulated corpora reach 32-119: more would zero them
 

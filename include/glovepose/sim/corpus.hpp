@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/units.hpp"
 #include "../calibration/sequence.hpp"
 #include "../config.hpp"
 #include "../core/thread_pool.hpp"
@@ -128,7 +129,7 @@ inline calibration::Sequence guided_calibration_sequence(const std::vector<KeyPo
               s.pose[d] = 0.0;
               s.pinned[d] = true;
             }
-          s.pinned_sd = 2.0 * calibration::kRadiansPerDegree;
+          s.pinned_sd = 2.0 * kRadiansPerDegree;
         }
         steps.push_back(s);
       }

@@ -34,13 +34,12 @@
 #include <utility>
 #include <vector>
 
+#include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 
 namespace glovepose::train {
 
-/// @brief Degrees per radian.
-inline constexpr double kDegreesPerRadian = 57.295779513082320876798;
 /// @brief Width of a histogram bin used for percentiles, degrees (a power of two, so every whole
 /// degree is a bin edge and binning is exact).
 inline constexpr double kPercentileResolutionDeg = 1.0 / 128.0;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../core/random.hpp"
@@ -117,7 +118,7 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
       sum += std::abs(radians - angles[f * hand::kDofCount + d]);
       ++count;
     }
-  return count ? sum / static_cast<double>(count) * 180.0 / M_PI : NAN;
+  return count ? sum / static_cast<double>(count) * kDegreesPerRadian : NAN;
 }
 
 /// @brief Trains `net` on `train` (targets normalised by `limits`), keeps the tensors with the
