@@ -87,7 +87,7 @@ int train_command(Options o) {
                  static_cast<std::size_t>(std::count(setup.samples.labelled.begin(), setup.samples.labelled.end(), true)));
   std::map<std::string, std::string> provenance{
       {"training_command", o.command_line}, {"training_seed", std::to_string(o.training.seed)}, {"training_data", o.data}};
-  if (architecture == "linear") {
+  if (o.architecture.kind == model::Architecture::Linear) {
     if (o.training.augmentation.active())
       throw CLI::ValidationError("--augment trains networks; a linear map is fitted by least squares on the frames as they are");
     const train::LinearModelFit fit = train::fit_linear_model(setup.samples, o.validation, setup.info.joint_limits());
@@ -99,7 +99,7 @@ int train_command(Options o) {
                 fit.validation_error_deg, o.out.c_str());
     return 0;
   }
-  if (architecture == "fcn" && !o.lr_set && o.training.optimizer.kind == train::OptimizerKind::Sgd)
+  if (o.architecture.kind == model::Architecture::Fcn && !o.lr_set && o.training.optimizer.kind == train::OptimizerKind::Sgd)
     o.training.optimizer.learning_rate = 0.01;  // the paper's SGD rate for the FCN
   const std::unique_ptr<train::TrainableNetwork> net = train::make_network(setup.info, glove, o.training.batch);
   net->initialize(o.training.seed);
