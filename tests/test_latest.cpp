@@ -1,7 +1,7 @@
-// Latest<T> (latest.hpp): one writer, many readers, never a torn value; and LatestHand between an
+// Latest<T> (core/latest.hpp): one writer, many readers, never a torn value; and LatestHand between an
 // estimator's thread and two reader threads. Run under ThreadSanitizer by tools/sanitize.sh thread.
 #include <glovepose/estimator.hpp>
-#include <glovepose/latest.hpp>
+#include <glovepose/core/latest.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
 #include <doctest/doctest.h>

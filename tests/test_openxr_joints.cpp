@@ -1,11 +1,11 @@
-// The OpenXR joint layout (hand/openxr_joints.hpp, xr_hand.hpp): enum order, joint count, struct
+// The OpenXR joint layout (hand/openxr_joints.hpp, hand/xr_hand.hpp): enum order, joint count, struct
 // layout and flag values against <openxr/openxr.h>; the spec's joint conventions checked
 // geometrically; radii against the template's spheres; a left hand as the mirrored right hand;
 // velocities as the derivative of the located joints.
 #include <openxr/openxr.h>
 
 #include <glovepose/hand/joint_list.hpp>
-#include <glovepose/xr_hand.hpp>
+#include <glovepose/hand/xr_hand.hpp>
 
 #include <doctest/doctest.h>
 

@@ -1,10 +1,10 @@
-// The pinch rule (hand/pinch.hpp) and the pinch and aim state an engine reads (xr_hand.hpp,
+// The pinch rule (hand/pinch.hpp) and the pinch and aim state an engine reads (hand/xr_hand.hpp,
 // XR_FB_hand_tracking_aim): strengths and flags of the gallery's poses against distances computed
 // here from the kinematics; the hysteresis on distance ramps (one onset, one release, no chatter);
 // the aim pose; the estimator's aim state; no allocation per frame; the C ABI's
 // glovepose_xr_aim_state and XrAimFlag against <openxr/openxr.h>.
 #include <glovepose/hand/pinch.hpp>
-#include <glovepose/xr_hand.hpp>
+#include <glovepose/hand/xr_hand.hpp>
 
 #include <doctest/doctest.h>
 

@@ -41,7 +41,7 @@
 #include "hand/dofs.hpp"
 #include "hand/joint_list.hpp"
 #include "hand/kinematics.hpp"
-#include "latest.hpp"
+#include "core/latest.hpp"
 #include "model/model_info.hpp"
 #include "pose.hpp"
 #include "pose_model.hpp"
@@ -51,7 +51,7 @@
 #include "sensor/readout.hpp"
 #include "sensor/solver.hpp"
 #include "status.hpp"
-#include "xr_hand.hpp"
+#include "hand/xr_hand.hpp"
 
 namespace glovepose {
 
@@ -177,7 +177,7 @@ class GlovePoseEstimator {
     return trend_.at(t, out.angles);
   }
 
-  /// @brief The OpenXR joints (xr_hand.hpp) at time t, located from pose_at(t), with velocities.
+  /// @brief The OpenXR joints (hand/xr_hand.hpp) at time t, located from pose_at(t), with velocities.
   GLOVEPOSE_REALTIME Status joints_at(double t, XrHandJoints& out) const noexcept {
     PredictedPose pose;
     const Status status = pose_at(t, pose);
@@ -189,7 +189,7 @@ class GlovePoseEstimator {
     return Status::Ok;
   }
 
-  /// @brief The pinch and aim state of the latest pose (xr_hand.hpp, XR_FB_hand_tracking_aim):
+  /// @brief The pinch and aim state of the latest pose (hand/xr_hand.hpp, XR_FB_hand_tracking_aim):
   /// pinch strengths, the pinching flags with their hysteresis kept from pose to pose, the aim pose
   /// in the wrist frame. active is false before the first pose. Publish it to reader threads with a
   /// LatestAim beside the LatestHand.

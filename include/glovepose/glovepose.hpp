@@ -16,5 +16,5 @@
 #include "filter/trend.hpp"
 #include "hand/joint_list.hpp"
 #include "hand/openxr_joints.hpp"
-#include "xr_hand.hpp"
+#include "hand/xr_hand.hpp"
 #include "estimator.hpp"

@@ -11,10 +11,10 @@
 #include "config.hpp"
 #include "hand/dofs.hpp"
 #include "hand/joint_list.hpp"
-#include "latest.hpp"
+#include "core/latest.hpp"
 #include "sensor/readout.hpp"
 #include "status.hpp"
-#include "xr_hand.hpp"
+#include "hand/xr_hand.hpp"
 
 namespace glovepose {
 
@@ -142,7 +142,7 @@ GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLoc
   out.active = true;
 }
 
-/// @brief The newest HandState of one estimator for any number of reader threads (latest.hpp):
+/// @brief The newest HandState of one estimator for any number of reader threads (core/latest.hpp):
 /// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
 /// block it and never see a torn state.
 using LatestHand = Latest<HandState>;

@@ -107,7 +107,7 @@ using Skeleton = std::array<Eigen::Affine3d, kPhalanxCount>;
 
 /// @brief The world direction (root frame, unit) of each DoF's rotation axis in a pose, kDofs
 /// order: turning DoF d by a small angle e turns everything beyond it by e about this axis through
-/// its phalanx's origin. What joint velocities are made of (xr_hand.hpp).
+/// its phalanx's origin. What joint velocities are made of (xr_hand.hpp in this folder).
 using DofAxes = std::array<Eigen::Vector3d, kDofCount>;
 
 /// @brief A hand's rest geometry: rest transform of each phalanx relative to its parent, and the

@@ -1,6 +1,6 @@
 /// @file pinch.hpp
 /// @brief The one definition of a pinch, shared by evaluation (train/fingertip_metrics.hpp) and the
-/// live pinch and aim state an engine reads (xr_hand.hpp, XR_FB_hand_tracking_aim):
+/// live pinch and aim state an engine reads (hand/xr_hand.hpp, XR_FB_hand_tracking_aim):
 /// - the distance: between the thumb's tip point and a finger's (the ends of the distal phalanxes,
 ///   Kinematics::fingertip), mm, for the four pairs thumb-index, -middle, -ring, -pinky;
 /// - the flag: a pinch starts when that distance falls below kPinchThresholdMm (15 mm) and ends

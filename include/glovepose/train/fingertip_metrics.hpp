@@ -8,7 +8,7 @@
 ///   mean, median, 95th percentile and maximum per digit and over all five;
 /// - for index..pinky, the error of the thumb-tip-to-fingertip distance, |d_pred - d_true|, mm;
 /// - pinch detection per pair (thumb-index, -middle, -ring, -pinky) by the rule of hand/pinch.hpp,
-///   the one the live pinch state (xr_hand.hpp) uses: a pinch is on when the two tip points (the
+///   the one the live pinch state (hand/xr_hand.hpp) uses: a pinch is on when the two tip points (the
 ///   ends of the distal phalanxes, Kinematics::fingertip) come closer than kPinchThresholdMm and
 ///   stays on until they part beyond kPinchReleaseMm (the same rule for the truth and the
 ///   prediction); per-frame precision and recall of the predicted pinch against the

@@ -1,4 +1,4 @@
-/// @file xr_hand.hpp
+/// @file hand/xr_hand.hpp
 /// @brief One hand's 26 OpenXR joints (hand/openxr_joints.hpp) with their velocities, located from
 /// a set of angles and their rate of change: what GlovePoseEstimator::joints_at() and a reader of
 /// LatestHand hand to an engine (Unity's XR Hands, Godot's XRHandTracker, an OpenXR runtime's
@@ -14,12 +14,12 @@
 
 #include <Eigen/Geometry>
 
-#include "config.hpp"
-#include "hand/dofs.hpp"
-#include "hand/handedness.hpp"
-#include "hand/openxr_joints.hpp"
-#include "hand/pinch.hpp"
-#include "latest.hpp"
+#include "../config.hpp"
+#include "dofs.hpp"
+#include "handedness.hpp"
+#include "openxr_joints.hpp"
+#include "pinch.hpp"
+#include "../core/latest.hpp"
 
 namespace glovepose {
 
@@ -227,7 +227,7 @@ class XrAimTracker {
   XrHandAim aim_;
 };
 
-/// @brief The newest aim state of one estimator for reader threads (latest.hpp): the estimator's
+/// @brief The newest aim state of one estimator for reader threads (core/latest.hpp): the estimator's
 /// thread publishes estimator.aim() beside its HandState (LatestHand); a reader matches the two by
 /// XrHandAim::sequence and Pose::sequence when it needs both of one pose.
 using LatestAim = Latest<XrHandAim>;

@@ -1,4 +1,4 @@
-/// @file latest.hpp
+/// @file core/latest.hpp
 /// @brief The newest value from one writer thread for any number of reader threads: an engine's
 /// update and render threads read the hand the glove's thread last estimated.
 ///
@@ -19,7 +19,7 @@
 #include <cstring>
 #include <type_traits>
 
-#include "config.hpp"
+#include "../config.hpp"
 
 namespace glovepose {
 
