@@ -19,8 +19,10 @@ execute_process(COMMAND "${prefix}/bin/glovepose" bench --poses 10 --json RESULT
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "installed glovepose bench failed (${rc}):\n${out}\n${err}")
 endif()
+# The tool names the path it finds itself at (/proc/self/exe): links in the prefix resolved.
+file(REAL_PATH "${prefix}" real_prefix)
 foreach(model glovepose_fcn512.safetensors glovepose_unet64.safetensors)
-  string(FIND "${out}" "${prefix}/share/glovepose/models/${model}" at)
+  string(FIND "${out}" "${real_prefix}/share/glovepose/models/${model}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "installed glovepose bench did not time ${prefix}/share/glovepose/models/${model}:\n${out}")
   endif()
