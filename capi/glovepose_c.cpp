@@ -883,6 +883,8 @@ void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) noexcept {
   pose->struct_size = sizeof *pose;
 }
 
+}  // extern "C": the helper below returns a C++ type
+
 namespace {
 
 // The options of glovepose_evaluate (glovepose_c.h names them; the same as `glovepose eval`'s).
@@ -944,6 +946,8 @@ glovepose::train::EvaluationOptions evaluation_options(const char* text, const g
 thread_local std::string evaluation_json;  // what glovepose_evaluate returned last on this thread
 
 }  // namespace
+
+extern "C" {
 
 glovepose_result glovepose_evaluate(const char* model_path, const char* dataset_path, const char* options_json,
                                     const char** out_json) noexcept {
