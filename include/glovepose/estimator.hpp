@@ -161,6 +161,8 @@ class GlovePoseEstimator {
   const hand::JointList& joints() const noexcept { return joints_; }
   /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
   const Eigen::VectorXd& cells() const noexcept { return cells_; }
+  /// @brief The latest calibrated cells in [-1, 1] (the network's input), when a pose came from them.
+  const Eigen::VectorXd& normalized_cells() const noexcept { return normalized_; }
   /// @brief The latest pose, joint list, calibration progress and rate together (for LatestHand).
   /// The rate is filter::Trend::slope(), kept as poses arrive: a few dozen nanoseconds.
   HandState state() const noexcept { return HandState{pose_, joints_, calibration_progress(), trend_.slope(), trend_.has_slope()}; }

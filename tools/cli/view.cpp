@@ -81,7 +81,7 @@ struct ViewFrame {
 class GloveStream {
  public:
   GloveStream(GlovePoseEstimator& estimator, Latest<ViewFrame>& latest, std::atomic<bool>& stop)
-      : estimator_(estimator), latest_(latest), stop_(stop), normalized_(estimator.model().cell_count()) {}
+      : estimator_(estimator), latest_(latest), stop_(stop) {}
 
   // `clock`: set to the stream's time at `served_from` (the recording's clock against the server's).
   void recorded(const NewUser& user, Clock::time_point served_from, std::atomic<double>& clock) {
@@ -121,9 +121,8 @@ class GloveStream {
     frame_.hand = estimator_.state();
     frame_.aim = estimator_.aim();
     frame_.stream_time = stream_time;
-    const auto& range = estimator_.calibration();
-    frame_.maps = frame_.hand.pose.valid && range && range->normalize(estimator_.cells(), normalized_) == Status::Ok &&
-                  estimator_.model().glove().map().to_stretch_maps(normalized_.data(), frame_.stretch) == Status::Ok;
+    frame_.maps = frame_.hand.pose.valid &&
+                  estimator_.model().glove().map().to_stretch_maps(estimator_.normalized_cells().data(), frame_.stretch) == Status::Ok;
     if (frame_.maps)
       estimator_.model().glove().map().to_pose_map(estimator_.model().joint_limits().normalize(frame_.hand.pose.angles), frame_.pose_map);
     latest_.publish(frame_);
@@ -132,7 +131,6 @@ class GloveStream {
   GlovePoseEstimator& estimator_;
   Latest<ViewFrame>& latest_;
   std::atomic<bool>& stop_;
-  Eigen::VectorXd normalized_;
   ViewFrame frame_;
 };
 
