@@ -1,7 +1,48 @@
 // Driver of team_layers.sh: one thread, then a team of 2, on the same random U-Net (Fixed16 where
 // the instruction set has it, as BM_UNetForward), batch 1; prints thousands of time-stamp-counter
-// cycles per frame for each layer's parts and each member's share of the products. Built against
-// the instrumented copy of the headers that team_layers_instrument.py writes.
+// cycles per frame for each layer's parts and each member's share of the products, read through
+// the runner's layer probe (nn/layer_probe.hpp).
+#include <x86intrin.h>
+
+#include <glovepose/nn/layer_probe.hpp>
+
+// Cycles per layer: [0] compaction, [1] products without the compaction, [2] Fixed16 finish,
+// [3] activation; per member of a team: [0] start after the hand-over began, [1] its share.
+struct LayerProfile {
+  unsigned long long part[32][4] = {};
+  unsigned long long member[32][2][2] = {};
+  int layer = 0;
+};
+inline LayerProfile g_profile;
+
+struct TscProbe {
+  static void mark(glovepose::nn::LayerEvent event, int member = 0) noexcept {
+    using E = glovepose::nn::LayerEvent;
+    // Each member writes only its own slots; the layer index is set before the hand-over.
+    static unsigned long long layer_begin, compaction_begin, products_end, activation_begin, handed_over;
+    static thread_local unsigned long long share_begin;
+    const unsigned long long now = __rdtsc();
+    auto& part = g_profile.part[(g_profile.layer - 1) & 31];
+    switch (event) {
+      case E::Forward: g_profile.layer = 0; break;
+      case E::LayerBegin: ++g_profile.layer; layer_begin = now; handed_over = 0; break;
+      case E::CompactionBegin: compaction_begin = now; break;
+      case E::CompactionEnd: part[0] += now - compaction_begin; part[1] -= now - compaction_begin; break;  // counted once
+      case E::HandOver: handed_over = now; break;
+      case E::ShareBegin:
+        share_begin = now;
+        if (handed_over != 0) g_profile.member[(g_profile.layer - 1) & 31][member & 1][0] += now - handed_over;
+        break;
+      case E::ShareEnd: g_profile.member[(g_profile.layer - 1) & 31][member & 1][1] += now - share_begin; break;
+      case E::ProductsEnd: part[1] += now - layer_begin; products_end = now; break;
+      case E::FinishEnd: part[2] += now - products_end; break;
+      case E::ActivationBegin: activation_begin = now; break;
+      case E::ActivationEnd: part[3] += now - activation_begin; break;
+    }
+  }
+};
+#define GLOVEPOSE_LAYER_PROBE TscProbe
+
 #include <glovepose/core/team.hpp>
 #include <glovepose/nn/unet.hpp>
 

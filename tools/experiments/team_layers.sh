@@ -4,16 +4,15 @@
 #
 #   tools/experiments/team_layers.sh [WIDTH ...]     (default: 64 100)
 #
-# Builds team_layers.cpp against a copy of the headers whose U-Net runner reads the time-stamp
-# counter (team_layers_instrument.py; x86-64, GCC), -O3 -march=native, and prints per width a table
-# per setting. Needs python3 and Eigen/xsimd as the library does; writes only to a temporary directory.
+# Builds team_layers.cpp, whose layer probe (include/glovepose/nn/layer_probe.hpp) reads the
+# time-stamp counter at the U-Net runner's events (x86-64, GCC), -O3 -march=native, and prints per
+# width a table per setting. Needs Eigen/xsimd as the library does; writes only to a temporary directory.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 repo="$(cd "$here/../.." && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-python3 "$here/team_layers_instrument.py" "$repo" "$work"
-g++ -std=c++17 -O3 -DNDEBUG -march=native -I"$work/include" -isystem /usr/include/eigen3 "$here/team_layers.cpp" -o "$work/team_layers" -lpthread
+g++ -std=c++17 -O3 -DNDEBUG -march=native -I"$repo/include" -isystem /usr/include/eigen3 "$here/team_layers.cpp" -o "$work/team_layers" -lpthread
 widths=("$@")
 [ "${#widths[@]}" -gt 0 ] || widths=(64 100)
 for width in "${widths[@]}"; do

@@ -16,9 +16,14 @@
 #include "batching.hpp"
 #include "fixed16.hpp"
 #include "kernels/sparse_row.hpp"
+#include "layer_probe.hpp"
 #include "../core/team.hpp"
 #include "tensor.hpp"
 #include "unet_packing.hpp"
+
+#ifndef GLOVEPOSE_LAYER_PROBE
+#define GLOVEPOSE_LAYER_PROBE ::glovepose::nn::NoLayerProbe  // layer_probe.hpp
+#endif
 
 namespace glovepose::nn {
 
@@ -79,17 +84,21 @@ class UNetRunner {
   using Workspace = UNetWorkspace<Backend>;  ///< A stream's activations and scratch.
 
   /// @brief A runner over the activation buffers `buffers` (unet_buffers()), which must outlive it.
-  explicit UNetRunner(const std::vector<UNetBuffer>& buffers) noexcept : buffers_(buffers) {}
+  /// One runner is made per forward.
+  explicit UNetRunner(const std::vector<UNetBuffer>& buffers) noexcept : buffers_(buffers) { Probe::mark(LayerEvent::Forward); }
 
   /// @brief One layer on the `frames` frames in `ws`, its products shared by `team` when given.
   GLOVEPOSE_REALTIME void run(const PackedLayer& layer, int frames, Workspace& ws, core::Team* team) const noexcept {
     const BufferSpec& out_spec = buffers_[static_cast<std::size_t>(layer.out_buffer)];
     float* out = ws.buffers[static_cast<std::size_t>(layer.out_buffer)].data();
     const int rows = out_spec.positions * frames;  // <= 25 * kMaxBatch
-    if (layer.weights.fixed16()) {                 // Fixed16: products of levels first, then scale, offset and bias
+    Probe::mark(LayerEvent::LayerBegin);
+    if (layer.weights.fixed16()) {  // Fixed16: products of levels first, then scale, offset and bias
       std::fill(out, out + static_cast<long>(rows) * out_spec.stride, 0.0f);
       run_taps(layer, layer.weights.wfx16.data(), frames, ws, team);
+      Probe::mark(LayerEvent::ProductsEnd);
       finish_fixed16(layer, frames, ws);
+      Probe::mark(LayerEvent::FinishEnd);
     } else {
       for (int r = 0; r < rows; ++r)
         std::copy(layer.bias.begin(), layer.bias.begin() + out_spec.stride, out + static_cast<long>(r) * out_spec.stride);
@@ -97,14 +106,19 @@ class UNetRunner {
         if constexpr (!std::is_same_v<std::remove_cv_t<std::remove_pointer_t<decltype(w)>>, kernels::Fixed16>)
           run_products(layer, w, frames, ws, team);
       });
+      Probe::mark(LayerEvent::ProductsEnd);
     }
+    Probe::mark(LayerEvent::ActivationBegin);
     if (layer.activation == Activation::Relu)
       Backend::relu(out, rows * out_spec.stride);
     else
       for (int r = 0; r < rows; ++r) out[r] = std::tanh(out[r]);
+    Probe::mark(LayerEvent::ActivationEnd);
   }
 
  private:
+  using Probe = GLOVEPOSE_LAYER_PROBE;  // layer_probe.hpp: nothing unless a timing experiment asks
+
   // One team member's part of a layer's products: its share of the output column panels of every
   // row or, when the layer has fewer panels than members, its share of the output positions (all
   // the taps' rows that add into them: no two members write one row). Either way each output
@@ -170,12 +184,23 @@ class UNetRunner {
   template <typename W>
   void run_taps(const PackedLayer& layer, const W* weights, int frames, Workspace& ws, core::Team* team) const noexcept {
     std::size_t first_row[2] = {0, 0};  // unet_layers(): at most two (concatenated) sources
-    if (frames <= kSparseMaxFrames) compact_sources(layer, frames, ws, first_row);
+    if (frames <= kSparseMaxFrames) {
+      Probe::mark(LayerEvent::CompactionBegin);
+      compact_sources(layer, frames, ws, first_row);
+      Probe::mark(LayerEvent::CompactionEnd);
+    }
     if (team == nullptr || team->size() == 1) {
+      Probe::mark(LayerEvent::ShareBegin);
       run_tap_share(layer, weights, frames, ws, first_row);
+      Probe::mark(LayerEvent::ShareEnd);
       return;
     }
-    auto share = [&](int member) noexcept { run_tap_share(layer, weights, frames, ws, first_row, Share{member, team->size()}); };
+    auto share = [&](int member) noexcept {
+      Probe::mark(LayerEvent::ShareBegin, member);
+      run_tap_share(layer, weights, frames, ws, first_row, Share{member, team->size()});
+      Probe::mark(LayerEvent::ShareEnd, member);
+    };
+    Probe::mark(LayerEvent::HandOver);
     team->run(share);
   }
 
