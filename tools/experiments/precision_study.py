@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How much precision 16-bit formats cost the U-Net, in joint-angle degrees (docs/performance.md).
 
-Run: /usr/bin/python3 tools/python/precision_study.py   (needs Debian python3-torch)
+Run: /usr/bin/python3 tools/experiments/precision_study.py   (needs Debian python3-torch)
 A random w = 64 model (seed 21, BN statistics included), batch norm folded into the convolutions in
 float64, then the folded weights and/or every convolution input rounded to F16 or BF16; outputs are
 compared with the float64 forward over 256 inputs in the calibrated range [-1, 1], converted to
@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 
 import torch
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))  # the PyTorch reference
 from glovepose_ref import UNet, randomize
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN, import_model
 torch.manual_seed(0)
