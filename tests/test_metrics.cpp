@@ -1,5 +1,6 @@
 #include <glovepose/train/metrics_report.hpp>
 #include <glovepose/train/metrics.hpp>
+#include <glovepose/core/statistics.hpp>
 
 #include <doctest/doctest.h>
 
@@ -339,4 +340,38 @@ TEST_CASE("metrics: the 128-bit fixed-point sum carries past 64 bits, also when 
   CHECK(a.low == 0);
   CHECK(a.value() == 0x1p33);  // 2^65 units of 2^-32
   CHECK(train::detail::to_fixed(1.5) == (std::uint64_t{3} << 31));
+}
+
+TEST_CASE("statistics: one percentile, the nearest rank, for samples and histograms alike") {
+  // Hand-computed: the ceil(q n)-th smallest, the smallest for q = 0.
+  CHECK(core::nearest_rank(1, 0.0) == 1);
+  CHECK(core::nearest_rank(1, 1.0) == 1);
+  CHECK(core::nearest_rank(4, 0.0) == 1);
+  CHECK(core::nearest_rank(4, 0.25) == 1);
+  CHECK(core::nearest_rank(4, 0.5) == 2);
+  CHECK(core::nearest_rank(4, 0.95) == 4);
+  CHECK(core::nearest_rank(4, 1.0) == 4);
+  CHECK(core::nearest_rank(20, 0.95) == 19);  // 0.95 * 20 rounds above 19 in doubles: still rank 19
+  CHECK(core::nearest_rank(0, 0.5) == 0);
+  const std::vector<double> four{7.0, 1.0, 5.0, 3.0};
+  CHECK(core::percentile(four, 0.0) == 1.0);
+  CHECK(core::percentile(four, 0.25) == 1.0);
+  CHECK(core::percentile(four, 0.5) == 3.0);
+  CHECK(core::percentile(four, 0.95) == 7.0);
+  CHECK(core::percentile(four, 1.0) == 7.0);
+  CHECK(core::percentile({}, 0.5) == 0.0);
+  // A histogram of whole numbers gives the bin of the same value as the sample itself.
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> value(0, 29);
+  std::vector<double> sample;
+  std::vector<std::uint64_t> histogram(30, 0);
+  for (int i = 0; i < 997; ++i) {
+    const int v = value(rng);
+    sample.push_back(v);
+    ++histogram[static_cast<std::size_t>(v)];
+  }
+  for (double q : {0.0, 0.01, 0.25, 0.5, 0.95, 0.99, 1.0}) {
+    INFO("q = " << q);
+    CHECK(static_cast<double>(core::bin_of_rank(histogram, core::nearest_rank(sample.size(), q))) == core::percentile(sample, q));
+  }
 }

@@ -5,6 +5,7 @@
 //   max; "whole frame" is GlovePoseEstimator::push_measurements of a 180-row frame (solve,
 //   calibration, network, 1-euro, joint list), the per-stage rows are the same steps called on
 //   their own, so their sum is close to, not exactly, the whole.
+#include <glovepose/core/statistics.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
@@ -66,13 +67,8 @@ struct Spread {
   double p50 = 0, p99 = 0, max = 0;  // microseconds
 };
 
-Spread spread_of(std::vector<double> us) {
-  std::sort(us.begin(), us.end());
-  const auto at = [&](double q) {  // nearest rank
-    const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(us.size())));
-    return us[std::clamp<std::size_t>(rank, 1, us.size()) - 1];
-  };
-  return {at(0.5), at(0.99), us.back()};
+Spread spread_of(const std::vector<double>& us) {
+  return {core::percentile(us, 0.5), core::percentile(us, 0.99), *std::max_element(us.begin(), us.end())};
 }
 
 // Per-stage call times of one model in one storage.

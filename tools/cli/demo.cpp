@@ -6,6 +6,7 @@
 //   compared with the true angles. Prints a table (angle errors, speed, latency, calibration) and
 //   writes it and three SVG pictures to DIR: angles over time (paper Fig. 15), the cumulative
 //   error curve (Fig. 14) and predicted beside true skeletons (Fig. 11).
+#include <glovepose/core/statistics.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/metrics.hpp>
@@ -195,13 +196,6 @@ train::AngleErrorReport measure_errors(const NewUser& user, const SessionRun& ru
   return errors.report();
 }
 
-// Nearest-rank percentile (the ceil(q n)-th smallest), the definition train/metrics.hpp uses.
-double percentile(std::vector<double> values, double q) {
-  std::sort(values.begin(), values.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
-  return values[std::clamp<std::size_t>(rank, 1, values.size()) - 1];
-}
-
 std::string format_table(const DemoOptions& o, const std::string& model_path, const NewUser& user, const CalibrationResult& calibration,
                          const SessionRun& run, const train::AngleErrorReport& report) {
   std::string out;
@@ -237,17 +231,17 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   add("speed and latency\n");
   add("  poses per second of compute   %10.0f  (poses / sum of Pose::compute_seconds)\n", static_cast<double>(poses) / compute);
   add("  the stream's pose rate        %10.0f  per second of glove time\n", static_cast<double>(poses) / session_seconds);
-  add("  compute per pose              p50 %7.1f us   p99 %7.1f us\n", 1e6 * percentile(run.compute_seconds, 0.5),
-      1e6 * percentile(run.compute_seconds, 0.99));
-  add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * percentile(run.oldest_age, 0.5),
-      1e3 * percentile(run.oldest_age, 0.99));
+  add("  compute per pose              p50 %7.1f us   p99 %7.1f us\n", 1e6 * core::percentile(run.compute_seconds, 0.5),
+      1e6 * core::percentile(run.compute_seconds, 0.99));
+  add("  age of the oldest row         p50 %7.1f ms   p99 %7.1f ms\n", 1e3 * core::percentile(run.oldest_age, 0.5),
+      1e3 * core::percentile(run.oldest_age, 0.99));
   add("  whole stream                  %.1f s of glove time in %.2f s wall (%.1fx real time)\n", session_seconds, run.wall_seconds,
       session_seconds / run.wall_seconds);
   add("\npose at a requested time: the pose at each cycle end asked for when the newest reading is the horizon before it\n");
   add("  %-12s %22s %26s %18s\n", "horizon (ms)", "newest pose held (deg)", "pose_at, extrapolated (deg)", "ahead of pose (ms)");
   for (std::size_t h = 0; h < kHorizonCount; ++h)
     add("  %-12.0f %22.2f %26.2f %18.1f\n", 1e3 * kHorizons[h], mean_error(user, run.held[h]), mean_error(user, run.ahead[h]),
-        1e3 * percentile(run.ahead_of_pose[h], 0.5));
+        1e3 * core::percentile(run.ahead_of_pose[h], 0.5));
   return out;
 }
 

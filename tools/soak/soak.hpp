@@ -47,6 +47,7 @@
 #  include <unistd.h>
 #endif
 
+#include <glovepose/core/statistics.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/sim/faults.hpp>
@@ -192,11 +193,7 @@ struct SoakReport {
       total += r.count;
     }
     if (total == 0) return 0;
-    const auto needed = static_cast<std::uint64_t>(std::ceil(share * static_cast<double>(total)));
-    std::uint64_t seen = 0;
-    for (std::size_t c = 0; c < all.size(); ++c)
-      if ((seen += all[c]) >= needed) return static_cast<long>(c);
-    return static_cast<long>(all.size() - 1);
+    return static_cast<long>(core::bin_of_rank(all, core::nearest_rank(total, share)));
   }
   /// @brief Longest recovery over all kinds, cycles.
   long recovery_max() const {
@@ -294,11 +291,7 @@ struct SoakReport {
   long kind_quantile(std::size_t kind, double q) const {
     const Recoveries& r = recoveries[kind];
     if (r.count == 0) return 0;
-    const auto needed = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(r.count)));
-    std::uint64_t seen = 0;
-    for (std::size_t c = 0; c < r.histogram.size(); ++c)
-      if ((seen += r.histogram[c]) >= needed) return static_cast<long>(c);
-    return static_cast<long>(r.histogram.size() - 1);
+    return static_cast<long>(core::bin_of_rank(r.histogram, core::nearest_rank(r.count, q)));
   }
 };
 

@@ -22,7 +22,7 @@
 /// "Fingertips and pinches", has the measurement.
 ///
 /// Evaluation is offline set-up code: it may allocate and throws glovepose::Error on misuse.
-/// Percentiles are core::percentile's (the floor(p (n - 1))-th smallest value).
+/// Percentiles are core::percentile's (nearest rank: the ceil(q n)-th smallest value).
 #pragma once
 
 #include <algorithm>

@@ -34,6 +34,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/statistics.hpp"
 #include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
@@ -240,11 +241,7 @@ class AngleErrorAccumulator {
     require_frames("percentile");
     if (!(q >= 0.0 && q <= 1.0))
       throw Error("AngleErrorAccumulator::percentile: q = " + std::to_string(q) + ", expected a share in [0, 1]");
-    const std::uint64_t n = angles();
-    // Guard against q * n landing a rounding error above a whole number (0.95 * 20 = 19.000...04).
-    const double position = q * static_cast<double>(n);
-    auto rank = static_cast<std::uint64_t>(std::ceil(position - 4.0 * std::numeric_limits<double>::epsilon() * position));
-    rank = std::clamp<std::uint64_t>(rank, 1, n);
+    const std::uint64_t rank = core::nearest_rank(angles(), q);
     if (rank > in_histogram_) {
       std::vector<double> large;
       large.reserve(large_.size());
@@ -253,12 +250,7 @@ class AngleErrorAccumulator {
       std::nth_element(large.begin(), nth, large.end());
       return *nth;
     }
-    std::uint64_t seen = 0;
-    std::size_t bin = 0;
-    for (; bin < kHistogramBins; ++bin) {
-      seen += histogram_[bin];
-      if (seen >= rank) break;
-    }
+    const std::size_t bin = core::bin_of_rank(histogram_, rank);
     const double centre = (static_cast<double>(bin) + 0.5) * kPercentileResolutionDeg;
     return std::clamp(centre, min_, max_error());
   }
