@@ -45,7 +45,7 @@ Recording simulate_recording(std::uint64_t seed, double seconds) {
   config.recording.raw_rows = true;
   Recording out;
   out.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  while (out.data.kind[out.first_session_frame] == io::kKindCalibration) ++out.first_session_frame;
+  out.first_session_frame = out.data.first_session_frame();
   out.session_rows.assign(out.data.raw_rows.begin() + static_cast<std::ptrdiff_t>(out.first_session_frame * out.data.row_count),
                           out.data.raw_rows.end());
   return out;

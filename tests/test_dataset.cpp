@@ -525,3 +525,16 @@ TEST_CASE("dataset: a dataset file parses with plain json + numpy, as safetensor
   const std::string cmd = python + " " + GLOVEPOSE_SOURCE_DIR + "/tests/python/check_dataset_file.py " + temp_path("python.dataset");
   CHECK(std::system(cmd.c_str()) == 0);
 }
+
+TEST_CASE("dataset: first_session_frame is the first frame after the leading calibration frames") {
+  Dataset d = make_dataset(12);
+  // make_dataset marks every third frame as calibration: frame 0 only leads.
+  CHECK(d.first_session_frame() == 1);
+  for (std::size_t i = 0; i < d.frames(); ++i) d.kind[i] = i < 5 || i == 8 ? io::kKindCalibration : io::kKindRecording;
+  CHECK(d.first_session_frame() == 5);  // the later calibration frame 8 does not count
+  for (auto& k : d.kind) k = io::kKindRecording;
+  CHECK(d.first_session_frame() == 0);
+  for (auto& k : d.kind) k = io::kKindCalibration;
+  CHECK(d.first_session_frame() == d.frames());
+  CHECK(Dataset(5, 0, "empty", 60.0).first_session_frame() == 0);
+}

@@ -51,7 +51,7 @@ Session simulate_session(hand::Handedness side) {
   config.recording.noise.drop_probability = 0.0;
   Session out;
   out.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  while (out.data.kind[out.first_session_frame] == io::kKindCalibration) ++out.first_session_frame;
+  out.first_session_frame = out.data.first_session_frame();
   return out;
 }
 

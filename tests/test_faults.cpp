@@ -44,10 +44,7 @@ const io::Dataset& faults_session() {
 }
 
 std::size_t first_session_frame() {
-  const io::Dataset& d = faults_session();
-  std::size_t f = 0;
-  while (d.kind[f] == io::kKindCalibration) ++f;
-  return f;
+  return faults_session().first_session_frame();
 }
 
 std::shared_ptr<const PoseModel> faults_model() {

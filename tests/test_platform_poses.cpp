@@ -43,8 +43,7 @@ std::vector<float> simulated_normalized_cells(long& frames, int& cells) {
   config.calibration_seconds = 3.0;
   config.threads = 1;
   const io::Dataset d = sim::to_dataset(sim::simulate_corpus(config), config);
-  std::size_t first = 0;
-  while (d.kind[first] == io::kKindCalibration) ++first;
+  const std::size_t first = d.first_session_frame();
   cells = static_cast<int>(d.cell_count);
   Eigen::MatrixXd calibration(static_cast<Eigen::Index>(first), cells);
   for (std::size_t f = 0; f < first; ++f)

@@ -59,7 +59,7 @@ Session simulate_session() {
   config.recording.raw_rows = true;
   Session s;
   s.data = sim::to_dataset(sim::simulate_corpus(config), config);
-  while (s.data.kind[s.first_session_frame] == io::kKindCalibration) ++s.first_session_frame;
+  s.first_session_frame = s.data.first_session_frame();
   return s;
 }
 

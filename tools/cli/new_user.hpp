@@ -36,8 +36,7 @@ inline NewUser simulate_new_user(std::uint64_t seed, double minutes, const PoseM
   NewUser user;
   user.data = sim::to_dataset(sim::simulate_corpus(config), config);
   user.cycle_rate = config.recording.cycle_rate;
-  while (user.first_session_frame < user.data.frames() && user.data.kind[user.first_session_frame] == io::kKindCalibration)
-    ++user.first_session_frame;
+  user.first_session_frame = user.data.first_session_frame();
   if (user.first_session_frame == 0 || user.first_session_frame == user.data.frames())
     throw Error("the simulated user has " + std::to_string(user.first_session_frame) + " calibration frames of " +
                 std::to_string(user.data.frames()) + ", expected a calibration sequence followed by a session");

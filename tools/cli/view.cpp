@@ -426,8 +426,7 @@ int view(const ViewOptions& o) {
     if (!user->data.has_raw_rows())
       throw Error("'" + o.replay + "' has no raw rows, expected a dataset written by glovepose simulate --raw-rows");
     user->cycle_rate = user->data.frame_rate();
-    while (user->first_session_frame < user->data.frames() && user->data.kind[user->first_session_frame] == io::kKindCalibration)
-      ++user->first_session_frame;
+    user->first_session_frame = user->data.first_session_frame();
     if (user->first_session_frame == 0)
       throw Error("'" + o.replay + "' starts with no calibration frames (kind 1), expected a calibration sequence before the session");
   }

@@ -325,16 +325,9 @@ inline long peak_resident_kib() {
 
 namespace detail {
 
-// The frames of the calibration sequence at the source's start.
-inline std::size_t calibration_frames(const io::Dataset& source) noexcept {
-  std::size_t n = 0;
-  while (n < source.frames() && source.kind[n] == io::kKindCalibration) ++n;
-  return n;
-}
-
 // Readout cycles per second of the source's session (its frames are the cycles' ends).
 inline double cycle_rate(const io::Dataset& source) noexcept {
-  const std::size_t first = calibration_frames(source), last = source.frames() - 1;
+  const std::size_t first = source.first_session_frame(), last = source.frames() - 1;
   return static_cast<double>(last - first) / (source.timestamps[last] - source.timestamps[first]);
 }
 
@@ -349,7 +342,7 @@ class SoakStream {
         layout_(estimator_.model().solver()->layout()),
         rng_(core::derive_seed(config.seed, {static_cast<std::uint64_t>(index)})) {
     rows_ = static_cast<int>(source.row_count);
-    calibration_frames_ = calibration_frames(source);
+    calibration_frames_ = source.first_session_frame();
     session_frames_ = source.frames() - calibration_frames_;
     cycles_per_second_ = cycle_rate(source);
     cycle_seconds_ = 1.0 / cycles_per_second_;
@@ -557,7 +550,7 @@ inline SoakReport run_soak(const std::shared_ptr<const PoseModel>& model, const 
   if (!source.has_raw_rows() || static_cast<int>(source.row_count) != model->solver()->layout().row_count())
     throw Error("soak: the source has " + std::to_string(source.row_count) + " raw rows per frame, expected " +
                 std::to_string(model->solver()->layout().row_count()) + " (simulate it with raw rows)");
-  const std::size_t calibration = detail::calibration_frames(source);
+  const std::size_t calibration = source.first_session_frame();
   if (calibration < 20 || source.frames() - calibration < 60)
     throw Error("soak: the source has " + std::to_string(calibration) + " calibration frames and " +
                 std::to_string(source.frames() - calibration) + " session frames, expected at least 20 and 60");

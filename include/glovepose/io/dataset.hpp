@@ -116,6 +116,14 @@ struct Dataset {
   /// @brief When raw row `row` of frame `frame` was read (RowClock::time). Reads the metadata at
   /// each call: in a loop over rows, take row_clock() once.
   double row_time(std::size_t frame, std::size_t row) const { return row_clock().time(timestamps[frame], row); }
+  /// @brief The first frame after the calibration frames (kind kKindCalibration) the dataset starts
+  /// with: where a simulated user's session begins after their calibration sequence; 0 when it
+  /// starts with none, frames() when every frame is calibration.
+  std::size_t first_session_frame() const noexcept {
+    std::size_t f = 0;
+    while (f < kind.size() && kind[f] == kKindCalibration) ++f;
+    return f;
+  }
 
   /// @brief The DoFs with reference angles: metadata "labelled_dofs", every DoF when it is absent.
   /// Throws glovepose::Error when the metadata does not name a set of DoFs.
