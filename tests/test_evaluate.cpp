@@ -1,9 +1,11 @@
 // train::evaluate (train/evaluate.hpp), what `glovepose eval` and glovepose.evaluate() print: on a
 // dataset whose predictions are known in closed form (a linear model reading a delayed copy of the
-// labels), the angle errors, the lag and the per-frame predictions against the same figures
-// computed here from the formula; the zeroed-sensor report's typed run and glove names.
+// labels), the angle errors, the lag (every frame and every K-th) and the per-frame predictions
+// against the same figures computed here from the formula; the weight storages against the
+// real-time network's own batch path; the zeroed-sensor report's typed run and glove names.
 #include <glovepose/train/evaluate.hpp>
 #include <glovepose/io/json.hpp>
+#include <glovepose/pose_model.hpp>
 
 #include <doctest/doctest.h>
 
@@ -29,12 +31,15 @@ double label(const hand::JointLimits& limits, int run, long f, std::size_t d) {
   return limits.min()[d] + (normalized_label(run, f, d) + 1.0) * 0.5 * (limits.max()[d] - limits.min()[d]);
 }
 
-TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form") {
+constexpr long kPerRun = 240;  // frames of each of the two people
+
+// Two people, kPerRun frames each, of the built-in glove; the cells hold the normalised labels
+// kDelay frames back (the rest 0), no calibration sequence.
+io::Dataset closed_form_data() {
   const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
   const hand::JointLimits limits = glove.joint_limits();
-  // Two people, 240 frames each; the cells hold the normalised labels kDelay frames back.
   const std::size_t cells = static_cast<std::size_t>(glove.cell_count());
-  const long per_run = 240;
+  const long per_run = kPerRun;
   io::Dataset data(cells, 0, glove.id(), kRate);
   for (int run = 0; run < 2; ++run)
     for (long f = 0; f < per_run; ++f) {
@@ -52,6 +57,15 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
       data.kind.push_back(io::kKindRecording);
       data.outlier.push_back(0);
     }
+  return data;
+}
+
+TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form") {
+  const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+  const hand::JointLimits limits = glove.joint_limits();
+  const std::size_t cells = static_cast<std::size_t>(glove.cell_count());
+  const long per_run = kPerRun;
+  const io::Dataset data = closed_form_data();
   // The model: output d = cell d (d < 25), no calibration of the inputs.
   std::vector<float> weight(hand::kDofCount * cells, 0.0f), bias(hand::kDofCount, 0.0f);
   for (std::size_t d = 0; d < hand::kDofCount; ++d) weight[d * cells + d] = 1.0f;
@@ -106,6 +120,21 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
   CHECK(json.at("contact").is_null());
   CHECK(json.at("frames").get<long>() == 2 * per_run);
 
+  // Every K-th frame (eval --stride K): the same lag in recording frames, measured between frames K
+  // apart (it was refused: "no neighbouring frames"); the coarser shifts cost accuracy, not the unit.
+  for (const int stride : {2, 7}) {
+    CAPTURE(stride);
+    options.stride = stride;
+    const train::EvaluationResult strided = train::evaluate(model, data, options);
+    CHECK(strided.frames() == 2 * ((per_run + stride - 1) / stride));
+    CHECK(strided.lag_ms == doctest::Approx(kDelay * 1000.0 / kRate).epsilon(stride == 2 ? 0.05 : 0.25));
+  }
+  options.stride = 1;
+  // A linear map has no real-time network to hold 16-bit weights.
+  options.weights = nn::WeightStorage::F16;
+  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("weights F16: the model is linear"), Error);
+  options.weights = nn::WeightStorage::F32;
+
   // A selection scores only its frames: the second person alone.
   options.filter.subjects = {1};
   const train::EvaluationResult one = train::evaluate(model, data, options);
@@ -116,6 +145,49 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
   CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("expected none, training, onthefly or guided"), Error);
   options.calibration = "onthefly";
   CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("has no calibration sequence"), Error);
+}
+
+TEST_CASE("evaluate: weights held as the real-time network holds them, for both architectures") {
+  const io::Dataset data = closed_form_data();  // cells in [-0.6, 0.6], read uncalibrated
+  for (const char* name : {"glovepose_fcn512", "glovepose_unet64"}) {
+    CAPTURE(name);
+    const std::string path = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/" + name + ".safetensors";
+    train::TrainedModel model = train::load_model(path);
+    train::EvaluationOptions options;
+    options.threads = 1;
+    options.calibration = "none";
+    const train::EvaluationResult f32 = train::evaluate(model, data, options);
+    CHECK(f32.weights == nn::WeightStorage::F32);
+    const train::Samples samples = train::samples_for_model(model, data, options.filter, 1, "none").first;
+    for (const nn::WeightStorage storage : {nn::WeightStorage::F16, nn::WeightStorage::BF16, nn::WeightStorage::Fixed16}) {
+      CAPTURE(nn::storage_name(storage));
+      options.weights = storage;
+      const train::EvaluationResult r = train::evaluate(model, data, options);
+      CHECK(r.weights == storage);
+      // The reference: the model as PoseModel loads it with that storage, its batch path on the same cells.
+      PoseModelOptions load;
+      load.storage = storage;
+      const auto runtime = PoseModel::load(path, load);
+      const std::vector<hand::Angles> normalized =
+          runtime->network().normalized_dofs_batch(runtime->glove().map(), samples.inputs.data(), samples.cells, samples.frames());
+      REQUIRE(r.predicted.size() == normalized.size() * hand::kDofCount);
+      double worst = 0.0, moved = 0.0;
+      for (std::size_t f = 0; f < normalized.size(); ++f) {
+        const hand::Angles angles = runtime->joint_limits().denormalize(runtime->model_outputs(normalized[f]));
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+          worst = std::max(worst, std::abs(r.predicted[f * hand::kDofCount + d] - angles[d]));
+          moved = std::max(moved, std::abs(static_cast<double>(r.predicted[f * hand::kDofCount + d] - f32.predicted[f * hand::kDofCount + d])));
+        }
+      }
+      CHECK(worst < 1e-6);  // radians: the same kernels on the same weights (float results)
+      CHECK(moved > 0.0);   // the storage is in use: not the F32 predictions
+      // 16-bit weights move the mean error by rounding only (BF16, 8 mantissa bits, the most).
+      CHECK(std::abs(r.vs_labels.overall.mean_deg - f32.vs_labels.overall.mean_deg) < 0.2);
+    }
+    options.weights = nn::WeightStorage::Fixed16;
+    CHECK(io::json::parse(train::to_json(train::evaluate(model, data, options))).at("weights") == "fixed16");
+    CHECK(io::json::parse(train::to_json(f32)).at("weights") == "f32");
+  }
 }
 
 TEST_CASE("evaluate: zeroed sensors name their run's fields and the glove's cells") {

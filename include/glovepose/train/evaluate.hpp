@@ -7,6 +7,8 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -20,6 +22,9 @@
 #include "../core/thread_pool.hpp"
 #include "../hand/contact.hpp"
 #include "../hand/pinch.hpp"
+#include "../nn/fcn.hpp"
+#include "../nn/unet.hpp"
+#include "../nn/weight_storage.hpp"
 #include "fingertip_metrics.hpp"
 #include "guided_calibration.hpp"
 #include "lag.hpp"
@@ -89,6 +94,10 @@ struct EvaluationOptions {
   bool pinch_distances = false;  ///< Keep every frame's true and predicted thumb-to-fingertip distances.
   SubjectHands hands;            ///< Whose hands the fingertips are measured on.
   int threads = 0;               ///< Threads (0: all cores).
+  /// How the network holds its weights: F32 scores the file's values in float (the trainer's
+  /// network); F16, BF16 and Fixed16 score the real-time network (nn::UNet, nn::Fcn, as
+  /// PoseModel loads it) holding them so. A linear map has only F32.
+  nn::WeightStorage weights = nn::WeightStorage::F32;
 };
 
 /// @brief One frame's thumb-to-fingertip distances (mm), true and predicted, and the true pinches.
@@ -103,6 +112,7 @@ struct EvaluationResult {
   std::string calibration;                 ///< "guided", or the calibration mode used.
   std::optional<std::string> mean_window;  ///< The dataset's readout mean window (metadata "mean_window"), if it says.
   bool rows_replayed = false;              ///< The raw rows were replayed through a readout.
+  nn::WeightStorage weights = nn::WeightStorage::F32;  ///< How the network held its weights.
   AngleErrorReport vs_labels;              ///< Against the labels.
   double lag_ms = 0.0;                     ///< Motion lag against the labels.
   std::optional<AngleErrorReport> vs_truth;  ///< Against the true angles (simulated data).
@@ -139,6 +149,52 @@ inline std::pair<Samples, model::CalibrationMode> samples_for_model(const Traine
 
 namespace detail {
 
+// Normalised predictions (frames x 25) of the model's network with its weights held as `storage`,
+// as the real-time path holds them; DoFs the model was not trained on read the rest pose, as in
+// TrainedModel::predict.
+inline std::vector<float> predict_stored(const TrainedModel& model, const Samples& samples, nn::WeightStorage storage, int threads) {
+  const model::ModelInfo& info = model.info;
+  if (!model.network)
+    throw Error("weights " + std::string(nn::storage_name(storage)) + ": the model is " + info.architecture_name() +
+                ", which has no real-time network, expected F32 weights (the default)");
+  if (samples.cells != info.inputs)
+    throw Error("the samples have " + std::to_string(samples.cells) + " cells per frame, the model takes " + std::to_string(info.inputs));
+  const nn::TensorMap tensors = model.network->parameters().to_tensors();
+  const long frames = samples.frames();
+  std::vector<float> out(static_cast<std::size_t>(frames) * kTargets);
+  if (info.architecture == model::Architecture::Fcn) {
+    nn::Fcn<>::from_tensors(tensors, info.inputs, info.width, storage).forward_batch(samples.inputs.data(), out.data(), frames, threads);
+  } else {
+    const nn::UNet<> net = nn::UNet<>::from_tensors(tensors, info.width, info.bn_eps, storage);
+    const grid::GridMap& map = model.glove.map();
+    const long values = net.input_values();
+    if (map.input_plane_count() * grid::kMapSlots != values)
+      throw Error("the U-Net reads " + std::to_string(values) + " input values, expected the glove's " +
+                  std::to_string(map.input_plane_count() * grid::kMapSlots));
+    std::vector<float> planes(static_cast<std::size_t>(frames * values)), maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
+    for (long f = 0; f < frames; ++f)
+      if (map.to_input_planes(samples.inputs.data() + f * samples.cells, planes.data() + f * values) != Status::Ok)
+        throw Error("frame " + std::to_string(f) + " has a non-finite cell value, expected finite calibrated cells");
+    net.forward_batch(planes.data(), maps.data(), frames, threads);
+    std::array<float, grid::kMapSlots> pose_map{};
+    hand::Angles a{};
+    for (long f = 0; f < frames; ++f) {
+      std::copy_n(maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());
+      map.from_pose_map(pose_map, a);
+      std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
+    }
+  }
+  const hand::JointLimits limits = info.joint_limits();
+  const hand::DofSet labelled = info.labelled();
+  for (long f = 0; labelled != hand::all_dofs() && f < frames; ++f) {
+    hand::Angles a{};
+    std::copy_n(out.begin() + f * kTargets, hand::kDofCount, a.begin());
+    a = limits.rest_unlabelled(a, labelled);
+    std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
+  }
+  return out;
+}
+
 // Whether to calibrate guided: asked for, or by default when the model carries a pose-guided
 // calibration and the dataset's calibrations followed its sequence.
 inline bool evaluate_guided(const std::string& calibration, const TrainedModel& model, const io::Dataset& data) {
@@ -164,13 +220,16 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   const auto [samples, mode] = samples_for_model(model, data, options.filter, options.stride, choice);
   EvaluationResult r;
   r.rows_replayed = replayed.has_value();
+  r.weights = options.weights;
   r.zeroed = zeroed_sensors(samples, model.glove);
   const hand::JointLimits limits = model.info.joint_limits();
   core::ThreadPool pool(options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
   const bool guided = detail::evaluate_guided(choice, model, data);
   const std::map<std::int64_t, hand::Angles> offsets =
       guided ? guided_offsets(model, data, options.filter, pool) : std::map<std::int64_t, hand::Angles>{};
-  const std::vector<float> normalized = model.predict(samples, pool);
+  const std::vector<float> normalized = options.weights == nn::WeightStorage::F32
+                                            ? model.predict(samples, pool)
+                                            : detail::predict_stored(model, samples, options.weights, pool.size());
   hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
   const hand::DofSet trained = model.info.labelled();
   for (std::size_t d = 0; d < hand::kDofCount; ++d) scored[d] = scored[d] && trained[d];
@@ -241,10 +300,10 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   if (const auto window = data.metadata.find("mean_window"); window != data.metadata.end()) r.mean_window = window->second;
   r.vs_labels = errors.report();
   const double frame_ms = 1000.0 / data.frame_rate();
-  r.lag_ms = lag_frames(r.predicted, samples.angles, samples.source, samples.run) * frame_ms;
+  r.lag_ms = lag_frames(r.predicted, samples.angles, samples.source, samples.run, options.stride) * frame_ms;
   if (with_truth) {
     r.vs_truth = truth_errors.report();
-    r.truth_lag_ms = lag_frames(r.predicted, truth, samples.source, samples.run) * frame_ms;
+    r.truth_lag_ms = lag_frames(r.predicted, truth, samples.source, samples.run, options.stride) * frame_ms;
   }
   if (!tips.empty()) r.fingertips = tips.report();
   r.fingertips_vs_truth = with_truth;
@@ -256,8 +315,9 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
 }
 
 /// @brief The result as `glovepose eval --json` prints it: the angle-error report (to_json of
-/// metrics_report.hpp) with "calibration", "mean_window", "lag_ms", "scored_against", "vs_labels",
-/// "vs_truth", "fingertips" and "contact" ({"adjusted_frames", "refused_frames"} or null).
+/// metrics_report.hpp) with "calibration", "weights" (the storage, as --weights spells it: "f32",
+/// "f16", "bf16" or "fixed16"), "mean_window", "lag_ms", "scored_against", "vs_labels", "vs_truth",
+/// "fingertips" and "contact" ({"adjusted_frames", "refused_frames"} or null).
 inline std::string to_json(const EvaluationResult& r) {
   const std::string tips =
       r.fingertips ? to_json(*r.fingertips, {{"scored_against", r.fingertips_vs_truth ? "\"truth\"" : "\"labels\""}, {"hands", "\"" + r.hands + "\""}})
@@ -267,7 +327,10 @@ inline std::string to_json(const EvaluationResult& r) {
                                         : "null";
   char lag[32];
   std::snprintf(lag, sizeof lag, "%.3f", r.lag_ms);
+  std::string weights = nn::storage_name(r.weights);
+  std::transform(weights.begin(), weights.end(), weights.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return to_json(r.vs_labels, {{"calibration", "\"" + r.calibration + "\""},
+                               {"weights", "\"" + weights + "\""},
                                {"mean_window", r.mean_window.value_or("null")},
                                {"lag_ms", lag},
                                {"scored_against", "\"labels\""},

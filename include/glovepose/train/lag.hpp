@@ -22,17 +22,21 @@
 
 namespace glovepose::train {
 
-/// @brief The lag in frames (fraction included) of `predicted` behind `truth` (frames x 25 each,
-/// radians; NaN truth for a DoF not labelled, which is left out). `source[f]` is frame f's index in its recording and `run[f]` its run: two
-/// frames are neighbours when they share a run and their sources differ by one. Throws glovepose::Error for mismatched sizes or when no
-/// shift has any pair of neighbouring changes.
+/// @brief The lag in recording frames (fraction included) of `predicted` behind `truth` (frames x
+/// 25 each, radians; NaN truth for a DoF not labelled, which is left out). `source[f]` is frame f's
+/// index in its recording and `run[f]` its run; the frames are every `step`-th of the recording (a
+/// stride): two frames are neighbours when they share a run and their sources differ by `step`, and
+/// the shifts go in whole steps over at least -max_shift..+max_shift recording frames. Throws
+/// glovepose::Error for mismatched sizes or when no shift has any pair of neighbouring changes.
 inline double lag_frames(const std::vector<float>& predicted, const std::vector<float>& truth, const std::vector<std::int64_t>& source,
-                         const std::vector<std::int64_t>& run, int max_shift = 20) {
+                         const std::vector<std::int64_t>& run, int step = 1, int max_shift = 20) {
   const std::size_t n = source.size();
   const std::size_t dofs = hand::kDofCount;
-  if (predicted.size() != n * dofs || truth.size() != n * dofs || run.size() != n || max_shift < 1)
+  if (predicted.size() != n * dofs || truth.size() != n * dofs || run.size() != n || step < 1 || max_shift < 1)
     throw Error("lag_frames: " + std::to_string(predicted.size()) + " predicted and " + std::to_string(truth.size()) + " true angles for " +
-                std::to_string(n) + " frames, expected 25 per frame each, and a maximum shift of at least 1");
+                std::to_string(n) + " frames, a step of " + std::to_string(step) +
+                ", expected 25 per frame each, a step of at least 1 and a maximum shift of at least 1");
+  const int steps = (max_shift + step - 1) / step;  // the shifts, in steps
   // Position in `predicted` of recording frame (run, source), for the frames present.
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
@@ -45,13 +49,13 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
                                      });
     return it != order.end() && run[*it] == r && source[*it] == s ? static_cast<long>(*it) : -1;
   };
-  std::vector<double> score(static_cast<std::size_t>(2 * max_shift + 1), 0.0);
+  std::vector<double> score(static_cast<std::size_t>(2 * steps + 1), 0.0);
   std::vector<long> pairs(score.size(), 0);
   for (std::size_t i = 0; i < n; ++i) {
-    const long next = present(run[i], source[i] + 1);
+    const long next = present(run[i], source[i] + step);
     if (next < 0) continue;
-    for (int s = -max_shift; s <= max_shift; ++s) {
-      const long a = present(run[i], source[i] + s), b = present(run[i], source[i] + s + 1);
+    for (int s = -steps; s <= steps; ++s) {
+      const long a = present(run[i], source[i] + s * step), b = present(run[i], source[i] + (s + 1) * step);
       if (a < 0 || b < 0) continue;
       double sum = 0.0;
       for (std::size_t d = 0; d < dofs; ++d) {
@@ -61,13 +65,14 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
             predicted[static_cast<std::size_t>(b) * dofs + d] - predicted[static_cast<std::size_t>(a) * dofs + d];
         sum += true_change * predicted_change;
       }
-      score[static_cast<std::size_t>(s + max_shift)] += sum;
-      ++pairs[static_cast<std::size_t>(s + max_shift)];
+      score[static_cast<std::size_t>(s + steps)] += sum;
+      ++pairs[static_cast<std::size_t>(s + steps)];
     }
   }
   for (std::size_t k = 0; k < score.size(); ++k) {
     if (pairs[k] == 0)
-      throw Error("lag_frames: no neighbouring frames at a shift of " + std::to_string(static_cast<int>(k) - max_shift) + " frames");
+      throw Error("lag_frames: no neighbouring frames (sources " + std::to_string(step) + " apart) at a shift of " +
+                  std::to_string((static_cast<int>(k) - steps) * step) + " frames, expected runs long enough for every shift");
     score[k] /= static_cast<double>(pairs[k]);
   }
   const std::size_t best = static_cast<std::size_t>(std::max_element(score.begin(), score.end()) - score.begin());
@@ -77,7 +82,7 @@ inline double lag_frames(const std::vector<float>& predicted, const std::vector<
     const double curvature = a - 2.0 * b + c;
     if (curvature < 0.0) fraction = 0.5 * (a - c) / curvature;
   }
-  return static_cast<double>(best) - max_shift + fraction;
+  return (static_cast<double>(best) - steps + fraction) * step;
 }
 
 }  // namespace glovepose::train
