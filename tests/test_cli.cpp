@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <random>
 #include <set>
 #include <tuple>
@@ -131,14 +132,14 @@ TEST_CASE("cli: a bad number, a missing required option and clashing options are
       {"view --replay " + kModel + " --stdin", "--stdin"},
       {"eval --data " + kModel + " --model " + kModel + " --subjects 3-1", "--subjects: '3-1', expected ids like 0-3,7"},
       {"train --data " + kModel + " --model unet:W --out x", "--model: 'unet:W', expected unet:W, fcn[:H] or linear"},
-      {"train --data " + kModel + " --model linear --out x --optimizer adagrad", "--optimizer: 'adagrad', expected one of adam|sgd"},
+      {"train --data " + kModel + " --architecture linear --out x --optimizer adagrad", "--optimizer: 'adagrad', expected one of adam|sgd"},
       {"eval --data " + kModel + " --model " + kModel + " --calibration sometimes", "--calibration"},
-      {"train --data " + kModel + " --model linear --out x --calibration guided", "--calibration"},
+      {"train --data " + kModel + " --architecture linear --out x --calibration-mode guided", "--calibration-mode"},
       {"predict --model " + kModel + " --f16 --bf16", "--f16 excludes --bf16"},
       {"demo --fixed16 --f16", "--f16 excludes --fixed16"},
       {"predict --in " + kModel, "--model is required"},
       {"eval --model " + kModel, "--data is required"},
-      {"train --data " + kModel + " --model linear", "--out is required"},
+      {"train --data " + kModel + " --architecture linear", "--out is required"},
       {"import " + kModel, "--out is required"},
       {"info --model " + temp("no_such_model.safetensors"), "--model: File does not exist"}};
   for (const auto& entry : refused) {
@@ -309,7 +310,7 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   const std::string data = small_corpus("train");
   const std::string unet = temp("t_unet.safetensors"), fcn = temp("t_fcn.safetensors"), lin = temp("t_lin.safetensors"),
                     tuned = temp("t_tuned.safetensors");
-  Run r = run("train --data " + data + " --model unet:8 --exclude-subjects 2 --epochs 2 --batch 256 --seed 3 --out " + unet);
+  Run r = run("train --data " + data + " --architecture unet:8 --exclude-subjects 2 --epochs 2 --batch 256 --seed 3 --out " + unet);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("samples/s") != std::string::npos);  // the progress lines
   CHECK(r.out.find("kept epoch") != std::string::npos);
@@ -325,12 +326,14 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   CHECK(r.out.find("index_base_flexion") != std::string::npos);
   CHECK(r.out.find("<15 deg") != std::string::npos);
 
-  r = run("train --data " + data + " --model fcn:32 --exclude-subjects 2 --epochs 1 --batch 256 --calibration training --out " + fcn);
+  r = run("train --data " + data + " --architecture fcn:32 --exclude-subjects 2 --epochs 1 --batch 256 --calibration-mode training --out " +
+          fcn);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("eval --model " + fcn + " --data " + data + " --subjects 2 --json");
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::isfinite(json_number(r.out, "mean_deg")));
-  r = run("eval --model " + fcn + " --data " + data + " --subjects 2 --calibration onthefly --json");  // another mode than trained with
+  r = run("eval --model " + fcn + " --data " + data +
+          " --subjects 2 --calibration-mode onthefly --json");  // another mode than trained with
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("info --model " + fcn);  // the real-time path loads an FCN too
   REQUIRE_MESSAGE(r.status == 0, r.out);
@@ -341,12 +344,12 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
     for (int c = 0; c < 44; ++c) row += (c ? "," : "") + std::string("0.25");
     std::ofstream(temp("fcn_row.csv")) << row << "\n" << row << "\n";
   }
-  r = run("predict --model " + fcn + " --fixed16 --no-header --in " + temp("fcn_row.csv"));
+  r = run("predict --model " + fcn + " --weights fixed16 --no-header --in " + temp("fcn_row.csv"));
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 2);
   CHECK(std::count(r.out.begin(), r.out.end(), ',') == 2 * 24);
 
-  r = run("train --data " + data + " --model linear --exclude-subjects 2 --out " + lin);
+  r = run("train --data " + data + " --architecture linear --exclude-subjects 2 --out " + lin);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("eval --model " + lin + " --data " + data + " --subjects 2 --json");
   REQUIRE_MESSAGE(r.status == 0, r.out);
@@ -361,16 +364,16 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(std::isfinite(json_number(r.out, "mean_deg")));
 
-  r = run("train --data " + data + " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --augment 0.05,0.05,0.02 --out " +
+  r = run("train --data " + data + " --architecture fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --augment 0.05,0.05,0.02 --out " +
           temp("t_aug.safetensors"));
   REQUIRE_MESSAGE(r.status == 0, r.out);
-  r = run("train --data " + data + " --model linear --augment 0.05,0.05,0.02 --out " + temp("x.safetensors"));
+  r = run("train --data " + data + " --architecture linear --augment 0.05,0.05,0.02 --out " + temp("x.safetensors"));
   CHECK(r.status == 2);
   CHECK(r.out.find("--augment trains networks") != std::string::npos);
-  r = run("train --data " + data + " --model fcn:16 --augment 0.05,0.05 --out " + temp("x.safetensors"));
+  r = run("train --data " + data + " --architecture fcn:16 --augment 0.05,0.05 --out " + temp("x.safetensors"));
   CHECK(r.status == 2);
   CHECK(r.out.find("expected GAIN,OFFSET,NOISE") != std::string::npos);
-  r = run("train --data " + data + " --model fcn:16 --augment 0.05,2,0 --out " + temp("x.safetensors"));
+  r = run("train --data " + data + " --architecture fcn:16 --augment 0.05,2,0 --out " + temp("x.safetensors"));
   CHECK(r.status == 2);
   CHECK(r.out.find("augmentation offset deviation") != std::string::npos);
   r = run("train --data " + data + " --model lstm --out " + temp("x.safetensors"));
@@ -385,7 +388,7 @@ TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
   const std::string data = small_corpus("interrupt"), out = temp("t_interrupted.safetensors");
   std::remove(out.c_str());
   const Run r =
-      run("train --data " + data + " --model unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
+      run("train --data " + data + " --architecture unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
   CHECK(r.status == 130);
   CHECK(r.out.find("stopped") != std::string::npos);
   const auto loaded = model::UNetModel<>::load(out);
@@ -422,7 +425,7 @@ DescribedGlove main14_glove(const std::string& tag) {
 std::string main14_model(const DescribedGlove& glove, const std::string& name) {
   const std::string model_file = temp(name);
   const Run r = run("train --data " + glove.data + " --glove " + glove.glove_file +
-                    " --model fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --quiet --out " + model_file);
+                    " --architecture fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --quiet --out " + model_file);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   return model_file;
 }
@@ -433,10 +436,10 @@ TEST_CASE("cli: a glove described by a file (14 cells) trains, evaluates and pre
   const std::string &corpus = glove.corpus, &data = glove.data, &glove_file = glove.glove_file;
   const std::string model_file = temp("t_main14.safetensors");
 
-  Run r = run("train --data " + data + " --model unet:8 --epochs 1 --batch 256 --out " + model_file);
+  Run r = run("train --data " + data + " --architecture unet:8 --epochs 1 --batch 256 --out " + model_file);
   CHECK(r.status == 1);
   CHECK(r.out.find("pass its description with --glove FILE") != std::string::npos);
-  r = run("train --data " + data + " --glove " + glove_file + " --model unet:8 --exclude-subjects 2 --epochs 1 --batch 256 --out " +
+  r = run("train --data " + data + " --glove " + glove_file + " --architecture unet:8 --exclude-subjects 2 --epochs 1 --batch 256 --out " +
           model_file);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   r = run("eval --model " + model_file + " --data " + data + " --subjects 2 --json");
@@ -473,8 +476,8 @@ TEST_CASE(
     grid::GloveSettings twenty;
     twenty.rate_hz = 20.0;
     grid::GloveDescription("main14-extra", names, grid::GridMap(slots, paper.dof_slots()), twenty).write(temp("extra15_20hz.json"));
-    const Run refused =
-        run("train --data " + data + " --glove " + temp("extra15_20hz.json") + " --model linear --out " + temp("extra_rate.safetensors"));
+    const Run refused = run("train --data " + data + " --glove " + temp("extra15_20hz.json") + " --architecture linear --out " +
+                            temp("extra_rate.safetensors"));
     CHECK(refused.status == 1);
     CHECK_MESSAGE(refused.out.find("rate_hz is 20.000000, expected the same rate") != std::string::npos, refused.out);
   }
@@ -576,7 +579,8 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   CHECK(r.status != 0);
   CHECK_MESSAGE(r.out.find("'note'") != std::string::npos, r.out);
   CHECK_MESSAGE(r.out.find("--ignore COLUMN[,COLUMN...]") != std::string::npos, r.out);
-  r = run("import --glove " + glove_file + " --rate 60 --ignore frame,note --takes " + temp("import_takes.csv") + " --out " + imported_file);
+  r = run("import --glove " + glove_file + " --rate 60 --ignore frame,note --takes " + temp("import_takes.csv") + " --out " +
+          imported_file);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("imported 12 takes: " + std::to_string(reference.frames()) + " frames") == 0);
   CHECK(r.out.find("of 3 subjects, 6 sessions, glove 'maker-44', 44 cells, with the 25 DoF angles") != std::string::npos);
@@ -591,9 +595,9 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
 
   // Same frames, same maps: a linear map fitted on either, evaluated on the held-out subject, agrees.
   const std::string from_import = temp("t_import_lin.safetensors"), from_reference = temp("t_reference_lin.safetensors");
-  r = run("train --data " + imported_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + from_import);
+  r = run("train --data " + imported_file + " --glove " + glove_file + " --architecture linear --exclude-subjects 2 --out " + from_import);
   REQUIRE_MESSAGE(r.status == 0, r.out);
-  r = run("train --data " + reference_file + " --model linear --exclude-subjects 2 --out " + from_reference);
+  r = run("train --data " + reference_file + " --architecture linear --exclude-subjects 2 --out " + from_reference);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   const Run eval_import = run("eval --model " + from_import + " --data " + imported_file + " --subjects 2 --json");
   const Run eval_reference = run("eval --model " + from_reference + " --data " + reference_file + " --subjects 2 --json");
@@ -613,7 +617,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
       if (!labelled[i % hand::kDofCount]) part.angles[i] = NAN;
     const std::string part_file = temp("imported_part.safetensors"), part_model = temp("t_part_lin.safetensors");
     part.write(part_file);
-    r = run("train --data " + part_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + part_model);
+    r = run("train --data " + part_file + " --glove " + glove_file + " --architecture linear --exclude-subjects 2 --out " + part_model);
     REQUIRE_MESSAGE(r.status == 0, r.out);
     CHECK(r.out.find("the data labels 23 of the 25 DoFs") != std::string::npos);
     CHECK(nn::WeightFile::read(part_model).metadata.at("labelled_dofs") == hand::dof_set_text(labelled));
@@ -655,7 +659,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
       if (flat.kind[i] == io::kKindCalibration && flat.subject[i] == 1 && flat.session[i] == 0) flat.cells[i * 44 + 17] = 3.0f;
     const std::string flat_file = temp("imported_flat.safetensors"), flat_model = temp("t_flat_lin.safetensors");
     flat.write(flat_file);
-    r = run("train --data " + flat_file + " --glove " + glove_file + " --model linear --exclude-subjects 2 --out " + flat_model);
+    r = run("train --data " + flat_file + " --glove " + glove_file + " --architecture linear --exclude-subjects 2 --out " + flat_model);
     REQUIRE_MESSAGE(r.status == 0, r.out);
     CHECK(r.out.find("train: calibration of subject 1, glove 0, session 0: 1 flat sensor read 0: stretch_B7\n") != std::string::npos);
     CHECK(r.out.find("flat sensor") == r.out.rfind("flat sensor"));  // only that run
@@ -665,7 +669,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   }
 
   // A CSV given where a dataset file belongs, or to predict, says how to import it.
-  r = run("train --data " + temp("import_take_1.csv") + " --model linear --out " + temp("t_never.safetensors"));
+  r = run("train --data " + temp("import_take_1.csv") + " --architecture linear --out " + temp("t_never.safetensors"));
   CHECK(r.status == 1);
   CHECK(r.out.find("the file is CSV text, not a dataset file: import it first with glovepose import") != std::string::npos);
   r = run("eval --model " + from_import + " --data " + temp("import_take_1.csv"));
@@ -1298,8 +1302,8 @@ TEST_CASE("cli: every command spells the model file, the weight storage and the 
       {"simulate", false, false, false},  // simulates the built-in glove
       {"import", false, false, true},
       {"train", false, true, true},  // the file's dtype (f32|f16|bf16); --model is the old spelling of --architecture
-      {"finetune", true, true, false},    // the glove is the model's
-      {"eval", true, false, false},       // scores the F32 weights; the glove is the model's and the data's
+      {"finetune", true, true, true},     // --weights: the written file's dtype; --glove: checked against the model's
+      {"eval", true, true, true},         // --weights: as predict holds them; --glove: checked against the model's
       {"fit-guided", true, false, false},  // writes the model's own dtype and glove
       {"demo", true, true, false},   // a simulated user of the built-in glove
       {"soak", true, false, false},  // F32, the library's default: its figures are fault counts, not speed
@@ -1346,11 +1350,48 @@ TEST_CASE("cli: every command spells the model file, the weight storage and the 
     CHECK(r.status == 2);
     CHECK(r.out.find(entry.second) != std::string::npos);
   }
-  for (const std::string& command : {predict, "view --model " + kModel + " --weights fixed16 --stdin"}) {
+  for (const std::string& command : {predict, "view --model " + kModel + " --weights fixed16 --stdin",
+                                     "eval --model " + kModel + " --data " + kModel + " --weights f16",
+                                     "finetune --model " + kModel + " --data " + kModel + " --out " + temp("never.safetensors")}) {
     const Run wrong_glove = run_stream(command + " --glove " + other + " </dev/null", 2);
     INFO(command, "\n", wrong_glove.out);
     CHECK(wrong_glove.status == 1);
     CHECK(wrong_glove.out.find("'another-glove', 44 cells) is not the one the model") != std::string::npos);
+  }
+}
+
+// eval --weights holds the weights as predict --weights does (test_evaluate.cpp compares them
+// with PoseModel's own batch path); here: what the command line and its report say.
+TEST_CASE("cli: eval --weights scores the storage it names, --glove checks the glove, --stride K measures the lag") {
+  const std::string data = small_corpus("eval_weights");
+  const std::string fcn = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+  const std::string eval = "eval --model " + fcn + " --data " + data + " --threads 1";
+  std::map<std::string, nlohmann::json> reports;
+  for (const std::string word : {"f32", "f16", "bf16", "fixed16"}) {
+    CAPTURE(word);
+    const Run r = run_stream(eval + " --json --weights " + word, 1);
+    REQUIRE(r.status == 0);
+    reports[word] = nlohmann::json::parse(r.out);
+    CHECK(reports[word]["weights"] == word);
+    CHECK(reports[word]["frames"] == reports["f32"]["frames"]);
+    const double moved = std::abs(reports[word]["mean_deg"].get<double>() - reports["f32"]["mean_deg"].get<double>());
+    CHECK(moved < (word == "bf16" ? 0.05 : 0.005));  // degrees: rounding of the weights only
+    if (word != "f32") CHECK(moved > 0.0);           // and the storage is in use
+  }
+  CHECK(nlohmann::json::parse(run_stream(eval + " --json", 1).out) == reports["f32"]);  // f32 is the default
+  CHECK(run_stream(eval + " --weights fixed16", 1).out.find("(fcn, Fixed16 weights)") != std::string::npos);
+  const std::string glove = temp("eval_glove.json");
+  std::ofstream(glove) << grid::GloveDescription::glauser2019().to_json();
+  CHECK(nlohmann::json::parse(run_stream(eval + " --json --glove " + glove, 1).out) == reports["f32"]);  // the model's glove
+  // Every K-th frame: it was refused ("lag_frames: no neighbouring frames"); now the lag in the same
+  // unit, within the coarser grid of shifts (K frames) of every frame's.
+  for (const int stride : {2, 7}) {
+    CAPTURE(stride);
+    const Run r = run_stream(eval + " --json --stride " + std::to_string(stride), 1);
+    REQUIRE(r.status == 0);
+    const nlohmann::json strided = nlohmann::json::parse(r.out);
+    CHECK(std::abs(strided["frames"].get<double>() - reports["f32"]["frames"].get<double>() / stride) <= 12.0);  // per run, rounded up
+    CHECK(std::abs(strided["lag_ms"].get<double>() - reports["f32"]["lag_ms"].get<double>()) < stride * 1000.0 / 60.0);
   }
 }
 

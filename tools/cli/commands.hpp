@@ -178,9 +178,10 @@ CLI::Option* add_model_file(CLI::App& command, Target& path, const std::string& 
 }
 
 /// Adds `--weights f32|f16|bf16|fixed16`, the tool's one spelling of how a loaded model keeps its
-/// weights in memory (default F32; train's --weights is the same words for the file it writes), and
-/// the older flags `--fixed16`, `--f16`, `--bf16` as aliases; any two of them exclude each other.
-inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage) {
+/// weights in memory (default F32; train's --weights is the same words for the file it writes), and,
+/// where a command had them (`old_spellings`), the older flags `--fixed16`, `--f16`, `--bf16` as
+/// aliases; any two of them exclude each other.
+inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage, bool old_spellings = true) {
   struct Choice {
     const char* word;
     nn::WeightStorage storage;
@@ -204,7 +205,7 @@ inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage) {
       "how the weights are kept in memory: f32 (default), f16, bf16 (the fastest) or fixed16 (16-bit, within 0.005 "
       "degree of F32 on the shipped model)")};
   for (const Choice& c : choices)
-    if (c.storage != nn::WeightStorage::F32)
+    if (old_spellings && c.storage != nn::WeightStorage::F32)
       added.push_back(command
                           .add_flag_callback(
                               std::string("--") + c.word, [&storage, chosen = c.storage] { storage = chosen; },

@@ -114,6 +114,7 @@ int finetune_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, o.training.batch);
   if (!model.network)
     throw Error("model '" + o.model + "' is " + model.info.architecture_name() + ", expected a network (unet or fcn) to fine-tune");
+  check_glove(o.glove_file, model.glove, o.model);
   const io::Dataset data = read_dataset(o.data);
   o.filter = train::exclude_subjects(o.filter, data, o.exclude_subjects);
   const train::Samples all = train::samples_for_model(model, data, o.filter, o.stride, o.calibration).first;
@@ -126,8 +127,10 @@ int finetune_command(Options o) {
 
 int eval_command(Options o) {
   train::TrainedModel model = train::load_model(o.model, 1024);
+  check_glove(o.glove_file, model.glove, o.model);
   const io::Dataset data = read_dataset(o.data);
   train::EvaluationOptions options;
+  options.weights = o.storage;
   options.filter = train::exclude_subjects(o.filter, data, o.exclude_subjects);
   options.stride = o.stride;
   options.calibration = o.calibration;
@@ -146,9 +149,9 @@ int eval_command(Options o) {
   if (o.json) {
     std::printf("%s\n", train::to_json(result).c_str());
   } else {
-    std::printf("model %s (%s), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(), model.info.architecture_name().c_str(),
-                o.data.c_str(), result.calibration.c_str(), result.mean_window.value_or("null").c_str(),
-                result.rows_replayed ? " (rows replayed)" : "");
+    std::printf("model %s (%s, %s weights), data %s, calibration %s, readout mean window %s%s\n", o.model.c_str(),
+                model.info.architecture_name().c_str(), nn::storage_name(result.weights), o.data.c_str(), result.calibration.c_str(),
+                result.mean_window.value_or("null").c_str(), result.rows_replayed ? " (rows replayed)" : "");
     std::printf("%s", train::format_text(result).c_str());
   }
   return 0;
@@ -216,9 +219,7 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
     training::add_training_options(
         *command, o,
         {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100", "2e-4; 0.01 with sgd for an FCN"});
-    command->add_option("--glove", o->glove_file, "the glove description the data was recorded with (default: the built-in glove)")
-        ->check(existing_file())
-        ->type_name("FILE");
+    add_glove_file(*command, o->glove_file, "the glove description the data was recorded with (default: the built-in glove)");
     finish(command, o, train_command);
   }
   {
@@ -228,6 +229,7 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
                             "the model to fine-tune", true);
     training::add_data_options(*command, *o, true);
     training::add_training_options(*command, o, {"5", "64", "1e-6"});
+    add_glove_file(*command, o->glove_file, "the glove description the data was recorded with: refused unless it is the model's");
     finish(command, o, finetune_command);
   }
   {

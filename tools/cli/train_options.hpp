@@ -93,6 +93,7 @@ struct Options {
   train::TrainConfig training;
   double validation = 0.1;
   io::DType dtype = io::DType::F32;  // storage of the written model
+  nn::WeightStorage storage = nn::WeightStorage::F32;  // eval: how the network holds the weights (--weights)
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
   bool contact = false;  // eval: the contact stage (hand/contact.hpp) on the predicted poses
 };
@@ -208,6 +209,8 @@ inline void add_eval_options(CLI::App& command, Options& o) {
   add_calibration_mode(command, o, {"none", "training", "onthefly", "guided"},
                        "how the inputs are calibrated (default: the model's; guided when the model carries a pose-guided "
                        "calibration and the data followed its sequence)");
+  add_weight_storage(command, o.storage, false);
+  add_glove_file(command, o.glove_file, "the glove description the data was recorded with: refused unless it is the model's");
   command.add_flag("--json", o.json, "print the report as JSON");
   CLI::Option* replay = command.add_flag("--replay-rows", o.replay, "replay the raw rows through the estimator's readout");
   add_number(command, "--mean-window", "N", o.mean_window, "the readout's mean window for --replay-rows (default: the estimator's)")
