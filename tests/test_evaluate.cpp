@@ -176,7 +176,8 @@ TEST_CASE("evaluate: weights held as the real-time network holds them, for both 
         const hand::Angles angles = runtime->joint_limits().denormalize(runtime->model_outputs(normalized[f]));
         for (std::size_t d = 0; d < hand::kDofCount; ++d) {
           worst = std::max(worst, std::abs(r.predicted[f * hand::kDofCount + d] - angles[d]));
-          moved = std::max(moved, std::abs(static_cast<double>(r.predicted[f * hand::kDofCount + d] - f32.predicted[f * hand::kDofCount + d])));
+          moved =
+              std::max(moved, std::abs(static_cast<double>(r.predicted[f * hand::kDofCount + d] - f32.predicted[f * hand::kDofCount + d])));
         }
       }
       CHECK(worst < 1e-6);  // radians: the same kernels on the same weights (float results)

@@ -3,7 +3,7 @@
 # session of poses; glovepose estimates the hand row by row and prints how well and how fast.
 # Installs what is missing (tools/setup.sh, via apt), builds only the glovepose tool into ./build of
 # the repository, then runs `build/tools/glovepose demo "$@"` in the current directory.
-# Usage: tools/demo.sh [--out DIR] [--seed S] [--minutes M] [--f16] [--model FILE]
+# Usage: tools/demo.sh [--out DIR] [--seed S] [--minutes M] [--weights f32|f16|bf16|fixed16] [--model FILE]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bash "$root/tools/setup.sh"

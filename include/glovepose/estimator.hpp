@@ -265,7 +265,7 @@ class GlovePoseEstimator {
     if (!model_->training_range())
       throw Error(
           "GlovePoseEstimator::use_training_calibration: the model records no training-set range, expected a model trained with "
-          "--calibration training");
+          "--calibration-mode training");
     set_range(*model_->training_range(), CalibrationSource::Training);
   }
   /// @brief The range in use, if any.

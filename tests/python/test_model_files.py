@@ -7,7 +7,7 @@
     import_model. The U-Net's PyTorch forward, with the cells -> stretch-maps scatter, the pose
     map -> DoF order and the de-normalisation redone here, equals `glovepose predict` within 1e-4
     rad. FCN and linear models (which `predict` does not take) are checked for shapes and finite
-    outputs, and, like the U-Net, against `glovepose eval --calibration none` (mean and max angle
+    outputs, and, like the U-Net, against `glovepose eval --calibration-mode none` (mean and max angle
     error on the corpus's recording frames). The other way round, files of export_model (U-Net
     F16, FCN BF16, linear F32) give the same predictions in the tool as in PyTorch. So does a U-Net
     for a glove with 2 extra inputs (input planes 2 + 2, the extras at inputs 3 and 15), its planes
@@ -303,12 +303,12 @@ def run_cli(args: Sequence[str], cwd: Path) -> str:
 
 
 MODELS = {  # file stem -> train arguments
-    "unet": ["--model", "unet:4"],
-    "unet_f16": ["--model", "unet:4", "--dtype", "f16"],
-    "fcn": ["--model", "fcn:8"],
-    "fcn_f16": ["--model", "fcn:8", "--dtype", "f16"],
-    "linear": ["--model", "linear"],
-    "linear_f16": ["--model", "linear", "--dtype", "f16"],
+    "unet": ["--architecture", "unet:4"],
+    "unet_f16": ["--architecture", "unet:4", "--weights", "f16"],
+    "fcn": ["--architecture", "fcn:8"],
+    "fcn_f16": ["--architecture", "fcn:8", "--weights", "f16"],
+    "linear": ["--architecture", "linear"],
+    "linear_f16": ["--architecture", "linear", "--weights", "f16"],
 }
 #: Models written by export_model for the C++ tool to read: file stem -> (module, dtype).
 PY_MODELS = {
@@ -527,7 +527,7 @@ def test_cli_unet_extra_inputs_matches_predict() -> None:
 
 @test
 def test_cli_eval_matches() -> None:
-    """`glovepose eval --calibration none` vs PyTorch on the corpus's recording frames (kind 0, not
+    """`glovepose eval --calibration-mode none` vs PyTorch on the corpus's recording frames (kind 0, not
     outliers): the raw cell capacitances go into each model as they are, so no calibration is redone.
     Covers the tool's files and export_model's (the tool reads FCN and linear files only this way)."""
     d = cli_dir()
@@ -536,7 +536,7 @@ def test_cli_eval_matches() -> None:
     cells, truth = data["cells"][keep], data["angles"][keep].double()
     for stem in [*MODELS, *PY_MODELS]:
         report = json.loads(run_cli(["eval", "--model", f"{stem}.safetensors", "--data", "c.safetensors",
-                                     "--calibration", "none", "--json", "--threads", "1"], d))
+                                     "--calibration-mode", "none", "--json", "--threads", "1"], d))
         m, info = import_model_with_info(d / f"{stem}.safetensors")
         if isinstance(m, UNet):
             radians = unet_predict_radians(m, info, cells)

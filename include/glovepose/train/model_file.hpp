@@ -76,7 +76,7 @@ struct TrainedModel {
     std::optional<sensor::CalibrationRange> range = info.training_range(cell_names(info.inputs), glove.calibration().config());
     if (!range)
       throw Error(
-          "the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration training");
+          "the model has no training-set calibration range (metadata calibration_min/max), expected one for --calibration-mode training");
     return std::move(*range);
   }
 
