@@ -11,6 +11,7 @@
 #include <glovepose/train/training_setup.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdarg>
 #include <cstddef>
 #include <cstdio>
@@ -282,6 +283,11 @@ extern "C" {
 const char* glovepose_version(void) noexcept { return glovepose::kVersion; }
 
 int32_t glovepose_abi_version(void) noexcept { return GLOVEPOSE_C_ABI_VERSION; }
+
+double glovepose_row_time(double cycle_end, int32_t row, int32_t rows, double cycle_rate) noexcept {
+  if (rows < 1 || row < 0 || row >= rows || !(cycle_rate > 0.0) || !std::isfinite(cycle_rate)) return std::nan("");
+  return glovepose::io::RowClock{static_cast<std::size_t>(rows), cycle_rate}.time(cycle_end, static_cast<std::size_t>(row));
+}
 
 const char* glovepose_last_error(void) noexcept { return last_error_text; }
 

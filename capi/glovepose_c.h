@@ -337,6 +337,12 @@ typedef struct glovepose_calibration_step {
 GLOVEPOSE_C_API const char* glovepose_version(void) GLOVEPOSE_C_NOEXCEPT;
 /** @brief The ABI version the library was built with; compare with GLOVEPOSE_C_ABI_VERSION. */
 GLOVEPOSE_C_API int32_t glovepose_abi_version(void) GLOVEPOSE_C_NOEXCEPT;
+/** @brief When row `row` of a readout cycle that ends at `cycle_end` (seconds) was read, for a glove
+ * that reads `rows` rows per cycle at `cycle_rate` cycles per second: each row completes at the end
+ * of its slot of 1 / (rows * cycle_rate) s, the last one at `cycle_end`. For timestamping rows
+ * (glovepose_estimator_push_row) when the firmware stamps only whole cycles. NaN when row is outside
+ * 0..rows-1, rows < 1, or cycle_rate is not a positive finite number. */
+GLOVEPOSE_C_API double glovepose_row_time(double cycle_end, int32_t row, int32_t rows, double cycle_rate) GLOVEPOSE_C_NOEXCEPT;
 /** @brief The message of the last error on the calling thread ("" if none yet). Valid until the
  * next failing call on this thread; copy it to keep it. */
 GLOVEPOSE_C_API const char* glovepose_last_error(void) GLOVEPOSE_C_NOEXCEPT;

@@ -11,7 +11,7 @@
 // The session protocol (repeated exactly by test_capi.py): settings as in session_config(); the
 // dataset's leading calibration frames (kind 1) are streamed between start_calibration() and
 // finish_calibration(), then the remaining frames; row r of frame f is read at
-// timestamps[f] - (R - 1 - r) / (R * 60) (tests/test_estimator.cpp, row_time).
+// the dataset's row clock (io::RowClock; glovepose_row_time in the C ABI).
 //
 // Output line per pose (push_row returned Solved): "pose" frame row sequence timestamp oldest_age
 // flags rejected, 25 angles, 25 raw angles, 21 x (3 position + 4 rotation) joint floats; then a
@@ -52,15 +52,15 @@ int session(const std::string& model_path, const std::string& dataset_path) {
   const io::Dataset d = io::Dataset::read(dataset_path);
   if (d.row_count == 0) throw Error("dataset '" + dataset_path + "' has no raw rows, expected one simulated with --raw-rows");
   GlovePoseEstimator estimator(PoseModel::load(model_path), session_config());
-  std::size_t calibration_end = 0;
-  while (calibration_end < d.frames() && d.kind[calibration_end] == io::kKindCalibration) ++calibration_end;
+  const std::size_t calibration_end = d.first_session_frame();
   if (calibration_end > 0) estimator.start_calibration();
   long poses = 0;
+  const io::RowClock clock = d.row_clock();
   for (std::size_t f = 0; f < d.frames(); ++f) {
     if (f == calibration_end && calibration_end > 0) estimator.finish_calibration();
     for (std::size_t r = 0; r < d.row_count; ++r) {
       const double value = d.raw_rows[f * d.row_count + r];
-      const double timestamp = d.timestamps[f] - static_cast<double>(d.row_count - 1 - r) / (static_cast<double>(d.row_count) * 60.0);
+      const double timestamp = clock.time(d.timestamps[f], r);
       if (estimator.push_row(static_cast<int>(r), value, timestamp) == Status::Solved) {
         print_pose(f, static_cast<int>(r), estimator);
         ++poses;

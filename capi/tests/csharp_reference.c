@@ -366,7 +366,7 @@ int main(int argc, char** argv) {
       fprintf(out, "\n");
     }
     for (r = 0; r < rows; ++r) {
-      const double t = f / 60.0 + r / (rows * 60.0);
+      const double t = glovepose_row_time((f + 1) / 60.0, r, rows, 60.0);
       const double value = row_value(r, t);
       result = glovepose_estimator_push_row(estimator, r, value, t);
       fprintf(out, "push %d", r);

@@ -67,6 +67,14 @@ static int push_synthetic(glovepose_estimator* estimator, double t0, int frames)
 
 static void test_library(void) {
   CHECK(glovepose_abi_version() == GLOVEPOSE_C_ABI_VERSION);
+  /* The row clock: the last row of a cycle at its end, rows one slot of 1 / (rows * rate) apart. */
+  CHECK(glovepose_row_time(2.0, 179, 180, 60.0) == 2.0);
+  CHECK(fabs(glovepose_row_time(2.0, 0, 180, 60.0) - (2.0 - 179.0 / 10800.0)) < 1e-12);
+  CHECK(fabs(glovepose_row_time(2.0, 90, 180, 60.0) - glovepose_row_time(2.0, 89, 180, 60.0) - 1.0 / 10800.0) < 1e-12);
+  CHECK(glovepose_row_time(1.0, 0, 1, 50.0) == 1.0);
+  CHECK(isnan(glovepose_row_time(2.0, 180, 180, 60.0)) && isnan(glovepose_row_time(2.0, -1, 180, 60.0)));
+  CHECK(isnan(glovepose_row_time(2.0, 0, 0, 60.0)) && isnan(glovepose_row_time(2.0, 0, 180, 0.0)));
+  CHECK(isnan(glovepose_row_time(2.0, 0, 180, INFINITY)) && isnan(glovepose_row_time(2.0, 0, 180, NAN)));
   CHECK(strcmp(glovepose_version(), GLOVEPOSE_EXPECTED_VERSION) == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_SOLVED), "solved") == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_UNCALIBRATED), "uncalibrated") == 0);
@@ -382,7 +390,7 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
     for (r = 0; r < 180; ++r) {
       /* Row r sums two cells (a stand-in wiring; the solve finds some cells from any rows). */
       const glovepose_result result =
-          glovepose_estimator_push_row(e, r, cells[r % 44] + cells[(r / 15) % 44], t - (179 - r) / (180.0 * 60.0));
+          glovepose_estimator_push_row(e, r, cells[r % 44] + cells[(r / 15) % 44], glovepose_row_time(t, r, 180, 60.0));
       if (result == GLOVEPOSE_SOLVED) ++solved;
       if (result == GLOVEPOSE_UNCALIBRATED) ++uncalibrated;
       if (result != GLOVEPOSE_SOLVED && result != GLOVEPOSE_UNCALIBRATED && result != GLOVEPOSE_OK && result != GLOVEPOSE_NOT_READY)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import ctypes
 import enum
 import json
+import math
 
 import numpy as np
 
@@ -28,7 +29,7 @@ from . import _library
 from .dataset import load_dataset
 
 __all__ = ["PoseModel", "Estimator", "Pose", "PredictedPose", "XrHand", "XrAim", "XrAimFlag", "Latest", "LatestHand", "CalibrationStep",
-           "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "evaluate", "Status", "OK", "SOLVED",
+           "CalibrationProgress", "CalibrationSource", "PoseFlag", "GloveposeError", "InputError", "load_dataset", "evaluate", "row_time", "Status", "OK", "SOLVED",
            "NOT_READY", "UNCALIBRATED", "DOF_NAMES", "JOINT_NAMES", "JOINT_PARENTS", "XR_JOINT_NAMES", "XR_JOINT_PARENTS",
            "XR_ORIENTATION_VALID", "XR_POSITION_VALID", "XR_ORIENTATION_TRACKED", "XR_POSITION_TRACKED", "XR_LINEAR_VELOCITY_VALID",
            "XR_ANGULAR_VELOCITY_VALID"]
@@ -584,6 +585,16 @@ class Latest(_Closing):
         if getattr(self, "_handle", None):
             _lib.glovepose_latest_free(self._handle)
             self._handle = ctypes.c_void_p()
+
+
+def row_time(cycle_end: float, row: int, rows: int, cycle_rate: float) -> float:
+    """When row `row` of a readout cycle that ends at `cycle_end` (s) was read, `rows` rows per cycle at
+    `cycle_rate` cycles/s: each row completes at the end of its slot (glovepose_row_time). Timestamps
+    for Estimator.push_row when the firmware stamps whole cycles only. Raises ValueError when invalid."""
+    t = _lib.glovepose_row_time(float(cycle_end), int(row), int(rows), float(cycle_rate))
+    if math.isnan(t):
+        raise ValueError(f"row {row} of {rows} at {cycle_rate} cycles/s, expected 0 <= row < rows and a positive rate")
+    return t
 
 
 def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None, gloves=None, stride: int = 1,

@@ -166,6 +166,7 @@ _VOID = ctypes.c_void_p
 _SIGNATURES = {
     "glovepose_version": (ctypes.c_char_p, []),
     "glovepose_abi_version": (ctypes.c_int32, []),
+    "glovepose_row_time": (ctypes.c_double, [ctypes.c_double, ctypes.c_int32, ctypes.c_int32, ctypes.c_double]),
     "glovepose_last_error": (ctypes.c_char_p, []),
     "glovepose_result_name": (ctypes.c_char_p, [ctypes.c_int32]),
     "glovepose_dof_name": (ctypes.c_char_p, [ctypes.c_int32]),

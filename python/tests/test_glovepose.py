@@ -117,6 +117,7 @@ class Session(unittest.TestCase):
     def test_estimator_poses_equal_the_cpp_api(self):
         data = glovepose.load_dataset(self.dataset)
         rows, stamps, kind = data["raw_rows"].tolist(), data["timestamps"].tolist(), data["kind"]
+        rate = float(data["metadata"]["frame_rate"])  # the row clock of capi/tests/cpp_reference.cpp
         reference = subprocess.run([os.environ["GLOVEPOSE_CPP_REFERENCE"], "session", str(MODEL), str(self.dataset)],
                                    check=True, capture_output=True, text=True).stdout
         expected = [line.split() for line in reference.splitlines() if line.startswith("pose")]
@@ -132,7 +133,7 @@ class Session(unittest.TestCase):
             if f == calibration_end:
                 estimator.finish_calibration()
             for r in range(180):
-                if estimator.push_row(r, rows[f][r], stamps[f] - (179 - r) / (180 * 60.0)) == glovepose.SOLVED:
+                if estimator.push_row(r, rows[f][r], glovepose.row_time(stamps[f], r, 180, rate)) == glovepose.SOLVED:
                     pose, joints = estimator.pose(), estimator.joints()
                     self.assertEqual(pose.angles.shape, (25,))
                     self.assertEqual(joints.shape, (21, 7))
@@ -532,6 +533,15 @@ class Abi(unittest.TestCase):
         found = re.search(rf"#define GLOVEPOSE_{name} \(?(-?(?:0x[0-9A-Fa-f]+|\d+))u?\)?\s", self.HEADER)
         self.assertIsNotNone(found, name)
         return int(found.group(1), 0)
+
+    def test_row_time_is_the_readout_clock(self):
+        # The last row of a cycle at its end; rows one slot of 1 / (rows * rate) apart; invalid input refused.
+        self.assertEqual(glovepose.row_time(2.0, 179, 180, 60.0), 2.0)
+        self.assertAlmostEqual(glovepose.row_time(2.0, 0, 180, 60.0), 2.0 - 179 / 10800, delta=1e-12)
+        self.assertAlmostEqual(glovepose.row_time(2.0, 90, 180, 60.0) - glovepose.row_time(2.0, 89, 180, 60.0), 1 / 10800, delta=1e-12)
+        for bad in [(2.0, 180, 180, 60.0), (2.0, -1, 180, 60.0), (2.0, 0, 0, 60.0), (2.0, 0, 180, 0.0)]:
+            with self.assertRaisesRegex(ValueError, "expected 0 <= row < rows"):
+                glovepose.row_time(*bad)
 
     def test_constants_are_the_headers(self):
         self.assertEqual((_library.DOF_COUNT, _library.JOINT_COUNT, _library.XR_JOINT_COUNT),

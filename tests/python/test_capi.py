@@ -8,7 +8,7 @@ A short session is simulated with raw readout rows (`glovepose simulate --raw-ro
   which prints every pose with %.17g (an exact round trip of a double).
 Protocol: the paper's readout (mean of 5, a solve every 16 rows), 1-euro smoothing (60, 1, 0.5, 1)
 and joint transforms on; calibration frames (kind 1) between start and finish of the on-the-fly
-calibration; row r of frame f at timestamps[f] - (R - 1 - r) / (R * 60).
+calibration; row r of frame f at glovepose_row_time(timestamps[f], r, R, the dataset's frame rate).
 
 Both run the same code built with the same flags (neither uses -march=native), on the same doubles
 (the dataset's float32 rows widened exactly), so the assertion is exact equality: the largest
@@ -64,6 +64,7 @@ def load_library(path: str) -> ctypes.CDLL:
     p = ctypes.POINTER
     signatures = {
         "glovepose_abi_version": (ctypes.c_int32, []),
+        "glovepose_row_time": (ctypes.c_double, [ctypes.c_double, ctypes.c_int32, ctypes.c_int32, ctypes.c_double]),
         "glovepose_last_error": (ctypes.c_char_p, []),
         "glovepose_model_load": (ctypes.c_int32, [ctypes.c_char_p, ctypes.c_int32, ctypes.c_char_p, p(ctypes.c_void_p)]),
         "glovepose_model_free": (None, [ctypes.c_void_p]),
@@ -115,7 +116,7 @@ def pose_record(frame: int, row: int, pose: Pose, joints) -> list:
     return record
 
 
-def stream_through_capi(lib, model, rows: np.ndarray, timestamps: np.ndarray, kind: np.ndarray):
+def stream_through_capi(lib, model, rows: np.ndarray, timestamps: np.ndarray, kind: np.ndarray, rate: float):
     """The session protocol of cpp_reference.cpp, through the C ABI. Returns (records, last pose per frame)."""
     config = EstimatorConfig()
     assert lib.glovepose_estimator_config_default(ctypes.byref(config)) == OK
@@ -143,7 +144,7 @@ def stream_through_capi(lib, model, rows: np.ndarray, timestamps: np.ndarray, ki
             if lib.glovepose_calibration_finish(estimator) != OK:
                 raise RuntimeError(lib.glovepose_last_error().decode())
         for r in range(row_count):
-            timestamp = stamps[f] - (row_count - 1 - r) / (row_count * 60.0)
+            timestamp = lib.glovepose_row_time(stamps[f], r, row_count, rate)
             if push_row(estimator, r, row_values[f][r], timestamp) == SOLVED:
                 assert lib.glovepose_estimator_get_pose(estimator, ctypes.byref(pose)) == OK
                 assert lib.glovepose_estimator_get_joints(estimator, joints, JOINTS) == OK
@@ -213,7 +214,8 @@ def main() -> int:
     subprocess.run([cli, "simulate", "--world", "clean", "--seed", "41", "--subjects", "1", "--sessions", "1", "--gloves", "1",
                     "--minutes", "0.1", "--calibration-seconds", "3", "--raw-rows", "--threads", "1", "--out", str(dataset)],
                    check=True, stdout=subprocess.DEVNULL)
-    tensors, _ = safetensors_io.load(dataset)
+    tensors, metadata = safetensors_io.load(dataset)
+    rate = float(metadata["frame_rate"])
     rows = tensors["raw_rows"].numpy()
     timestamps = tensors["timestamps"].numpy()
     kind = tensors["kind"].numpy()
@@ -221,7 +223,7 @@ def main() -> int:
 
     reference_run = subprocess.run([reference, "session", str(MODEL), str(dataset)], check=True, capture_output=True, text=True)
     expected, expected_end = parse_reference(reference_run.stdout)
-    got, frame_poses, source = stream_through_capi(lib, model, rows, timestamps, kind)
+    got, frame_poses, source = stream_through_capi(lib, model, rows, timestamps, kind, rate)
     lib.glovepose_model_free(model)
 
     checks.check(len(got) > 100, f"the session gives poses (got {len(got)})")

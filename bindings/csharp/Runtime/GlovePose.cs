@@ -52,6 +52,9 @@ namespace GlovePose
         public static string Version { get { return Utf8(Native.glovepose_version()); } }
         /// <summary>The ABI the native library was built with; this package speaks Counts.AbiVersion.</summary>
         public static int AbiVersion { get { return Native.glovepose_abi_version(); } }
+        /// <summary>When row `row` of a readout cycle ending at `cycleEnd` (s) was read, `rows` rows per
+        /// cycle at `cycleRate` cycles/s: each row at the end of its slot (glovepose_row_time); NaN when invalid.</summary>
+        public static double RowTime(double cycleEnd, int row, int rows, double cycleRate) { return Native.glovepose_row_time(cycleEnd, row, rows, cycleRate); }
         /// <summary>The calling thread's last error message ("" if none).</summary>
         public static string LastError { get { return Utf8(Native.glovepose_last_error()); } }
         public static string ResultName(Status status) { return Utf8(Native.glovepose_result_name((int)status)); }
