@@ -36,12 +36,7 @@ struct Recording {
 };
 
 Recording simulate_recording(std::uint64_t seed, double seconds) {
-  sim::CorpusConfig config;
-  config.seed = seed;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = seconds / 60.0;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(seed, seconds, 3.0);
   config.recording.raw_rows = true;
   Recording out;
   out.data = sim::to_dataset(sim::simulate_corpus(config), config);

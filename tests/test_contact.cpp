@@ -202,12 +202,7 @@ TEST_CASE("contact stage: apply allocates nothing, bad settings are refused at s
 
 TEST_CASE("contact stage in the estimator: off by default, when on only the poses it closes change, without allocating") {
   CHECK_FALSE(EstimatorConfig{}.contact.has_value());
-  sim::CorpusConfig config;
-  config.seed = 31;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = 40.0 / 60.0;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  const sim::CorpusConfig config = sim::CorpusConfig::one_session(31, 40.0, 3.0);
   const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors");
   EstimatorConfig with;

@@ -37,15 +37,8 @@ struct Session {
 };
 
 Session simulate_session(hand::Handedness side) {
-  sim::CorpusConfig config;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(41, 6.0, 3.0);
   config.handedness = side;
-  config.seed = 41;
-  config.subjects = 1;
-  config.sessions = 1;
-  config.gloves = 1;
-  config.minutes = 0.1;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
   config.recording.raw_rows = true;
   config.recording.readout.solve_every = sim::kRows;
   config.recording.noise.drop_probability = 0.0;

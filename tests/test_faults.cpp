@@ -27,16 +27,10 @@ constexpr std::size_t kFaultBegin = 120, kFaultEnd = 240;  // frames of the sess
 
 const io::Dataset& faults_session() {
   static const io::Dataset d = [] {
-    sim::CorpusConfig config;
-    config.seed = 43;
-    config.subjects = 1;
-    config.sessions = 1;
-    config.gloves = 1;
-    config.minutes = 0.15;  // 9 s
+    sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
     // The default protocol: the guided calibration sequence (30 s), then the session.
     config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
     config.calibration_seconds = config.guided_calibration->total_seconds();
-    config.threads = 1;
     config.recording.raw_rows = true;  // default noise: readout jitter, rare spikes and drops
     return sim::to_dataset(sim::simulate_corpus(config), config);
   }();

@@ -266,14 +266,7 @@ TEST_CASE("lag: predictions that trail the truth by a whole or half number of fr
 }
 
 TEST_CASE("replay: re-solving the raw rows with the recorder's readout gives the recorded cells") {
-  sim::CorpusConfig config;
-  config.seed = 43;
-  config.subjects = 1;
-  config.sessions = 1;
-  config.gloves = 1;
-  config.minutes = 0.05;
-  config.calibration_seconds = 2.0;
-  config.threads = 1;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 3.0, 2.0);
   config.recording.raw_rows = true;
   config.recording.readout.solve_every = sim::kRows;  // a solve at every cycle end, whatever the start
   config.recording.noise.drop_probability = 0.0;      // a drop would move the solves off the cycle ends

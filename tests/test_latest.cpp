@@ -88,12 +88,7 @@ TEST_CASE("latest: a writer publishing as fast as it can and two readers: never 
 }
 
 TEST_CASE("latest: an estimator's thread publishes every pose, two readers see whole hand states in order") {
-  sim::CorpusConfig config;
-  config.seed = 31;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = 4.0 / 60.0;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(31, 4.0, 3.0);
   config.recording.raw_rows = true;
   const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   EstimatorConfig estimator_config;

@@ -242,12 +242,7 @@ TEST_CASE("aim: per-frame updates allocate nothing") {
 }
 
 TEST_CASE("aim: the estimator keeps the pinch state of its poses") {
-  sim::CorpusConfig config;
-  config.seed = 31;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = 6.0 / 60.0;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  const sim::CorpusConfig config = sim::CorpusConfig::one_session(31, 6.0, 3.0);
   const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   GlovePoseEstimator estimator(PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors"));
   CHECK_FALSE(estimator.aim().active);

@@ -34,14 +34,7 @@ constexpr const char* kPlatformStorageNames[] = {"f32", "fixed16", "f16", "bf16"
 // A simulated subject's 2 s session after its calibration sequence, its solved cells normalised by
 // the calibration sequence's range: the network's input, kept in the fixture as float32.
 std::vector<float> simulated_normalized_cells(long& frames, int& cells) {
-  sim::CorpusConfig config;
-  config.seed = 4242;
-  config.subjects = 1;
-  config.sessions = 1;
-  config.gloves = 1;
-  config.minutes = 2.0 / 60.0;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  const sim::CorpusConfig config = sim::CorpusConfig::one_session(4242, 2.0, 3.0);
   const io::Dataset d = sim::to_dataset(sim::simulate_corpus(config), config);
   const std::size_t first = d.first_session_frame();
   cells = static_cast<int>(d.cell_count);

@@ -167,12 +167,7 @@ TEST_CASE("team: an idle team of two uses under 1% of a core") {
 }
 
 TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shipped U-Net, without allocating per row") {
-  sim::CorpusConfig config;
-  config.seed = 41;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = 2.0 / 60.0;
-  config.calibration_seconds = 2.0;
-  config.threads = 1;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(41, 2.0, 2.0);
   config.recording.raw_rows = true;
   const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");

@@ -50,12 +50,7 @@ struct Session {
 };
 
 Session simulate_session() {
-  sim::CorpusConfig config;
-  config.seed = 7;
-  config.subjects = config.sessions = config.gloves = 1;
-  config.minutes = 0.25;
-  config.calibration_seconds = 3.0;
-  config.threads = 1;
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(7, 15.0, 3.0);
   config.recording.raw_rows = true;
   Session s;
   s.data = sim::to_dataset(sim::simulate_corpus(config), config);

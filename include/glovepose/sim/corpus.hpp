@@ -52,6 +52,18 @@ struct CorpusConfig {
   /// sheet turned over (the same cells at the mirrored places).
   hand::Handedness handedness = hand::Handedness::Right;
 
+  /// @brief One person, one glove, one session of `seconds` after a `calibration_seconds`
+  /// calibration sequence, on one thread: the simulated user of tests, benchmarks and examples.
+  static CorpusConfig one_session(std::uint64_t seed, double seconds, double calibration_seconds) {
+    CorpusConfig c;
+    c.seed = seed;
+    c.subjects = c.sessions = c.gloves = 1;
+    c.minutes = seconds / 60.0;
+    c.calibration_seconds = calibration_seconds;
+    c.threads = 1;
+    return c;
+  }
+
   /// @brief Throws glovepose::Error naming the first setting out of range.
   void validate() const {
     const auto need = [](bool ok, const std::string& what) {
