@@ -5,9 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <string>
 
 #include "../hand/dofs.hpp"
+#include "../model/architecture.hpp"
 #include "parameters.hpp"
 #include "../core/thread_pool.hpp"
 
@@ -20,8 +20,8 @@ inline constexpr int kTargets = static_cast<int>(hand::kDofCount);
 class TrainableNetwork {
  public:
   virtual ~TrainableNetwork() = default;
-  /// @brief "unet" or "fcn" (the weight file's metadata).
-  virtual std::string architecture() const = 0;
+  /// @brief Architecture::UNet or Architecture::Fcn (the weight file's metadata).
+  virtual model::Architecture architecture() const = 0;
   /// @brief Its size parameter (U-Net base width, FCN hidden width).
   virtual int width() const = 0;
   /// @brief Cell values per frame.

@@ -44,7 +44,7 @@ class TrainableFcn final : public TrainableNetwork {
     }
   }
 
-  std::string architecture() const override { return "fcn"; }
+  model::Architecture architecture() const override { return model::Architecture::Fcn; }
   int width() const override { return hidden_; }
   int inputs() const override { return widths_.front(); }
   int max_batch() const override { return max_batch_; }

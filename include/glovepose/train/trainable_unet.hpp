@@ -94,7 +94,7 @@ class TrainableUNet final : public TrainableNetwork {
     output_.resize(static_cast<std::size_t>(max_batch) * kTargets);
   }
 
-  std::string architecture() const override { return "unet"; }
+  model::Architecture architecture() const override { return model::Architecture::UNet; }
   int width() const override { return width_; }
   int inputs() const override { return map_.cell_count(); }
   int max_batch() const override { return max_batch_; }
