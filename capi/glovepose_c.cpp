@@ -893,9 +893,11 @@ void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) noexcept {
 
 namespace {
 
-// The options of glovepose_evaluate (glovepose_c.h names them; the same as `glovepose eval`'s).
-// Throws glovepose::Error naming a key that is unknown or of the wrong type.
-glovepose::train::EvaluationOptions evaluation_options(const char* text, const glovepose::io::Dataset& data) {
+// The options of glovepose_evaluate (glovepose_c.h names them; the same as `glovepose eval`'s) for
+// `model`. Throws glovepose::Error naming a key that is unknown or of the wrong type, and a glove
+// description other than the model's (as eval --glove refuses it).
+glovepose::train::EvaluationOptions evaluation_options(const char* text, const glovepose::io::Dataset& data,
+                                                       const glovepose::train::TrainedModel& model) {
   using glovepose::Error;
   namespace json = glovepose::io::json;
   glovepose::train::EvaluationOptions o;
@@ -934,10 +936,24 @@ glovepose::train::EvaluationOptions evaluation_options(const char* text, const g
       mean_window = std::min(whole(v, key, 1), 1L << 20);
     } else if (key == "contact") {
       o.contact = flag(v, key);
+    } else if (key == "weights") {
+      bool named = false;
+      for (const auto storage : {glovepose::nn::WeightStorage::F32, glovepose::nn::WeightStorage::F16, glovepose::nn::WeightStorage::BF16,
+                                 glovepose::nn::WeightStorage::Fixed16})
+        if (v.is_string() && v.get<std::string>() == glovepose::train::weights_word(storage)) o.weights = storage, named = true;
+      if (!named)
+        throw Error("options_json: \"weights\" is " + json::describe(v) + ", expected \"f32\", \"f16\", \"bf16\" or \"fixed16\"");
+    } else if (key == "glove") {
+      if (!v.is_string()) throw Error("options_json: \"glove\" is " + json::describe(v) + ", expected a glove description file's path");
+      const glovepose::grid::GloveDescription glove = glovepose::grid::GloveDescription::read(v.get<std::string>());
+      if (glove != model.glove)
+        throw Error("options_json: the glove of '" + v.get<std::string>() + "' ('" + glove.id() + "', " + std::to_string(glove.cell_count()) +
+                    " cells) is not the one the model was trained for ('" + model.glove.id() + "', " +
+                    std::to_string(model.glove.cell_count()) + " cells), expected the same description");
     } else {
       throw Error("options_json: unknown key \"" + key +
                   "\", expected subjects, exclude_subjects, sessions, gloves, stride, calibration_mode, replay_rows, mean_window, "
-                  "contact or threads");
+                  "contact, threads, weights or glove");
     }
   }
   if (mean_window && !replay) throw Error("options_json: \"mean_window\" needs \"replay_rows\": true");
@@ -973,7 +989,7 @@ glovepose_result glovepose_evaluate(const char* model_path, const char* dataset_
   }
   glovepose::train::EvaluationOptions options;
   try {
-    options = evaluation_options(options_json, *data);
+    options = evaluation_options(options_json, *data, *model);
   } catch (...) {
     return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
   }

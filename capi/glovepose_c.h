@@ -562,7 +562,10 @@ GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_aim(const glovepose_lat
  * "exclude_subjects", "sessions", "gloves" (arrays of ids >= 0), "stride" (>= 1), "calibration_mode"
  * ("none", "training", "onthefly" or "guided"; default the model's), "replay_rows" (true: replay the
  * raw rows through the estimator's readout), "mean_window" (>= 1, with replay_rows), "contact"
- * (true: the contact stage before scoring), "threads" (>= 0; 0: all cores).
+ * (true: the contact stage before scoring), "threads" (>= 0; 0: all cores), "weights" ("f32",
+ * "f16", "bf16" or "fixed16": how the network holds its weights, as glovepose_model_load's
+ * weight_storage; the report's "weights"), "glove" (a glove description file's path: refused unless
+ * it is the model's glove).
  * @param out_json receives the report, NUL-terminated UTF-8 JSON, owned by the library and valid on
  * this thread until its next glovepose_evaluate call (NULL on failure).
  * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE (a file, or data the model

@@ -599,14 +599,20 @@ def row_time(cycle_end: float, row: int, rows: int, cycle_rate: float) -> float:
 
 def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None, gloves=None, stride: int = 1,
              calibration_mode: str | None = None, replay_rows: bool = False, mean_window: int | None = None, contact: bool = False,
-             threads: int = 0) -> dict:
+             threads: int = 0, weights: str = "f32", glove=None) -> dict:
     """Scores model file `model` on dataset file `data` (glovepose simulate or import): the report
     `glovepose eval --json` prints, as a dict (the library's train::evaluate through
     glovepose_evaluate). The options are eval's: subjects, exclude_subjects, sessions, gloves (lists
     of ids; None: all), stride, calibration_mode ("none", "training", "onthefly", "guided"; None: the
-    model's), replay_rows with mean_window, contact, threads (0: all cores). Raises GloveposeError
-    with the library's message."""
-    options = {"stride": stride, "replay_rows": replay_rows, "contact": contact, "threads": threads}
+    model's), replay_rows with mean_window, contact, threads (0: all cores), weights (how the network
+    holds them, as PoseModel's: "f32", "f16", "bf16" or "fixed16"; the report's "weights") and glove
+    (a glove description file the data was recorded with: refused unless it is the model's). Raises
+    GloveposeError with the library's message."""
+    if weights not in _WEIGHTS:
+        raise ValueError(f"weights {weights!r}, expected one of {sorted(_WEIGHTS)}")
+    options = {"stride": stride, "replay_rows": replay_rows, "contact": contact, "threads": threads, "weights": weights}
+    if glove is not None:
+        options["glove"] = str(glove)
     for key, ids in (("subjects", subjects), ("exclude_subjects", exclude_subjects), ("sessions", sessions), ("gloves", gloves)):
         if ids is not None:
             options[key] = [int(i) for i in ids]

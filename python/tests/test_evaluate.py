@@ -2,12 +2,14 @@
 `glovepose eval --json` on the same model and dataset files: the same report, key for key, every
 string and count equal and every other number within a relative 1e-5 (the C library is built for
 baseline x86-64, the tool for this machine's instruction set: sums of floats in another order), with
-the default options and with eval's selection, calibration, row replay and
-contact options; bad options and files raise GloveposeError with the library's message. The tool's
+the default options and with eval's selection, calibration, row replay, contact and weight-storage
+options (the report naming the storage); another glove's description refused by both, naming both
+gloves; bad options and files raise GloveposeError with the library's message. The tool's
 old spellings (train --model ARCH, --calibration MODE, --dtype) do what the new ones do and say so.
 
 Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CLI.
 """
+import ctypes
 import json
 import os
 import struct
@@ -81,6 +83,38 @@ class Evaluate(unittest.TestCase):
         self.assertLess(report["frames"], whole["frames"] * 0.6)  # one of two people
         excluded = glovepose.evaluate(MODEL, self.data, exclude_subjects=[0], threads=1)
         self.assertEqual(excluded, glovepose.evaluate(MODEL, self.data, subjects=[1], threads=1))  # the same library: equal
+
+    def test_weights_and_glove_are_evals(self):
+        cli = ["--model", str(MODEL), "--data", str(self.data), "--subjects", "1", "--threads", "1"]
+        f32 = glovepose.evaluate(MODEL, self.data, subjects=[1], threads=1)
+        self.assertEqual(f32["weights"], "f32")
+        for weights in ("f16", "bf16", "fixed16"):
+            with self.subTest(weights=weights):
+                report = glovepose.evaluate(MODEL, self.data, subjects=[1], weights=weights, threads=1)
+                tool = cli_eval(*cli, "--weights", weights)
+                if weights == "fixed16":  # acc - 1.5 * sum(x) cancels: the instruction sets' float orders differ by ~1e-4 deg
+                    self.assertEqual((report["weights"], report["frames"]), (tool["weights"], tool["frames"]))
+                    self.assertLess(abs(report["mean_deg"] - tool["mean_deg"]), 1e-3)
+                else:
+                    self.assertSameReport(report, tool)
+                self.assertEqual(report["weights"], weights)
+                self.assertNotEqual(report["mean_deg"], f32["mean_deg"])  # the storage is in use
+                self.assertLess(abs(report["mean_deg"] - f32["mean_deg"]), 0.2)  # rounding only (BF16 the most)
+        # Another glove's description (the fixture's): refused as eval --glove refuses it, naming both.
+        other = Path(self.work.name) / "other_glove.json"
+        other.write_text(glovepose.load_dataset(ROOT / "tests" / "fixtures" / "unet_w4_e2.safetensors")["metadata"]["glove_description"])
+        both = r"'fixture-e2', \d+ cells\) is not the one the model .*'glauser2019-44', 44 cells"
+        refused = subprocess.run([os.environ["GLOVEPOSE_CLI"], "eval", *cli, "--glove", str(other)], capture_output=True, text=True)
+        self.assertEqual(refused.returncode, 1)
+        self.assertRegex(refused.stderr, both)
+        with self.assertRaisesRegex(glovepose.GloveposeError, both):
+            glovepose.evaluate(MODEL, self.data, glove=other)
+        with self.assertRaisesRegex(ValueError, "weights 'f64', expected one of"):
+            glovepose.evaluate(MODEL, self.data, weights="f64")
+        report = ctypes.c_char_p()  # the C ABI's own check, below the package's
+        self.assertNotEqual(glovepose._lib.glovepose_evaluate(str(MODEL).encode(), str(self.data).encode(), b'{"weights": "F16"}',
+                                                              ctypes.byref(report)), 0)
+        self.assertIn('"weights" is "F16", expected "f32", "f16", "bf16" or "fixed16"', glovepose._lib.glovepose_last_error().decode())
 
     def test_bad_options_and_files_raise_with_the_librarys_message(self):
         with self.assertRaisesRegex(glovepose.GloveposeError, "calibration 'sideways', expected none, training, onthefly or guided"):
