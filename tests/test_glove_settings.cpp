@@ -143,7 +143,7 @@ TEST_CASE("glove settings: a model for the glove records and normalises by the g
   info.to(file);
   const model::ModelInfo back = model::ModelInfo::from(file);
   CHECK(back.joint_limits_max[index] == 110.0 * kPi / 180.0);
-  CHECK(grid::GloveDescription::from_metadata(back.glove_description) == own);
+  CHECK(back.glove_description == own);
 }
 
 TEST_CASE("glove settings: the estimator takes the glove's median window and flat rule unless told otherwise") {

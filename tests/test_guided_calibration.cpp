@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include "test_files.hpp"
+#include "unet_reference.hpp"
 
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/calibration/sequence.hpp>
@@ -13,6 +14,7 @@
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/guided_calibration.hpp>
 #include <glovepose/train/lag.hpp>
+#include <glovepose/train/model_file.hpp>
 #include <glovepose/train/replay.hpp>
 
 #include <cmath>
@@ -388,4 +390,100 @@ TEST_CASE("estimator: a user who explores freely instead of following the sequen
       }
     }
   }
+}
+
+TEST_CASE("model file: typed metadata (glove, pose offset, trained DoFs) is parsed once and written back byte for byte") {
+  // A glove of its own (so the file describes it), a pose offset for it, and a subset of trained DoFs.
+  const grid::GloveDescription builtin = grid::GloveDescription::glauser2019();
+  const grid::GloveDescription glove("own-44", builtin.cell_names(), builtin.map());
+  const int cells = glove.cell_count();
+  const Eigen::Index features = 2 * (25 + cells);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd w(25, features);
+  for (Eigen::Index i = 0; i < w.size(); ++i) w(i) = normal(rng) * 1e-3;
+  Eigen::VectorXd bias(25);
+  for (Eigen::Index i = 0; i < 25; ++i) bias(i) = normal(rng) * 1e-2;
+  const Eigen::VectorXd mean = Eigen::VectorXd::Constant(features, 0.1), scale = Eigen::VectorXd::Constant(features, 0.5);
+  model::ModelInfo info = train::make_model_info(model::Architecture::UNet, 4, glove, model::CalibrationMode::OnTheFly, nullptr);
+  info.pose_offset.emplace(two_steps(), cells, w, bias, mean, scale, 1.2);
+  hand::DofSet trained = hand::all_dofs();
+  trained[hand::dof_from_name("thumb_base_twist")] = trained[hand::dof_from_name("pinky_base_twist")] = false;
+  info.labelled_dofs = trained;
+  const nn::TensorMap tensors = test::random_tensors(nn::UNet<>::expected_tensors(4), 11);
+  const std::string first = test::temp_path("typed_metadata_a.safetensors"), second = test::temp_path("typed_metadata_b.safetensors");
+  train::save_model(first, info, tensors, {{"training_seed", "7"}});
+
+  // The metadata's JSON and lists arrive parsed; what the file says is what was written.
+  train::TrainedModel loaded = train::load_model(first);
+  REQUIRE(loaded.info.glove_description);
+  CHECK(*loaded.info.glove_description == glove);
+  CHECK(loaded.glove == glove);
+  REQUIRE(loaded.info.pose_offset);
+  CHECK(loaded.info.pose_offset->cells() == cells);
+  CHECK(loaded.info.pose_offset->sequence().id() == "test");
+  Eigen::VectorXd f(features);
+  for (Eigen::Index i = 0; i < features; ++i) f(i) = normal(rng);
+  const hand::Angles want = info.pose_offset->offsets(f), got = loaded.info.pose_offset->offsets(f);
+  for (std::size_t d = 0; d < 25; ++d) CHECK(got[d] == want[d]);  // the JSON keeps every double exactly
+  CHECK(loaded.info.labelled_dofs == trained);
+  CHECK(loaded.metadata.at("labelled_dofs") == hand::dof_set_text(trained));
+  // Written again from the typed fields alone (and the provenance), the file is the same bytes.
+  train::save_model(second, loaded.info, loaded.network->parameters().to_tensors(), {{"training_seed", loaded.metadata.at("training_seed")}});
+  const std::string bytes = test::slurp(first);
+  CHECK(!bytes.empty());
+  CHECK(test::slurp(second) == bytes);
+  // The estimator's model reads the same fields from the same reader.
+  const auto pose_model = PoseModel::load(first);
+  CHECK(pose_model->glove() == glove);
+  CHECK(pose_model->labelled_dofs() == trained);
+  REQUIRE(pose_model->pose_offset());
+  CHECK(pose_model->pose_offset()->offsets(f)[3] == want[3]);
+
+  // Errors still name the key and what was expected.
+  nn::WeightFile file = nn::WeightFile::read(first);
+  file.metadata["glove_description"] = "{\"format\": \"glovepose-glove\"}";
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'glove_description': glove description: "), Error);
+  file = nn::WeightFile::read(first);
+  file.metadata["pose_offset"] = "{}";
+  CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("pose offset model 'metadata 'pose_offset''"), Error);
+  info.labelled_dofs = hand::DofSet{};
+  CHECK_THROWS_WITH_AS(info.to(file), doctest::Contains("labelled_dofs names no DoF"), Error);
+}
+
+TEST_CASE("model file: the shipped and fixture models load; the shipped default reads and writes back byte for byte") {
+  const std::string root = std::string(GLOVEPOSE_SOURCE_DIR);
+  for (const std::string& path : {root + "/models/glovepose_fcn512.safetensors", root + "/models/glovepose_unet64.safetensors",
+                                  root + "/tests/fixtures/unet_w4.safetensors", root + "/tests/fixtures/unet_w4_e2.safetensors"}) {
+    CAPTURE(path);
+    const model::ModelFile file = model::load_model_file(path, [](model::ModelFile&& f) { return std::move(f); });
+    CHECK_NOTHROW(PoseModel::load(path));
+    CHECK_NOTHROW(train::load_model(path));
+    // Files older writers made (other number spellings) come back in today's spelling: once
+    // rewritten, a rewrite changes nothing.
+    nn::WeightFile again;
+    again.tensors = file.tensors;
+    again.metadata = file.metadata;
+    file.info.to(again);
+    const model::ModelInfo reread = model::ModelInfo::from(nn::WeightFile::parse(again.serialize()));
+    nn::WeightFile twice;
+    twice.tensors = file.tensors;
+    twice.metadata = file.metadata;
+    reread.to(twice);
+    CHECK(twice.serialize() == again.serialize());
+    CHECK(reread.labelled_dofs == file.info.labelled_dofs);
+    CHECK(reread.glove_description == file.info.glove_description);
+    CHECK(reread.pose_offset.has_value() == file.info.pose_offset.has_value());
+  }
+  // The shipped default was written by this code: read, its F16 tensors widened, and written
+  // again as F16, it is the same file.
+  const model::ModelFile shipped = model::load_model_file(kShippedModel, [](model::ModelFile&& f) { return std::move(f); });
+  REQUIRE(shipped.info.pose_offset);
+  nn::WeightFile file;
+  file.tensors = shipped.tensors;
+  file.metadata = shipped.metadata;
+  shipped.info.to(file);
+  const std::string path = test::temp_path("shipped_again.safetensors");
+  file.write(path, io::DType::F16);
+  CHECK(test::slurp(path) == test::slurp(kShippedModel));
 }

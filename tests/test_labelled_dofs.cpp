@@ -180,7 +180,7 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   for (float& v : b) v = u(rng);
   train::TrainedModel model;
   model.info = train::make_model_info("linear", 0, grid::GloveDescription::glauser2019(), model::CalibrationMode::None, nullptr);
-  model.info.labelled_dofs = hand::dof_set_text(kSubset);
+  model.info.labelled_dofs = kSubset;
   model.linear.emplace(cells, 25, w, b);
   train::Samples samples;
   samples.cells = cells;
@@ -204,7 +204,7 @@ TEST_CASE("labelled DoFs: a model trained without some DoFs reads the rest pose 
   nn::WeightFile file;
   model.info.to(file);
   CHECK(file.metadata.at("labelled_dofs") == hand::dof_set_text(kSubset));
-  CHECK(model::ModelInfo::from(file).labelled() == kSubset);
+  CHECK(model::ModelInfo::from(file).labelled_dofs == kSubset);
   file.metadata["labelled_dofs"] = "index_base_flexion,elbow";
   CHECK_THROWS_WITH_AS(model::ModelInfo::from(file), doctest::Contains("metadata 'labelled_dofs': 'elbow' is not a DoF"), Error);
 

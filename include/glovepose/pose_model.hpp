@@ -19,6 +19,7 @@
 #include "grid/glove_description.hpp"
 #include "grid/grid_map.hpp"
 #include "hand/dofs.hpp"
+#include "model/model_file.hpp"
 #include "model/model_info.hpp"
 #include "pose_network.hpp"
 #include "sensor/calibration.hpp"
@@ -54,14 +55,10 @@ class PoseModel {
   /// @brief Loads a model file (weights_format.md). Throws glovepose::Error naming the file and what
   /// is wrong: unreadable or malformed file, not a U-Net or FCN, or a glove or wiring that does not fit it.
   static std::shared_ptr<const PoseModel> load(const std::string& path, PoseModelOptions options = {}) {
-    const nn::WeightFile file = nn::WeightFile::read(path);
-    try {
-      model::ModelInfo info = model::ModelInfo::from(file);
-      Network network = Network::from_tensors(info, file.tensors, options.storage);
-      return std::make_shared<const PoseModel>(std::move(info), std::move(network), std::move(options));
-    } catch (const Error& e) {
-      throw Error("model file '" + path + "': " + e.what());
-    }
+    return model::load_model_file(path, [&options](model::ModelFile&& file) {
+      Network network = Network::from_tensors(file.info, file.tensors, options.storage);
+      return std::make_shared<const PoseModel>(std::move(file.info), std::move(network), std::move(options));
+    });
   }
 
   /// @brief A model from its parts (see load()). Throws glovepose::Error when the glove's cell count
@@ -87,15 +84,11 @@ class PoseModel {
       solver_ = std::make_shared<const Solver>(*layout);
     }
     limits_ = info_.joint_limits();
-    labelled_ = info_.labelled();
-    all_labelled_ = labelled_ == hand::all_dofs();
+    all_labelled_ = info_.labelled_dofs == hand::all_dofs();
     rest_normalized_ = limits_.normalize(limits_.rest());
-    if (!info_.pose_offset.empty()) {
-      pose_offset_.emplace(calibration::PoseOffsetModel::parse(info_.pose_offset, "metadata 'pose_offset'"));
-      if (pose_offset_->cells() != glove_.cell_count())
-        throw Error("metadata 'pose_offset' reads " + std::to_string(pose_offset_->cells()) + " cells, expected " +
-                    std::to_string(glove_.cell_count()) + " (the glove's)");
-    }
+    if (info_.pose_offset && info_.pose_offset->cells() != glove_.cell_count())
+      throw Error("metadata 'pose_offset' reads " + std::to_string(info_.pose_offset->cells()) + " cells, expected " +
+                  std::to_string(glove_.cell_count()) + " (the glove's)");
     training_range_ = info_.training_range(glove_.cell_names(), glove_.calibration().config());
   }
 
@@ -113,20 +106,20 @@ class PoseModel {
   const hand::JointLimits& joint_limits() const noexcept { return limits_; }
   /// @brief The DoFs the model was trained on reference angles for; the others read the rest pose
   /// (hand::JointLimits::rest()) whatever the glove does.
-  const hand::DofSet& labelled_dofs() const noexcept { return labelled_; }
+  const hand::DofSet& labelled_dofs() const noexcept { return info_.labelled_dofs; }
   /// @brief The network's normalised outputs as the model reads them: DoFs outside labelled_dofs()
   /// at the rest pose.
   GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept {
     if (all_labelled_) return normalized;
     hand::Angles out = normalized;  // the rest pose computed once at load, not per frame
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      if (!labelled_[d]) out[d] = rest_normalized_[d];
+      if (!info_.labelled_dofs[d]) out[d] = rest_normalized_[d];
     return out;
   }
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept { return training_range_; }
   /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.
-  const std::optional<calibration::PoseOffsetModel>& pose_offset() const noexcept { return pose_offset_; }
+  const std::optional<calibration::PoseOffsetModel>& pose_offset() const noexcept { return info_.pose_offset; }
 
   /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
   /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one
@@ -169,11 +162,9 @@ class PoseModel {
   grid::GloveDescription glove_;
   std::shared_ptr<const Solver> solver_;
   hand::JointLimits limits_;
-  hand::DofSet labelled_ = hand::all_dofs();
   bool all_labelled_ = true;
   hand::Angles rest_normalized_{};
   std::optional<sensor::CalibrationRange> training_range_;
-  std::optional<calibration::PoseOffsetModel> pose_offset_;
 };
 
 }  // namespace glovepose

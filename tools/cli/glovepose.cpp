@@ -177,8 +177,8 @@ int info(const std::string& model_path) {
     std::printf(", %d extra input%s (%s)", glove.map().extra_input_count(), glove.map().extra_input_count() > 1 ? "s" : "", extra.c_str());
   std::printf(")\n");
   if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
-  if (!model.info().labelled_dofs.empty())
-    std::printf("trained DoFs: %s (the others read the rest pose)\n", model.info().labelled_dofs.c_str());
+  if (model.labelled_dofs() != hand::all_dofs())
+    std::printf("trained DoFs: %s (the others read the rest pose)\n", hand::dof_set_text(model.labelled_dofs()).c_str());
   std::printf("weights on disk: %s\npacked weight bytes (F32): %zu\nmultiply-adds per frame: %zu\n", cli::stored_dtypes(model_path).c_str(),
               net.weight_bytes(), net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count());
   std::printf("calibration mode: %s\ntraining-set calibration: %s\n", model::to_string(model.info().calibration),

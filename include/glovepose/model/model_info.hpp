@@ -1,8 +1,9 @@
 /// @file model_info.hpp
-/// @brief The metadata of a model file (weights_format.md), read and checked in one place: the
-/// architecture, the glove it was trained for, how its inputs were calibrated, what its outputs
-/// mean (joint limits), and the training set's per-cell range. The estimator's PoseModel and the
-/// trainer's model files both read it here.
+/// @brief The metadata of a model file (weights_format.md), read, parsed and checked in one place
+/// into typed fields: the architecture, the glove it was trained for (and its description), how
+/// its inputs were calibrated, what its outputs mean (joint limits), the DoFs it was trained on,
+/// the training set's per-cell range and its pose-guided calibration. Written back from the same
+/// fields, so a file this code wrote reads and writes again byte for byte.
 #pragma once
 
 #include <charconv>
@@ -14,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/pose_offset.hpp"
 #include "../config.hpp"
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
@@ -46,27 +48,23 @@ struct ModelInfo {
   int width = 0;                  ///< U-Net base width, FCN hidden width; 0 for linear.
   int inputs = 44;                ///< Cell values per frame the model takes.
   std::string glove;              ///< Sensor layout id the model was trained for.
-  std::string glove_description;  ///< The glove as data (grid/glove_description.hpp JSON); empty: the built-in glove `glove`.
+  /// The glove as data (metadata 'glove_description'); none: the built-in glove `glove`.
+  std::optional<grid::GloveDescription> glove_description;
   CalibrationMode calibration = CalibrationMode::OnTheFly;  ///< How inputs were normalised in training.
   double bn_eps = 1e-5;                                     ///< Batch-norm epsilon.
   std::vector<double> joint_limits_min;                     ///< Per DoF, radians: what output -1 means.
   std::vector<double> joint_limits_max;                     ///< Per DoF, radians: what output +1 means.
   std::optional<std::vector<double>> calibration_min;       ///< Per cell, training-set minimum (optional).
   std::optional<std::vector<double>> calibration_max;       ///< Per cell, training-set maximum (optional).
-  /// The pose-guided calibration fitted for this model (calibration/pose_offset.hpp JSON, with its
-  /// calibration sequence); empty: min-max calibration only.
-  std::string pose_offset;
-  /// The DoFs the model was trained on reference angles for (hand::dof_set_text()); empty: all 25.
-  /// The others were trained toward the rest pose and read it (PoseModel).
-  std::string labelled_dofs;
+  /// The pose-guided calibration fitted for this model, with its calibration sequence (metadata
+  /// 'pose_offset'); none: min-max calibration only.
+  std::optional<calibration::PoseOffsetModel> pose_offset;
+  /// The DoFs the model was trained on reference angles for (metadata 'labelled_dofs', absent when
+  /// all 25). The others were trained toward the rest pose and read it (PoseModel).
+  hand::DofSet labelled_dofs = hand::all_dofs();
 
   /// @brief The architecture as the file spells it ("unet", "fcn" or "linear").
   std::string architecture_name() const { return to_string(architecture); }
-
-  /// @brief labelled_dofs as a set (every DoF when empty).
-  hand::DofSet labelled() const {
-    return labelled_dofs.empty() ? hand::all_dofs() : hand::parse_dof_set(labelled_dofs, "metadata 'labelled_dofs'");
-  }
 
   /// @brief What the network's outputs -1 and +1 mean, per DoF.
   hand::JointLimits joint_limits() const {
@@ -81,7 +79,7 @@ struct ModelInfo {
   /// @brief The glove the model reads: its description in the file, else the built-in glove the id
   /// names. Throws glovepose::Error when neither is there or its cell count differs from `inputs`.
   grid::GloveDescription glove_of_model() const {
-    grid::GloveDescription described = grid::GloveDescription::of_model(glove, glove_description);
+    grid::GloveDescription described = glove_description ? *glove_description : grid::GloveDescription::of_model(glove, "");
     if (described.cell_count() != inputs)
       throw Error("metadata 'inputs' is " + std::to_string(inputs) + " but glove '" + described.id() + "' has " +
                   std::to_string(described.cell_count()) + " cells");
@@ -115,7 +113,13 @@ struct ModelInfo {
     }
     if (info.architecture != Architecture::Linear) info.width = parse_int(file.meta("width"), "width");
     if (file.metadata.count("inputs")) info.inputs = parse_int(file.meta("inputs"), "inputs");
-    if (file.metadata.count("glove_description")) info.glove_description = file.meta("glove_description");
+    if (file.metadata.count("glove_description")) {
+      try {
+        info.glove_description = grid::GloveDescription::from_metadata(file.meta("glove_description"));
+      } catch (const Error& e) {
+        throw Error(std::string("metadata 'glove_description': ") + e.what());
+      }
+    }
     if (file.metadata.count("calibration")) {
       try {
         info.calibration = calibration_mode(file.meta("calibration"));
@@ -136,23 +140,23 @@ struct ModelInfo {
       if (info.calibration_min->size() != info.calibration_max->size())
         throw Error("metadata 'calibration_min' and 'calibration_max' differ in length");
     }
-    if (file.metadata.count("pose_offset")) info.pose_offset = file.meta("pose_offset");
-    if (file.metadata.count("labelled_dofs")) {
-      info.labelled_dofs = file.meta("labelled_dofs");
-      info.labelled();  // throws unless it names a set of DoFs
-    }
+    if (file.metadata.count("pose_offset"))  // the one parse of the pose offset's JSON
+      info.pose_offset = calibration::PoseOffsetModel::parse(file.meta("pose_offset"), "metadata 'pose_offset'");
+    if (file.metadata.count("labelled_dofs")) info.labelled_dofs = hand::parse_dof_set(file.meta("labelled_dofs"), "metadata 'labelled_dofs'");
     return info;
   }
 
-  /// @brief Writes the metadata into a file's metadata map.
+  /// @brief Writes the metadata into a file's metadata map, each typed field in the text from()
+  /// reads. Throws glovepose::Error when labelled_dofs names no DoF (no file could say so).
   void to(nn::WeightFile& file) const {
+    if (labelled_dofs == hand::DofSet{}) throw Error("labelled_dofs names no DoF, expected at least one (or all: the key left out)");
     file.metadata["format"] = "glovepose-model";
     file.metadata["format_version"] = "1";
     file.metadata["architecture"] = to_string(architecture);
     if (architecture != Architecture::Linear) file.metadata["width"] = std::to_string(width);
     file.metadata["inputs"] = std::to_string(inputs);
     file.metadata["glove"] = glove;
-    if (!glove_description.empty()) file.metadata["glove_description"] = glove_description;
+    if (glove_description) file.metadata["glove_description"] = glove_description->to_metadata();
     file.metadata["calibration"] = to_string(calibration);
     char eps[32];
     std::snprintf(eps, sizeof eps, "%.17g", bn_eps);
@@ -161,8 +165,8 @@ struct ModelInfo {
     file.metadata["joint_limits_max"] = nn::WeightFile::format_numbers(joint_limits_max);
     if (calibration_min) file.metadata["calibration_min"] = nn::WeightFile::format_numbers(*calibration_min);
     if (calibration_max) file.metadata["calibration_max"] = nn::WeightFile::format_numbers(*calibration_max);
-    if (!pose_offset.empty()) file.metadata["pose_offset"] = pose_offset;
-    if (!labelled_dofs.empty()) file.metadata["labelled_dofs"] = labelled_dofs;
+    if (pose_offset) file.metadata["pose_offset"] = pose_offset->to_json();
+    if (labelled_dofs != hand::all_dofs()) file.metadata["labelled_dofs"] = hand::dof_set_text(labelled_dofs);
   }
 
  private:

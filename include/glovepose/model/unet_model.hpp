@@ -1,7 +1,7 @@
 /// @file unet_model.hpp
 /// @brief A U-Net model file loaded as the bare network with its metadata, for benchmarks, studies
 /// and tests that run the U-Net without the estimator (which loads every architecture through
-/// PoseModel).
+/// PoseModel). Read by the one model file reader, model_file.hpp.
 #pragma once
 
 #include <string>
@@ -9,7 +9,7 @@
 
 #include "../config.hpp"
 #include "../nn/unet.hpp"
-#include "../nn/weights.hpp"
+#include "model_file.hpp"
 #include "model_info.hpp"
 
 namespace glovepose::model {
@@ -23,17 +23,13 @@ struct UNetModel {
   /// @brief Loads a model file, with weights kept as `storage`. Throws glovepose::Error naming the
   /// file and what is wrong (including a model of another architecture).
   static UNetModel load(const std::string& path, nn::WeightStorage storage = nn::WeightStorage::F32) {
-    const nn::WeightFile file = nn::WeightFile::read(path);
-    try {
-      ModelInfo info = ModelInfo::from(file);
-      if (info.architecture != Architecture::UNet)
-        throw Error("architecture '" + info.architecture_name() +
+    return load_model_file(path, [storage](ModelFile&& file) {
+      if (file.info.architecture != Architecture::UNet)
+        throw Error("architecture '" + file.info.architecture_name() +
                     "' is not a U-Net; PoseModel::load runs U-Nets and FCNs, train::load_model every architecture");
-      nn::UNet<Backend> net = nn::UNet<Backend>::from_tensors(file.tensors, info.width, info.bn_eps, storage);
-      return UNetModel{std::move(info), std::move(net)};
-    } catch (const Error& e) {
-      throw Error("model file '" + path + "': " + e.what());
-    }
+      nn::UNet<Backend> net = nn::UNet<Backend>::from_tensors(file.tensors, file.info.width, file.info.bn_eps, storage);
+      return UNetModel{std::move(file.info), std::move(net)};
+    });
   }
 };
 

@@ -185,7 +185,7 @@ inline std::vector<float> predict_stored(const TrainedModel& model, const Sample
     }
   }
   const hand::JointLimits limits = info.joint_limits();
-  const hand::DofSet labelled = info.labelled();
+  const hand::DofSet& labelled = info.labelled_dofs;
   for (long f = 0; labelled != hand::all_dofs() && f < frames; ++f) {
     hand::Angles a{};
     std::copy_n(out.begin() + f * kTargets, hand::kDofCount, a.begin());
@@ -199,10 +199,9 @@ inline std::vector<float> predict_stored(const TrainedModel& model, const Sample
 // calibration and the dataset's calibrations followed its sequence.
 inline bool evaluate_guided(const std::string& calibration, const TrainedModel& model, const io::Dataset& data) {
   if (calibration == "guided") return true;
-  if (!calibration.empty() || model.info.pose_offset.empty()) return false;
+  if (!calibration.empty() || !model.info.pose_offset) return false;
   const auto it = data.metadata.find("calibration_sequence");
-  return it != data.metadata.end() &&
-         it->second == calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'").sequence().id();
+  return it != data.metadata.end() && it->second == model.info.pose_offset->sequence().id();
 }
 
 }  // namespace detail
@@ -231,7 +230,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
                                             ? model.predict(samples, pool)
                                             : detail::predict_stored(model, samples, options.weights, pool.size());
   hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
-  const hand::DofSet trained = model.info.labelled();
+  const hand::DofSet& trained = model.info.labelled_dofs;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) scored[d] = scored[d] && trained[d];
   if (std::find(scored.begin(), scored.end(), true) == scored.end())
     throw Error("the model was trained on " + hand::dof_set_text(trained) + " and the data labels " + hand::dof_set_text(samples.labelled) +

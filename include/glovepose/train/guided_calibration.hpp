@@ -105,9 +105,9 @@ inline std::map<std::int64_t, Eigen::VectorXd> guided_features(TrainedModel& mod
 /// followed another sequence, or naming the first run whose sequence is incomplete.
 inline std::map<std::int64_t, hand::Angles> guided_offsets(TrainedModel& model, const io::Dataset& data, const FrameFilter& filter,
                                                            core::ThreadPool& pool) {
-  if (model.info.pose_offset.empty())
+  if (!model.info.pose_offset)
     throw Error("the model carries no pose-guided calibration (metadata 'pose_offset'), expected one fitted by glovepose fit-guided");
-  const calibration::PoseOffsetModel offsets = calibration::PoseOffsetModel::parse(model.info.pose_offset, "metadata 'pose_offset'");
+  const calibration::PoseOffsetModel& offsets = *model.info.pose_offset;
   if (offsets.cells() != model.info.inputs)
     throw Error("the pose-guided calibration reads " + std::to_string(offsets.cells()) + " cells, the model " +
                 std::to_string(model.info.inputs));

@@ -17,6 +17,7 @@
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../nn/linear.hpp"
+#include "../model/model_file.hpp"
 #include "../model/model_info.hpp"
 #include "../sensor/calibration.hpp"
 #include "network.hpp"
@@ -37,7 +38,7 @@ inline model::ModelInfo make_model_info(model::Architecture architecture, int wi
   info.width = architecture == model::Architecture::Linear ? 0 : width;
   info.inputs = glove.cell_count();
   info.glove = glove.id();
-  if (glove != grid::GloveDescription::glauser2019()) info.glove_description = glove.to_metadata();
+  if (glove != grid::GloveDescription::glauser2019()) info.glove_description = glove;
   info.calibration = mode;
   const hand::JointLimits limits = glove.joint_limits();
   info.joint_limits_min.assign(limits.min().begin(), limits.min().end());
@@ -92,7 +93,7 @@ struct TrainedModel {
       if (linear->predict(samples.inputs.data(), out.data(), samples.frames(), &rejected) != Status::Ok)
         throw Error("linear model: frame " + std::to_string(rejected) + " has a non-finite input");
     }
-    const hand::DofSet labelled = info.labelled();
+    const hand::DofSet& labelled = info.labelled_dofs;
     if (labelled != hand::all_dofs()) {  // DoFs the model had no reference angles for read the rest pose
       const hand::JointLimits limits = info.joint_limits();
       for (long f = 0; f < samples.frames(); ++f) {
@@ -122,14 +123,13 @@ inline nn::TensorMap linear_tensors(const nn::LinearMap& map) {
   return {{"weight", nn::Tensor{{map.outputs(), map.inputs()}, map.weight()}}, {"bias", nn::Tensor{{map.outputs()}, map.bias()}}};
 }
 
-/// @brief Reads a model file of any architecture, its network sized for batches of `max_batch`.
-/// Throws glovepose::Error naming the file and what is wrong.
+/// @brief Reads a model file of any architecture (model::load_model_file), its network sized for
+/// batches of `max_batch`. Throws glovepose::Error naming the file and what is wrong.
 inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
-  const nn::WeightFile file = nn::WeightFile::read(path);
-  try {
+  return model::load_model_file(path, [max_batch](model::ModelFile&& file) {
     TrainedModel trained;
-    trained.info = model::ModelInfo::from(file);
-    trained.metadata = file.metadata;
+    trained.info = std::move(file.info);
+    trained.metadata = std::move(file.metadata);
     trained.glove = trained.info.glove_of_model();
     if (trained.info.architecture == model::Architecture::Linear) {
       for (const char* name : {"weight", "bias"})
@@ -146,9 +146,7 @@ inline TrainedModel load_model(const std::string& path, int max_batch = 1024) {
       trained.network->parameters().load(file.tensors);
     }
     return trained;
-  } catch (const Error& e) {
-    throw Error("model file '" + path + "': " + e.what());
-  }
+  });
 }
 
 }  // namespace glovepose::train

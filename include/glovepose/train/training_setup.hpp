@@ -75,7 +75,7 @@ inline TrainingSetup prepare_training(const io::Dataset& data, const FrameFilter
   TrainingSetup s;
   s.samples = make_samples(data, filter, mode, range ? &*range : nullptr, glove.joint_limits(), stride, glove.calibration());
   s.info = make_model_info(architecture, width, glove, mode, range ? &*range : nullptr);
-  if (s.samples.labelled != hand::all_dofs()) s.info.labelled_dofs = hand::dof_set_text(s.samples.labelled);
+  s.info.labelled_dofs = s.samples.labelled;
   return s;
 }
 
