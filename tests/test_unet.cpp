@@ -2,6 +2,7 @@
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/model/unet_model.hpp>
+#include <glovepose/pose_network.hpp>
 
 #include <doctest/doctest.h>
 
@@ -517,4 +518,62 @@ TEST_CASE("unet: equals PyTorch for every preset (fixtures regenerated with PyTo
     std::remove((base + ".safetensors").c_str());
     std::remove((base + "_io.safetensors").c_str());
   }
+}
+
+namespace {
+// Multiply-adds of one convolution on square grids, counting the (output, tap, input) triples whose
+// input lies inside the grid, as unet_reference.hpp's conv loops them; and the taps that meet any.
+struct ConvCount {
+  std::size_t macs = 0, weights = 0;
+};
+ConvCount count_conv(const TensorMap& t, const std::string& name, int in_size, int out_size, int k, int s, int p, bool transposed) {
+  const std::vector<std::int64_t>& shape = t.at(name + ".weight").shape;  // [out, in, k, k]; transposed [in, out, k, k]
+  const auto channels = static_cast<std::size_t>(shape[0] * shape[1]);
+  std::size_t pairs = 0, taps = 0;  // along one axis
+  for (int tap = 0; tap < k; ++tap) {
+    std::size_t meets = 0;
+    for (int a = 0; a < (transposed ? in_size : out_size); ++a) {
+      const int b = a * s - p + tap;
+      meets += b >= 0 && b < (transposed ? out_size : in_size);
+    }
+    pairs += meets;
+    taps += meets > 0;
+  }
+  return {pairs * pairs * channels, taps * taps * channels};
+}
+}  // namespace
+
+TEST_CASE("pose network: multiply-adds and kept weights for a U-Net and an FCN, counted from the layer shapes") {
+  // U-Net w = 8 reading one extra input plane: the paper's layers (Table 6), as unet_reference.hpp runs them.
+  const TensorMap unet_tensors = test::random_tensors(UNet<>::expected_tensors(8, 1), 21);
+  ConvCount unet{};
+  for (const ConvCount& c : {count_conv(unet_tensors, "enc1", 5, 5, 5, 1, 2, false), count_conv(unet_tensors, "enc2", 5, 3, 3, 2, 1, false),
+                             count_conv(unet_tensors, "enc3", 3, 2, 3, 2, 1, false), count_conv(unet_tensors, "enc4", 2, 1, 4, 2, 1, false),
+                             count_conv(unet_tensors, "dec1", 1, 2, 4, 2, 1, true), count_conv(unet_tensors, "dec2", 2, 3, 3, 2, 1, true),
+                             count_conv(unet_tensors, "dec3", 3, 5, 3, 2, 1, true), count_conv(unet_tensors, "out", 5, 5, 5, 1, 2, false)}) {
+    unet.macs += c.macs;
+    unet.weights += c.weights;
+  }
+  const glovepose::PoseNetwork unet_net(UNet<>::from_tensors(unet_tensors, 8));
+  CHECK(unet_net.mac_count() == unet.macs);
+  CHECK(unet_net.stored_weight_count() == unet.weights);
+
+  // FCN, 44 cells, hidden 32: each layer multiplies its [out, in] weight matrix once per frame.
+  TensorMap fcn_tensors;
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<float> u(-0.1f, 0.1f);
+  for (const auto& [name, shape] : fcn_tensor_shapes(44, 32)) {
+    Tensor& t = fcn_tensors[name] = Tensor{shape, {}};
+    t.values.resize(static_cast<std::size_t>(t.element_count()));
+    for (float& v : t.values) v = u(rng);
+  }
+  std::size_t fcn_macs = 0;
+  for (int l = 1; l <= kFcnLayers; ++l) {
+    const std::vector<std::int64_t>& shape = fcn_tensors.at("fc" + std::to_string(l) + ".weight").shape;
+    fcn_macs += static_cast<std::size_t>(shape[0] * shape[1]);
+  }
+  const glovepose::PoseNetwork fcn_net(Fcn<>::from_tensors(fcn_tensors, 44, 32));
+  CHECK(fcn_net.mac_count() == fcn_macs);
+  CHECK(fcn_net.stored_weight_count() == fcn_macs);
+  CHECK(fcn_macs == 44 * 32 + 3 * 32 * 32 + 32 * 16 + 16 * 25);  // tests/test_cli.cpp's figure for this shape
 }

@@ -61,6 +61,16 @@ class PoseNetwork {
   std::size_t parameter_count() const noexcept {
     return std::visit([](const auto& net) { return net.parameter_count(); }, net_);
   }
+  /// @brief Multiply-adds per frame that meet real input (the U-Net's padding skipped): the
+  /// arithmetic floor of a forward.
+  std::size_t mac_count() const noexcept {
+    return std::visit([](const auto& net) { return net.mac_count(); }, net_);
+  }
+  /// @brief Weights kept after load (batch norm folded, the U-Net's taps that only meet padding
+  /// dropped; biases not counted).
+  std::size_t stored_weight_count() const noexcept {
+    return std::visit([](const auto& net) { return net.stored_weight_count(); }, net_);
+  }
   /// @brief Bytes of packed weights a dense forward streams.
   std::size_t weight_bytes() const noexcept {
     return std::visit([](const auto& net) { return net.weight_bytes(); }, net_);

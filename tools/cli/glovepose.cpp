@@ -176,11 +176,11 @@ int info(const std::string& model_path) {
   if (!extra.empty())
     std::printf(", %d extra input%s (%s)", glove.map().extra_input_count(), glove.map().extra_input_count() > 1 ? "s" : "", extra.c_str());
   std::printf(")\n");
-  if (net.unet()) std::printf("weights that can meet a 5x5 input: %zu\n", net.unet()->stored_weight_count());
+  std::printf("weights that can meet an input: %zu\n", net.stored_weight_count());
   if (model.labelled_dofs() != hand::all_dofs())
     std::printf("trained DoFs: %s (the others read the rest pose)\n", hand::dof_set_text(model.labelled_dofs()).c_str());
   std::printf("weights on disk: %s\npacked weight bytes (F32): %zu\nmultiply-adds per frame: %zu\n", cli::stored_dtypes(model_path).c_str(),
-              net.weight_bytes(), net.unet() ? net.unet()->mac_count() : net.fcn()->mac_count());
+              net.weight_bytes(), net.mac_count());
   std::printf("calibration mode: %s\ntraining-set calibration: %s\n", model::to_string(model.info().calibration),
               model.info().calibration_min ? "yes" : "no");
   if (!model.pose_offset()) {

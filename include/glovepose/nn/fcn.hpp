@@ -76,6 +76,9 @@ class Fcn {
            static_cast<std::size_t>(widths_[static_cast<std::size_t>(l + 1)]);
     return n;
   }
+  /// @brief Weights kept (biases not counted, as UNet::stored_weight_count): all of every layer's,
+  /// and each meets one input per frame, so as many as mac_count().
+  std::size_t stored_weight_count() const noexcept { return mac_count(); }
   /// @brief Bytes of packed weights a dense forward streams (channel padding included).
   std::size_t weight_bytes() const noexcept {
     std::size_t n = 0;
