@@ -26,6 +26,29 @@ struct Stamped {
     return true;
   }
 };
+
+// What the reader threads of a test saw: reads, and numbers lower than the one read before.
+struct ReadCounts {
+  std::atomic<long> reads{0}, backwards{0};
+};
+
+// A reader thread's loop: reads `latest` until `done`, counting into `counts`; `check(value, n)`
+// inspects every value read and its number.
+template <typename T, typename Check>
+auto reader_of(const Latest<T>& latest, const std::atomic<bool>& done, ReadCounts& counts, Check check) {
+  return [&latest, &done, &counts, check] {
+    T out;
+    std::uint64_t last = 0;
+    while (!done.load(std::memory_order_acquire)) {
+      const std::uint64_t n = latest.read(out);
+      if (n == 0) continue;
+      counts.reads.fetch_add(1, std::memory_order_relaxed);
+      if (n < last) counts.backwards.fetch_add(1, std::memory_order_relaxed);
+      last = n;
+      check(out, n);
+    }
+  };
+}
 }  // namespace
 
 TEST_CASE("latest: nothing before the first publish, then the newest value and its number") {
@@ -54,20 +77,12 @@ TEST_CASE("latest: a writer publishing as fast as it can and two readers: never 
   Latest<Stamped> latest;
   constexpr std::uint64_t kPublishes = 200000;
   std::atomic<bool> done{false};
-  std::atomic<long> torn{0}, backwards{0}, mislabelled{0}, reads{0};
-  const auto reader = [&] {
-    Stamped out;
-    std::uint64_t last = 0;
-    while (!done.load(std::memory_order_acquire)) {
-      const std::uint64_t n = latest.read(out);
-      if (n == 0) continue;
-      reads.fetch_add(1, std::memory_order_relaxed);
-      if (!out.whole()) torn.fetch_add(1, std::memory_order_relaxed);
-      if (out.words[0] != n) mislabelled.fetch_add(1, std::memory_order_relaxed);
-      if (n < last) backwards.fetch_add(1, std::memory_order_relaxed);
-      last = n;
-    }
-  };
+  ReadCounts counts;
+  std::atomic<long> torn{0}, mislabelled{0};
+  const auto reader = reader_of(latest, done, counts, [&](const Stamped& out, std::uint64_t n) {
+    if (!out.whole()) torn.fetch_add(1, std::memory_order_relaxed);
+    if (out.words[0] != n) mislabelled.fetch_add(1, std::memory_order_relaxed);
+  });
   std::thread a(reader), b(reader);
   Stamped v;
   for (std::uint64_t i = 1; i <= kPublishes; ++i) {
@@ -77,11 +92,11 @@ TEST_CASE("latest: a writer publishing as fast as it can and two readers: never 
   done.store(true, std::memory_order_release);
   a.join();
   b.join();
-  MESSAGE(reads.load() << " reads during " << kPublishes << " publishes");
-  CHECK(reads.load() > 0);
+  MESSAGE(counts.reads.load() << " reads during " << kPublishes << " publishes");
+  CHECK(counts.reads.load() > 0);
   CHECK(torn.load() == 0);
   CHECK(mislabelled.load() == 0);
-  CHECK(backwards.load() == 0);
+  CHECK(counts.backwards.load() == 0);
   Stamped last;
   CHECK(latest.read(last) == kPublishes);
   CHECK(last.words[0] == kPublishes);
@@ -98,28 +113,21 @@ TEST_CASE("latest: an estimator's thread publishes every pose, two readers see w
   LatestHand latest;
   std::vector<std::array<float, 3>> tips(data.frames());  // the pinky tip of pose n, at [n - 1]
   std::atomic<bool> done{false};
-  std::atomic<long> inconsistent{0}, backwards{0}, reads{0};
-  const auto reader = [&] {
-    HandState state;
-    std::uint64_t last = 0;
-    while (!done.load(std::memory_order_acquire)) {
-      const std::uint64_t n = latest.read(state);
-      if (n == 0) continue;
-      reads.fetch_add(1, std::memory_order_relaxed);
-      if (n < last) backwards.fetch_add(1, std::memory_order_relaxed);
-      last = n;
-      // Published once per pose: the n-th state carries the n-th pose and that pose's joints
-      // (written down by the estimator's thread before it published them).
-      if (!state.pose.valid || state.pose.sequence != n || state.joints[20].position != tips[n - 1])
-        inconsistent.fetch_add(1, std::memory_order_relaxed);
-    }
-  };
+  ReadCounts counts;
+  std::atomic<long> inconsistent{0};
+  const auto reader = reader_of(latest, done, counts, [&](const HandState& state, std::uint64_t n) {
+    // Published once per pose: the n-th state carries the n-th pose and that pose's joints
+    // (written down by the estimator's thread before it published them).
+    if (!state.pose.valid || state.pose.sequence != n || state.joints[20].position != tips[n - 1])
+      inconsistent.fetch_add(1, std::memory_order_relaxed);
+  });
   std::thread a(reader), b(reader);
   estimator.start_calibration();
   std::size_t published = 0;
   std::vector<double> rows;
+  const std::size_t session_start = data.first_session_frame();
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == io::kKindRecording && estimator.calibration_progress().collecting) estimator.finish_calibration();
+    if (f == session_start) estimator.finish_calibration();
     rows.assign(data.raw_rows.begin() + static_cast<std::ptrdiff_t>(f * data.row_count),
                 data.raw_rows.begin() + static_cast<std::ptrdiff_t>((f + 1) * data.row_count));
     const Status status = estimator.push_measurements(rows.data(), static_cast<int>(rows.size()), data.timestamps[f]);
@@ -130,8 +138,8 @@ TEST_CASE("latest: an estimator's thread publishes every pose, two readers see w
   done.store(true, std::memory_order_release);
   a.join();
   b.join();
-  CHECK(reads.load() > 0);
-  CHECK(backwards.load() == 0);
+  CHECK(counts.reads.load() > 0);
+  CHECK(counts.backwards.load() == 0);
   CHECK(inconsistent.load() == 0);
   HandState final_state;
   REQUIRE(latest.read(final_state) == published);

@@ -1,5 +1,6 @@
 // The simulator: subjects, glove physics, motion, timed readout, the corpus protocol.
 #include <glovepose/sim/corpus.hpp>
+#include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/sim/report.hpp>
 #include <glovepose/sim/tracker.hpp>
 #include <glovepose/train/lag.hpp>
@@ -302,6 +303,22 @@ TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   CHECK(one[0].recording.frames == 60);   // the 1 s calibration sequence
   config.minutes = 0.0;
   CHECK_THROWS_WITH_AS(simulate_corpus(config), doctest::Contains("--minutes"), Error);
+}
+
+TEST_CASE("sim session: the dataset's first session frame is the first after the simulated calibration") {
+  const CorpusConfig config = CorpusConfig::one_session(17, 1.0, 2.0);
+  const std::vector<SessionRecording> corpus = simulate_corpus(config);
+  REQUIRE(corpus.size() == 2);
+  REQUIRE(corpus[0].kind == RecordingKind::Calibration);
+  const io::Dataset d = to_dataset(corpus, config);
+  // From the recordings' own fields: the session's clock continues the calibration's, so its first
+  // frame is the first one past the calibration recording's last time.
+  const double calibration_end = corpus[0].recording.timestamps.back();
+  std::size_t past = 0;
+  while (past < d.frames() && d.timestamps[past] <= calibration_end) ++past;
+  CHECK(past == static_cast<std::size_t>(corpus[0].recording.frames));
+  CHECK(std::abs(static_cast<double>(past) - config.calibration_seconds * config.recording.cycle_rate) <= 1.0);
+  CHECK(d.first_session_frame() == past);
 }
 
 TEST_CASE("sim report: realistic readout age, outliers and signal, re-donning below pose change, not linearly solvable across people") {
@@ -696,6 +713,19 @@ TEST_CASE("sim worlds: every effect can be switched back to the clean world's, b
   CHECK(all.people.skin_spread == clean.people.skin_spread);
   CHECK(all.people.calibration_shortfall == clean.people.calibration_shortfall);
   CHECK(all.people.independent_fingers == clean.people.independent_fingers);
+  // Each effect switches back exactly the parameters kEffectParameters lists: from a world with every
+  // parameter at a value no world uses, the ones that change are those names, "tracker." the tracker's.
+  World odd = worn;
+  for (const WorldParameter& p : world_parameters()) odd = with(odd, p.name, 0.125);
+  for (std::size_t i = 0; i < kEffectNames.size(); ++i) {
+    World w = without(odd, static_cast<Effect>(i));
+    std::string changed, tracker;
+    for (const WorldParameter& p : world_parameters()) {
+      if (p.field(w) != 0.125) changed += (changed.empty() ? "" : ",") + std::string(p.name);
+      if (std::string(p.name).rfind("tracker.", 0) == 0) tracker += (tracker.empty() ? "" : ",") + std::string(p.name);
+    }
+    CHECK_MESSAGE(changed == (std::string(kEffectParameters[i]) == "tracker." ? tracker : std::string(kEffectParameters[i])), kEffectNames[i]);
+  }
 }
 
 TEST_CASE("sim worlds: every parameter can be set by name, and the settings are recorded") {

@@ -179,8 +179,9 @@ TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shippe
   const std::size_t rows = data.row_count;
   long poses = 0, differing = 0;
   std::size_t allocations = 0;
+  const std::size_t session_start = data.first_session_frame();
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == io::kKindRecording && alone.calibration_progress().collecting) {
+    if (f == session_start) {
       alone.finish_calibration();
       shared.finish_calibration();
     }

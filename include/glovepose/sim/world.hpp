@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <string>
 #include <utility>
 
@@ -37,124 +38,6 @@ struct World {
   std::string settings;        ///< Parameters set by with(), "name=value" comma-separated.
 };
 
-/// @brief Every named world; the first, "clean", is the physics the library's tests measure against.
-inline const std::array<World, 4>& worlds() {
-  static const std::array<World, 4> table = [] {
-    World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
-    TrackerConfig t;
-    t.flexion_sd = 3.5;
-    t.abduction_sd = 2.5;
-    t.twist_sd = 1.5;
-    t.thumb_factor = 1.5;
-    t.occlusion_gain = 1.0;
-    t.correlation_time = 0.5;
-    t.subject_bias_sd = 2.0;
-    t.session_bias_sd = 1.5;
-    t.snap_rate = 2.0;
-    t.freeze_rate = 2.0;
-    t.failure_seconds = 0.5;
-    t.snap_abduction = 20.0;
-    t.collision_allowance = 20.0;
-    t.latency = 1.0 / 60.0;
-    t.smoothing = 0.02;
-    World tracked{"tracked", "labels from a simulated depth-camera tracker (assumed parameters)", t, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
-    WearConfig w;
-    w.donning_shift = 3.0;
-    w.cell_shift = 2.0;
-    w.pre_stretch_spread = 0.04;
-    w.slip_sd = 1.5;
-    w.slip_time = 600.0;
-    w.loose_gain = 1.0;
-    w.placement_sd = 1.0;
-    GloveMaterial m;
-    m.hysteresis_share = 0.2;
-    m.hysteresis_width = 0.01;
-    m.drift_rate = 0.005;
-    m.warmup_gain = 0.02;
-    m.warmup_time = 300.0;
-    World worn{"worn", "tracked, and a glove that shifts, slips, drifts and differs between copies (assumed parameters)", t, w, m, PeopleConfig{}, "", ""};
-    // worn with the parameters fitted to the paper's Table 1 and outlier share (docs/simulator.md,
-    // "Fitting a world to the paper"); the same as `--world worn --set` with these values.
-    World fitted = worn;
-    fitted.name = "fitted";
-    fitted.summary = "worn, with parameters fitted to the paper's Table 1 and outlier share";
-    fitted.tracker.subject_bias_sd = 5.0;
-    fitted.wear.pre_stretch_spread = 0.01;
-    fitted.wear.size_coupling = 0.5;
-    fitted.material.drift_rate = 0.01;
-    fitted.people.skin_spread = 0.7;
-    fitted.people.calibration_shortfall = 0.5;
-    fitted.people.independent_fingers = 0.4;
-    return std::array<World, 4>{clean, tracked, worn, fitted};
-  }();
-  return table;
-}
-
-/// @brief The world called `name`; throws glovepose::Error naming the known worlds.
-inline const World& world_named(const std::string& name) {
-  std::string known;
-  for (const World& w : worlds()) {
-    if (name == w.name) return w;
-    known += (known.empty() ? "" : ", ") + std::string(w.name);
-  }
-  throw Error("unknown world '" + name + "', expected one of " + known);
-}
-
-/// @brief The simulator's default world (`glovepose simulate`, the demo, the viewer's simulated user):
-/// the world fitted to the paper's measurements, so that every figure the tools print is from the
-/// world as hard as the paper's. sim::CorpusConfig itself starts from the clean world.
-inline const World& default_world() { return world_named("fitted"); }
-
-/// @brief The effects a world can switch back to the clean world's settings, for ablations.
-enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, SizeCoupling, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
-
-/// @brief Effect names (`glovepose simulate --without NAME`), in enum order.
-inline constexpr std::array<const char*, static_cast<std::size_t>(Effect::Count)> kEffectNames{
-    "tracker", "donning", "slip", "loose_fit", "placement", "size_coupling", "hysteresis", "drift", "skin", "shortfall", "independent"};
-static_assert(kEffectNames.size() == static_cast<std::size_t>(Effect::Count), "one name per effect");
-
-/// @brief The effect called `name`; throws glovepose::Error naming the known effects.
-inline Effect effect_named(const std::string& name) {
-  std::string known;
-  for (std::size_t i = 0; i < kEffectNames.size(); ++i) {
-    if (name == kEffectNames[i]) return static_cast<Effect>(i);
-    known += (known.empty() ? "" : ", ") + std::string(kEffectNames[i]);
-  }
-  throw Error("unknown effect '" + name + "', expected one of " + known);
-}
-
-/// @brief `world` with `effect` set back to the clean world's settings, named in World::ablated.
-inline World without(World world, Effect effect) {
-  const World& clean = worlds().front();
-  const std::string name = kEffectNames[static_cast<std::size_t>(effect)];
-  if (("," + world.ablated + ",").find("," + name + ",") == std::string::npos) world.ablated += (world.ablated.empty() ? "" : ",") + name;
-  switch (effect) {
-    case Effect::Tracker: world.tracker = clean.tracker; break;
-    case Effect::Donning:
-      world.wear.donning_shift = clean.wear.donning_shift;
-      world.wear.cell_shift = clean.wear.cell_shift;
-      world.wear.pre_stretch_spread = clean.wear.pre_stretch_spread;
-      break;
-    case Effect::Slip: world.wear.slip_sd = clean.wear.slip_sd; break;
-    case Effect::LooseFit: world.wear.loose_gain = clean.wear.loose_gain; break;
-    case Effect::Placement: world.wear.placement_sd = clean.wear.placement_sd; break;
-    case Effect::SizeCoupling: world.wear.size_coupling = clean.wear.size_coupling; break;
-    case Effect::Hysteresis:
-      world.material.hysteresis_share = clean.material.hysteresis_share;
-      world.material.hysteresis_width = clean.material.hysteresis_width;
-      break;
-    case Effect::Drift:
-      world.material.drift_rate = clean.material.drift_rate;
-      world.material.warmup_gain = clean.material.warmup_gain;
-      break;
-    case Effect::Skin: world.people.skin_spread = clean.people.skin_spread; break;
-    case Effect::Shortfall: world.people.calibration_shortfall = clean.people.calibration_shortfall; break;
-    case Effect::Independent: world.people.independent_fingers = clean.people.independent_fingers; break;
-    case Effect::Count: break;
-  }
-  return world;
-}
-
 /// @brief A world's parameter that can be set by name: "group.field" as in the tables of
 /// docs/simulator.md.
 struct WorldParameter {
@@ -163,10 +46,10 @@ struct WorldParameter {
 };
 
 /// @brief Every parameter a world's effects have, by name.
-inline const std::array<WorldParameter, 30>& world_parameters() {
+inline const std::array<WorldParameter, 31>& world_parameters() {
 #define GLOVEPOSE_WORLD_PARAMETER(group, field) \
   WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; } }
-  static const std::array<WorldParameter, 30> table{
+  static const std::array<WorldParameter, 31> table{
       GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, twist_sd),
@@ -178,6 +61,7 @@ inline const std::array<WorldParameter, 30>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(tracker, snap_rate),
       GLOVEPOSE_WORLD_PARAMETER(tracker, freeze_rate),
       GLOVEPOSE_WORLD_PARAMETER(tracker, failure_seconds),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, snap_abduction),
       GLOVEPOSE_WORLD_PARAMETER(tracker, collision_allowance),
       GLOVEPOSE_WORLD_PARAMETER(tracker, latency),
       GLOVEPOSE_WORLD_PARAMETER(tracker, smoothing),
@@ -232,6 +116,129 @@ inline World with(World world, const std::string& assignment) {
   if (equals == std::string::npos || value.empty() || *end != '\0')
     throw Error("world setting '" + assignment + "', expected NAME=NUMBER (e.g. people.skin_spread=0.5)");
   return with(std::move(world), assignment.substr(0, equals), number);
+}
+
+/// @brief A named world: `base` with the parameters `values` set by their world_parameters() names,
+/// the vocabulary of `glovepose simulate --set` and of docs/simulator.md's tables (its own values,
+/// so World::settings stays empty).
+inline World named_world(const World& base, const char* name, const char* summary,
+                         std::initializer_list<std::pair<const char*, double>> values) {
+  World world = base;
+  world.name = name;
+  world.summary = summary;
+  for (const auto& [parameter, value] : values) world = with(std::move(world), parameter, value);
+  world.settings.clear();
+  return world;
+}
+
+/// @brief Every named world; the first, "clean", is the physics the library's tests measure against.
+inline const std::array<World, 4>& worlds() {
+  static const std::array<World, 4> table = [] {
+    const World clean{"clean", "labels are the true angles", TrackerConfig{}, WearConfig{}, GloveMaterial{}, PeopleConfig{}, "", ""};
+    const World tracked = named_world(clean, "tracked", "labels from a simulated depth-camera tracker (assumed parameters)",
+                                      {{"tracker.flexion_sd", 3.5},
+                                       {"tracker.abduction_sd", 2.5},
+                                       {"tracker.twist_sd", 1.5},
+                                       {"tracker.thumb_factor", 1.5},
+                                       {"tracker.occlusion_gain", 1.0},
+                                       {"tracker.correlation_time", 0.5},
+                                       {"tracker.subject_bias_sd", 2.0},
+                                       {"tracker.session_bias_sd", 1.5},
+                                       {"tracker.snap_rate", 2.0},
+                                       {"tracker.freeze_rate", 2.0},
+                                       {"tracker.failure_seconds", 0.5},
+                                       {"tracker.collision_allowance", 20.0},
+                                       {"tracker.latency", 1.0 / 60.0},
+                                       {"tracker.smoothing", 0.02}});
+    const World worn =
+        named_world(tracked, "worn", "tracked, and a glove that shifts, slips, drifts and differs between copies (assumed parameters)",
+                    {{"wear.donning_shift", 3.0},
+                     {"wear.cell_shift", 2.0},
+                     {"wear.pre_stretch_spread", 0.04},
+                     {"wear.slip_sd", 1.5},
+                     {"wear.slip_time", 600.0},
+                     {"wear.loose_gain", 1.0},
+                     {"wear.placement_sd", 1.0},
+                     {"material.hysteresis_share", 0.2},
+                     {"material.hysteresis_width", 0.01},
+                     {"material.drift_rate", 0.005},
+                     {"material.warmup_gain", 0.02},
+                     {"material.warmup_time", 300.0}});
+    // The parameters fitted to the paper's Table 1 and outlier share (docs/simulator.md, "Fitting a
+    // world to the paper"): the same as `--world worn --set` with these values.
+    const World fitted = named_world(worn, "fitted", "worn, with parameters fitted to the paper's Table 1 and outlier share",
+                                     {{"tracker.subject_bias_sd", 5.0},
+                                      {"wear.pre_stretch_spread", 0.01},
+                                      {"wear.size_coupling", 0.5},
+                                      {"material.drift_rate", 0.01},
+                                      {"people.skin_spread", 0.7},
+                                      {"people.calibration_shortfall", 0.5},
+                                      {"people.independent_fingers", 0.4}});
+    return std::array<World, 4>{clean, tracked, worn, fitted};
+  }();
+  return table;
+}
+
+/// @brief The world called `name`; throws glovepose::Error naming the known worlds.
+inline const World& world_named(const std::string& name) {
+  std::string known;
+  for (const World& w : worlds()) {
+    if (name == w.name) return w;
+    known += (known.empty() ? "" : ", ") + std::string(w.name);
+  }
+  throw Error("unknown world '" + name + "', expected one of " + known);
+}
+
+/// @brief The simulator's default world (`glovepose simulate`, the demo, the viewer's simulated user):
+/// the world fitted to the paper's measurements, so that every figure the tools print is from the
+/// world as hard as the paper's. sim::CorpusConfig itself starts from the clean world.
+inline const World& default_world() { return world_named("fitted"); }
+
+/// @brief The effects a world can switch back to the clean world's settings, for ablations.
+enum class Effect : std::uint8_t { Tracker, Donning, Slip, LooseFit, Placement, SizeCoupling, Hysteresis, Drift, Skin, Shortfall, Independent, Count };
+
+/// @brief Effect names (`glovepose simulate --without NAME`), in enum order.
+inline constexpr std::array<const char*, static_cast<std::size_t>(Effect::Count)> kEffectNames{
+    "tracker", "donning", "slip", "loose_fit", "placement", "size_coupling", "hysteresis", "drift", "skin", "shortfall", "independent"};
+static_assert(kEffectNames.size() == static_cast<std::size_t>(Effect::Count), "one name per effect");
+
+/// @brief The parameters each effect switches back (world_parameters() names, comma-separated; a
+/// group name ending in '.' is all of that group's parameters), in enum order.
+inline constexpr std::array<const char*, static_cast<std::size_t>(Effect::Count)> kEffectParameters{
+    "tracker.",
+    "wear.donning_shift,wear.cell_shift,wear.pre_stretch_spread",
+    "wear.slip_sd",
+    "wear.loose_gain",
+    "wear.placement_sd",
+    "wear.size_coupling",
+    "material.hysteresis_share,material.hysteresis_width",
+    "material.drift_rate,material.warmup_gain",
+    "people.skin_spread",
+    "people.calibration_shortfall",
+    "people.independent_fingers"};
+
+/// @brief The effect called `name`; throws glovepose::Error naming the known effects.
+inline Effect effect_named(const std::string& name) {
+  std::string known;
+  for (std::size_t i = 0; i < kEffectNames.size(); ++i) {
+    if (name == kEffectNames[i]) return static_cast<Effect>(i);
+    known += (known.empty() ? "" : ", ") + std::string(kEffectNames[i]);
+  }
+  throw Error("unknown effect '" + name + "', expected one of " + known);
+}
+
+/// @brief `world` with `effect` set back to the clean world's settings, named in World::ablated.
+inline World without(World world, Effect effect) {
+  World clean = worlds().front();  // a copy: WorldParameter::field takes a World it may write
+  const std::string name = kEffectNames[static_cast<std::size_t>(effect)];
+  if (("," + world.ablated + ",").find("," + name + ",") == std::string::npos) world.ablated += (world.ablated.empty() ? "" : ",") + name;
+  const std::string listed = "," + std::string(kEffectParameters[static_cast<std::size_t>(effect)]) + ",";
+  for (const WorldParameter& p : world_parameters()) {
+    const std::string parameter = p.name, group = parameter.substr(0, parameter.find('.') + 1);
+    if (listed.find("," + parameter + ",") != std::string::npos || listed.find("," + group + ",") != std::string::npos)
+      p.field(world) = p.field(clean);
+  }
+  return world;
 }
 
 }  // namespace glovepose::sim
