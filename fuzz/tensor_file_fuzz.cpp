@@ -29,7 +29,7 @@ std::shared_ptr<const glovepose::PoseModel> load_model(const glovepose::io::Tens
     const glovepose::nn::WeightFile weights = glovepose::nn::WeightFile::from(file);
     glovepose::model::ModelInfo info = glovepose::model::ModelInfo::from(weights);
     GLOVEPOSE_FUZZ_REQUIRE(info.joint_limits_min.size() == glovepose::hand::kDofCount);
-    if (info.architecture == "linear") return nullptr;
+    if (info.architecture == glovepose::model::Architecture::Linear) return nullptr;
     auto network = glovepose::PoseModel::Network::from_tensors(info, weights.tensors, glovepose::nn::WeightStorage::F32);
     return std::make_shared<const glovepose::PoseModel>(std::move(info), std::move(network), glovepose::PoseModelOptions{});
   } catch (const glovepose::Error&) {
