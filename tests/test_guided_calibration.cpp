@@ -451,7 +451,7 @@ TEST_CASE("model file: typed metadata (glove, pose offset, trained DoFs) is pars
   CHECK_THROWS_WITH_AS(info.to(file), doctest::Contains("labelled_dofs names no DoF"), Error);
 }
 
-TEST_CASE("model file: the shipped and fixture models load; the shipped default reads and writes back byte for byte") {
+TEST_CASE("model file: the shipped and fixture models load, the shipped default reads and writes back byte for byte") {
   const std::string root = std::string(GLOVEPOSE_SOURCE_DIR);
   for (const std::string& path : {root + "/models/glovepose_fcn512.safetensors", root + "/models/glovepose_unet64.safetensors",
                                   root + "/tests/fixtures/unet_w4.safetensors", root + "/tests/fixtures/unet_w4_e2.safetensors"}) {
