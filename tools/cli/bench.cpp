@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "session_options.hpp"
 
 namespace glovepose::cli {
 namespace {
@@ -220,7 +221,7 @@ void print_table(const std::vector<Result>& results, const BenchOptions& o, cons
 }
 
 int bench(BenchOptions o) {
-  if (o.models.empty()) o.models = {shipped_model_path("glovepose_fcn512.safetensors"), shipped_model_path("glovepose_unet64.safetensors")};
+  if (o.models.empty()) o.models = {shipped_model_path(kShippedModel), shipped_model_path(kShippedUNet)};
   const Session session = simulate_session();
   std::vector<Result> results;
   for (const std::string& path : o.models)

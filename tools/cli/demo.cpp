@@ -26,6 +26,7 @@
 
 #include "commands.hpp"
 #include "new_user.hpp"
+#include "session_options.hpp"
 #include "svg.hpp"
 
 namespace glovepose::cli {
@@ -33,7 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kShippedModelName = "glovepose_fcn512.safetensors";
 // The DoFs of the angles-over-time picture: the index finger's three flexions (paper Fig. 15) and
 // the thumb's base flexion.
 constexpr const char* kPlottedDofs[] = {"index_base_flexion", "index_middle_flexion", "index_tip_flexion", "thumb_base_flexion"};
@@ -45,11 +45,9 @@ constexpr double kHorizons[] = {0.0, 0.010, 0.020, 0.040};
 constexpr std::size_t kHorizonCount = std::size(kHorizons);
 
 struct DemoOptions {
-  std::string model;  // empty: the shipped model
+  SessionOptions session;  // --model, --weights, --seed
   std::string out = "demo-out";
-  std::uint64_t seed = 2026;
   double minutes = 1.5;
-  nn::WeightStorage storage = nn::WeightStorage::F32;
 };
 
 // What streaming the session produced.
@@ -216,7 +214,8 @@ std::string format_table(const DemoOptions& o, const std::string& model_path, co
   for (const std::string& name : calibration.flat_sensors) flat += (flat.empty() ? "" : ", ") + name;
 
   add("glovepose demo: a new user (simulation seed %llu, subject 0), model %s (%s on disk, %s in memory)\n",
-      static_cast<unsigned long long>(o.seed), model_path.c_str(), stored_dtypes(model_path).c_str(), nn::storage_name(o.storage));
+      static_cast<unsigned long long>(o.session.seed), model_path.c_str(), stored_dtypes(model_path).c_str(),
+      nn::storage_name(o.session.storage));
   add("calibration  %.1f s sequence streamed row by row: %ld frames taken, flat sensors: %s; %s\n", calibration.seconds, calibration.frames,
       flat.empty() ? "none" : flat.c_str(), calibration.guided ? "pose-guided" : "min-max");
   add("session      %.1f s: %zu rows streamed (%zu rejected), %zu poses (a solve every 16 rows),\n", session_seconds, run.rows,
@@ -384,16 +383,14 @@ void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::Hand
 }
 
 int demo(const DemoOptions& o) {
-  const std::string model_path = o.model.empty() ? shipped_model_path(kShippedModelName) : o.model;
-  PoseModelOptions model_options;
-  model_options.storage = o.storage;
-  const auto model = PoseModel::load(model_path, model_options);
+  const std::string model_path = o.session.model_path();
+  const auto model = o.session.load_model();
   std::error_code error;
   fs::create_directories(o.out, error);
   if (error || !fs::is_directory(o.out))
     throw Error("cannot create the output folder '" + o.out + "' (" + error.message() + "), expected a writable path");
 
-  const NewUser user = simulate_new_user(o.seed, o.minutes, *model);
+  const NewUser user = simulate_new_user(o.session.seed, o.minutes, *model);
   EstimatorConfig config;  // the default readout: a solve every 16 rows of their latest readings
   config.joint_transforms = true;
   GlovePoseEstimator estimator(model, config);
@@ -426,12 +423,10 @@ Command add_demo(CLI::App& tool) {
       "The product's main job, end to end: a simulated new user puts the glove on, performs the calibration sequence, then a "
       "session of poses, streamed row by row through the estimator; prints a table (angle errors, speed, latency, calibration) "
       "and writes it and three SVG pictures (angles over time, cumulative error, skeletons) to --out.");
-  add_model_file(*command, o->model, std::string("weights (default: models/") + kShippedModelName + ", shipped with glovepose)");
+  o->session.add_to(*command, "simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)");
   command->add_option("--out", o->out, "where the table and pictures go (default: demo-out)")->type_name("DIR");
-  add_number(*command, "--seed", "S", o->seed, "simulation seed of the new user (default 2026; the shipped model saw seeds 101 and 21)");
   add_number(*command, "--minutes", "M", o->minutes, "length of the session after the 30 s calibration (default 1.5)")
       ->check(above(0.0, 600.0));
-  add_weight_storage(*command, o->storage);
   return {command, [o] { return demo(*o); }};
 }
 

@@ -33,6 +33,7 @@
 #include "glove_lines.hpp"
 #include "loopback_socket.hpp"
 #include "new_user.hpp"
+#include "session_options.hpp"
 #include "view_page.hpp"
 
 namespace glovepose::cli {
@@ -52,10 +53,8 @@ constexpr std::chrono::duration<double> kEventPeriod(1.0 / 30.0);
 
 struct ViewOptions {
   int port = 8765;
-  std::string model;  // empty: the shipped one
-  nn::WeightStorage storage = nn::WeightStorage::F32;
-  std::string glove;  // --glove: checked against the model's
-  std::uint64_t seed = 2026;
+  SessionOptions session;  // --model, --weights, --seed (of the simulated user)
+  std::string glove;       // --glove: checked against the model's
   std::string replay;
   bool from_stdin = false;
   double calibration_seconds = kDefaultCalibrationSeconds;  // --stdin
@@ -412,10 +411,8 @@ class Connections {
 };
 
 int view(const ViewOptions& o) {
-  const std::string model_path = o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model;
-  PoseModelOptions model_options;
-  model_options.storage = o.storage;
-  const auto model = PoseModel::load(model_path, model_options);
+  const std::string model_path = o.session.model_path();
+  const auto model = o.session.load_model();
   check_glove(o.glove, model->glove(), model_path);
   if (!model->solver() && !o.from_stdin)
     throw Error("the model's glove '" + model->glove().id() + "' has no wiring to simulate or replay raw rows of, expected --stdin (its " +
@@ -434,8 +431,8 @@ int view(const ViewOptions& o) {
   // The simulated person's own hand (subject 0 of the seed, as simulate_new_user draws it): the page
   // draws it at their size. A replay or a real glove: the reference hand.
   EstimatorConfig config;
-  if (simulated) config.hand = sim::make_subjects(1, o.seed, sim::default_world().people)[0].hand_model();
-  const auto shared = std::make_shared<ViewShared>(model, o.model.empty(), config);
+  if (simulated) config.hand = sim::make_subjects(1, o.session.seed, sim::default_world().people)[0].hand_model();
+  const auto shared = std::make_shared<ViewShared>(model, o.session.model.empty(), config);
   shared->preparing = simulated;  // until the glove's thread has made the simulated user
   const SocketLibrary sockets;
   const auto [server, port] = listen_on_loopback(o.port);
@@ -447,7 +444,7 @@ int view(const ViewOptions& o) {
   const Clock::time_point start = shared->served_from;
   if (!o.calibration.empty()) shared->estimator.load_calibration(o.calibration);
   const std::optional<double> calibration_seconds = on_the_fly_seconds(o.calibration_seconds, o.calibration);
-  std::thread glove([shared, user, simulated, seed = o.seed, from_stdin = o.from_stdin, calibration_seconds] {
+  std::thread glove([shared, user, simulated, seed = o.session.seed, from_stdin = o.from_stdin, calibration_seconds] {
     try {
       GloveStream stream(shared->estimator, shared->latest, shared->stop);
       if (from_stdin) {
@@ -506,10 +503,8 @@ Command add_view(CLI::App& tool) {
       "dataset replayed (--replay), or a real glove on stdin (--stdin).");
   add_number(*command, "--port", "P", o->port, "port on 127.0.0.1 (default 8765; 0: any free one); the address is printed")
       ->check(CLI::Range(0, 65535));
-  add_model_file(*command, o->model, "weights (default: the shipped model)");
-  add_weight_storage(*command, o->storage);
+  o->session.add_to(*command, "simulation seed of the simulated user (default 2026)");
   add_glove_file(*command, o->glove, "the glove the readings come from; refused unless the model was trained for it (default: the model's)");
-  add_number(*command, "--seed", "S", o->seed, "simulation seed of the simulated user (default 2026)");
   CLI::Option* replay =
       command->add_option("--replay", o->replay, "a dataset with raw rows (glovepose simulate --raw-rows), replayed in real time")
           ->check(existing_file())
