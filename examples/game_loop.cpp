@@ -33,11 +33,11 @@ namespace {
 // copy that the game reads whenever it likes, never waiting for this thread nor making it wait.
 void stream_glove(GlovePoseEstimator& estimator, const io::Dataset& glove, Clock::time_point start, LatestHand& latest) {
   const std::size_t rows = glove.row_count;
-  const io::RowClock clock = glove.row_clock();  // when each raw row was read
+  const io::RowClock clock = glove.row_clock();                   // when each raw row was read
+  const std::size_t session_start = glove.first_session_frame();  // where the simulated calibration ends
   estimator.start_calibration();
   for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
-    if (glove.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting)
-      estimator.finish_calibration();  // set-up call: may throw (too few frames)
+    if (frame == session_start) estimator.finish_calibration();  // set-up call: may throw (too few frames)
     for (std::size_t r = 0; r < rows; ++r) {
       const double t = clock.time(glove.timestamps[frame], r);
       std::this_thread::sleep_until(start + std::chrono::duration<double>(t));  // stands in for a blocking read from the glove
@@ -102,10 +102,7 @@ int main(int argc, char** argv) {
     config.joint_transforms = true;
     GlovePoseEstimator estimator(PoseModel::load(argv[1]), config);
 
-    sim::CorpusConfig simulated;
-    simulated.subjects = simulated.sessions = simulated.gloves = 1;
-    simulated.calibration_seconds = 2.0;
-    simulated.minutes = play_seconds / 60.0;
+    sim::CorpusConfig simulated = sim::CorpusConfig::one_session(1, play_seconds, 2.0);
     simulated.recording.raw_rows = true;
     const io::Dataset glove = sim::to_dataset(sim::simulate_corpus(simulated), simulated);
 

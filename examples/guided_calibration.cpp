@@ -31,21 +31,18 @@ int main(int argc, char** argv) {
     GlovePoseEstimator estimator(model);
 
     // A simulated person who follows the sequence, then moves freely for 2 s.
-    sim::CorpusConfig person;
-    person.seed = 31;
-    person.subjects = person.sessions = person.gloves = 1;
+    sim::CorpusConfig person = sim::CorpusConfig::one_session(31, 2.0, sequence.total_seconds());
     person.guided_calibration = sequence;
-    person.calibration_seconds = sequence.total_seconds();
-    person.minutes = 2.0 / 60.0;
     person.recording.raw_rows = true;
     const io::Dataset glove = sim::to_dataset(sim::simulate_corpus(person), person);
     const std::size_t rows = glove.row_count;
-    const io::RowClock clock = glove.row_clock();  // when each raw row was read
+    const io::RowClock clock = glove.row_clock();                   // when each raw row was read
+    const std::size_t session_start = glove.first_session_frame();  // where the simulated person's calibration ends
 
     estimator.start_calibration();
     int shown = -1;
     for (std::size_t frame = 0; frame < glove.frames(); ++frame) {
-      if (glove.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting) {
+      if (frame == session_start) {
         estimator.finish_calibration();  // set-up call: may throw (too few frames)
         std::printf("calibrated: %s\n", estimator.calibration_method() == CalibrationMethod::PoseGuided
                                             ? "pose-guided (range and this user's angle offsets)"

@@ -24,19 +24,17 @@ int main(int argc, char** argv) {
     const std::shared_ptr<const PoseModel> model = PoseModel::load(argv[1]);
     GlovePoseEstimator estimator(model);
 
-    sim::CorpusConfig glove;
-    glove.subjects = glove.sessions = glove.gloves = 1;
-    glove.calibration_seconds = 3.0;
-    glove.minutes = 5.0 / 60.0;
+    sim::CorpusConfig glove = sim::CorpusConfig::one_session(1, 5.0, 3.0);  // seed 1: 5 s after 3 s of calibration
     glove.recording.raw_rows = true;
     const io::Dataset recording = sim::to_dataset(sim::simulate_corpus(glove), glove);
     const std::size_t rows = recording.row_count;
-    const io::RowClock clock = recording.row_clock();  // when each raw row was read
+    const io::RowClock clock = recording.row_clock();                   // when each raw row was read
+    const std::size_t session_start = recording.first_session_frame();  // where the simulated calibration ends
 
     // The user first moves through extreme poses while the estimator collects each cell's range.
     estimator.start_calibration();
     for (std::size_t frame = 0; frame < recording.frames(); ++frame) {
-      if (recording.kind[frame] == io::kKindRecording && estimator.calibration_progress().collecting) {
+      if (frame == session_start) {
         const long frames = estimator.calibration_progress().frames;
         const sensor::CalibrationRange& range = estimator.finish_calibration();
         std::printf("calibrated on %ld frames, %zu flat sensors\n", frames, range.flat_sensors().size());
