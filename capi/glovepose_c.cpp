@@ -937,12 +937,10 @@ glovepose::train::EvaluationOptions evaluation_options(const char* text, const g
     } else if (key == "contact") {
       o.contact = flag(v, key);
     } else if (key == "weights") {
-      bool named = false;
-      for (const auto storage : {glovepose::nn::WeightStorage::F32, glovepose::nn::WeightStorage::F16, glovepose::nn::WeightStorage::BF16,
-                                 glovepose::nn::WeightStorage::Fixed16})
-        if (v.is_string() && v.get<std::string>() == glovepose::train::weights_word(storage)) o.weights = storage, named = true;
+      const auto named = v.is_string() ? glovepose::nn::storage_of_word(v.get<std::string>()) : std::nullopt;
       if (!named)
         throw Error("options_json: \"weights\" is " + json::describe(v) + ", expected \"f32\", \"f16\", \"bf16\" or \"fixed16\"");
+      o.weights = *named;
     } else if (key == "glove") {
       if (!v.is_string()) throw Error("options_json: \"glove\" is " + json::describe(v) + ", expected a glove description file's path");
       const glovepose::grid::GloveDescription glove = glovepose::grid::GloveDescription::read(v.get<std::string>());

@@ -182,35 +182,23 @@ CLI::Option* add_model_file(CLI::App& command, Target& path, const std::string& 
 /// where a command had them (`old_spellings`), the older flags `--fixed16`, `--f16`, `--bf16` as
 /// aliases; any two of them exclude each other.
 inline void add_weight_storage(CLI::App& command, nn::WeightStorage& storage, bool old_spellings = true) {
-  struct Choice {
-    const char* word;
-    nn::WeightStorage storage;
-    const char* description;
-  };
-  static const Choice choices[] = {
-      {"f32", nn::WeightStorage::F32, "F32 (exact)"},
-      {"f16", nn::WeightStorage::F16, "F16"},
-      {"bf16", nn::WeightStorage::BF16, "BF16 (the fastest)"},
-      {"fixed16", nn::WeightStorage::Fixed16, "Fixed16 (16-bit, within 0.005 degree of F32 on the shipped model)"}};
   std::string words;
-  for (const Choice& c : choices) words += (words.empty() ? "" : "|") + std::string(c.word);
+  for (int s = 0; s < nn::kWeightStorageCount; ++s)
+    words += (words.empty() ? "" : "|") + std::string(nn::storage_word(static_cast<nn::WeightStorage>(s)));
   std::vector<CLI::Option*> added{add_parsed_option<nn::WeightStorage>(
       command, "--weights", words,
-      [](const std::string& text) -> std::optional<nn::WeightStorage> {
-        for (const Choice& c : choices)
-          if (text == c.word) return c.storage;
-        return std::nullopt;
-      },
+      [](const std::string& text) { return nn::storage_of_word(text); },
       [&storage](nn::WeightStorage chosen) { storage = chosen; }, "one of " + words,
       "how the weights are kept in memory: f32 (default), f16, bf16 (the fastest) or fixed16 (16-bit, within 0.005 "
       "degree of F32 on the shipped model)")};
-  for (const Choice& c : choices)
-    if (old_spellings && c.storage != nn::WeightStorage::F32)
-      added.push_back(command
-                          .add_flag_callback(
-                              std::string("--") + c.word, [&storage, chosen = c.storage] { storage = chosen; },
-                              std::string("the same as --weights ") + c.word)
-                          ->group("Old spellings"));
+  for (int s = 1; old_spellings && s < nn::kWeightStorageCount; ++s) {  // every storage but F32
+    const auto chosen = static_cast<nn::WeightStorage>(s);
+    added.push_back(command
+                        .add_flag_callback(
+                            std::string("--") + nn::storage_word(chosen), [&storage, chosen] { storage = chosen; },
+                            std::string("the same as --weights ") + nn::storage_word(chosen))
+                        ->group("Old spellings"));
+  }
   for (CLI::Option* option : added)
     for (CLI::Option* other : added)
       if (option != other) option->excludes(other);

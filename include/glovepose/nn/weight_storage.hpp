@@ -2,6 +2,9 @@
 /// @brief How a network's weights are kept in memory after loading, for every architecture.
 #pragma once
 
+#include <optional>
+#include <string_view>
+
 namespace glovepose::nn {
 
 /// @brief How the weights are kept in memory.
@@ -16,6 +19,8 @@ enum class WeightStorage : unsigned char {
 };
 
 static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEPOSE_WEIGHTS_* values are this order");
+/// @brief The number of storages (WeightStorage's values are 0 .. kWeightStorageCount - 1).
+inline constexpr int kWeightStorageCount = 4;
 
 /// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
 constexpr const char* storage_name(WeightStorage storage) noexcept {
@@ -30,6 +35,29 @@ constexpr const char* storage_name(WeightStorage storage) noexcept {
       return "Fixed16";
   }
   return "unknown";
+}
+
+/// @brief The word of a weight storage as the tool's --weights, eval's report, the C ABI's evaluation
+/// options and Python's weights= spell it: "f32", "f16", "bf16" or "fixed16".
+constexpr const char* storage_word(WeightStorage storage) noexcept {
+  switch (storage) {
+    case WeightStorage::F32:
+      return "f32";
+    case WeightStorage::F16:
+      return "f16";
+    case WeightStorage::BF16:
+      return "bf16";
+    case WeightStorage::Fixed16:
+      return "fixed16";
+  }
+  return "unknown";
+}
+
+/// @brief The storage `word` names (storage_word), if any.
+constexpr std::optional<WeightStorage> storage_of_word(std::string_view word) noexcept {
+  for (int s = 0; s < kWeightStorageCount; ++s)
+    if (word == storage_word(static_cast<WeightStorage>(s))) return static_cast<WeightStorage>(s);
+  return std::nullopt;
 }
 
 /// @brief The 16-bit storage for the real-time path with the instruction set the including code is

@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -313,14 +312,6 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   return r;
 }
 
-/// @brief `storage` as the report, `glovepose eval --weights` and Python's `weights=` spell it:
-/// nn::storage_name in lower case ("f32", "f16", "bf16" or "fixed16").
-inline std::string weights_word(nn::WeightStorage storage) {
-  std::string word = nn::storage_name(storage);
-  std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return word;
-}
-
 /// @brief The result as `glovepose eval --json` prints it: the angle-error report (to_json of
 /// metrics_report.hpp) with "calibration", "weights" (the storage, as --weights spells it: "f32",
 /// "f16", "bf16" or "fixed16"), "mean_window", "lag_ms", "scored_against", "vs_labels", "vs_truth",
@@ -335,7 +326,7 @@ inline std::string to_json(const EvaluationResult& r) {
   char lag[32];
   std::snprintf(lag, sizeof lag, "%.3f", r.lag_ms);
   return to_json(r.vs_labels, {{"calibration", "\"" + r.calibration + "\""},
-                               {"weights", "\"" + weights_word(r.weights) + "\""},
+                               {"weights", "\"" + std::string(nn::storage_word(r.weights)) + "\""},
                                {"mean_window", r.mean_window.value_or("null")},
                                {"lag_ms", lag},
                                {"scored_against", "\"labels\""},
