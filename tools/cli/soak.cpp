@@ -18,6 +18,7 @@
 // can prove the per-frame path allocates nothing here too.
 #include "../soak/soak.hpp"
 #include "commands.hpp"
+#include "session_options.hpp"
 
 namespace glovepose::cli {
 namespace {
@@ -39,7 +40,7 @@ int soak(SoakOptions o) {
   if (void* counter = dlsym(RTLD_DEFAULT, "glovepose_allocation_count"))
     o.soak.allocation_count = reinterpret_cast<std::size_t (*)()>(counter);
 #endif
-  const auto model = PoseModel::load(o.model.empty() ? shipped_model_path("glovepose_fcn512.safetensors") : o.model);
+  const auto model = PoseModel::load(o.model.empty() ? shipped_model_path(kShippedModel) : o.model);
   std::cout << "simulating " << o.source_minutes << " min of motion to loop ..." << std::endl;
   // The simulated user is the fault seed's, so one seed reproduces the whole run.
   const io::Dataset source = sim::simulate_soak_source(o.soak.seed, o.source_minutes, kCalibrationSeconds);
@@ -67,7 +68,7 @@ Command add_soak(CLI::App& tool) {
   add_number(*command, "--seed", "S", o->soak.seed, "seed of the faults and the simulated user (default 1)");
   add_number(*command, "--source-minutes", "X", o->source_minutes, "simulated motion looped, minutes (default 3; ~6 s of CPU per minute)")
       ->check(CLI::Range(0.1, 600.0));
-  add_model_file(*command, o->model, "weights (default: the shipped glovepose_fcn512.safetensors)");
+  add_model_file(*command, o->model, std::string("weights (default: the shipped ") + kShippedModel + ")");
   return {command, [o] { return soak(*o); }};
 }
 
