@@ -2,7 +2,7 @@
 #include <glovepose/grid/grid_map.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/model/unet_model.hpp>
-#include <glovepose/pose_network.hpp>
+#include <glovepose/model/pose_network.hpp>
 
 #include <doctest/doctest.h>
 
@@ -554,7 +554,7 @@ TEST_CASE("pose network: multiply-adds and kept weights for a U-Net and an FCN, 
     unet.macs += c.macs;
     unet.weights += c.weights;
   }
-  const glovepose::PoseNetwork unet_net(UNet<>::from_tensors(unet_tensors, 8));
+  const glovepose::model::PoseNetwork unet_net(UNet<>::from_tensors(unet_tensors, 8));
   CHECK(unet_net.mac_count() == unet.macs);
   CHECK(unet_net.stored_weight_count() == unet.weights);
 
@@ -572,7 +572,7 @@ TEST_CASE("pose network: multiply-adds and kept weights for a U-Net and an FCN, 
     const std::vector<std::int64_t>& shape = fcn_tensors.at("fc" + std::to_string(l) + ".weight").shape;
     fcn_macs += static_cast<std::size_t>(shape[0] * shape[1]);
   }
-  const glovepose::PoseNetwork fcn_net(Fcn<>::from_tensors(fcn_tensors, 44, 32));
+  const glovepose::model::PoseNetwork fcn_net(Fcn<>::from_tensors(fcn_tensors, 44, 32));
   CHECK(fcn_net.mac_count() == fcn_macs);
   CHECK(fcn_net.stored_weight_count() == fcn_macs);
   CHECK(fcn_macs == 44 * 32 + 3 * 32 * 32 + 32 * 16 + 16 * 25);  // tests/test_cli.cpp's figure for this shape

@@ -4,7 +4,7 @@
 # random generator); hand/ (the hand model, the vocabulary of poses); io/ (the container, JSON,
 # half floats, recordings); sensor/; filter/; nn/ (knows nothing of gloves or training); grid/;
 # calibration/; model/ (the model file's metadata); train/; sim/; and the composition files at the
-# top (estimator.hpp, pose_network.hpp, ...). A header may include its own folder and anything
+# top (estimator.hpp, pose_model.hpp, ...). A header may include its own folder and anything
 # below it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/include/glovepose"

@@ -45,7 +45,7 @@
 #include "model/model_info.hpp"
 #include "pose.hpp"
 #include "pose_model.hpp"
-#include "pose_network.hpp"
+#include "model/pose_network.hpp"
 #include "sensor/calibration.hpp"
 #include "sensor/layout.hpp"
 #include "sensor/readout.hpp"
@@ -446,7 +446,7 @@ class GlovePoseEstimator {
   std::optional<filter::OneEuroFilter<hand::kDofCount>> smoothing_;
   std::optional<hand::ContactStage> contact_;  // EstimatorConfig::contact
   hand::ContactResult contact_result_;
-  PoseNetwork::Workspace workspace_;
+  model::PoseNetwork::Workspace workspace_;
   std::unique_ptr<core::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;

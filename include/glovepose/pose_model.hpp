@@ -21,7 +21,7 @@
 #include "hand/dofs.hpp"
 #include "model/model_file.hpp"
 #include "model/model_info.hpp"
-#include "pose_network.hpp"
+#include "model/pose_network.hpp"
 #include "sensor/calibration.hpp"
 #include "sensor/layout.hpp"
 #include "sensor/solver.hpp"
@@ -50,7 +50,7 @@ class PoseModel {
   /// @brief The solver of a glove wiring of any size.
   using Solver = sensor::CapacitanceSolver;
   /// @brief The network: the U-Net or the FCN the model file holds.
-  using Network = PoseNetwork;
+  using Network = model::PoseNetwork;
 
   /// @brief Loads a model file (weights_format.md). Throws glovepose::Error naming the file and what
   /// is wrong: unreadable or malformed file, not a U-Net or FCN, or a glove or wiring that does not fit it.

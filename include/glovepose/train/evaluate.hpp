@@ -21,8 +21,7 @@
 #include "../core/thread_pool.hpp"
 #include "../hand/contact.hpp"
 #include "../hand/pinch.hpp"
-#include "../nn/fcn.hpp"
-#include "../nn/unet.hpp"
+#include "../model/pose_network.hpp"
 #include "../nn/weight_storage.hpp"
 #include "fingertip_metrics.hpp"
 #include "guided_calibration.hpp"
@@ -158,37 +157,15 @@ inline std::vector<float> predict_stored(const TrainedModel& model, const Sample
                 ", which has no real-time network, expected F32 weights (the default)");
   if (samples.cells != info.inputs)
     throw Error("the samples have " + std::to_string(samples.cells) + " cells per frame, the model takes " + std::to_string(info.inputs));
-  const nn::TensorMap tensors = model.network->parameters().to_tensors();
+  const model::PoseNetwork network = model::PoseNetwork::from_tensors(info, model.network->parameters().to_tensors(), storage);
   const long frames = samples.frames();
-  std::vector<float> out(static_cast<std::size_t>(frames) * kTargets);
-  if (info.architecture == model::Architecture::Fcn) {
-    nn::Fcn<>::from_tensors(tensors, info.inputs, info.width, storage).forward_batch(samples.inputs.data(), out.data(), frames, threads);
-  } else {
-    const nn::UNet<> net = nn::UNet<>::from_tensors(tensors, info.width, info.bn_eps, storage);
-    const grid::GridMap& map = model.glove.map();
-    const long values = net.input_values();
-    if (map.input_plane_count() * grid::kMapSlots != values)
-      throw Error("the U-Net reads " + std::to_string(values) + " input values, expected the glove's " +
-                  std::to_string(map.input_plane_count() * grid::kMapSlots));
-    std::vector<float> planes(static_cast<std::size_t>(frames * values)), maps(static_cast<std::size_t>(frames) * grid::kMapSlots);
-    for (long f = 0; f < frames; ++f)
-      if (map.to_input_planes(samples.inputs.data() + f * samples.cells, planes.data() + f * values) != Status::Ok)
-        throw Error("frame " + std::to_string(f) + " has a non-finite cell value, expected finite calibrated cells");
-    net.forward_batch(planes.data(), maps.data(), frames, threads);
-    std::array<float, grid::kMapSlots> pose_map{};
-    hand::Angles a{};
-    for (long f = 0; f < frames; ++f) {
-      std::copy_n(maps.begin() + f * grid::kMapSlots, grid::kMapSlots, pose_map.begin());
-      map.from_pose_map(pose_map, a);
-      std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
-    }
-  }
+  const std::vector<hand::Angles> rows = network.normalized_dofs_batch(model.glove.map(), samples.inputs.data(), samples.cells, frames, threads);
   const hand::JointLimits limits = info.joint_limits();
   const hand::DofSet& labelled = info.labelled_dofs;
-  for (long f = 0; labelled != hand::all_dofs() && f < frames; ++f) {
-    hand::Angles a{};
-    std::copy_n(out.begin() + f * kTargets, hand::kDofCount, a.begin());
-    a = limits.rest_unlabelled(a, labelled);
+  std::vector<float> out(static_cast<std::size_t>(frames) * kTargets);
+  for (long f = 0; f < frames; ++f) {
+    hand::Angles a = rows[static_cast<std::size_t>(f)];
+    if (labelled != hand::all_dofs()) a = limits.rest_unlabelled(a, labelled);
     std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
   }
   return out;

@@ -13,16 +13,16 @@
 #include <variant>
 #include <vector>
 
-#include "config.hpp"
-#include "grid/grid_map.hpp"
-#include "hand/dofs.hpp"
-#include "nn/fcn.hpp"
-#include "model/model_info.hpp"
-#include "core/team.hpp"
-#include "nn/unet.hpp"
-#include "status.hpp"
+#include "../config.hpp"
+#include "../core/team.hpp"
+#include "../grid/grid_map.hpp"
+#include "../hand/dofs.hpp"
+#include "../nn/fcn.hpp"
+#include "../nn/unet.hpp"
+#include "../status.hpp"
+#include "model_info.hpp"
 
-namespace glovepose {
+namespace glovepose::model {
 
 /// @brief A U-Net or an FCN behind one per-frame call.
 class PoseNetwork {
@@ -40,15 +40,15 @@ class PoseNetwork {
   /// @brief The network a model file's metadata names, built from its tensors with weights kept as
   /// `storage`. Throws glovepose::Error for an architecture the real-time path does not run (a
   /// linear map: train::load_model evaluates it) or tensors that do not make the network.
-  static PoseNetwork from_tensors(const model::ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
-    if (info.architecture == model::Architecture::UNet) return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
-    if (info.architecture == model::Architecture::Fcn) return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
+  static PoseNetwork from_tensors(const ModelInfo& info, const nn::TensorMap& tensors, nn::WeightStorage storage) {
+    if (info.architecture == Architecture::UNet) return UNet::from_tensors(tensors, info.width, info.bn_eps, storage);
+    if (info.architecture == Architecture::Fcn) return Fcn::from_tensors(tensors, info.inputs, info.width, storage);
     throw Error("architecture '" + info.architecture_name() +
                 "' has no real-time network, expected 'unet' or 'fcn' (train::load_model evaluates every architecture)");
   }
 
   /// @brief Architecture::UNet or Architecture::Fcn.
-  model::Architecture architecture() const noexcept { return unet() ? model::Architecture::UNet : model::Architecture::Fcn; }
+  Architecture architecture() const noexcept { return unet() ? Architecture::UNet : Architecture::Fcn; }
   /// @brief The U-Net, or null for an FCN.
   const UNet* unet() const noexcept { return std::get_if<UNet>(&net_); }
   /// @brief The FCN, or null for a U-Net.
@@ -173,4 +173,4 @@ class PoseNetwork {
   std::variant<UNet, Fcn> net_;
 };
 
-}  // namespace glovepose
+}  // namespace glovepose::model
