@@ -213,8 +213,9 @@ TEST_CASE("contact stage in the estimator: off by default, when on only the pose
   const hand::Kinematics fk;
   std::size_t poses = 0, adjusted = 0, allocations = 0;
   std::vector<double> cells(data.cell_count);
+  const std::size_t recording = data.first_session_frame();
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == io::kKindRecording && off.calibration_progress().collecting) {
+    if (f == recording) {
       off.finish_calibration();
       on.finish_calibration();
     }

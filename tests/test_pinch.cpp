@@ -252,8 +252,9 @@ TEST_CASE("aim: the estimator keeps the pinch state of its poses") {
   hand::PinchTracker reference;  // the same rule followed here, pose by pose
   std::size_t poses = 0, pinching = 0;
   std::vector<double> cells(data.cell_count);
+  const std::size_t recording = data.first_session_frame();
   for (std::size_t f = 0; f < data.frames(); ++f) {
-    if (data.kind[f] == io::kKindRecording && estimator.calibration_progress().collecting) estimator.finish_calibration();
+    if (f == recording) estimator.finish_calibration();
     for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = data.cells[f * data.cell_count + c];
     if (estimator.push_cells(cells.data(), static_cast<int>(cells.size()), data.timestamps[f]) != Status::Solved) continue;
     ++poses;
