@@ -19,38 +19,28 @@ enum class WeightStorage : unsigned char {
 };
 
 static_assert(static_cast<int>(WeightStorage::Fixed16) == 3, "the C ABI's GLOVEPOSE_WEIGHTS_* values are this order");
+/// @brief Each storage's two spellings, in WeightStorage's order: the name for messages and reports
+/// ("F32", "F16", "BF16", "Fixed16") and the word the tool's --weights, eval's report, the C ABI's
+/// evaluation options and Python's weights= use ("f32", "f16", "bf16", "fixed16").
+struct WeightStorageNames {
+  const char* name;
+  const char* word;
+};
+inline constexpr WeightStorageNames kWeightStorageNames[] = {{"F32", "f32"}, {"F16", "f16"}, {"BF16", "bf16"}, {"Fixed16", "fixed16"}};
 /// @brief The number of storages (WeightStorage's values are 0 .. kWeightStorageCount - 1).
-inline constexpr int kWeightStorageCount = 4;
+inline constexpr int kWeightStorageCount = static_cast<int>(sizeof kWeightStorageNames / sizeof kWeightStorageNames[0]);
+static_assert(kWeightStorageCount == static_cast<int>(WeightStorage::Fixed16) + 1, "one name table entry per storage");
 
 /// @brief Name of a weight storage for messages and reports: "F32", "F16", "BF16" or "Fixed16".
 constexpr const char* storage_name(WeightStorage storage) noexcept {
-  switch (storage) {
-    case WeightStorage::F32:
-      return "F32";
-    case WeightStorage::F16:
-      return "F16";
-    case WeightStorage::BF16:
-      return "BF16";
-    case WeightStorage::Fixed16:
-      return "Fixed16";
-  }
-  return "unknown";
+  const auto s = static_cast<int>(storage);
+  return s < kWeightStorageCount ? kWeightStorageNames[s].name : "unknown";
 }
 
-/// @brief The word of a weight storage as the tool's --weights, eval's report, the C ABI's evaluation
-/// options and Python's weights= spell it: "f32", "f16", "bf16" or "fixed16".
+/// @brief The word of a weight storage: "f32", "f16", "bf16" or "fixed16".
 constexpr const char* storage_word(WeightStorage storage) noexcept {
-  switch (storage) {
-    case WeightStorage::F32:
-      return "f32";
-    case WeightStorage::F16:
-      return "f16";
-    case WeightStorage::BF16:
-      return "bf16";
-    case WeightStorage::Fixed16:
-      return "fixed16";
-  }
-  return "unknown";
+  const auto s = static_cast<int>(storage);
+  return s < kWeightStorageCount ? kWeightStorageNames[s].word : "unknown";
 }
 
 /// @brief The storage `word` names (storage_word), if any.
