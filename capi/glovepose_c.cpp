@@ -284,6 +284,15 @@ const char* glovepose_version(void) noexcept { return glovepose::kVersion; }
 
 int32_t glovepose_abi_version(void) noexcept { return GLOVEPOSE_C_ABI_VERSION; }
 
+const char* glovepose_isa(void) noexcept {
+  try {
+    return glovepose::nn::isa_word(glovepose::model::process_isa());
+  } catch (...) {
+    (void)fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+    return nullptr;
+  }
+}
+
 double glovepose_row_time(double cycle_end, int32_t row, int32_t rows, double cycle_rate) noexcept {
   if (rows < 1 || row < 0 || row >= rows || !(cycle_rate > 0.0) || !std::isfinite(cycle_rate)) return std::nan("");
   return glovepose::io::RowClock{static_cast<std::size_t>(rows), cycle_rate}.time(cycle_end, static_cast<std::size_t>(row));
@@ -351,14 +360,19 @@ glovepose_result glovepose_model_load(const char* model_path, int32_t weight_sto
   if (out_model == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: out_model is NULL");
   *out_model = nullptr;
   if (model_path == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_model_load: model_path is NULL");
-  if (weight_storage < GLOVEPOSE_WEIGHTS_F32 || weight_storage > GLOVEPOSE_WEIGHTS_FIXED16)
+  if (weight_storage < GLOVEPOSE_WEIGHTS_F32 || weight_storage > GLOVEPOSE_WEIGHTS_REALTIME)
     return failf(GLOVEPOSE_ERROR_INVALID_ARGUMENT,
                  "glovepose_model_load: weight_storage %d, expected GLOVEPOSE_WEIGHTS_F32 (0), GLOVEPOSE_WEIGHTS_F16 (1), "
-                 "GLOVEPOSE_WEIGHTS_BF16 (2) or GLOVEPOSE_WEIGHTS_FIXED16 (3)",
+                 "GLOVEPOSE_WEIGHTS_BF16 (2), GLOVEPOSE_WEIGHTS_FIXED16 (3) or GLOVEPOSE_WEIGHTS_REALTIME (4)",
                  static_cast<int>(weight_storage));
   glovepose::PoseModelOptions options;
   // The C values are the enumerators' order (checked where WeightStorage is defined).
-  options.storage = static_cast<glovepose::nn::WeightStorage>(weight_storage);
+  if (weight_storage != GLOVEPOSE_WEIGHTS_REALTIME) options.storage = static_cast<glovepose::nn::WeightStorage>(weight_storage);
+  try {
+    if (weight_storage == GLOVEPOSE_WEIGHTS_REALTIME) options.storage = glovepose::nn::realtime_storage(glovepose::model::process_isa());
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  }
   if (glove_description_path != nullptr) {
     try {
       options.glove = glovepose::grid::GloveDescription::read(glove_description_path);

@@ -135,16 +135,20 @@ typedef int32_t glovepose_result;
 
 /** @brief In-memory weight precision: float32, the file's values exactly. */
 #define GLOVEPOSE_WEIGHTS_F32 0
-/** @brief In-memory weight precision: binary16, half the bytes (faster at batch 1: the real-time
- * choice); angles differ from F32 by rounding (hundredths of a degree). */
+/** @brief In-memory weight precision: binary16, half the bytes; angles differ from F32 by rounding
+ * (hundredths of a degree). Fast where the CPU converts binary16 (AVX2, AVX-512), slow (widened
+ * in software) on SSE2-only x86-64 and ARM64: GLOVEPOSE_WEIGHTS_REALTIME chooses per CPU. */
 #define GLOVEPOSE_WEIGHTS_F16 1
 /** @brief In-memory weight precision: bfloat16, half the bytes and the fastest at batch 1; its
  * rounding moves angles by up to about 0.4 degree on the shipped model (F16: 0.03 degree). */
 #define GLOVEPOSE_WEIGHTS_BF16 2
 /** @brief In-memory weight precision: 16-bit codes with one scale per output channel (Fixed16):
- * half the bytes, the real-time choice; angles within 0.005 degree of F32 on the shipped
- * model (README, "Figures"). */
+ * half the bytes; angles within 0.005 degree of F32 on the shipped model (README, "Figures"). */
 #define GLOVEPOSE_WEIGHTS_FIXED16 3
+/** @brief The real-time choice: the fastest precision within 0.1 degree of F32 for the instruction
+ * set this process runs (glovepose_isa()): F16 with AVX2, Fixed16 with AVX-512 and NEON, F32 with
+ * SSE2 (measured: docs/performance.md). */
+#define GLOVEPOSE_WEIGHTS_REALTIME 4
 
 /** @brief Where the calibration range in use comes from: none yet (no pose can be computed). */
 #define GLOVEPOSE_CALIBRATION_NONE 0
@@ -337,6 +341,13 @@ typedef struct glovepose_calibration_step {
 GLOVEPOSE_C_API const char* glovepose_version(void) GLOVEPOSE_C_NOEXCEPT;
 /** @brief The ABI version the library was built with; compare with GLOVEPOSE_C_ABI_VERSION. */
 GLOVEPOSE_C_API int32_t glovepose_abi_version(void) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The instruction set this process's networks run (static string): "sse2", "avx2" or
+ * "avx512" on x86-64, "neon" on ARM64. The library holds its networks once per set and chooses,
+ * at the first call of this function or the first model loaded, the best this CPU executes, or the
+ * one the environment variable GLOVEPOSE_ISA names (for tests and bug reports). NULL, with the
+ * message in glovepose_last_error(), when GLOVEPOSE_ISA names no set or one this CPU does not
+ * execute (models then fail to load with the same message). */
+GLOVEPOSE_C_API const char* glovepose_isa(void) GLOVEPOSE_C_NOEXCEPT;
 /** @brief When row `row` of a readout cycle that ends at `cycle_end` (seconds) was read, for a glove
  * that reads `rows` rows per cycle at `cycle_rate` cycles per second: each row completes at the end
  * of its slot of 1 / (rows * cycle_rate) s, the last one at `cycle_end`. For timestamping rows
@@ -364,7 +375,7 @@ GLOVEPOSE_C_API int32_t glovepose_xr_joint_parent(int32_t joint) GLOVEPOSE_C_NOE
 /**
  * @brief Loads a model file (weights_format.md) into *out_model.
  * @param model_path path of the .safetensors model file.
- * @param weight_storage GLOVEPOSE_WEIGHTS_F32, _F16, _BF16 or _FIXED16.
+ * @param weight_storage GLOVEPOSE_WEIGHTS_F32, _F16, _BF16, _FIXED16 or _REALTIME.
  * @param glove_description_path a glove description JSON file, or NULL for the model's own glove.
  * @param out_model receives the handle (NULL on failure). Free it with glovepose_model_free().
  * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE / _INVALID_ARGUMENT /

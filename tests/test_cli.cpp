@@ -1279,7 +1279,25 @@ TEST_CASE("cli: glovepose bench --json times every stage for every weight storag
 TEST_CASE("cli: glovepose --version prints config.hpp's version, which the Python and C# packages carry too") {
   const Run r = run_stream("--version", 1);
   CHECK(r.status == 0);
-  CHECK(r.out == std::string("glovepose ") + kVersion + "\n");
+  // The tool runs glovepose::compiled's networks: the best set this CPU executes (the variable unset).
+  std::string best = nn::isa_word(nn::Isa::Neon), built = "neon";
+#if defined(__x86_64__) || defined(_M_X64)
+  best = nn::isa_word(nn::cpu_supports(nn::Isa::Avx512) ? nn::Isa::Avx512 : nn::cpu_supports(nn::Isa::Avx2) ? nn::Isa::Avx2 : nn::Isa::Sse2);
+  built = "sse2, avx2, avx512";
+#endif
+  CHECK(r.out == std::string("glovepose ") + kVersion + "\nnetworks: " + best + " (this build holds " + built + ")\n");
+  // GLOVEPOSE_ISA forces one of them; a word that names none is refused, naming the words.
+  setenv("GLOVEPOSE_ISA", "sse2", 1);
+  const Run forced = run_stream("--version", 1);
+  setenv("GLOVEPOSE_ISA", "sse9", 1);
+  const Run refused = run_stream("--version", 2);
+  unsetenv("GLOVEPOSE_ISA");
+#if defined(__x86_64__) || defined(_M_X64)
+  CHECK(forced.status == 0);
+  CHECK(forced.out.find("\nnetworks: sse2 (") != std::string::npos);
+#endif
+  CHECK(refused.status == 1);
+  CHECK(refused.out.find("GLOVEPOSE_ISA is 'sse9', expected sse2, avx2, avx512 or neon") != std::string::npos);
   // kVersion is the three macros; CMakeLists.txt reads them. The packages write it again (they are
   // built without CMake): they must agree.
   CHECK(std::string(kVersion) == std::to_string(GLOVEPOSE_VERSION_MAJOR) + "." + std::to_string(GLOVEPOSE_VERSION_MINOR) + "." +

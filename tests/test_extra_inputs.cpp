@@ -151,7 +151,7 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
     const auto model = PoseModel::load(path);
     std::remove(path.c_str());
     REQUIRE(model->glove() == glove);
-    if (architecture == model::Architecture::UNet) CHECK(model->network().unet()->extra_inputs() == 1);
+    if (architecture == model::Architecture::UNet) CHECK(model->network().extra_inputs() == 1);
 
     // Every input calibrated over 0..10: normalised x = 2 c / 10 - 1.
     const sensor::CalibrationRange range(Eigen::VectorXd::Zero(n), Eigen::VectorXd::Constant(n, 10.0), glove.cell_names());

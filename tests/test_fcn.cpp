@@ -235,7 +235,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
     options.storage = storage;
     const std::shared_ptr<const PoseModel> model = PoseModel::load(path, options);
     CHECK(model->network().architecture() == model::Architecture::Fcn);
-    CHECK(model->network().fcn()->hidden() == hidden);
+    CHECK(model->network().width() == hidden);
     CHECK(worst(model->predict(cells.data(), frames, range, 2)) < bound_deg);
     GlovePoseEstimator estimator(model);
     estimator.set_calibration(range);

@@ -17,7 +17,8 @@ stage="$out/stage"
 rm -rf "$stage" && mkdir -p "$stage"
 
 # Binaries engines ship run on machines nobody knows: baseline x86-64 (the C ABI is built so in
-# every tree; the tool here too), Release, no test or benchmark.
+# every tree; the tool here too), Release, no test or benchmark. Their networks are
+# glovepose::compiled's, built per instruction set: each machine runs the best it executes.
 cmake -S . -B build-release -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_NATIVE=OFF -DGLOVEPOSE_UNITY_BUILD=ON \
   -DGLOVEPOSE_BUILD_TESTS=OFF -DGLOVEPOSE_BUILD_EXAMPLES=OFF -DGLOVEPOSE_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-release -j"$(nproc)"

@@ -162,6 +162,7 @@ static void write_constants(void) {
   CONST("WeightStorage", "F16", GLOVEPOSE_WEIGHTS_F16);
   CONST("WeightStorage", "Bf16", GLOVEPOSE_WEIGHTS_BF16);
   CONST("WeightStorage", "Fixed16", GLOVEPOSE_WEIGHTS_FIXED16);
+  CONST("WeightStorage", "Realtime", GLOVEPOSE_WEIGHTS_REALTIME);
   CONST("Hand", "Right", GLOVEPOSE_HAND_RIGHT);
   CONST("Hand", "Left", GLOVEPOSE_HAND_LEFT);
   CONST("CalibrationSource", "None", GLOVEPOSE_CALIBRATION_NONE);

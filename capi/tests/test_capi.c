@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int passed = 0;
@@ -76,6 +77,17 @@ static void test_library(void) {
   CHECK(isnan(glovepose_row_time(2.0, 0, 0, 60.0)) && isnan(glovepose_row_time(2.0, 0, 180, 0.0)));
   CHECK(isnan(glovepose_row_time(2.0, 0, 180, INFINITY)) && isnan(glovepose_row_time(2.0, 0, 180, NAN)));
   CHECK(strcmp(glovepose_version(), GLOVEPOSE_EXPECTED_VERSION) == 0);
+  /* The instruction set the networks run: one the library holds; GLOVEPOSE_ISA's when it is set. */
+  {
+    const char* isa = glovepose_isa();
+    const char* asked = getenv("GLOVEPOSE_ISA");
+    CHECK(isa != NULL);
+    if (isa != NULL) {
+      CHECK(strcmp(isa, "sse2") == 0 || strcmp(isa, "avx2") == 0 || strcmp(isa, "avx512") == 0 || strcmp(isa, "neon") == 0);
+      if (asked != NULL && asked[0] != '\0') CHECK(strcmp(isa, asked) == 0);
+      CHECK(glovepose_isa() == isa); /* one choice per process */
+    }
+  }
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_SOLVED), "solved") == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_UNCALIBRATED), "uncalibrated") == 0);
   CHECK(strcmp(glovepose_result_name(GLOVEPOSE_ERROR_FILE_NOT_FOUND), "file not found") == 0);
@@ -219,6 +231,13 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
            bf16_degrees, fixed16_degrees);
     CHECK(fixed16_degrees > 0.0);
     CHECK(fixed16_degrees < 0.05);
+    /* The real-time choice is one of the storages within 0.1 degree of F32. */
+    {
+      glovepose_model* realtime = NULL;
+      CHECK_RESULT(glovepose_model_load(model_path, GLOVEPOSE_WEIGHTS_REALTIME, NULL, &realtime), GLOVEPOSE_OK);
+      CHECK(angle_difference_degrees(model, realtime) < 0.1);
+      glovepose_model_free(realtime);
+    }
     CHECK(f16_degrees == 0.0);
     CHECK(bf16_degrees > fixed16_degrees);
     CHECK(bf16_degrees < 1.0);

@@ -84,7 +84,7 @@ class GlovePoseEstimator {
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
     if (config_.contact) contact_.emplace(kinematics_, model_->joint_limits(), *config_.contact);
-    if (config_.network_threads > 1 && model_->network().unet() != nullptr) team_ = std::make_unique<core::Team>(config_.network_threads);
+    if (config_.network_threads > 1 && model_->network().architecture() == model::Architecture::UNet) team_ = std::make_unique<core::Team>(config_.network_threads);
     if (model_->solver()) {
       readout_.emplace(model_->solver(), config_.readout);
       measurements_ = Eigen::VectorXd::Zero(model_->solver()->layout().row_count());

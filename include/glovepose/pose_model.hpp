@@ -72,8 +72,8 @@ class PoseModel {
       throw Error("the network reads " + std::to_string(network_.required_cells()) + " cells, expected " + std::to_string(info_.inputs) +
                   " (metadata 'inputs')");
     if (glove_.id() != info_.glove) throw Error("glove '" + glove_.id() + "' given, expected the model's glove '" + info_.glove + "'");
-    if (const auto* unet = network_.unet(); unet && unet->extra_inputs() != glove_.map().extra_input_count())
-      throw Error("the U-Net reads " + std::to_string(unet->extra_inputs()) + " extra input planes (enc1.weight), expected " +
+    if (network_.architecture() == model::Architecture::UNet && network_.extra_inputs() != glove_.map().extra_input_count())
+      throw Error("the U-Net reads " + std::to_string(network_.extra_inputs()) + " extra input planes (enc1.weight), expected " +
                   std::to_string(glove_.map().extra_input_count()) + " (glove '" + glove_.id() + "' has that many extra inputs)");
     std::optional<sensor::TraceLayout> layout = std::move(options.layout);
     if (!layout && glove_.id() == grid::GloveDescription::glauser2019().id()) layout = sensor::TraceLayout::glauser2019();

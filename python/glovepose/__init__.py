@@ -60,6 +60,7 @@ if any(str(s) == "unknown result" for s in Status) or _lib.glovepose_result_name
     raise ImportError("glovepose: the C library's per-frame statuses differ from glovepose.Status (a library of another version)")
 OK, SOLVED, NOT_READY, UNCALIBRATED = Status.OK, Status.SOLVED, Status.NOT_READY, Status.UNCALIBRATED
 _WEIGHTS = {"f32": 0, "f16": 1, "bf16": 2, "fixed16": 3}
+_MODEL_WEIGHTS = {**_WEIGHTS, "realtime": 4}  # realtime: the fastest within 0.1 degree of F32 for `isa`
 
 
 class PoseFlag(enum.IntFlag):
@@ -116,6 +117,18 @@ XR_LINEAR_VELOCITY_VALID, XR_ANGULAR_VELOCITY_VALID = _library.XR_LINEAR_VELOCIT
 _HANDS = {"right": _library.HAND_RIGHT, "left": _library.HAND_LEFT}
 
 version = _lib.glovepose_version().decode()
+
+
+def _process_isa() -> str:
+    isa = _lib.glovepose_isa()
+    if isa is None:
+        raise ImportError("glovepose: " + _lib.glovepose_last_error().decode())
+    return isa.decode()
+
+
+#: The instruction set the library's networks run in this process: "sse2", "avx2", "avx512" or
+#: "neon" (the best the CPU executes, or the environment variable GLOVEPOSE_ISA's).
+isa = _process_isa()
 
 
 class GloveposeError(RuntimeError):
@@ -204,13 +217,14 @@ class PoseModel(_Closing):
     cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names,
     has_training_range (Estimator.use_training_calibration works), and calibration_steps: the
     model's guided calibration sequence, a tuple of CalibrationStep (empty when the model's
-    calibration is min-max only)."""
+    calibration is min-max only). weights: how the network holds them, "f32" (exact), "f16",
+    "bf16", "fixed16", or "realtime": the fastest within 0.1 degree of F32 for `isa`."""
 
     def __init__(self, path: str, weights: str = "f32", glove: str | None = None):
-        if weights not in _WEIGHTS:
-            raise ValueError(f"weights {weights!r}, expected one of {sorted(_WEIGHTS)}")
+        if weights not in _MODEL_WEIGHTS:
+            raise ValueError(f"weights {weights!r}, expected one of {sorted(_MODEL_WEIGHTS)}")
         self._handle = ctypes.c_void_p()
-        _check(_lib.glovepose_model_load(str(path).encode(), _WEIGHTS[weights], str(glove).encode() if glove else None,
+        _check(_lib.glovepose_model_load(str(path).encode(), _MODEL_WEIGHTS[weights], str(glove).encode() if glove else None,
                                          ctypes.byref(self._handle)))
         self.cell_count = _lib.glovepose_model_cell_count(self._handle)
         self.row_count = _lib.glovepose_model_row_count(self._handle)

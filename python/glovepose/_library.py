@@ -165,6 +165,7 @@ _P = ctypes.POINTER
 _VOID = ctypes.c_void_p
 _SIGNATURES = {
     "glovepose_version": (ctypes.c_char_p, []),
+    "glovepose_isa": (ctypes.c_char_p, []),
     "glovepose_abi_version": (ctypes.c_int32, []),
     "glovepose_row_time": (ctypes.c_double, [ctypes.c_double, ctypes.c_int32, ctypes.c_int32, ctypes.c_double]),
     "glovepose_last_error": (ctypes.c_char_p, []),

@@ -103,6 +103,15 @@ class Session(unittest.TestCase):
     def tearDownClass(cls):
         cls.work.cleanup()
 
+    def test_isa_is_the_tools_and_realtime_loads(self):
+        # The library and the tool choose alike (glovepose::compiled, the best set this CPU executes).
+        version = subprocess.run([os.environ["GLOVEPOSE_CLI"], "--version"], check=True, capture_output=True, text=True).stdout
+        self.assertIn(f"\nnetworks: {glovepose.isa} (", version)
+        model = glovepose.PoseModel(MODEL, weights="realtime")
+        self.assertEqual(model.cell_count, 44)
+        with self.assertRaisesRegex(ValueError, "realtime"):
+            glovepose.PoseModel("unused.safetensors", weights="fast")
+
     def test_load_dataset_gives_the_tools_values(self):
         data = glovepose.load_dataset(self.dataset)
         table = np.loadtxt(self.csv, delimiter=",", skiprows=1)

@@ -17,7 +17,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <optional>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -109,10 +108,9 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   const auto& solver = *model->solver();
   const sensor::CalibrationRange& range = *estimator.calibration();
   auto workspace = model->network().make_workspace();
-  const bool unet = model->network().unet() != nullptr;
-  // The U-Net's three steps apart: its own workspace (the network's keeps them together).
-  std::optional<typename PoseModel::Network::UNet::Workspace> unet_workspace;
-  if (unet) unet_workspace.emplace(model->network().unet()->make_workspace(1));
+  // The U-Net's three steps apart: the glove's maps, the network alone, the pose map.
+  const bool unet = model->network().architecture() == model::Architecture::UNet;
+  std::vector<float> planes(static_cast<std::size_t>(model->network().input_values()));
   filter::OneEuroFilter<hand::kDofCount> smoothing(*config.smoothing);
   const hand::Kinematics kinematics;
   hand::Skeleton skeleton;
@@ -120,7 +118,6 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   XrHandJoints xr;
   Eigen::VectorXd measurements(rows), cells(model->cell_count()), normalized(model->cell_count());
   hand::Angles unit{}, angles{}, smoothed{};
-  std::array<float, grid::kStretchValues> maps{};
   std::array<float, grid::kMapSlots> pose_map{};
   std::vector<std::string> names = {"solve", "calibration"};
   if (unet)
@@ -147,10 +144,8 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
     }));
     times[s++].push_back(time_us([&] { (void)range.normalize(cells, normalized); }));
     if (unet) {
-      const auto& net = *model->network().unet();
-      auto& w = *unet_workspace;
-      times[s++].push_back(time_us([&] { (void)model->glove().map().to_stretch_maps(normalized.data(), maps); }));
-      times[s++].push_back(time_us([&] { (void)net.forward(maps, pose_map, w); }));
+      times[s++].push_back(time_us([&] { (void)model->glove().map().to_input_planes(normalized.data(), planes.data()); }));
+      times[s++].push_back(time_us([&] { (void)model->network().forward(planes.data(), pose_map.data(), workspace); }));
       times[s++].push_back(time_us([&] { model->glove().map().from_pose_map(pose_map, unit); }));
     } else {
       times[s++].push_back(
@@ -228,7 +223,7 @@ int bench(BenchOptions o) {
     for (nn::WeightStorage storage : kStorages) results.push_back(bench_model(path, storage, session, o.poses));
   const json machine = {{"cpu", cpu_model()},
                         {"logical_cores", std::max(1u, std::thread::hardware_concurrency())},
-                        {"simd", nn::kernels::SimdBackend::Arch::name()}};
+                        {"simd", nn::isa_word(model::process_isa())}};
   if (!o.json) {
     print_table(results, o, machine);
     return 0;

@@ -1,6 +1,7 @@
 // The glovepose command-line tool.
 //   glovepose --version
-//       the library's version (config.hpp).
+//       the library's version (config.hpp), and the instruction set the networks run (of those the
+//       build holds: model/network_variants.hpp).
 //   glovepose predict --model FILE [--in CSV] [--weights f32|f16|bf16|fixed16] [--glove FILE] [--no-header]
 //       [--raw [--calibration FILE | --calibration-seconds S [--save-calibration FILE]]]
 //       rows of calibrated cell values (44 for the built-in glove; comma-separated, in [-1, 1]) in, 25 joint angles in
@@ -262,7 +263,7 @@ int main(int argc, char** argv) {
   tool.require_subcommand(0, 1);  // an unknown command is then named as unexpected; none is refused below
   tool.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // an option given twice: the last counts
   tool.failure_message(usage_error);
-  const CLI::Option* version = tool.add_flag("--version", "print the version of glovepose (its library's, config.hpp) and exit");
+  const CLI::Option* version = tool.add_flag("--version", "print the version of glovepose (its library's, config.hpp) and the instruction set its networks run, and exit");
   std::vector<cli::Command> commands{add_predict(tool), add_info(tool), cli::add_simulate(tool), cli::add_import(tool)};
   std::string command_line = "glovepose";
   for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
@@ -271,7 +272,9 @@ int main(int argc, char** argv) {
   try {
     tool.parse(argc, argv);
     if (*version) {
-      std::printf("glovepose %s\n", kVersion);
+      std::string built;
+      for (nn::Isa isa : model::built_isas()) built += std::string(built.empty() ? "" : ", ") + nn::isa_word(isa);
+      std::printf("glovepose %s\nnetworks: %s (this build holds %s)\n", kVersion, nn::isa_word(model::process_isa()), built.c_str());
       return 0;
     }
     if (tool.get_subcommands().empty()) throw CLI::RequiredError("A command");
@@ -288,7 +291,8 @@ int main(int argc, char** argv) {
       tool.exit(e);
     return 2;
   } catch (const Error& e) {
-    std::cerr << "glovepose " << tool.get_subcommands().front()->get_name() << ": " << e.what() << "\n";
+    const auto chosen = tool.get_subcommands();  // none for --version
+    std::cerr << "glovepose" << (chosen.empty() ? std::string() : " " + chosen.front()->get_name()) << ": " << e.what() << "\n";
     return 1;
   }
 }

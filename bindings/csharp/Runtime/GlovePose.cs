@@ -52,6 +52,10 @@ namespace GlovePose
         public static string Version { get { return Utf8(Native.glovepose_version()); } }
         /// <summary>The ABI the native library was built with; this package speaks Counts.AbiVersion.</summary>
         public static int AbiVersion { get { return Native.glovepose_abi_version(); } }
+        /// <summary>The instruction set the native library's networks run in this process: "sse2",
+        /// "avx2", "avx512" or "neon" (the best the CPU executes, or the environment variable
+        /// GLOVEPOSE_ISA's); null when GLOVEPOSE_ISA names one it cannot run (LastError says why).</summary>
+        public static string Isa { get { IntPtr isa = Native.glovepose_isa(); return isa == IntPtr.Zero ? null : Utf8(isa); } }
         /// <summary>When row `row` of a readout cycle ending at `cycleEnd` (s) was read, `rows` rows per
         /// cycle at `cycleRate` cycles/s: each row at the end of its slot (glovepose_row_time); NaN when invalid.</summary>
         public static double RowTime(double cycleEnd, int row, int rows, double cycleRate) { return Native.glovepose_row_time(cycleEnd, row, rows, cycleRate); }

@@ -19,6 +19,7 @@ namespace GlovePose
         // ---- library
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_version();
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_abi_version();
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_isa();
         [DllImport(Library, CallingConvention = Cdecl)] public static extern double glovepose_row_time(double cycleEnd, int row, int rows, double cycleRate);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_last_error();
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_result_name(int result);

@@ -31,8 +31,9 @@ namespace GlovePose
         ErrorInternal = -10,
     }
 
-    /// <summary>In-memory weight precision of a loaded model (GLOVEPOSE_WEIGHTS_*).</summary>
-    public enum WeightStorage : int { F32 = 0, F16 = 1, Bf16 = 2, Fixed16 = 3 }
+    /// <summary>In-memory weight precision of a loaded model (GLOVEPOSE_WEIGHTS_*). Realtime: the
+    /// fastest within 0.1 degree of F32 for the instruction set the library runs (Library.Isa).</summary>
+    public enum WeightStorage : int { F32 = 0, F16 = 1, Bf16 = 2, Fixed16 = 3, Realtime = 4 }
 
     /// <summary>The hand the glove is on (GLOVEPOSE_HAND_*).</summary>
     public enum Hand : int { Right = 0, Left = 1 }

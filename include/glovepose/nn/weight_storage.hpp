@@ -5,6 +5,8 @@
 #include <optional>
 #include <string_view>
 
+#include "isa.hpp"
+
 namespace glovepose::nn {
 
 /// @brief How the weights are kept in memory.
@@ -50,19 +52,29 @@ constexpr std::optional<WeightStorage> storage_of_word(std::string_view word) no
   return std::nullopt;
 }
 
-/// @brief The 16-bit storage for the real-time path with the instruction set the including code is
-/// compiled for: the fastest of those within 0.1 degree of F32 (Fixed16 and F16; test_estimator.cpp).
-/// With AVX-512 VBMI2 Fixed16 (three integer operations widen 32 weights); with F16C and no
-/// VBMI2, F16 (one hardware conversion per 8 weights, cheaper on AVX2 than Fixed16's five integer
-/// operations per 16: `BM_SparseRowKernel*` on Zen 3, docs/performance.md; AVX-512 without VBMI2
-/// also gets F16, unmeasured); otherwise Fixed16 (binary16 would be converted in software).
-constexpr WeightStorage realtime_storage() noexcept {
-#if defined(__F16C__) && !defined(__AVX512VBMI2__)
-  return WeightStorage::F16;
-#else
+/// @brief The storage for the real-time path with `isa`'s kernels: the fastest of those within 0.1
+/// degree of F32 (F32, Fixed16 and F16; test_estimator.cpp), measured per set (an engine's frame
+/// through the C ABI, docs/performance.md, "The shipped library per instruction set"). AVX2: F16
+/// (one hardware conversion per 8 weights, cheaper there than Fixed16's five integer operations per
+/// 16). AVX-512 (with VBMI2): Fixed16 (three integer operations widen 32 weights). SSE2: F32
+/// (binary16 is widened in software, one value at a time, and Fixed16's widening costs more than the
+/// bytes it saves). NEON: Fixed16 (binary16 in software there too; unmeasured against F32).
+constexpr WeightStorage realtime_storage(Isa isa) noexcept {
+  switch (isa) {
+    case Isa::Avx2:
+      return WeightStorage::F16;
+    case Isa::Sse2:
+      return WeightStorage::F32;
+    case Isa::Avx512:
+    case Isa::Neon:
+      break;
+  }
   return WeightStorage::Fixed16;
-#endif
 }
+
+/// @brief The real-time storage for the instruction set the including code is compiled for
+/// (header-only use; the compiled library's is realtime_storage(model::process_isa())).
+constexpr WeightStorage realtime_storage() noexcept { return realtime_storage(compiled_isa()); }
 
 /// @brief Whether matrices kept as `storage` are in pair layout (kernels/weight_load.hpp), so that
 /// output channels are padded to whole pairs of vectors.

@@ -1,7 +1,7 @@
 /// @file simd.hpp
 /// @brief The xsimd kernels, for the instruction set the including code is compiled for
-/// (xsimd::default_arch: AVX-512 or AVX2 with GLOVEPOSE_NATIVE, depending on the machine; SSE2 on
-/// baseline x86-64). Same contracts as ScalarBackend, which is their reference.
+/// (SimdBackend, xsimd::default_arch: AVX-512 or AVX2 with GLOVEPOSE_NATIVE, depending on the
+/// machine; SSE2 on baseline x86-64; each of the compiled library's variant units, isa.hpp). Same contracts as ScalarBackend, which is their reference.
 ///
 /// The product y[r] += x[r] W is blocked as R rows x V SIMD vectors of output channels, the
 /// R * V accumulators held in registers while k runs: each weight vector is loaded once per block
@@ -48,10 +48,14 @@ constexpr std::array<std::uint32_t, 256> compress_order_table() noexcept {
 /// @brief compress_order_table(), computed at compile time.
 inline constexpr std::array<std::uint32_t, 256> kCompressOrder = compress_order_table();
 
-/// @brief xsimd kernels for xsimd's default architecture.
-struct SimdBackend {
+/// @brief xsimd kernels for the architecture `ArchT`, which the including code must be compiled for.
+/// `Variant` only tells apart copies compiled with different flags: the compiled library's variant
+/// units (model/network_variants.hpp) pass a type of their own, so that no function of theirs is
+/// shared with, or replaced by, a copy compiled for another instruction set.
+template <typename ArchT, typename Variant = void>
+struct SimdBackendFor {
   /// @brief The SIMD architecture compiled for.
-  using Arch = xsimd::default_arch;
+  using Arch = ArchT;
   /// @brief A vector of floats.
   using Batch = xsimd::batch<float, Arch>;
   /// @brief Name for reports.
@@ -359,5 +363,8 @@ struct SimdBackend {
     }
   }
 };
+
+/// @brief The kernels for the instruction set the including code is compiled for (header-only use).
+using SimdBackend = SimdBackendFor<xsimd::default_arch>;
 
 }  // namespace glovepose::nn::kernels
