@@ -12,16 +12,29 @@
 // - BM_EstimatorFrameXr/3: BM_EstimatorFrame/3 plus joints_at (OpenXR joints, predicted, with velocities).
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
+// - BM_CapiFrame/<library>/<storage>: an engine's frame through the C ABI, the library loaded at run
+//   time: glovepose_estimator_push_measurements of the 180 rows and glovepose_estimator_get_pose,
+//   the default estimator settings, on the shipped model. The libraries are named by
+//   GLOVEPOSE_BENCH_CAPI="label=path,label=path" (bench/capi_frame.sh builds the shipped library and
+//   its header-only peers and runs them side by side); each label names the instruction set its
+//   networks run (glovepose_isa, where the library has it). Linux only (dlopen).
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
 #include <benchmark/benchmark.h>
+#include <glovepose_c.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <memory>
+#include <sstream>
+#include <string>
 #include <vector>
+
+#if defined(__linux__)
+#  include <dlfcn.h>
+#endif
 
 using namespace glovepose;
 
@@ -199,6 +212,114 @@ void BM_EstimatorRow(benchmark::State& state) {
   state.counters["frames/s"] = benchmark::Counter(poses, benchmark::Counter::kIsRate);
   state.SetLabel(nn::storage_name(storage_of(state)));
 }
+
+#if defined(__linux__)
+// The C ABI functions an engine's frame uses, from one library loaded with dlopen (RTLD_LOCAL: two
+// libraries with the same symbols side by side).
+struct CapiLibrary {
+  std::string label;
+  void* handle = nullptr;
+  decltype(&glovepose_model_load) model_load = nullptr;
+  decltype(&glovepose_model_free) model_free = nullptr;
+  decltype(&glovepose_estimator_config_default) config_default = nullptr;
+  decltype(&glovepose_estimator_create) estimator_create = nullptr;
+  decltype(&glovepose_estimator_free) estimator_free = nullptr;
+  decltype(&glovepose_calibration_start) calibration_start = nullptr;
+  decltype(&glovepose_calibration_finish) calibration_finish = nullptr;
+  decltype(&glovepose_estimator_push_measurements) push_measurements = nullptr;
+  decltype(&glovepose_estimator_get_pose) get_pose = nullptr;
+  decltype(&glovepose_pose_init) pose_init = nullptr;
+  decltype(&glovepose_last_error) last_error = nullptr;
+  decltype(&glovepose_isa) isa = nullptr;  // null in a library without it
+
+  static CapiLibrary open(const std::string& label, const std::string& path) {
+    CapiLibrary lib;
+    lib.label = label;
+    lib.handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!lib.handle) throw Error("GLOVEPOSE_BENCH_CAPI: cannot load '" + path + "': " + dlerror());
+    auto need = [&](auto& function, const char* name) {
+      function = reinterpret_cast<std::remove_reference_t<decltype(function)>>(dlsym(lib.handle, name));
+      if (!function) throw Error("GLOVEPOSE_BENCH_CAPI: '" + path + "' has no " + name + ", expected the C ABI");
+    };
+    need(lib.model_load, "glovepose_model_load");
+    need(lib.model_free, "glovepose_model_free");
+    need(lib.config_default, "glovepose_estimator_config_default");
+    need(lib.estimator_create, "glovepose_estimator_create");
+    need(lib.estimator_free, "glovepose_estimator_free");
+    need(lib.calibration_start, "glovepose_calibration_start");
+    need(lib.calibration_finish, "glovepose_calibration_finish");
+    need(lib.push_measurements, "glovepose_estimator_push_measurements");
+    need(lib.get_pose, "glovepose_estimator_get_pose");
+    need(lib.pose_init, "glovepose_pose_init");
+    need(lib.last_error, "glovepose_last_error");
+    lib.isa = reinterpret_cast<decltype(&glovepose_isa)>(dlsym(lib.handle, "glovepose_isa"));
+    return lib;
+  }
+};
+
+// The shipped model in `storage`, an estimator with the default settings calibrated on the
+// recording's calibration sequence, and the session's frames pushed one per iteration.
+void BM_CapiFrame(benchmark::State& state, const CapiLibrary& lib) {
+  const std::string model_path = std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors";
+  glovepose_model* model = nullptr;
+  glovepose_estimator* estimator = nullptr;
+  glovepose_estimator_config config;
+  config.struct_size = sizeof config;
+  if (lib.model_load(model_path.c_str(), static_cast<int32_t>(state.range(0)), nullptr, &model) != GLOVEPOSE_OK ||
+      lib.config_default(&config) != GLOVEPOSE_OK || lib.estimator_create(model, &config, &estimator) != GLOVEPOSE_OK) {
+    state.SkipWithError(lib.last_error());
+    lib.model_free(model);
+    return;
+  }
+  const Recording& r = recording();
+  const io::Dataset& d = r.data;
+  const int rows = static_cast<int>(d.row_count);
+  (void)lib.calibration_start(estimator);
+  std::vector<double> frame(d.row_count);
+  for (std::size_t f = 0; f < r.first_session_frame; ++f) {
+    std::copy_n(d.raw_rows.begin() + static_cast<std::ptrdiff_t>(f * d.row_count), d.row_count, frame.begin());
+    (void)lib.push_measurements(estimator, frame.data(), rows, d.timestamps[f]);
+  }
+  if (lib.calibration_finish(estimator) != GLOVEPOSE_OK) state.SkipWithError(lib.last_error());
+  glovepose_pose pose;
+  lib.pose_init(&pose);
+  SessionClock clock{r};
+  for (auto _ : state) {
+    const glovepose_result pushed = lib.push_measurements(estimator, clock.rows(), rows, clock.timestamp());
+    const glovepose_result read = lib.get_pose(estimator, &pose);
+    benchmark::DoNotOptimize(pose.angles[0]);
+    if (pushed != GLOVEPOSE_SOLVED || read != GLOVEPOSE_OK) {
+      state.SkipWithError("a frame gave no pose");
+      break;
+    }
+    clock.next();
+  }
+  state.SetLabel(lib.label + (lib.isa ? std::string(" ") + lib.isa() : std::string()));
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  lib.estimator_free(estimator);
+  lib.model_free(model);
+}
+
+// One BM_CapiFrame per library of GLOVEPOSE_BENCH_CAPI and storage, registered before main runs.
+const int kCapiBenchmarks = [] {
+  const char* libraries = std::getenv("GLOVEPOSE_BENCH_CAPI");
+  if (libraries == nullptr || *libraries == '\0') return 0;
+  static std::vector<CapiLibrary> loaded;
+  loaded.reserve(8);
+  std::stringstream list(libraries);
+  for (std::string item; std::getline(list, item, ',');) {
+    const auto equals = item.find('=');
+    if (equals == std::string::npos) throw Error("GLOVEPOSE_BENCH_CAPI item '" + item + "', expected label=path");
+    if (loaded.size() == loaded.capacity()) throw Error("GLOVEPOSE_BENCH_CAPI: more than 8 libraries");
+    loaded.push_back(CapiLibrary::open(item.substr(0, equals), item.substr(equals + 1)));
+  }
+  for (std::size_t l = 0; l < loaded.size(); ++l)
+    benchmark::RegisterBenchmark(("BM_CapiFrame/" + loaded[l].label).c_str(),
+                                 [&lib = loaded[l]](benchmark::State& state) { BM_CapiFrame(state, lib); })
+        ->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();
+  return static_cast<int>(loaded.size());
+}();
+#endif
 
 }  // namespace
 
