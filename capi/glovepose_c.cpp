@@ -366,10 +366,10 @@ glovepose_result glovepose_model_load(const char* model_path, int32_t weight_sto
                  "GLOVEPOSE_WEIGHTS_BF16 (2), GLOVEPOSE_WEIGHTS_FIXED16 (3) or GLOVEPOSE_WEIGHTS_REALTIME (4)",
                  static_cast<int>(weight_storage));
   glovepose::PoseModelOptions options;
-  // The C values are the enumerators' order (checked where WeightStorage is defined).
-  if (weight_storage != GLOVEPOSE_WEIGHTS_REALTIME) options.storage = static_cast<glovepose::nn::WeightStorage>(weight_storage);
   try {
-    if (weight_storage == GLOVEPOSE_WEIGHTS_REALTIME) options.storage = glovepose::nn::realtime_storage(glovepose::model::process_isa());
+    // The C values are the enumerators' order (checked where WeightStorage is defined).
+    options.storage = weight_storage == GLOVEPOSE_WEIGHTS_REALTIME ? glovepose::nn::realtime_storage(glovepose::model::process_isa())
+                                                                    : static_cast<glovepose::nn::WeightStorage>(weight_storage);
   } catch (...) {
     return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
   }
