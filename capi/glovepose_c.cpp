@@ -5,6 +5,12 @@
 #include "glovepose_c.h"
 
 #include <glovepose/estimator.hpp>
+#include <glovepose/hand/contact.hpp>
+#include <glovepose/hand/xr_hand.hpp>
+#include <glovepose/model/pose_network.hpp>
+#include <glovepose/pose_model_options.hpp>
+#include <glovepose/pose_prediction.hpp>
+#include <glovepose/sensor/calibration.hpp>
 #include <glovepose/io/json.hpp>
 #include <glovepose/sim/subject_hands.hpp>
 #include <glovepose/train/evaluate.hpp>
@@ -643,7 +649,7 @@ glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estima
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_cells: out is NULL");
-  if (count != e->cells().size())
+  if (static_cast<std::size_t>(count) != e->cells().size())
     return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_cells: count is not the model's cell count");
   std::memcpy(out, e->cells().data(), sizeof(double) * static_cast<std::size_t>(count));
   return GLOVEPOSE_OK;

@@ -231,7 +231,7 @@ TEST_CASE("estimator: rows, whole C_m frames and solved C_c frames give the same
     // solve and the pose are the same.
     for (std::size_t r = 0; r < d.row_count; ++r) frame[r] = d.raw_rows[f * d.row_count + r];
     (void)by_frames.push_measurements(frame.data(), static_cast<int>(frame.size()), d.timestamps[f]);
-    for (std::size_t c = 0; c < d.cell_count; ++c) cells[c] = by_rows.cells()(static_cast<Eigen::Index>(c));
+    for (std::size_t c = 0; c < d.cell_count; ++c) cells[c] = by_rows.cells()[c];
     REQUIRE(by_cells.push_cells(cells.data(), static_cast<int>(cells.size()), d.timestamps[f]) == Status::Solved);
     worst_cells = std::max(worst_cells, max_difference(by_rows.pose().angles, by_cells.pose().angles));
   });

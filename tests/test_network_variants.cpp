@@ -7,6 +7,7 @@
 #include <glovepose/model/pose_network.hpp>
 #include <glovepose/nn/kernels/scalar.hpp>
 #include <glovepose/pose_model.hpp>
+#include <glovepose/pose_model_options.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -9,7 +9,10 @@
 #include <doctest/doctest.h>
 
 #include <glovepose/io/tensor_file.hpp>
+#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/model/pose_network.hpp>
 #include <glovepose/pose_model.hpp>
+#include <glovepose/pose_model_options.hpp>
 #include <glovepose/sensor/calibration.hpp>
 #include <glovepose/sim/corpus.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>

@@ -17,7 +17,9 @@
 // flags rejected, 25 angles, 25 raw angles, 21 x (3 position + 4 rotation) joint floats; then a
 // last line "end" poses calibration_source.
 #include <glovepose/estimator.hpp>
+#include <glovepose/grid/glove_description.hpp>
 #include <glovepose/io/dataset.hpp>
+#include <glovepose/nn/weights.hpp>
 
 #include <cstdio>
 #include <exception>

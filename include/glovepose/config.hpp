@@ -19,6 +19,15 @@
 /// and throw glovepose::Error. The marker expands to nothing; it is there for readers and for grep.
 #define GLOVEPOSE_REALTIME
 
+/// @brief How the narrow fronts' members (PoseModel, GlovePoseEstimator) are defined: inline in
+/// header-only use; out of line, once, in the compiled library (glovepose::compiled defines
+/// GLOVEPOSE_COMPILED_LIB for itself and for every unit that links it).
+#ifdef GLOVEPOSE_COMPILED_LIB
+#define GLOVEPOSE_INLINE
+#else
+#define GLOVEPOSE_INLINE inline
+#endif
+
 namespace glovepose {
 
 #define GLOVEPOSE_VERSION_TEXT_(major, minor, patch) #major "." #minor "." #patch

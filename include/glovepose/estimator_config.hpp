@@ -4,16 +4,20 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 
-#include "filter/one_euro.hpp"
-#include "hand/contact.hpp"
+#include "filter/one_euro_config.hpp"
+#include "hand/contact_config.hpp"
 #include "hand/handedness.hpp"
-#include "hand/kinematics.hpp"
-#include "sensor/calibration.hpp"
-#include "sensor/readout.hpp"
+#include "sensor/calibration_config.hpp"
+#include "sensor/readout_config.hpp"
 
 namespace glovepose {
+
+namespace hand {
+struct HandModel;  // hand/kinematics.hpp
+}  // namespace hand
 
 /// @brief How finish_calibration() calibrates (docs/calibration.md).
 enum class CalibrationMethod : std::uint8_t {
@@ -75,7 +79,9 @@ struct EstimatorConfig {
   /// the pose does not show, nor drop one it does: detection is the pose's own (docs/results.md,
   /// "Contact-consistent poses").
   std::optional<hand::ContactConfig> contact;
-  hand::HandModel hand = hand::HandModel::reference();  ///< The hand the joint transforms are computed for.
+  /// The hand the skeleton, the joint list and the OpenXR joints are computed for (hand/kinematics.hpp;
+  /// e.g. one fitted to the user's hand). None (the default): the reference template hand.
+  std::shared_ptr<const hand::HandModel> hand;
   /// The hand the glove is on. A left glove is the right glove's sensor sheet turned over, so the
   /// mirrored hand stretches every cell as the right hand does: the same model and inputs serve,
   /// and only the skeleton, the joint list and the OpenXR joints are mirrored (hand/handedness.hpp).

@@ -7,6 +7,12 @@
 //   their own, so their sum is close to, not exactly, the whole.
 #include <glovepose/core/statistics.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/filter/one_euro.hpp>
+#include <glovepose/hand/joint_list.hpp>
+#include <glovepose/hand/xr_hand.hpp>
+#include <glovepose/model/architecture.hpp>
+#include <glovepose/model/pose_network.hpp>
+#include <glovepose/pose_model_options.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
 #include <nlohmann/json.hpp>

@@ -6,8 +6,14 @@
 //   compared with the true angles. Prints a table (angle errors, speed, latency, calibration) and
 //   writes it and three SVG pictures to DIR: angles over time (paper Fig. 15), the cumulative
 //   error curve (Fig. 14) and predicted beside true skeletons (Fig. 11).
+#include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/core/statistics.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/hand/joint_list.hpp>
+#include <glovepose/hand/kinematics.hpp>
+#include <glovepose/model/pose_network.hpp>
+#include <glovepose/pose_model_options.hpp>
+#include <glovepose/sensor/calibration.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/train/metrics.hpp>
 
@@ -407,7 +413,7 @@ int demo(const DemoOptions& o) {
   if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
   draw_angles_over_time(user, run, files[1]);
   draw_cumulative_error(report, files[2]);
-  draw_skeletons(user, run, estimator.config().hand, files[3]);
+  draw_skeletons(user, run, estimator.config().hand ? *estimator.config().hand : hand::HandModel::reference(), files[3]);
   std::cout << table << "\nwrote";
   for (const std::string& file : files) std::cout << " " << file;
   std::cout << "\n";

@@ -7,6 +7,8 @@
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/csv_fields.hpp>
 #include <glovepose/io/number_text.hpp>
+#include <glovepose/sensor/layout.hpp>
+#include <glovepose/sensor/solver.hpp>
 
 #include <atomic>
 #include <charconv>

@@ -26,9 +26,14 @@
 //   glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]
 //       the hand live in the browser, from a simulated, replayed or real glove (view.cpp).
 #include <glovepose/calibration/pose_offset.hpp>
+#include <glovepose/estimator.hpp>
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
-#include <glovepose/estimator.hpp>
+#include <glovepose/model/model_info.hpp>
+#include <glovepose/model/pose_network.hpp>
+#include <glovepose/pose_model_options.hpp>
+#include <glovepose/sensor/calibration.hpp>
+#include <glovepose/sensor/solver.hpp>
 
 #include <algorithm>
 #include <array>

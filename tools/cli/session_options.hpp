@@ -4,6 +4,7 @@
 #pragma once
 
 #include <glovepose/pose_model.hpp>
+#include <glovepose/pose_model_options.hpp>
 
 #include <cstdint>
 #include <memory>

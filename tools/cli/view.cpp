@@ -10,7 +10,11 @@
 //   or the built-in glove's raw rows, one "row,value,timestamp" line each; the first 30 s of stream
 //   time, or --calibration-seconds, are the calibration, or --calibration FILE is a saved one
 //   (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing").
+#include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/grid/grid_map.hpp>
+#include <glovepose/hand/xr_hand.hpp>
+#include <glovepose/model/pose_network.hpp>
 #include <glovepose/sim/subject.hpp>
 
 #include <nlohmann/json.hpp>
@@ -431,7 +435,7 @@ int view(const ViewOptions& o) {
   // The simulated person's own hand (subject 0 of the seed, as simulate_new_user draws it): the page
   // draws it at their size. A replay or a real glove: the reference hand.
   EstimatorConfig config;
-  if (simulated) config.hand = sim::make_subjects(1, o.session.seed, sim::default_world().people)[0].hand_model();
+  if (simulated) config.hand = std::make_shared<const hand::HandModel>(sim::make_subjects(1, o.session.seed, sim::default_world().people)[0].hand_model());
   const auto shared = std::make_shared<ViewShared>(model, o.session.model.empty(), config);
   shared->preparing = simulated;  // until the glove's thread has made the simulated user
   const SocketLibrary sockets;

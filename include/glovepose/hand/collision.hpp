@@ -19,12 +19,10 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "collision_threshold.hpp"
 #include "kinematics.hpp"
 
 namespace glovepose::hand {
-
-/// @brief The paper's outlier threshold on the collision energy (mm^2).
-inline constexpr double kCollisionOutlierThreshold = 80.0;
 
 /// @brief Distal sphere radius (mm) of each finger phalanx by phalanx id 1..15 (index 0 unused):
 /// thumb 10.31 / 7.31 / 7.03; pinky 6.23 / 4.77 / 4.18; ring 6.97 / 5.01 / 4.85; middle 7.64 /

@@ -11,8 +11,6 @@
 
 #include <cstdint>
 
-#include <Eigen/Geometry>
-
 #include "../config.hpp"
 
 namespace glovepose::hand {
@@ -25,15 +23,5 @@ enum class Handedness : std::uint8_t {
 
 /// @brief Stable name of a side: "right" or "left".
 constexpr const char* to_string(Handedness side) noexcept { return side == Handedness::Left ? "left" : "right"; }
-
-/// @brief The mirror image of a rigid transform through the x = 0 plane, kept right-handed:
-/// S T S with S = diag(-1, 1, 1) (translation x negated; rotation rows and columns 0 negated).
-GLOVEPOSE_REALTIME inline Eigen::Affine3d mirrored(const Eigen::Affine3d& transform) noexcept {
-  Eigen::Affine3d out = transform;
-  out.linear().row(0) *= -1.0;
-  out.linear().col(0) *= -1.0;
-  out.translation().x() = -out.translation().x();
-  return out;
-}
 
 }  // namespace glovepose::hand

@@ -133,6 +133,16 @@ struct HandModel {
   }
 };
 
+/// @brief The mirror image of a rigid transform through the x = 0 plane, kept right-handed:
+/// S T S with S = diag(-1, 1, 1) (translation x negated; rotation rows and columns 0 negated).
+GLOVEPOSE_REALTIME inline Eigen::Affine3d mirrored(const Eigen::Affine3d& transform) noexcept {
+  Eigen::Affine3d out = transform;
+  out.linear().row(0) *= -1.0;
+  out.linear().col(0) *= -1.0;
+  out.translation().x() = -out.translation().x();
+  return out;
+}
+
 /// @brief Forward kinematics: angles -> the global transform of every phalanx.
 ///
 /// Local transform of phalanx p: rest[p] * Rx(flexion) * Rz(abduction) * Ry(twist), the reference

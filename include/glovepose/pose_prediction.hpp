@@ -1,0 +1,56 @@
+/// @file pose_prediction.hpp
+/// @brief The hand at a requested time: a pose extrapolated along its rate (predict) and its OpenXR
+/// joints (locate), for the estimator's pose_at()/joints_at() and for readers of LatestHand that
+/// predict on their own thread.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "config.hpp"
+#include "hand/xr_hand.hpp"
+#include "pose.hpp"
+#include "status.hpp"
+
+namespace glovepose {
+
+/// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
+/// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
+/// before the first pose, NonFinite for a non-finite t.
+GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const XrHandLocator& locator, double t,
+                                         double max_prediction, PredictedPose& out) noexcept {
+  if (!pose.valid) return Status::NotReady;
+  if (!std::isfinite(t)) return Status::NonFinite;
+  out.time = t;
+  out.horizon = std::min(t - pose.timestamp, max_prediction);
+  out.clamped = t - pose.timestamp > max_prediction;
+  out.predicted = out.horizon > 0.0;
+  out.rate = rate;
+  out.has_rate = has_rate;
+  out.flags = pose.flags;
+  out.trusted = pose.trusted();
+  out.angles = out.predicted ? locator.extrapolate(pose.angles, rate, out.horizon) : pose.angles;
+  return Status::Ok;
+}
+
+/// @brief predict() from a HandState (LatestHand's value).
+GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
+                                         PredictedPose& out) noexcept {
+  return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
+}
+
+/// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
+/// trusted and the time was within the prediction bound; velocities when the rate is known.
+GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLocator& locator, XrHandJoints& out) noexcept {
+  std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
+  if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
+  locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);
+  out.time = pose.time;
+  out.horizon = pose.horizon;
+  out.predicted = pose.predicted;
+  out.clamped = pose.clamped;
+  out.active = true;
+}
+
+}  // namespace glovepose
