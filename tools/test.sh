@@ -32,7 +32,11 @@ if [ "${CI:-}" = "true" ]; then
   werror=ON
 fi
 echo "== GCC, native (build/)"
-cmake -S "$PWD" -B "$PWD/build" -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_BASELINE=OFF -DGLOVEPOSE_HEADER_CHECK=OFF -DGLOVEPOSE_UNITY_BUILD=ON
+# build/ may be the tree tools/demo.sh made (the tool alone, without the tests, the benchmarks, the
+# view page and ccache, whose packages it leaves out): each is named here, so every test is built.
+cmake -S "$PWD" -B "$PWD/build" -DCMAKE_BUILD_TYPE=Release -DGLOVEPOSE_WERROR=$werror -DGLOVEPOSE_TEST_BASELINE=OFF -DGLOVEPOSE_HEADER_CHECK=OFF -DGLOVEPOSE_UNITY_BUILD=ON \
+  -DGLOVEPOSE_BUILD_TESTS=ON -DGLOVEPOSE_BUILD_BENCHMARKS=ON -DGLOVEPOSE_VIEW_PAGE=ON \
+  -DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 echo "== clang, baseline x86-64, the tests a compiler and an instruction set can change (build-clang/)"

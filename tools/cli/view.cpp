@@ -289,8 +289,12 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& 
 }
 
 const ViewAsset* find_asset(const std::string& path) {
+#if GLOVEPOSE_VIEW_PAGE
   for (const ViewAsset& asset : kViewAssets)
     if (path == asset.path || (path == "/index.html" && std::strcmp(asset.path, "/") == 0)) return &asset;
+#else
+  (void)path;
+#endif
   return nullptr;
 }
 
@@ -415,6 +419,10 @@ class Connections {
 };
 
 int view(const ViewOptions& o) {
+#if !GLOVEPOSE_VIEW_PAGE
+  throw Error("this glovepose was built without the view's page (CMake GLOVEPOSE_VIEW_PAGE=OFF, as tools/demo.sh builds a new tree): "
+              "run tools/setup.sh --view, then cmake -S . -B build -DGLOVEPOSE_VIEW_PAGE=ON && cmake --build build --target glovepose_cli");
+#endif
   const std::string model_path = o.session.model_path();
   const auto model = o.session.load_model();
   check_glove(o.glove, model->glove(), model_path);

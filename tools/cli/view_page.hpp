@@ -4,4 +4,18 @@
 // tools/cli/web/view_assets.cmake. Nothing is fetched at run time.
 #pragma once
 
-#include "view_assets.hpp"
+#include <cstddef>
+
+namespace glovepose::cli {
+struct ViewAsset {
+  const char* path;           // as the page asks for it
+  const char* const* chunks;  // the file's bytes, null-terminated list
+  std::size_t size;
+};
+}  // namespace glovepose::cli
+
+// A tool built with GLOVEPOSE_VIEW_PAGE=OFF (CMake; tools/demo.sh's new tree, whose packages leave npm
+// out) has no page: its view command says so.
+#if GLOVEPOSE_VIEW_PAGE
+#include "view_assets.hpp"  // kViewAssets
+#endif

@@ -6,7 +6,7 @@
 # ships one self-contained minified module (684 KB); later ones split it into unminified files of
 # 2.1 MB.
 #
-# Two uses of this file: included by tools/CMakeLists.txt, it adds the rule that writes
+# Two uses of this file: included by tools/CMakeLists.txt (GLOVEPOSE_VIEW_PAGE), it adds the rule that writes
 # view_assets.hpp for the glovepose_cli target; run with `cmake -DOUT=... -P`, it writes it: each
 # file as raw string literals of under 64 KB (ISO C++'s minimum a compiler must take; -Wpedantic).
 set(view_web_files
@@ -19,9 +19,7 @@ set(view_web_dir ${CMAKE_CURRENT_LIST_DIR})
 
 if(CMAKE_SCRIPT_MODE_FILE)
   set(text "// Generated at build time by tools/cli/web/view_assets.cmake from the files of tools/cli/web; do not edit.\n")
-  string(APPEND text "#pragma once\n#include <cstddef>\nnamespace glovepose::cli {\n")
-  string(APPEND text "struct ViewAsset {\n  const char* path;            // as the page asks for it\n")
-  string(APPEND text "  const char* const* chunks;   // the file's bytes, null-terminated list\n  std::size_t size;\n};\n")
+  string(APPEND text "// Included by view_page.hpp, which declares ViewAsset.\n#pragma once\nnamespace glovepose::cli {\n")
   set(index 0)
   set(table "")
   foreach(entry IN LISTS view_web_files)
@@ -57,8 +55,8 @@ foreach(entry IN LISTS view_web_files)
   string(REPLACE "|" ";" parts "${entry}")
   list(GET parts 1 file)
   if(NOT EXISTS "${view_web_dir}/${file}")
-    message(FATAL_ERROR "${view_web_dir}/${file} is missing: glovepose view embeds it, expected tools/setup.sh to have run "
-                        "`npm ci` in tools/cli/web (three.js from the npm registry)")
+    message(FATAL_ERROR "${view_web_dir}/${file} is missing: glovepose view embeds it, expected tools/setup.sh (or tools/setup.sh --view) "
+                        "to have run `npm ci` in tools/cli/web (three.js from the npm registry); GLOVEPOSE_VIEW_PAGE=OFF builds the tool without the page")
   endif()
   list(APPEND view_web_inputs "${view_web_dir}/${file}")
 endforeach()
