@@ -4,6 +4,8 @@
 #define GLOVEPOSE_C_BUILDING
 #include "glovepose_c.h"
 
+#include "last_error.hpp"
+
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/json.hpp>
 #include <glovepose/sim/subject_hands.hpp>
@@ -12,11 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstddef>
-#include <cstdio>
 #include <cstring>
-#include <exception>
 #include <memory>
 #include <new>
 #include <optional>
@@ -109,55 +108,9 @@ static_assert(sizeof(glovepose_calibration_step) == 1184, "ABI 1 layout");
 static_assert(offsetof(glovepose_calibration_step, start_seconds) == 112, "ABI 1 layout");
 static_assert(offsetof(glovepose_calibration_step, instruction) == 160, "ABI 1 layout");
 
-// Fixed-size and trivially constructed: setting it never allocates, and a thread-local of a
-// trivial type needs no per-thread constructor or destructor.
-constexpr std::size_t kLastErrorCapacity = 2048;
-thread_local char last_error_text[kLastErrorCapacity] = "";
-
-glovepose_result fail(glovepose_result code, const char* message) noexcept {
-  std::size_t n = std::strlen(message);
-  if (n >= kLastErrorCapacity) n = kLastErrorCapacity - 1;
-  std::memcpy(last_error_text, message, n);
-  last_error_text[n] = '\0';
-  return code;
-}
-
-// Set-up paths only: the message is formatted into the fixed buffer.
-#if defined(__GNUC__) || defined(__clang__)
-__attribute__((format(printf, 2, 3)))
-#endif
-glovepose_result
-failf(glovepose_result code, const char* format, ...) noexcept {
-  std::va_list args;
-  va_start(args, format);
-  std::vsnprintf(last_error_text, kLastErrorCapacity, format, args);
-  va_end(args);
-  return code;
-}
-
-bool readable(const char* path) noexcept {
-  std::FILE* file = std::fopen(path, "rb");
-  if (file == nullptr) return false;
-  std::fclose(file);
-  return true;
-}
-
-// Maps the exception in flight to a code. `reading` is the file a glovepose::Error may be about:
-// unopenable means not found, otherwise its contents were refused.
-glovepose_result fail_from_exception(const char* reading, glovepose_result error_code) noexcept {
-  try {
-    throw;
-  } catch (const std::bad_alloc&) {
-    return fail(GLOVEPOSE_ERROR_OUT_OF_MEMORY, "out of memory");
-  } catch (const glovepose::Error& e) {
-    if (reading != nullptr && !readable(reading)) return fail(GLOVEPOSE_ERROR_FILE_NOT_FOUND, e.what());
-    return fail(error_code, e.what());
-  } catch (const std::exception& e) {
-    return fail(GLOVEPOSE_ERROR_INTERNAL, e.what());
-  } catch (...) {
-    return fail(GLOVEPOSE_ERROR_INTERNAL, "unknown exception");
-  }
-}
+using glovepose::capi::fail;
+using glovepose::capi::fail_from_exception;
+using glovepose::capi::failf;
 
 glovepose::LatestHand* latest_of(const glovepose_latest* handle) noexcept {
   return handle != nullptr && handle->tag == kLatestTag ? &const_cast<glovepose_latest*>(handle)->latest : nullptr;
@@ -298,7 +251,7 @@ double glovepose_row_time(double cycle_end, int32_t row, int32_t rows, double cy
   return glovepose::io::RowClock{static_cast<std::size_t>(rows), cycle_rate}.time(cycle_end, static_cast<std::size_t>(row));
 }
 
-const char* glovepose_last_error(void) noexcept { return last_error_text; }
+const char* glovepose_last_error(void) noexcept { return glovepose::capi::last_error_text; }
 
 const char* glovepose_result_name(glovepose_result result) noexcept {
   if (result >= GLOVEPOSE_OK && result <= GLOVEPOSE_UNCALIBRATED) return glovepose::to_string(static_cast<Status>(result));
