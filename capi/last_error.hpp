@@ -1,7 +1,8 @@
 // How the C libraries of capi/ report a failure (internal: not installed): a result code returned,
-// the message in a thread-local buffer that the library's *_last_error() function returns
-// (glovepose_c: glovepose_last_error). Each shared library that includes it has its own buffer
-// (hidden visibility, one copy per library), so none exports a way into another's.
+// the message in a thread-local buffer that the library's *_last_error() function returns. Shared by
+// glovepose_c (glovepose_last_error) and glovepose_eval (glovepose_eval_last_error); each shared
+// library has its own buffer (hidden visibility, one copy per library), so neither exports a way into
+// the other's.
 #ifndef GLOVEPOSE_CAPI_LAST_ERROR_HPP
 #define GLOVEPOSE_CAPI_LAST_ERROR_HPP
 
