@@ -4,30 +4,27 @@
 #define GLOVEPOSE_C_BUILDING
 #include "glovepose_c.h"
 
+#include "last_error.hpp"
+
+// Loading and the per-frame calls only: no train/ or sim/ header (offline evaluation is
+// glovepose_eval's; the capi_training_isolation test checks the includes and the symbols).
 #include <glovepose/estimator.hpp>
 #include <glovepose/hand/contact.hpp>
 #include <glovepose/hand/xr_hand.hpp>
+#include <glovepose/io/dataset.hpp>  // io::RowClock (glovepose_row_time)
 #include <glovepose/model/pose_network.hpp>
 #include <glovepose/pose_model_options.hpp>
 #include <glovepose/pose_prediction.hpp>
 #include <glovepose/sensor/calibration.hpp>
-#include <glovepose/io/json.hpp>
-#include <glovepose/sim/subject_hands.hpp>
-#include <glovepose/train/evaluate.hpp>
-#include <glovepose/train/training_setup.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstddef>
-#include <cstdio>
 #include <cstring>
-#include <exception>
 #include <memory>
 #include <new>
-#include <optional>
 #include <string>
-#include <vector>
+#include <utility>
 
 // Handles carry a tag so that a model passed where an estimator is expected (both are plain
 // pointers in C# and ctypes), or a freed handle, is usually refused instead of misread.
@@ -115,55 +112,9 @@ static_assert(sizeof(glovepose_calibration_step) == 1184, "ABI 1 layout");
 static_assert(offsetof(glovepose_calibration_step, start_seconds) == 112, "ABI 1 layout");
 static_assert(offsetof(glovepose_calibration_step, instruction) == 160, "ABI 1 layout");
 
-// Fixed-size and trivially constructed: setting it never allocates, and a thread-local of a
-// trivial type needs no per-thread constructor or destructor.
-constexpr std::size_t kLastErrorCapacity = 2048;
-thread_local char last_error_text[kLastErrorCapacity] = "";
-
-glovepose_result fail(glovepose_result code, const char* message) noexcept {
-  std::size_t n = std::strlen(message);
-  if (n >= kLastErrorCapacity) n = kLastErrorCapacity - 1;
-  std::memcpy(last_error_text, message, n);
-  last_error_text[n] = '\0';
-  return code;
-}
-
-// Set-up paths only: the message is formatted into the fixed buffer.
-#if defined(__GNUC__) || defined(__clang__)
-__attribute__((format(printf, 2, 3)))
-#endif
-glovepose_result
-failf(glovepose_result code, const char* format, ...) noexcept {
-  std::va_list args;
-  va_start(args, format);
-  std::vsnprintf(last_error_text, kLastErrorCapacity, format, args);
-  va_end(args);
-  return code;
-}
-
-bool readable(const char* path) noexcept {
-  std::FILE* file = std::fopen(path, "rb");
-  if (file == nullptr) return false;
-  std::fclose(file);
-  return true;
-}
-
-// Maps the exception in flight to a code. `reading` is the file a glovepose::Error may be about:
-// unopenable means not found, otherwise its contents were refused.
-glovepose_result fail_from_exception(const char* reading, glovepose_result error_code) noexcept {
-  try {
-    throw;
-  } catch (const std::bad_alloc&) {
-    return fail(GLOVEPOSE_ERROR_OUT_OF_MEMORY, "out of memory");
-  } catch (const glovepose::Error& e) {
-    if (reading != nullptr && !readable(reading)) return fail(GLOVEPOSE_ERROR_FILE_NOT_FOUND, e.what());
-    return fail(error_code, e.what());
-  } catch (const std::exception& e) {
-    return fail(GLOVEPOSE_ERROR_INTERNAL, e.what());
-  } catch (...) {
-    return fail(GLOVEPOSE_ERROR_INTERNAL, "unknown exception");
-  }
-}
+using glovepose::capi::fail;
+using glovepose::capi::fail_from_exception;
+using glovepose::capi::failf;
 
 glovepose::LatestHand* latest_of(const glovepose_latest* handle) noexcept {
   return handle != nullptr && handle->tag == kLatestTag ? &const_cast<glovepose_latest*>(handle)->latest : nullptr;
@@ -304,7 +255,7 @@ double glovepose_row_time(double cycle_end, int32_t row, int32_t rows, double cy
   return glovepose::io::RowClock{static_cast<std::size_t>(rows), cycle_rate}.time(cycle_end, static_cast<std::size_t>(row));
 }
 
-const char* glovepose_last_error(void) noexcept { return last_error_text; }
+const char* glovepose_last_error(void) noexcept { return glovepose::capi::last_error_text; }
 
 const char* glovepose_result_name(glovepose_result result) noexcept {
   if (result >= GLOVEPOSE_OK && result <= GLOVEPOSE_UNCALIBRATED) return glovepose::to_string(static_cast<Status>(result));
@@ -907,118 +858,6 @@ void glovepose_predicted_pose_init(glovepose_predicted_pose* pose) noexcept {
   if (pose == nullptr) return;
   std::memset(pose, 0, sizeof *pose);
   pose->struct_size = sizeof *pose;
-}
-
-}  // extern "C": the helper below returns a C++ type
-
-namespace {
-
-// The options of glovepose_evaluate (glovepose_c.h names them; the same as `glovepose eval`'s) for
-// `model`. Throws glovepose::Error naming a key that is unknown or of the wrong type, and a glove
-// description other than the model's (as eval --glove refuses it).
-glovepose::train::EvaluationOptions evaluation_options(const char* text, const glovepose::io::Dataset& data,
-                                                       const glovepose::train::TrainedModel& model) {
-  using glovepose::Error;
-  namespace json = glovepose::io::json;
-  glovepose::train::EvaluationOptions o;
-  const json::Value root = json::parse(text == nullptr || *text == '\0' ? "{}" : text);
-  if (!root.is_object()) throw Error("options_json is " + json::describe(root) + ", expected a JSON object");
-  const auto whole = [](const json::Value& v, const std::string& key, long least) {
-    if (!v.is_number_integer() || v.get<long>() < least)
-      throw Error("options_json: \"" + key + "\" is " + json::describe(v) + ", expected a whole number >= " + std::to_string(least));
-    return v.get<long>();
-  };
-  const auto flag = [](const json::Value& v, const std::string& key) {
-    if (!v.is_boolean()) throw Error("options_json: \"" + key + "\" is " + json::describe(v) + ", expected true or false");
-    return v.get<bool>();
-  };
-  std::vector<int> excluded;
-  std::optional<long> mean_window;
-  bool replay = false;
-  for (const auto& [key, v] : root.items()) {
-    if (key == "subjects" || key == "exclude_subjects" || key == "sessions" || key == "gloves") {
-      if (!v.is_array()) throw Error("options_json: \"" + key + "\" is " + json::describe(v) + ", expected an array of ids");
-      std::vector<int>& ids = key == "subjects" ? o.filter.subjects
-                              : key == "sessions" ? o.filter.sessions
-                              : key == "gloves"   ? o.filter.gloves
-                                                  : excluded;
-      for (const json::Value& id : v) ids.push_back(static_cast<int>(whole(id, key, 0)));
-    } else if (key == "stride") {
-      o.stride = static_cast<int>(std::min(whole(v, key, 1), 1L << 30));
-    } else if (key == "threads") {
-      o.threads = static_cast<int>(std::min(whole(v, key, 0), 4096L));
-    } else if (key == "calibration_mode") {
-      if (!v.is_string()) throw Error("options_json: \"calibration_mode\" is " + json::describe(v) + ", expected a string");
-      o.calibration = v.get<std::string>();
-    } else if (key == "replay_rows") {
-      replay = flag(v, key);
-    } else if (key == "mean_window") {
-      mean_window = std::min(whole(v, key, 1), 1L << 20);
-    } else if (key == "contact") {
-      o.contact = flag(v, key);
-    } else if (key == "weights") {
-      const auto named = v.is_string() ? glovepose::nn::storage_of_word(v.get<std::string>()) : std::nullopt;
-      if (!named)
-        throw Error("options_json: \"weights\" is " + json::describe(v) + ", expected \"f32\", \"f16\", \"bf16\" or \"fixed16\"");
-      o.weights = *named;
-    } else if (key == "glove") {
-      if (!v.is_string()) throw Error("options_json: \"glove\" is " + json::describe(v) + ", expected a glove description file's path");
-      const glovepose::grid::GloveDescription glove = glovepose::grid::GloveDescription::read(v.get<std::string>());
-      if (glove != model.glove)
-        throw Error("options_json: the glove of '" + v.get<std::string>() + "' ('" + glove.id() + "', " + std::to_string(glove.cell_count()) +
-                    " cells) is not the one the model was trained for ('" + model.glove.id() + "', " +
-                    std::to_string(model.glove.cell_count()) + " cells), expected the same description");
-    } else {
-      throw Error("options_json: unknown key \"" + key +
-                  "\", expected subjects, exclude_subjects, sessions, gloves, stride, calibration_mode, replay_rows, mean_window, "
-                  "contact, threads, weights or glove");
-    }
-  }
-  if (mean_window && !replay) throw Error("options_json: \"mean_window\" needs \"replay_rows\": true");
-  if (replay) {
-    o.replay = glovepose::EstimatorConfig{}.readout;
-    if (mean_window) o.replay->mean_window = static_cast<int>(*mean_window);
-  }
-  o.filter = glovepose::train::exclude_subjects(o.filter, data, excluded);
-  return o;
-}
-
-thread_local std::string evaluation_json;  // what glovepose_evaluate returned last on this thread
-
-}  // namespace
-
-extern "C" {
-
-glovepose_result glovepose_evaluate(const char* model_path, const char* dataset_path, const char* options_json,
-                                    const char** out_json) noexcept {
-  if (out_json == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_evaluate: out_json is NULL");
-  *out_json = nullptr;
-  if (model_path == nullptr || dataset_path == nullptr)
-    return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_evaluate: model_path or dataset_path is NULL");
-  std::optional<glovepose::train::TrainedModel> model;
-  std::optional<glovepose::io::Dataset> data;
-  const char* reading = model_path;
-  try {
-    model.emplace(glovepose::train::load_model(model_path, 1024));
-    reading = dataset_path;
-    data.emplace(glovepose::io::Dataset::read(dataset_path));
-  } catch (...) {
-    return fail_from_exception(reading, GLOVEPOSE_ERROR_INVALID_FILE);
-  }
-  glovepose::train::EvaluationOptions options;
-  try {
-    options = evaluation_options(options_json, *data, *model);
-  } catch (...) {
-    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_ARGUMENT);
-  }
-  try {
-    options.hands = glovepose::sim::subject_hands(*data);
-    evaluation_json = glovepose::train::to_json(glovepose::train::evaluate(*model, *data, options));
-    *out_json = evaluation_json.c_str();
-    return GLOVEPOSE_OK;
-  } catch (...) {
-    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_INVALID_FILE);
-  }
 }
 
 void glovepose_xr_aim_state_init(glovepose_xr_aim_state* state) noexcept {

@@ -19,6 +19,9 @@
  * no implicit padding. Structs that may grow start with `struct_size`, which the caller sets to
  * sizeof the struct it was compiled with (the *_init / *_default functions do that).
  * See capi/README.md for thread safety, ownership and the ABI stability rules.
+ *
+ * This library holds loading and the per-frame calls only; offline evaluation (a model scored on a
+ * dataset file) is glovepose_eval.h's, a library of its own.
  */
 #ifndef GLOVEPOSE_C_H
 #define GLOVEPOSE_C_H
@@ -561,29 +564,6 @@ GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_joints(const glovepose_
  * never blocks the writer. */
 GLOVEPOSE_C_API glovepose_result glovepose_latest_get_xr_aim(const glovepose_latest* latest, glovepose_xr_aim_state* out,
                                                              uint64_t* sequence) GLOVEPOSE_C_NOEXCEPT;
-
-/* ---- evaluation (set-up, not per frame) --------------------------------------------------- */
-
-/**
- * @brief Scores a model file on a dataset file (glovepose simulate or import): what
- * `glovepose eval --json` prints (train::evaluate and its to_json in the C++ library).
- * @param model_path the .safetensors model file.
- * @param dataset_path the dataset file.
- * @param options_json NULL or "{}" for the defaults, or a JSON object with any of: "subjects",
- * "exclude_subjects", "sessions", "gloves" (arrays of ids >= 0), "stride" (>= 1), "calibration_mode"
- * ("none", "training", "onthefly" or "guided"; default the model's), "replay_rows" (true: replay the
- * raw rows through the estimator's readout), "mean_window" (>= 1, with replay_rows), "contact"
- * (true: the contact stage before scoring), "threads" (>= 0; 0: all cores), "weights" ("f32",
- * "f16", "bf16" or "fixed16": how the network holds its weights, as glovepose_model_load's
- * weight_storage; the report's "weights"), "glove" (a glove description file's path: refused unless
- * it is the model's glove).
- * @param out_json receives the report, NUL-terminated UTF-8 JSON, owned by the library and valid on
- * this thread until its next glovepose_evaluate call (NULL on failure).
- * @return GLOVEPOSE_OK, or GLOVEPOSE_ERROR_FILE_NOT_FOUND / _INVALID_FILE (a file, or data the model
- * cannot score) / _INVALID_ARGUMENT (the options) / _OUT_OF_MEMORY, with a message.
- */
-GLOVEPOSE_C_API glovepose_result glovepose_evaluate(const char* model_path, const char* dataset_path, const char* options_json,
-                                                    const char** out_json) GLOVEPOSE_C_NOEXCEPT;
 
 /* ---- struct helpers ------------------------------------------------------------------------ */
 

@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Release archives, one per platform, and the C# (Unity) package with its native libraries, with
 # SHA-256 checksums:
-#   glovepose-VERSION-linux-x64.tar.gz     headers, libglovepose_c.so, the tool, the shipped models
+#   glovepose-VERSION-linux-x64.tar.gz     headers, libglovepose_c.so, libglovepose_eval.so (offline
+#                                          evaluation for C and Python), the tool, the shipped models
 #   glovepose-VERSION-linux-arm64.tar.gz   the same for 64-bit ARM Linux (glibc)
-#   glovepose-VERSION-windows-x64.zip      headers, glovepose_c.dll + import library, glovepose.exe, models
+#   glovepose-VERSION-windows-x64.zip      headers, glovepose_c.dll and glovepose_eval.dll + import
+#                                          libraries, glovepose.exe, models
 #   com.glovepose.glovepose-VERSION.tgz    bindings/csharp as a Unity package (package/ inside, as npm
-#                                          packs it), Windows x64 and Linux x64 libraries under Plugins/
+#                                          packs it), Windows x64 and Linux x64 glovepose_c under Plugins/
 #   SHA256SUMS
 # Usage: tools/package.sh [OUT_DIR]   (default: out/packages)
 # Builds the Linux x64 release tree (build-release/: baseline x86-64, no -march, no tests) and the

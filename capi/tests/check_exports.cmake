@@ -1,8 +1,16 @@
-# The shared library exports exactly the functions glovepose_c.h declares: hidden visibility keeps
+# The shared library exports exactly the functions its header declares: hidden visibility keeps
 # Eigen, xsimd, glovepose and std:: template instances out of the dynamic symbol table.
 # Usage: cmake -DNM=nm -DLIBRARY=libglovepose_c.so -DHEADER=glovepose_c.h -P check_exports.cmake
+# Another library of capi/: -DAPI=its export macro (default GLOVEPOSE_C_API) and -DAT_LEAST=the
+# fewest declarations its header has (default 30: a regex that finds too few must not pass).
 # A Windows DLL (glovepose_c.dll): the export table of `objdump -p` instead (-DOBJDUMP=...).
 # Usage there: cmake -DOBJDUMP=x86_64-w64-mingw32-objdump -DLIBRARY=glovepose_c.dll -DHEADER=... -P ...
+if(NOT DEFINED API)
+  set(API GLOVEPOSE_C_API)
+endif()
+if(NOT DEFINED AT_LEAST)
+  set(AT_LEAST 30)
+endif()
 if(LIBRARY MATCHES "\\.dll$")
   set(command ${OBJDUMP} -p ${LIBRARY})
   # The names follow "[Ordinal/Name Pointer] Table" as "[   0] name".
@@ -31,7 +39,7 @@ foreach(line IN LISTS lines)
   endif()
 endforeach()
 file(READ ${HEADER} header)
-string(REGEX MATCHALL "GLOVEPOSE_C_API[^;(]*[ *](glovepose_[a-z0-9_]+)\\(" declarations "${header}")
+string(REGEX MATCHALL "${API}[^;(]*[ *](glovepose_[a-z0-9_]+)\\(" declarations "${header}")
 set(declared "")
 foreach(d IN LISTS declarations)
   string(REGEX REPLACE ".*[ *](glovepose_[a-z0-9_]+)\\($" "\\1" name "${d}")
@@ -40,7 +48,7 @@ endforeach()
 list(SORT exported)
 list(SORT declared)
 list(LENGTH declared declared_count)
-if(declared_count LESS 30)
+if(declared_count LESS AT_LEAST)
   message(FATAL_ERROR "found only ${declared_count} declarations in ${HEADER}, expected the whole API")
 endif()
 if(NOT exported STREQUAL declared)

@@ -14,7 +14,9 @@
 
 The library is found through $GLOVEPOSE_LIBRARY, the system's library path (an installed
 glovepose), the lib/ of this Python's prefix (a virtual environment glovepose was installed into),
-or a build tree of the clone this package sits in (build/capi/).
+or a build tree of the clone this package sits in (build/capi/). glovepose.evaluate calls a second
+library, libglovepose_eval (the training code engines do not ship), loaded at its first call: from
+$GLOVEPOSE_EVAL_LIBRARY, else beside libglovepose_c, else the same places.
 """
 from __future__ import annotations
 
@@ -145,10 +147,12 @@ class InputError(GloveposeError, ValueError):
     GloveposeError and a ValueError."""
 
 
-def _check(code: int) -> int:
+def _check(code: int, last_error=None) -> int:
+    """`code` if not an error, else GloveposeError with the message of `last_error` (the failing
+    library's function; default glovepose_c's). Both libraries share glovepose_c.h's codes."""
     if code < 0:
         name = _lib.glovepose_result_name(code).decode()
-        raise GloveposeError(code, f"{_lib.glovepose_last_error().decode()} ({name})")
+        raise GloveposeError(code, f"{(last_error or _lib.glovepose_last_error)().decode()} ({name})")
     return code
 
 
@@ -616,12 +620,13 @@ def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None
              threads: int = 0, weights: str = "f32", glove=None) -> dict:
     """Scores model file `model` on dataset file `data` (glovepose simulate or import): the report
     `glovepose eval --json` prints, as a dict (the library's train::evaluate through
-    glovepose_evaluate). The options are eval's: subjects, exclude_subjects, sessions, gloves (lists
-    of ids; None: all), stride, calibration_mode ("none", "training", "onthefly", "guided"; None: the
-    model's), replay_rows with mean_window, contact, threads (0: all cores), weights (how the network
-    holds them, as PoseModel's: "f32", "f16", "bf16" or "fixed16"; the report's "weights") and glove
-    (a glove description file the data was recorded with: refused unless it is the model's). Raises
-    GloveposeError with the library's message."""
+    glovepose_evaluate, in libglovepose_eval). The options are eval's: subjects, exclude_subjects,
+    sessions, gloves (lists of ids; None: all), stride, calibration_mode ("none", "training",
+    "onthefly", "guided"; None: the model's), replay_rows with mean_window, contact, threads (0: all
+    cores), weights (how the network holds them, as PoseModel's: "f32", "f16", "bf16" or "fixed16";
+    the report's "weights") and glove (a glove description file the data was recorded with: refused
+    unless it is the model's). Raises GloveposeError with the library's message, OSError when
+    libglovepose_eval is not found (naming the places tried)."""
     if weights not in _WEIGHTS:
         raise ValueError(f"weights {weights!r}, expected one of {sorted(_WEIGHTS)}")
     options = {"stride": stride, "replay_rows": replay_rows, "contact": contact, "threads": threads, "weights": weights}
@@ -634,6 +639,20 @@ def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None
         options["calibration_mode"] = calibration_mode
     if mean_window is not None:
         options["mean_window"] = mean_window
+    lib = _eval_library()
     report = ctypes.c_char_p()
-    _check(_lib.glovepose_evaluate(str(model).encode(), str(data).encode(), json.dumps(options).encode(), ctypes.byref(report)))
+    _check(lib.glovepose_evaluate(str(model).encode(), str(data).encode(), json.dumps(options).encode(), ctypes.byref(report)),
+           lib.glovepose_eval_last_error)
     return json.loads(report.value.decode())
+
+
+_eval_lib = None
+
+
+def _eval_library() -> ctypes.CDLL:
+    """libglovepose_eval, loaded at the first evaluate: importing glovepose needs libglovepose_c only.
+    Raises OSError naming the places tried."""
+    global _eval_lib
+    if _eval_lib is None:
+        _eval_lib = _library.load_eval(_lib)
+    return _eval_lib

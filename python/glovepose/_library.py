@@ -1,5 +1,5 @@
 """Finding and describing libglovepose_c: the C ABI's structs and function signatures (glovepose_c.h,
-ABI 1) for ctypes."""
+ABI 1) for ctypes; and libglovepose_eval (glovepose_eval.h), the offline evaluation beside it."""
 from __future__ import annotations
 
 import ctypes
@@ -221,25 +221,29 @@ _SIGNATURES = {
     "glovepose_xr_hand_init": (None, [_P(XrHand)]),
     "glovepose_predicted_pose_init": (None, [_P(PredictedPose)]),
     "glovepose_xr_aim_state_init": (None, [_P(XrAimState)]),
+}
+# glovepose_eval.h's functions (libglovepose_eval): what glovepose.evaluate calls.
+_EVAL_SIGNATURES = {
     "glovepose_evaluate": (ctypes.c_int32, [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, _P(ctypes.c_char_p)]),
+    "glovepose_eval_last_error": (ctypes.c_char_p, []),
 }
 
 
-def _candidates() -> list[str]:
-    """Where the library may be: $GLOVEPOSE_LIBRARY, the system's search (an installed prefix),
-    the lib/ of this Python's prefix (a virtual environment glovepose was installed into with
+def _candidates(name: str, variable: str) -> list[str]:
+    """Where lib`name`.so may be: $`variable`, the system's search (an installed prefix), the lib/ of
+    this Python's prefix (a virtual environment glovepose was installed into with
     `cmake --install build --prefix VENV`), then a build tree beside this package's source (python/
     in a clone: build/capi/)."""
     found = []
-    if os.environ.get("GLOVEPOSE_LIBRARY"):
-        found.append(os.environ["GLOVEPOSE_LIBRARY"])
-    system = ctypes.util.find_library("glovepose_c")
+    if os.environ.get(variable):
+        found.append(os.environ[variable])
+    system = ctypes.util.find_library(name)
     if system:
         found.append(system)
-    found.append(str(Path(sys.prefix) / "lib" / "libglovepose_c.so"))
+    found.append(str(Path(sys.prefix) / "lib" / f"lib{name}.so"))
     clone = Path(__file__).resolve().parents[2]
     for build in ("build", "build-clang"):
-        found.append(str(clone / build / "capi" / "libglovepose_c.so"))
+        found.append(str(clone / build / "capi" / f"lib{name}.so"))
     return found
 
 
@@ -262,20 +266,37 @@ def _check_layouts(lib: ctypes.CDLL, path: str) -> None:
                           + (f", {library_size(lib, struct)} in the library" if struct in _INITS else ""))
 
 
-def load() -> ctypes.CDLL:
-    """libglovepose_c with the signatures above; raises OSError naming the places tried."""
+def _open(places: list[str], signatures: dict, name: str, variable: str) -> ctypes.CDLL:
+    """The first of `places` that loads, with `signatures` set; raises OSError naming the places tried."""
     tried = []
-    for path in _candidates():
+    for path in places:
         try:
             lib = ctypes.CDLL(path)
         except OSError as e:
             tried.append(f"{path} ({e})")
             continue
-        for name, (restype, argtypes) in _SIGNATURES.items():
-            fn = getattr(lib, name)
+        for function, (restype, argtypes) in signatures.items():
+            fn = getattr(lib, function)
             fn.restype, fn.argtypes = restype, argtypes
-        if lib.glovepose_abi_version() != 1:
-            raise OSError(f"{path}: ABI version {lib.glovepose_abi_version()}, expected 1")
-        _check_layouts(lib, path)
         return lib
-    raise OSError("libglovepose_c not found; set GLOVEPOSE_LIBRARY to its path. Tried: " + "; ".join(tried))
+    raise OSError(f"lib{name} not found; set {variable} to its path. Tried: " + "; ".join(tried))
+
+
+def load() -> ctypes.CDLL:
+    """libglovepose_c with _SIGNATURES; raises OSError naming the places tried."""
+    lib = _open(_candidates("glovepose_c", "GLOVEPOSE_LIBRARY"), _SIGNATURES, "glovepose_c", "GLOVEPOSE_LIBRARY")
+    if lib.glovepose_abi_version() != 1:
+        raise OSError(f"{lib._name}: ABI version {lib.glovepose_abi_version()}, expected 1")
+    _check_layouts(lib, lib._name)
+    return lib
+
+
+def load_eval(beside: ctypes.CDLL) -> ctypes.CDLL:
+    """libglovepose_eval (glovepose.evaluate's library) with _EVAL_SIGNATURES: $GLOVEPOSE_EVAL_LIBRARY,
+    else first the folder libglovepose_c `beside` was loaded from (the same install or build tree),
+    then where load() looks. Raises OSError naming the places tried."""
+    places = _candidates("glovepose_eval", "GLOVEPOSE_EVAL_LIBRARY")
+    folder = os.path.dirname(beside._name)
+    if folder and not os.environ.get("GLOVEPOSE_EVAL_LIBRARY"):
+        places.insert(0, os.path.join(folder, "libglovepose_eval.so"))
+    return _open(places, _EVAL_SIGNATURES, "glovepose_eval", "GLOVEPOSE_EVAL_LIBRARY")

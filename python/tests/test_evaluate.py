@@ -1,4 +1,4 @@
-"""glovepose.evaluate (the library's train::evaluate through the C ABI's glovepose_evaluate) against
+"""glovepose.evaluate (the library's train::evaluate through libglovepose_eval's glovepose_evaluate) against
 `glovepose eval --json` on the same model and dataset files: the same report, key for key, every
 string and count equal, every other number within a relative 1e-4 and every share of angles within
 one angle's step (the C library is built for baseline x86-64, the tool for this machine's instruction
@@ -8,12 +8,15 @@ the default options and with eval's selection, calibration, row replay, contact 
 options (the report naming the storage); another glove's description refused by both, naming both
 gloves; bad options and files raise GloveposeError with the library's message. The tool's
 old spellings (train --model ARCH, --calibration MODE, --dtype) do what the new ones do and say so.
+The package finds libglovepose_eval beside libglovepose_c and reaches all of glovepose_eval.h;
+libglovepose_c itself has no glovepose_evaluate (the engines' library holds no evaluation).
 
 Environment (CTest sets it): GLOVEPOSE_LIBRARY, GLOVEPOSE_CLI.
 """
 import ctypes
 import json
 import os
+import re
 import struct
 import subprocess
 import tempfile
@@ -21,6 +24,7 @@ import unittest
 from pathlib import Path
 
 import glovepose
+from glovepose import _library
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "models" / "glovepose_fcn512.safetensors"
@@ -119,10 +123,24 @@ class Evaluate(unittest.TestCase):
             glovepose.evaluate(MODEL, self.data, glove=other)
         with self.assertRaisesRegex(ValueError, "weights 'f64', expected one of"):
             glovepose.evaluate(MODEL, self.data, weights="f64")
-        report = ctypes.c_char_p()  # the C ABI's own check, below the package's
-        self.assertNotEqual(glovepose._lib.glovepose_evaluate(str(MODEL).encode(), str(self.data).encode(), b'{"weights": "F16"}',
-                                                              ctypes.byref(report)), 0)
-        self.assertIn('"weights" is "F16", expected "f32", "f16", "bf16" or "fixed16"', glovepose._lib.glovepose_last_error().decode())
+        report = ctypes.c_char_p()  # the C library's own check, below the package's
+        lib = glovepose._eval_library()
+        self.assertEqual(lib.glovepose_evaluate(str(MODEL).encode(), str(self.data).encode(), b'{"weights": "F16"}', ctypes.byref(report)),
+                         -1)  # GLOVEPOSE_ERROR_INVALID_ARGUMENT
+        self.assertIsNone(report.value)
+        self.assertIn('"weights" is "F16", expected "f32", "f16", "bf16" or "fixed16"', lib.glovepose_eval_last_error().decode())
+
+    def test_the_evaluation_library_is_found_beside_the_c_library(self):
+        if os.environ.get("GLOVEPOSE_EVAL_LIBRARY"):
+            self.skipTest("GLOVEPOSE_EVAL_LIBRARY names the library")
+        here = Path(glovepose._lib._name).parent
+        self.assertEqual(Path(glovepose._eval_library()._name), here / "libglovepose_eval.so")
+        with self.assertRaises(AttributeError):  # evaluation is not the engines' library's
+            glovepose._lib.glovepose_evaluate
+        header = (ROOT / "capi" / "glovepose_eval.h").read_text()
+        functions = set(re.findall(r"GLOVEPOSE_EVAL_API[^;(]*?\b(glovepose_\w+)\(", header))
+        self.assertEqual(functions, set(_library._EVAL_SIGNATURES))  # the package reaches the whole header
+        self.assertEqual(len(functions), 2)
 
     def test_bad_options_and_files_raise_with_the_librarys_message(self):
         with self.assertRaisesRegex(glovepose.GloveposeError, "calibration 'sideways', expected none, training, onthefly or guided"):

@@ -3,8 +3,9 @@ packages, `cmake --install` of this build into it, `pip install` of ./python fro
 the import; only `.venv` (a scratch folder here), `build` (this build tree) and `python3` (the
 Debian Python running this test, which a PATH such as pyenv's may hide) are substituted. The
 installed package must be the one imported (from the venv's site-packages), must load the installed
-libglovepose_c (found in the venv's lib/, with GLOVEPOSE_LIBRARY unset and no build tree beside it),
-and must print the version and the shipped model's 44 cells.
+libglovepose_c (found in the venv's lib/, with GLOVEPOSE_LIBRARY unset and no build tree beside it)
+and, for glovepose.evaluate, the installed libglovepose_eval beside it, and must print the version
+and the shipped model's 44 cells.
 
 Environment: GLOVEPOSE_BUILD_DIR (the build tree).
 """
@@ -31,7 +32,7 @@ def main():
     lines = sh_commands("## Python")
     if len(lines) != 4:
         sys.exit(f"FAIL: expected the README's 4 install commands, found {lines}")
-    env = {k: v for k, v in os.environ.items() if k not in ("GLOVEPOSE_LIBRARY", "PYTHONPATH", "VIRTUAL_ENV")}
+    env = {k: v for k, v in os.environ.items() if k not in ("GLOVEPOSE_LIBRARY", "GLOVEPOSE_EVAL_LIBRARY", "PYTHONPATH", "VIRTUAL_ENV")}
     with tempfile.TemporaryDirectory() as work:
         venv = os.path.join(work, "venv")
         output = ""
@@ -51,12 +52,14 @@ def main():
             sys.exit(f"FAIL: the import printed {output!r}, expected the version of python/pyproject.toml "
                      f"({package_version()}) and 44 cells")
         where = subprocess.run([os.path.join(venv, "bin", "python"), "-c",
-                                "import glovepose, glovepose._library as l; print(glovepose.__file__); print(l.load()._name)"],
+                                "import glovepose; print(glovepose.__file__); print(glovepose._lib._name); print(glovepose._eval_library()._name)"],
                                cwd="/", env=env, capture_output=True, text=True)
-        package, library = where.stdout.split()
-        if not package.startswith(venv) or not library.startswith(venv):
-            sys.exit(f"FAIL: imported {package} with {library}; expected both from the virtual environment {venv}")
-        print(f"package {package}, library {library}")
+        if where.returncode != 0 or len(where.stdout.split()) != 3:
+            sys.exit(f"FAIL: the package's libraries from the virtual environment: {where.stdout}{where.stderr}")
+        package, library, evaluation = where.stdout.split()
+        if not all(p.startswith(venv) for p in (package, library, evaluation)):
+            sys.exit(f"FAIL: imported {package} with {library} and {evaluation}; expected all three from the virtual environment {venv}")
+        print(f"package {package}, library {library}, evaluation library {evaluation}")
     print("PASS")
 
 

@@ -77,9 +77,6 @@ namespace GlovePose
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_latest_get_xr_joints(LatestHandle latest, EstimatorHandle estimator, double time, ref XrHand output);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_latest_get_xr_aim(LatestHandle latest, ref XrAimState output, out ulong sequence);
 
-        // ---- evaluation (set-up): the report as JSON, valid until this thread's next call
-        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_evaluate(string modelPath, string datasetPath, string optionsJson, out IntPtr json);
-
         // ---- struct helpers
         [DllImport(Library, CallingConvention = Cdecl)] public static extern void glovepose_pose_init(ref Pose pose);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern void glovepose_calibration_progress_init(ref CalibrationProgress progress);
