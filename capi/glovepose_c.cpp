@@ -16,6 +16,7 @@
 #include <glovepose/pose_model_options.hpp>
 #include <glovepose/pose_prediction.hpp>
 #include <glovepose/sensor/calibration.hpp>
+#include <glovepose/sensor/solver.hpp>
 
 #include <algorithm>
 #include <cmath>
