@@ -4,8 +4,8 @@
 # random generator); hand/ (the hand model, the vocabulary of poses); io/ (the container, JSON,
 # half floats, recordings); sensor/; filter/; nn/ (knows nothing of gloves or training); grid/;
 # calibration/; model/ (the model file's metadata); train/; sim/; and the composition files at the
-# top (estimator.hpp, pose_model.hpp, ...). A header may include its own folder and anything
-# below it.
+# top (estimator.hpp, pose_model.hpp, ..., and detail/, their members' definitions). A header may
+# include its own folder and anything below it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/include/glovepose"
 order=(base core hand io sensor filter nn grid calibration model train sim top)
@@ -14,6 +14,7 @@ layer_of() {  # path relative to include/glovepose -> layer index
   local rel="$1" name
   case "$rel" in
     config.hpp | status.hpp) name=base ;;
+    detail/*) name=top ;;  # the composition's member definitions, beside the fronts that include them
     */*) name="${rel%%/*}" ;;
     *) name=top ;;
   esac

@@ -1,6 +1,7 @@
 // README's C++ example as a program (README, "Use"), built twice by the consumer project: against
 // the compiled library (glovepose::compiled), where the unit must compile declarations only, and
-// header-only (glovepose::glovepose). Feeds a made-up row stream; exits 0 when poses came.
+// header-only (glovepose::glovepose). Feeds a made-up row stream (not a glove's: the readout flags
+// its rows as disagreeing, so few poses are trusted); exits 0 when poses came.
 #include <glovepose/glovepose.hpp>
 
 #include <cmath>
@@ -13,7 +14,7 @@
 using namespace glovepose;
 
 namespace {
-long poses_driven = 0;
+long poses_driven = 0, poses = 0;
 void drive_hand(const hand::Angles& angles, const hand::JointList& joints) {
   if (std::isfinite(angles[0]) && joints[0].rotation[3] != 0.0f) ++poses_driven;
 }
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
         const double value = reading(row, cycle);
         // per frame: noexcept, no allocation; a Status for bad input
         if (estimator.push_row(row, value, timestamp) == Status::Solved) {
+          ++poses;
           const Pose& pose = estimator.pose();  // angles (rad), timestamp, oldest_age, compute_seconds, flags
           if (pose.trusted()) drive_hand(pose.angles, estimator.joints());
         }
@@ -53,6 +55,6 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "readme_example: %s\n", e.what());
     return 1;
   }
-  std::printf("%ld poses driven\n", poses_driven);
-  return poses_driven > 0 ? 0 : 1;
+  std::printf("%ld poses, %ld trusted and driven\n", poses, poses_driven);
+  return poses > 0 ? 0 : 1;
 }
