@@ -21,16 +21,16 @@ case "$mode" in
     sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-sanitize-address-use-after-scope"
     export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=0:detect_stack_use_after_return=1:check_initialization_order=1:strict_init_order=1:print_summary=1"
     export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-    # capi_allocations counts malloc by interposing glibc's __libc_malloc; ASan replaces the allocator,
+    # capi_allocations and realtime_cpp count malloc by interposing glibc's __libc_malloc; ASan replaces the allocator,
     # so the count means nothing there (the zero-allocation claim is checked by the normal build).
-    exclude='^capi_allocations$'
+    exclude='^(capi_allocations|realtime_cpp)(_[a-z0-9]+)?$'
     runtime=libasan.so
     ;;
   thread)
     tree=build-tsan
     sanitize="-fsanitize=thread"
     export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1"
-    exclude='^capi_allocations$'  # as above: TSan replaces the allocator too
+    exclude='^(capi_allocations|realtime_cpp)(_[a-z0-9]+)?$'  # as above: TSan replaces the allocator too
     runtime=libtsan.so
     # Mono cannot run with the TSan runtime preloaded: its C# compiler (mcs) segfaults before our
     # library is loaded, and the preload with libstdc++ hangs. The C# host is checked under ASan.

@@ -99,6 +99,10 @@ struct EstimatorConfig {
   /// estimator's own (core/team.hpp), each computing part of every large layer; the same poses as
   /// with 1. Worth it for wide U-Nets on an otherwise idle second core (docs/performance.md); the
   /// workers park when no frame comes, so an idle estimator costs no CPU. An FCN runs on one.
+  /// Parking is a mutex and a condition variable: with more than 1 (and a U-Net) a frame that finds
+  /// the workers parked takes that lock to wake them, so the per-frame calls then keep
+  /// GLOVEPOSE_REALTIME's no-allocation promise but not its no-lock one (tests/test_realtime.cpp
+  /// counts both).
   int network_threads = 1;
 };
 
