@@ -178,7 +178,7 @@ void BM_EstimatorFrameXr(benchmark::State& state) {
   GlovePoseEstimator estimator = calibrated_estimator(storage_of(state), config);
   const int rows = static_cast<int>(recording().data.row_count);
   SessionClock clock{recording()};
-  XrHandJoints joints;
+  hand::XrHandJoints joints;
   for (auto _ : state) {
     if (estimator.push_measurements(clock.rows(), rows, clock.timestamp()) != Status::Solved ||
         estimator.joints_at(estimator.pose().timestamp + 0.011, joints) != Status::Ok) {

@@ -50,7 +50,7 @@ struct glovepose_estimator {
 struct glovepose_latest {
   std::uint32_t tag = kLatestTag;
   glovepose::LatestHand latest;
-  glovepose::LatestAim aim;  // published with `latest`, from the same pose
+  glovepose::hand::LatestAim aim;  // published with `latest`, from the same pose
 };
 
 namespace {
@@ -191,7 +191,7 @@ void apply(const glovepose_hand_options& o, glovepose::EstimatorConfig& config) 
   config.max_prediction = o.max_prediction;
 }
 
-void copy_xr_hand(const glovepose::XrHandJoints& in, glovepose_xr_hand& out) noexcept {
+void copy_xr_hand(const glovepose::hand::XrHandJoints& in, glovepose_xr_hand& out) noexcept {
   out.active = in.active ? 1 : 0;
   out.predicted = in.predicted ? 1 : 0;
   out.clamped = in.clamped ? 1 : 0;
@@ -204,7 +204,7 @@ void copy_xr_hand(const glovepose::XrHandJoints& in, glovepose_xr_hand& out) noe
 }
 
 // The aim state as XrHandTrackingAimStateFB carries it; type and next stay the caller's.
-void copy_xr_aim(const glovepose::XrHandAim& in, glovepose_xr_aim_state& out) noexcept {
+void copy_xr_aim(const glovepose::hand::XrHandAim& in, glovepose_xr_aim_state& out) noexcept {
   static_assert(sizeof out.aim_orientation == sizeof in.aim_pose.orientation && sizeof out.aim_position == sizeof in.aim_pose.position,
                 "XrPosef's parts");
   out.status = in.status;
@@ -587,7 +587,7 @@ glovepose_result glovepose_estimator_get_xr_joints(const glovepose_estimator* es
   const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
   if (e == nullptr) return invalid_estimator();
   if (const glovepose_result bad = check_xr_hand(out, "glovepose_estimator_get_xr_joints"); bad != GLOVEPOSE_OK) return bad;
-  glovepose::XrHandJoints joints;
+  glovepose::hand::XrHandJoints joints;
   const Status status = e->joints_at(time, joints);
   if (status != Status::Ok) {
     out->active = 0;
@@ -682,7 +682,7 @@ glovepose_result glovepose_latest_get_xr_joints(const glovepose_latest* latest, 
     out->active = 0;
     return to_result(status);
   }
-  glovepose::XrHandJoints joints;
+  glovepose::hand::XrHandJoints joints;
   glovepose::locate(pose, e->locator(), joints);
   copy_xr_hand(joints, *out);
   return GLOVEPOSE_OK;
@@ -692,7 +692,7 @@ glovepose_result glovepose_latest_get_xr_aim(const glovepose_latest* latest, glo
   if (latest_of(latest) == nullptr)
     return fail(GLOVEPOSE_ERROR_INVALID_HANDLE, "glovepose_latest_get_xr_aim: not a snapshot from glovepose_latest_create");
   if (const glovepose_result bad = check_xr_aim(out, "glovepose_latest_get_xr_aim"); bad != GLOVEPOSE_OK) return bad;
-  glovepose::XrHandAim aim;
+  glovepose::hand::XrHandAim aim;
   if (latest->aim.read(aim) == 0) {
     out->status = 0;
     out->pinch_strength_index = out->pinch_strength_middle = out->pinch_strength_ring = out->pinch_strength_little = 0.0f;

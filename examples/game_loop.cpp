@@ -82,7 +82,7 @@ Bone global_transform(const HandRig& rig, int joint) {
   return {up.position + up.rotation * rig[joint].position, up.rotation * rig[joint].rotation};
 }
 
-float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * static_cast<float>(kDegreesPerRadian); }
+float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * static_cast<float>(core::kDegreesPerRadian); }
 
 }  // namespace
 
@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
 
     // The estimator belongs to the sensor thread from here on; the game only sees `latest`, and the
     // locator (the estimator's hand model and side), which never changes and so serves any thread.
-    const XrHandLocator& locator = estimator.locator();
+    const hand::XrHandLocator& locator = estimator.locator();
     LatestHand latest;
     std::atomic<bool> glove_done{false};
     std::exception_ptr sensor_failure;
@@ -147,7 +147,7 @@ int main(int argc, char** argv) {
           // OpenXR joints for the display time (the stream's clock here is seconds since start):
           // what an OpenXR layer copies into XrHandJointLocationEXT, wrist-relative.
           PredictedPose ahead;
-          XrHandJoints xr;
+          hand::XrHandJoints xr;
           if (predict(hand, locator, now + 0.011, config.max_prediction, ahead) == Status::Ok) {
             locate(ahead, locator, xr);
             const hand::XrJointLocation& index_tip = xr.locations[static_cast<int>(hand::XrJoint::IndexTip)];

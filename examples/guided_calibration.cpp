@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       const double into_step = progress.sequence_seconds - sequence.step_start(static_cast<std::size_t>(progress.step));
       if (progress.step != shown) {
         shown = progress.step;
-        const auto degrees = [&](hand::Finger f, hand::Motion m) { return step.pose[hand::dof_of(f, m)] / kRadiansPerDegree; };
+        const auto degrees = [&](hand::Finger f, hand::Motion m) { return step.pose[hand::dof_of(f, m)] / core::kRadiansPerDegree; };
         std::printf("step %d/%zu %-18s %4.1f s  \"%s\"\n    target: index flexion %.0f %.0f %.0f deg, thumb abduction %.0f deg\n",
                     progress.step + 1, sequence.steps().size(), step.name.c_str(), step.seconds, step.instruction.c_str(),
                     degrees(hand::Finger::Index, hand::Motion::BaseFlexion), degrees(hand::Finger::Index, hand::Motion::MiddleFlexion),

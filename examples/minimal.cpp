@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
         const Pose& pose = estimator.pose();     // a new pose every 16 rows: 675 per second
         if (pose.sequence % 675 == 1) {
           const auto degrees = [&](hand::Finger finger, hand::Motion motion) {
-            return pose.angles[hand::dof_of(finger, motion)] * kDegreesPerRadian;
+            return pose.angles[hand::dof_of(finger, motion)] * core::kDegreesPerRadian;
           };
           std::printf(
               "t = %5.2f s  index flexion %5.1f %5.1f %5.1f deg  thumb abduction %5.1f deg  "

@@ -155,7 +155,7 @@ class StreamChecker {
     glovepose::PredictedPose at;
     const Status status = estimator_.pose_at(t, at);
     GLOVEPOSE_FUZZ_REQUIRE(status == Status::Ok || status == Status::NonFinite);
-    glovepose::XrHandJoints joints;
+    glovepose::hand::XrHandJoints joints;
     GLOVEPOSE_FUZZ_REQUIRE(estimator_.joints_at(t, joints) == status);
     if (status != Status::Ok) return;
     const auto& limits = estimator_.model().joint_limits();

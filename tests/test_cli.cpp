@@ -649,7 +649,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
         ++count;
       }
     }
-    CHECK(json_number(r.out, "mean_deg") == doctest::Approx(sum / static_cast<double>(count) * kDegreesPerRadian).epsilon(1e-6));
+    CHECK(json_number(r.out, "mean_deg") == doctest::Approx(sum / static_cast<double>(count) * core::kDegreesPerRadian).epsilon(1e-6));
   }
 
   // A sensor flat in one session's calibration is zeroed there, and train and eval say so.
@@ -1166,7 +1166,7 @@ TEST_CASE("cli: eval scores against the labels and the truth behind them, and --
     ++rows;
   }
   CHECK(rows == static_cast<long>(frames));
-  const double to_deg = kDegreesPerRadian / (25.0 * static_cast<double>(rows));
+  const double to_deg = core::kDegreesPerRadian / (25.0 * static_cast<double>(rows));
   CHECK(sum * to_deg == doctest::Approx(mean).epsilon(1e-6));
   CHECK(truth_sum * to_deg == doctest::Approx(truth_mean).epsilon(1e-6));
   MESSAGE("vs labels " << mean << " deg, vs truth " << truth_mean << " deg, labels vs truth " << label_truth * to_deg << " deg");

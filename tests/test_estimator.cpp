@@ -152,7 +152,7 @@ TEST_CASE("estimator: a session streamed row by row gives the poses of the batch
   double error = 0.0;
   for (std::size_t i = kSettle; i < streamed.size(); ++i)
     for (std::size_t k = 0; k < hand::kDofCount; ++k) error += std::abs(streamed[i][k] - d.angles[(begin + i) * hand::kDofCount + k]);
-  error *= kDegreesPerRadian / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
+  error *= core::kDegreesPerRadian / static_cast<double>((streamed.size() - kSettle) * hand::kDofCount);
   MESSAGE("mean angle error of the streamed poses: " << error << " degrees");
   CHECK(error < 10.0);
 }
@@ -174,7 +174,7 @@ TEST_CASE("estimator: 16-bit weights on the shipped model: Fixed16 within 0.1 de
     const std::vector<hand::Angles> rounded = predict(storages[s]);
     for (std::size_t f = 0; f < exact.size(); ++f)
       for (std::size_t k = 0; k < hand::kDofCount; ++k) {
-        const double degrees = std::abs(exact[f][k] - rounded[f][k]) * kDegreesPerRadian;
+        const double degrees = std::abs(exact[f][k] - rounded[f][k]) * core::kDegreesPerRadian;
         worst[s] = std::max(worst[s], degrees);
         mean[s] += degrees / static_cast<double>(exact.size() * hand::kDofCount);
       }
@@ -392,7 +392,7 @@ TEST_CASE("estimator: no heap allocation per row, per frame, while calibrating o
     (void)estimator.push_row(3, std::nan(""), 1e9);
     (void)estimator.calibration_progress();
     PredictedPose ahead;
-    XrHandJoints joints;
+    hand::XrHandJoints joints;
     (void)estimator.pose_at(estimator.pose().timestamp + 0.02, ahead);
     (void)estimator.joints_at(estimator.pose().timestamp + 0.02, joints);
     (void)estimator.joints_at(estimator.pose().timestamp - 0.01, joints);
@@ -473,7 +473,7 @@ TEST_CASE("estimator: pose_at interpolates the recent poses and extrapolates the
   EstimatorConfig config;  // the paper's cadence: a pose every 16 rows
   GlovePoseEstimator estimator = calibrated(model, config);
   PredictedPose out;
-  XrHandJoints joints;
+  hand::XrHandJoints joints;
   GlovePoseEstimator fresh(model, config);
   CHECK(fresh.pose_at(0.0, out) == Status::NotReady);
   CHECK(fresh.joints_at(0.0, joints) == Status::NotReady);
@@ -561,7 +561,7 @@ TEST_CASE("estimator: a left-hand session gives the mirrored joints of the right
         stream_rows(
             left, f, f + 1, [](std::size_t) {}, left_session.data);
         ++poses;
-        XrHandJoints r, l;
+        hand::XrHandJoints r, l;
         REQUIRE(right.joints_at(right.pose().timestamp + 0.01, r) == Status::Ok);
         REQUIRE(left.joints_at(right.pose().timestamp + 0.01, l) == Status::Ok);
         CHECK(l.side == hand::Handedness::Left);

@@ -82,7 +82,7 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
   CHECK(!r.rows_replayed);
   CHECK(r.zeroed.empty());
   // Mean absolute error in degrees, against the labels and the truth, from the formula.
-  const double degrees = kDegreesPerRadian;
+  const double degrees = core::kDegreesPerRadian;
   double sum = 0.0, truth_sum = 0.0, max_error = 0.0;
   for (int run = 0; run < 2; ++run)
     for (long f = 0; f < per_run; ++f)

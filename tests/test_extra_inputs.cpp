@@ -53,7 +53,7 @@ std::vector<double> dof_errors_deg(const std::vector<float>& predicted, const tr
     for (std::size_t d = 0; d < hand::kDofCount; ++d) n[d] = predicted[static_cast<std::size_t>(f) * hand::kDofCount + d];
     const hand::Angles a = limits.denormalize(n);
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      sum[d] += std::abs(a[d] - static_cast<double>(s.angles[static_cast<std::size_t>(f) * hand::kDofCount + d])) * kDegreesPerRadian;
+      sum[d] += std::abs(a[d] - static_cast<double>(s.angles[static_cast<std::size_t>(f) * hand::kDofCount + d])) * core::kDegreesPerRadian;
   }
   for (double& v : sum) v /= static_cast<double>(s.frames());
   return sum;
@@ -174,7 +174,7 @@ TEST_CASE("extra inputs: the FCN and the U-Net read them in the estimator, with 
         expected_normalized[d] = trainer->output()[static_cast<std::size_t>(f) * hand::kDofCount + d];
       const hand::Angles expected = model->joint_limits().denormalize(expected_normalized);
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
-        CHECK(estimator.pose().raw_angles[d] * kDegreesPerRadian == doctest::Approx(expected[d] * kDegreesPerRadian).epsilon(1e-4));
+        CHECK(estimator.pose().raw_angles[d] * core::kDegreesPerRadian == doctest::Approx(expected[d] * core::kDegreesPerRadian).epsilon(1e-4));
     }
     // The extra input moves the pose: the same cells with another extra value give other angles.
     std::vector<double> frame(raw.begin(), raw.begin() + n);

@@ -132,7 +132,7 @@ double mean_error_degrees(const FaultRun& run, std::size_t begin, std::size_t en
   for (std::size_t i = begin; i < end; ++i)
     for (std::size_t k = 0; k < hand::kDofCount; ++k)
       sum += std::abs(run.frames[i].angles[k] - d.angles[(first + i) * hand::kDofCount + k]);
-  return sum * kDegreesPerRadian / static_cast<double>((end - begin) * hand::kDofCount);
+  return sum * core::kDegreesPerRadian / static_cast<double>((end - begin) * hand::kDofCount);
 }
 
 struct Expectation {
@@ -148,7 +148,7 @@ double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
   const std::size_t row = (first_session_frame() + frame) * hand::kDofCount;
   double sum = 0.0;
   for (std::size_t k = 0; k < hand::kDofCount; ++k) sum += std::abs(r.angles[k] - d.angles[row + k]);
-  return sum * kDegreesPerRadian / static_cast<double>(hand::kDofCount);
+  return sum * core::kDegreesPerRadian / static_cast<double>(hand::kDofCount);
 }
 
 // The checks every fault must pass; returns the run for fault-specific checks. A pose is trusted

@@ -225,7 +225,7 @@ TEST_CASE("fcn: a model file with an FCN runs in the estimator with the trainer'
     for (int f = 0; f < frames; ++f)
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         w = std::max(w, std::abs(got[static_cast<std::size_t>(f)][d] - expected[static_cast<std::size_t>(f)][d]));
-    return w * kDegreesPerRadian;  // degrees
+    return w * core::kDegreesPerRadian;  // degrees
   };
   for (const auto& entry : std::vector<std::pair<WeightStorage, double>>{{WeightStorage::F32, 1e-4}, {WeightStorage::Fixed16, 0.01}}) {
     const WeightStorage storage = entry.first;

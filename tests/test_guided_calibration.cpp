@@ -339,8 +339,8 @@ TEST_CASE("estimator: pose-guided calibration on simulated new users: the offlin
       if (method == 0) ++compared;
     }
   }
-  const double minmax = error[0] / static_cast<double>(compared * 25) * kDegreesPerRadian;
-  const double guided = error[1] / static_cast<double>(compared * 25) * kDegreesPerRadian;
+  const double minmax = error[0] / static_cast<double>(compared * 25) * core::kDegreesPerRadian;
+  const double guided = error[1] / static_cast<double>(compared * 25) * core::kDegreesPerRadian;
   MESSAGE("twenty new users: min-max " << minmax << " degrees, pose-guided " << guided);
   // Measured with the shipped FCN: 4.921 -> 4.895 degrees. The gain is larger with the default
   // readout (each row's latest reading): 3-5% on the new people of docs/results.md.

@@ -122,7 +122,7 @@ struct Take {
         ++n;
       }
     }
-    return {sum / static_cast<double>(n) * kDegreesPerRadian, static_cast<double>(kept) / static_cast<double>(data.frames())};
+    return {sum / static_cast<double>(n) * core::kDegreesPerRadian, static_cast<double>(kept) / static_cast<double>(data.frames())};
   }
 };
 

@@ -74,7 +74,7 @@ LabelError error_against_truth(const train::TakeLabels& labels, const sim::Recor
         ++n;
       }
   }
-  return {n > 0 ? sum / static_cast<double>(n) * kDegreesPerRadian : NAN, static_cast<double>(trusted) / static_cast<double>(labels.trusted.size())};
+  return {n > 0 ? sum / static_cast<double>(n) * core::kDegreesPerRadian : NAN, static_cast<double>(trusted) / static_cast<double>(labels.trusted.size())};
 }
 
 }  // namespace
@@ -146,9 +146,9 @@ TEST_CASE("keypoint inverse kinematics recovers poses and placements from exact 
       CHECK((fit.root.translation() - root.translation()).norm() < 1.0);
     }
     MESSAGE(layout_name << ": worst residual " << worst_rms << " mm, mean angle error "
-                                    << error / (poses * hand::kDofCount) * kDegreesPerRadian << " deg");
+                                    << error / (poses * hand::kDofCount) * core::kDegreesPerRadian << " deg");
     CHECK(worst_rms < 0.5);
-    CHECK(error / (poses * hand::kDofCount) * kDegreesPerRadian < 1.0);
+    CHECK(error / (poses * hand::kDofCount) * core::kDegreesPerRadian < 1.0);
   }
 }
 

@@ -144,7 +144,7 @@ TEST_CASE("labelled DoFs: only scored DoFs count in the error figures (a mean co
       p[d] = u(rng);
       t[d] = kSubset[d] ? u(rng) : NAN;
       if (!kSubset[d]) continue;
-      const double e = std::abs(p[d] - t[d]) * kDegreesPerRadian;
+      const double e = std::abs(p[d] - t[d]) * core::kDegreesPerRadian;
       sum += e;
       if (hand::kDofs[d].finger == hand::Finger::Thumb) thumb += e, ++thumb_count;
     }

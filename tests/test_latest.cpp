@@ -1,4 +1,4 @@
-// Latest<T> (core/latest.hpp): one writer, many readers, never a torn value; and LatestHand between an
+// core::Latest<T> (core/latest.hpp): one writer, many readers, never a torn value; and LatestHand between an
 // estimator's thread and two reader threads. Run under ThreadSanitizer by tools/sanitize.sh thread.
 #include <glovepose/estimator.hpp>
 #include <glovepose/core/latest.hpp>
@@ -35,7 +35,7 @@ struct ReadCounts {
 // A reader thread's loop: reads `latest` until `done`, counting into `counts`; `check(value, n)`
 // inspects every value read and its number.
 template <typename T, typename Check>
-auto reader_of(const Latest<T>& latest, const std::atomic<bool>& done, ReadCounts& counts, Check check) {
+auto reader_of(const core::Latest<T>& latest, const std::atomic<bool>& done, ReadCounts& counts, Check check) {
   return [&latest, &done, &counts, check] {
     T out;
     std::uint64_t last = 0;
@@ -52,7 +52,7 @@ auto reader_of(const Latest<T>& latest, const std::atomic<bool>& done, ReadCount
 }  // namespace
 
 TEST_CASE("latest: nothing before the first publish, then the newest value and its number") {
-  Latest<Stamped> latest;
+  core::Latest<Stamped> latest;
   Stamped out;
   out.words.fill(7);
   CHECK(latest.read(out) == 0);
@@ -74,7 +74,7 @@ TEST_CASE("latest: nothing before the first publish, then the newest value and i
 }
 
 TEST_CASE("latest: a writer publishing as fast as it can and two readers: never torn, numbers never go back") {
-  Latest<Stamped> latest;
+  core::Latest<Stamped> latest;
   constexpr std::uint64_t kPublishes = 200000;
   std::atomic<bool> done{false};
   ReadCounts counts;

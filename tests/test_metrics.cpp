@@ -24,7 +24,7 @@ void frame_with_errors(const std::vector<double>& errors_deg, hand::Angles& pred
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {
     truth[d] = 0.1 * static_cast<double>(d) - 1.0;
     const double sign = d % 2 ? -1.0 : 1.0;
-    predicted[d] = truth[d] + sign * errors_deg[d] / kDegreesPerRadian;
+    predicted[d] = truth[d] + sign * errors_deg[d] / core::kDegreesPerRadian;
   }
 }
 

@@ -37,8 +37,8 @@ Angles random_pose(std::mt19937& rng) {
   return a;
 }
 
-XrJointLocations located(const XrHandLocator& locator, const Angles& angles) {
-  XrHandJoints out;
+XrJointLocations located(const hand::XrHandLocator& locator, const Angles& angles) {
+  hand::XrHandJoints out;
   locator.locate(angles, nullptr, kXrPositionValid, out);
   return out.locations;
 }
@@ -142,9 +142,9 @@ TEST_CASE("openxr joints: order, count, struct layout and flags are those of ope
   CHECK(kXrAngularVelocityValid == XR_SPACE_VELOCITY_ANGULAR_VALID_BIT);
 
   // What an engine does: copy the joints as they are into OpenXR's own structs.
-  const XrHandLocator locator(HandModel::reference(), Handedness::Right);
+  const hand::XrHandLocator locator(HandModel::reference(), Handedness::Right);
   std::mt19937 rng(5);
-  XrHandJoints joints;
+  hand::XrHandJoints joints;
   const Angles rate = random_pose(rng);
   locator.locate(random_pose(rng), &rate, kXrPositionValid | kXrOrientationTracked, joints);
   XrHandJointLocationEXT locations[XR_HAND_JOINT_COUNT_EXT];
@@ -161,7 +161,7 @@ TEST_CASE("openxr joints: order, count, struct layout and flags are those of ope
 }
 
 TEST_CASE("openxr joints: the spec's conventions hold on the rest pose and on random poses") {
-  const XrHandLocator locator(HandModel::reference(), Handedness::Right);
+  const hand::XrHandLocator locator(HandModel::reference(), Handedness::Right);
   const XrJointLocations rest = located(locator, Angles{});
   check_conventions(rest);
   // The open hand: every finger joint's +Y points out of the back of the hand (+Y of the wrist),
@@ -214,7 +214,7 @@ TEST_CASE("openxr joints: the spec's conventions hold on the rest pose and on ra
 }
 
 TEST_CASE("openxr joints: radii are the template's spheres at the joints, scaled with the hand") {
-  const XrHandLocator locator(HandModel::reference(), Handedness::Right);
+  const hand::XrHandLocator locator(HandModel::reference(), Handedness::Right);
   const Kinematics& fk = locator.mapper().kinematics();
   Skeleton skeleton;
   fk.pose(Angles{}, skeleton);
@@ -240,17 +240,17 @@ TEST_CASE("openxr joints: radii are the template's spheres at the joints, scaled
   HandModel big = HandModel::reference();
   for (auto& rest : big.rest) rest.translation() *= 1.2;
   for (double& l : big.tip_length) l *= 1.2;
-  const XrHandLocator big_locator(big, Handedness::Right);
+  const hand::XrHandLocator big_locator(big, Handedness::Right);
   for (std::size_t j = 0; j < kXrJointCount; ++j)
     CHECK(big_locator.mapper().radii()[j] == doctest::Approx(1.2 * locator.mapper().radii()[j]).epsilon(1e-6));
-  XrHandJoints joints;
+  hand::XrHandJoints joints;
   big_locator.locate(Angles{}, nullptr, 0, joints);
   CHECK(joints.locations[at(XrJoint::Wrist)].radius == doctest::Approx(1.2 * 12.943e-3).epsilon(1e-4));
 }
 
 TEST_CASE("openxr joints: a left hand is the right hand mirrored through the wrist's YZ plane") {
-  const XrHandLocator right(HandModel::reference(), Handedness::Right);
-  const XrHandLocator left(HandModel::reference(), Handedness::Left);
+  const hand::XrHandLocator right(HandModel::reference(), Handedness::Right);
+  const hand::XrHandLocator left(HandModel::reference(), Handedness::Left);
   CHECK(left.side() == Handedness::Left);
   std::mt19937 rng(23);
   for (int trial = 0; trial < 20; ++trial) {
@@ -276,7 +276,7 @@ TEST_CASE("openxr joints: a left hand is the right hand mirrored through the wri
 }
 
 TEST_CASE("openxr joints: velocities are the derivative of the located joints along the angles' rate") {
-  const XrHandLocator locator(HandModel::reference(), Handedness::Left);
+  const hand::XrHandLocator locator(HandModel::reference(), Handedness::Left);
   std::mt19937 rng(31);
   for (int trial = 0; trial < 10; ++trial) {
     Angles angles = random_pose(rng), rate{};
@@ -284,7 +284,7 @@ TEST_CASE("openxr joints: velocities are the derivative of the located joints al
       angles[d] = 0.5 * (angles[d] + 0.5 * (kDofs[d].min + kDofs[d].max));  // away from the limits
       rate[d] = std::uniform_real_distribution<double>(-3.0, 3.0)(rng);
     }
-    XrHandJoints joints;
+    hand::XrHandJoints joints;
     CHECK(test::allocations_during([&] { locator.locate(angles, &rate, kXrPositionValid, joints); }) == 0);
     // The reference: joints 0.1 ms before and after, in the test's own difference.
     constexpr double h = 1e-4;
@@ -311,7 +311,7 @@ TEST_CASE("openxr joints: velocities are the derivative of the located joints al
     CHECK(worst_linear < 0.01 * fastest);
     CHECK(worst_angular < 0.05);  // rad/s
   }
-  XrHandJoints still;
+  hand::XrHandJoints still;
   locator.locate(Angles{}, nullptr, kXrPositionValid, still);
   for (const auto& v : still.velocities) CHECK(v.velocity_flags == 0);
 }

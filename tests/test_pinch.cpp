@@ -2,7 +2,7 @@
 // XR_FB_hand_tracking_aim): strengths and flags of the gallery's poses against distances computed
 // here from the kinematics; the hysteresis on distance ramps (one onset, one release, no chatter);
 // the aim pose; the estimator's aim state; no allocation per frame; the C ABI's
-// glovepose_xr_aim_state and XrAimFlag against <openxr/openxr.h>.
+// glovepose_xr_aim_state and hand::XrAimFlag against <openxr/openxr.h>.
 #include <glovepose/hand/pinch.hpp>
 #include <glovepose/hand/xr_hand.hpp>
 
@@ -184,20 +184,20 @@ TEST_CASE("pinch: a non-finite distance reads no pinch and the pair starts over"
 TEST_CASE("aim: the aim pose is the straight index's proximal joint, fixed in the wrist frame") {
   for (hand::Handedness side : {hand::Handedness::Right, hand::Handedness::Left}) {
     CAPTURE(static_cast<int>(side));
-    const XrHandLocator locator(hand::HandModel::reference(), side);
-    XrHandJoints rest;
+    const hand::XrHandLocator locator(hand::HandModel::reference(), side);
+    hand::XrHandJoints rest;
     locator.locate(hand::Angles{}, nullptr, 0, rest);
     const hand::XrPose expected = rest.locations.at(static_cast<std::size_t>(hand::XrJoint::IndexProximal)).pose;
-    XrAimTracker tracker(locator.mapper());
-    const XrHandAim& before = tracker.aim();
+    hand::XrAimTracker tracker(locator.mapper());
+    const hand::XrHandAim& before = tracker.aim();
     CHECK_FALSE(before.active);
     CHECK(before.status == 0);
-    const XrHandAim& aim = tracker.update(sim::gallery_pose("pinch_index").angles, true, 2.5, 7);
+    const hand::XrHandAim& aim = tracker.update(sim::gallery_pose("pinch_index").angles, true, 2.5, 7);
     CHECK(aim.active);
     CHECK(aim.side == side);
     CHECK(aim.sequence == 7);
     CHECK(aim.timestamp == 2.5);
-    CHECK(aim.status == (kXrAimValid | kXrAimIndexPinching));
+    CHECK(aim.status == (hand::kXrAimValid | hand::kXrAimIndexPinching));
     CHECK(aim.pinch_strength[0] == 1.0f);
     CHECK(aim.aim_pose.position.x == expected.position.x);
     CHECK(aim.aim_pose.position.y == expected.position.y);
@@ -212,7 +212,7 @@ TEST_CASE("aim: the aim pose is the straight index's proximal joint, fixed in th
     CHECK((rotation * Eigen::Vector3d(0, 0, -1)).dot(along.normalized()) > 0.999);
     CHECK((rotation * Eigen::Vector3d(0, 1, 0)).y() > 0.9);  // the wrist frame's +Y is the back of the hand
     // The pose moves nothing of it; an untrusted pose is not valid; the flags keep their hysteresis.
-    const XrHandAim& flat = tracker.update(sim::gallery_pose("flat").angles, false, 2.6, 8);
+    const hand::XrHandAim& flat = tracker.update(sim::gallery_pose("flat").angles, false, 2.6, 8);
     CHECK(flat.status == 0);
     CHECK(flat.aim_pose.position.x == expected.position.x);
     CHECK(flat.aim_pose.orientation.y == expected.orientation.y);
@@ -220,13 +220,13 @@ TEST_CASE("aim: the aim pose is the straight index's proximal joint, fixed in th
 }
 
 TEST_CASE("aim: per-frame updates allocate nothing") {
-  const XrHandLocator locator(hand::HandModel::reference(), hand::Handedness::Right);
-  XrAimTracker tracker(locator.mapper());
+  const hand::XrHandLocator locator(hand::HandModel::reference(), hand::Handedness::Right);
+  hand::XrAimTracker tracker(locator.mapper());
   hand::PinchTracker pinch;
   const hand::Angles& a = sim::gallery_pose("pinch_index").angles;
   const hand::Angles& b = sim::gallery_pose("flat").angles;
-  LatestAim latest;
-  XrHandAim read;
+  hand::LatestAim latest;
+  hand::XrHandAim read;
   std::uint64_t status = 0;
   const std::size_t allocations = test::allocations_during([&] {
     for (int i = 0; i < 100; ++i) {
@@ -237,7 +237,7 @@ TEST_CASE("aim: per-frame updates allocate nothing") {
     }
   });
   CHECK(allocations == 0);
-  CHECK((status & kXrAimIndexPinching) != 0);
+  CHECK((status & hand::kXrAimIndexPinching) != 0);
   CHECK(read.sequence == 100);
 }
 
@@ -248,7 +248,7 @@ TEST_CASE("aim: the estimator keeps the pinch state of its poses") {
   CHECK_FALSE(estimator.aim().active);
   estimator.start_calibration();
   const hand::Kinematics fk;
-  const XrHandLocator& locator = estimator.locator();
+  const hand::XrHandLocator& locator = estimator.locator();
   hand::PinchTracker reference;  // the same rule followed here, pose by pose
   std::size_t poses = 0, pinching = 0;
   std::vector<double> cells(data.cell_count);
@@ -258,34 +258,34 @@ TEST_CASE("aim: the estimator keeps the pinch state of its poses") {
     for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = data.cells[f * data.cell_count + c];
     if (estimator.push_cells(cells.data(), static_cast<int>(cells.size()), data.timestamps[f]) != Status::Solved) continue;
     ++poses;
-    const XrHandAim& aim = estimator.aim();
+    const hand::XrHandAim& aim = estimator.aim();
     const Pose& pose = estimator.pose();
     const hand::PinchState expected = reference.update(fk, pose.angles);
     REQUIRE(aim.active);
     CHECK(aim.sequence == pose.sequence);
     CHECK(aim.timestamp == pose.timestamp);
-    CHECK(((aim.status & kXrAimValid) != 0) == pose.trusted());
+    CHECK(((aim.status & hand::kXrAimValid) != 0) == pose.trusted());
     pinching += (aim.status & 0x3Cu) != 0;
     for (std::size_t k = 0; k < hand::kPinchPairCount; ++k) {
       CHECK(((aim.status & xr_aim_pinching_bit(k)) != 0) == expected.pinching[k]);
       CHECK(aim.pinch_strength[k] == doctest::Approx(expected.strength[k]).epsilon(1e-6));
     }
-    CHECK(aim.aim_pose.position.x == XrAimTracker(locator.mapper()).aim_pose().position.x);
+    CHECK(aim.aim_pose.position.x == hand::XrAimTracker(locator.mapper()).aim_pose().position.x);
   }
   MESSAGE(poses << " poses, " << pinching << " of them pinching");
   CHECK(poses > 100);
 }
 
-TEST_CASE("aim: XrAimFlag and the C ABI's glovepose_xr_aim_state are laid out as openxr.h's") {
-  static_assert(kXrAimComputed == XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB);
-  static_assert(kXrAimValid == XR_HAND_TRACKING_AIM_VALID_BIT_FB);
-  static_assert(kXrAimIndexPinching == XR_HAND_TRACKING_AIM_INDEX_PINCHING_BIT_FB);
-  static_assert(kXrAimMiddlePinching == XR_HAND_TRACKING_AIM_MIDDLE_PINCHING_BIT_FB);
-  static_assert(kXrAimRingPinching == XR_HAND_TRACKING_AIM_RING_PINCHING_BIT_FB);
-  static_assert(kXrAimLittlePinching == XR_HAND_TRACKING_AIM_LITTLE_PINCHING_BIT_FB);
-  static_assert(kXrAimSystemGesture == XR_HAND_TRACKING_AIM_SYSTEM_GESTURE_BIT_FB);
-  static_assert(kXrAimDominantHand == XR_HAND_TRACKING_AIM_DOMINANT_HAND_BIT_FB);
-  static_assert(kXrAimMenuPressed == XR_HAND_TRACKING_AIM_MENU_PRESSED_BIT_FB);
+TEST_CASE("aim: hand::XrAimFlag and the C ABI's glovepose_xr_aim_state are laid out as openxr.h's") {
+  static_assert(hand::kXrAimComputed == XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB);
+  static_assert(hand::kXrAimValid == XR_HAND_TRACKING_AIM_VALID_BIT_FB);
+  static_assert(hand::kXrAimIndexPinching == XR_HAND_TRACKING_AIM_INDEX_PINCHING_BIT_FB);
+  static_assert(hand::kXrAimMiddlePinching == XR_HAND_TRACKING_AIM_MIDDLE_PINCHING_BIT_FB);
+  static_assert(hand::kXrAimRingPinching == XR_HAND_TRACKING_AIM_RING_PINCHING_BIT_FB);
+  static_assert(hand::kXrAimLittlePinching == XR_HAND_TRACKING_AIM_LITTLE_PINCHING_BIT_FB);
+  static_assert(hand::kXrAimSystemGesture == XR_HAND_TRACKING_AIM_SYSTEM_GESTURE_BIT_FB);
+  static_assert(hand::kXrAimDominantHand == XR_HAND_TRACKING_AIM_DOMINANT_HAND_BIT_FB);
+  static_assert(hand::kXrAimMenuPressed == XR_HAND_TRACKING_AIM_MENU_PRESSED_BIT_FB);
   static_assert(xr_aim_pinching_bit(3) == XR_HAND_TRACKING_AIM_LITTLE_PINCHING_BIT_FB);
   static_assert(GLOVEPOSE_XR_AIM_COMPUTED == XR_HAND_TRACKING_AIM_COMPUTED_BIT_FB);
   static_assert(GLOVEPOSE_XR_AIM_VALID == XR_HAND_TRACKING_AIM_VALID_BIT_FB);
@@ -313,6 +313,6 @@ TEST_CASE("aim: XrAimFlag and the C ABI's glovepose_xr_aim_state are laid out as
   static_assert(offsetof(C, pinch_strength_little) == offsetof(X, pinchStrengthLittle));
   // The C++ aim pose and strengths copy as they are.
   static_assert(sizeof(hand::XrPose) == sizeof(XrPosef));
-  static_assert(sizeof(XrHandAim::pinch_strength) == 4 * sizeof(float));
+  static_assert(sizeof(hand::XrHandAim::pinch_strength) == 4 * sizeof(float));
   CHECK(sizeof(C) == sizeof(X));
 }

@@ -102,7 +102,7 @@ TEST_CASE("platform poses: the shipped models per weight storage equal baseline 
       const std::vector<double> got = platform_angles(model, kPlatformStorages[s], cells, frames);
       REQUIRE(got.size() == expected.size());
       double worst = 0.0;
-      for (std::size_t i = 0; i < got.size(); ++i) worst = std::max(worst, std::abs(got[i] - expected[i]) * kDegreesPerRadian);
+      for (std::size_t i = 0; i < got.size(); ++i) worst = std::max(worst, std::abs(got[i] - expected[i]) * core::kDegreesPerRadian);
       MESSAGE(std::string(model) << " " << std::string(kPlatformStorageNames[s]) << ": largest angle difference to baseline x86-64 " << worst << " degrees over "
                     << frames << " frames");
       // Float rounding: other vector widths sum in another order and fuse multiply-adds (or not);

@@ -64,10 +64,10 @@ Counts per_frame_counts(const std::shared_ptr<const PoseModel>& model, int netwo
   }
   estimator.finish_calibration();
   LatestHand latest;
-  LatestAim latest_aim;
+  hand::LatestAim latest_aim;
   HandState state;
-  XrHandAim aim;
-  XrHandJoints xr;
+  hand::XrHandAim aim;
+  hand::XrHandJoints xr;
   PredictedPose ahead;
 
   std::fflush(stdout);

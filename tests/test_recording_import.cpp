@@ -145,7 +145,7 @@ TEST_CASE("import: named columns in any order read back to the frames written, w
 TEST_CASE("import: without a time column frames are 1/rate apart per run, degrees, ids and kind from the take") {
   const Frames f = random_frames(30, 3);
   const std::string take = csv(
-      f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); }, kDegreesPerRadian);
+      f, all_columns({}), [](const std::string&, std::size_t) { return std::string(); }, core::kDegreesPerRadian);
   train::CsvImportOptions o = options(50.0);
   o.degrees = true;
   train::RecordingImporter importer(small_glove(), o);

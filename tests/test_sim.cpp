@@ -42,13 +42,13 @@ Recording true_motion(const MotionSequence& m, double seconds) {
 
 // Label error (degrees) of frame f, DoF d.
 double label_error(const Recording& r, std::size_t f, std::size_t d) {
-  return (double(r.labels[f * hand::kDofCount + d]) - r.angles[f * hand::kDofCount + d]) / kRadiansPerDegree;
+  return (double(r.labels[f * hand::kDofCount + d]) - r.angles[f * hand::kDofCount + d]) / core::kRadiansPerDegree;
 }
 
 // Whether DoF d's truth at frame f is at least `margin` degrees inside its joint limits (no clamping of the label there).
 bool inside(const Recording& r, std::size_t f, std::size_t d, double margin) {
   const double a = r.angles[f * hand::kDofCount + d];
-  return a - hand::kDofs[d].min > margin * kRadiansPerDegree && hand::kDofs[d].max - a > margin * kRadiansPerDegree;
+  return a - hand::kDofs[d].min > margin * core::kRadiansPerDegree && hand::kDofs[d].max - a > margin * core::kRadiansPerDegree;
 }
 
 CellArray cells_at(const GlovePhysics& p, const hand::Angles& a) {
@@ -398,7 +398,7 @@ TEST_CASE("sim tracker: a perfect tracker copies the truth, the wandering error 
     for (std::size_t f = 0; f < n; ++f) {
       const double flexion = r.angles[f * hand::kDofCount + hand::dof_of(dof.finger, hand::Motion::BaseFlexion)] +
                              r.angles[f * hand::kDofCount + d];
-      const double sd = 4.0 * (1.0 + std::clamp(flexion / (180.0 * kRadiansPerDegree), 0.0, 1.0));
+      const double sd = 4.0 * (1.0 + std::clamp(flexion / (180.0 * core::kRadiansPerDegree), 0.0, 1.0));
       if (!inside(r, f, d, 4.0 * sd)) continue;
       normalised += std::pow(label_error(r, f, d) / sd, 2);
       frames += 1.0;

@@ -448,7 +448,7 @@ TEST_CASE("unet: 16-bit weights (F16, BF16, Fixed16) stay within 0.1 degree of t
       const double radians_per_unit = 0.5 * (hand::kDofs[d].max - hand::kDofs[d].min);
       for (int f = 0; f < frames; ++f) {
         const std::size_t i = static_cast<std::size_t>(f * kUNetOutputs + slots[d].flat());
-        worst_degrees = std::max(worst_degrees, std::abs(a[i] - b[i]) * radians_per_unit * kDegreesPerRadian);
+        worst_degrees = std::max(worst_degrees, std::abs(a[i] - b[i]) * radians_per_unit * core::kDegreesPerRadian);
       }
     }
     const std::string name = storage_name(storage);

@@ -44,10 +44,10 @@ class EstimatorCore;  // detail/estimator_core.hpp
 }  // namespace detail
 namespace hand {
 struct ContactResult;  // hand/contact.hpp
-}  // namespace hand
 struct XrHandJoints;   // hand/xr_hand.hpp
 struct XrHandAim;      // hand/xr_hand.hpp
 class XrHandLocator;   // hand/xr_hand.hpp
+}  // namespace hand
 
 /// @brief One glove stream: rows, frames or solved cells in, poses out. See the file comment.
 ///
@@ -104,15 +104,15 @@ class GlovePoseEstimator {
   /// Status::NotReady before the first pose (since the last reset), NonFinite for a non-finite t.
   GLOVEPOSE_REALTIME Status pose_at(double t, PredictedPose& out) const noexcept;
   /// @brief The OpenXR joints (hand/xr_hand.hpp) at time t, located from pose_at(t), with velocities.
-  GLOVEPOSE_REALTIME Status joints_at(double t, XrHandJoints& out) const noexcept;
+  GLOVEPOSE_REALTIME Status joints_at(double t, hand::XrHandJoints& out) const noexcept;
   /// @brief The pinch and aim state of the latest pose (hand/xr_hand.hpp, XR_FB_hand_tracking_aim):
   /// pinch strengths, the pinching flags with their hysteresis kept from pose to pose, the aim pose
   /// in the wrist frame. active is false before the first pose. Publish it to reader threads with a
-  /// LatestAim beside the LatestHand.
-  const XrHandAim& aim() const noexcept;
+  /// hand::LatestAim beside the LatestHand.
+  const hand::XrHandAim& aim() const noexcept;
   /// @brief The locator of this estimator's hand (side, hand model, joint limits), for readers of
   /// LatestHand that locate joints on their own thread (pose_prediction.hpp: predict() and locate()).
-  const XrHandLocator& locator() const noexcept;
+  const hand::XrHandLocator& locator() const noexcept;
 
   // ---- calibration -------------------------------------------------------------------------
 

@@ -104,6 +104,6 @@ struct HandState {
 /// @brief The newest HandState of one estimator for any number of reader threads (core/latest.hpp):
 /// the estimator's thread calls latest.publish(estimator.state()) after each pose; readers never
 /// block it and never see a torn state.
-using LatestHand = Latest<HandState>;
+using LatestHand = core::Latest<HandState>;
 
 }  // namespace glovepose

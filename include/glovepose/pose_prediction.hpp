@@ -18,7 +18,7 @@ namespace glovepose {
 /// @brief The pose of `state` extrapolated to time t along its rate, at most `max_prediction`
 /// seconds ahead (a reader of LatestHand predicting for its own display time). Status::NotReady
 /// before the first pose, NonFinite for a non-finite t.
-GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const XrHandLocator& locator, double t,
+GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& rate, bool has_rate, const hand::XrHandLocator& locator, double t,
                                          double max_prediction, PredictedPose& out) noexcept {
   if (!pose.valid) return Status::NotReady;
   if (!std::isfinite(t)) return Status::NonFinite;
@@ -35,14 +35,14 @@ GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& r
 }
 
 /// @brief predict() from a HandState (LatestHand's value).
-GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const XrHandLocator& locator, double t, double max_prediction,
+GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const hand::XrHandLocator& locator, double t, double max_prediction,
                                          PredictedPose& out) noexcept {
   return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
 }
 
 /// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
 /// trusted and the time was within the prediction bound; velocities when the rate is known.
-GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const XrHandLocator& locator, XrHandJoints& out) noexcept {
+GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const hand::XrHandLocator& locator, hand::XrHandJoints& out) noexcept {
   std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
   if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
   locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);

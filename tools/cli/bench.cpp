@@ -121,7 +121,7 @@ Result bench_model(const std::string& path, nn::WeightStorage storage, const Ses
   const hand::Kinematics kinematics;
   hand::Skeleton skeleton;
   hand::JointList joints{};
-  XrHandJoints xr;
+  hand::XrHandJoints xr;
   Eigen::VectorXd measurements(rows), cells(model->cell_count()), normalized(model->cell_count());
   hand::Angles unit{}, angles{}, smoothed{};
   std::array<float, grid::kMapSlots> pose_map{};

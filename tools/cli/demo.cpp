@@ -274,9 +274,9 @@ void draw_angles_over_time(const NewUser& user, const SessionRun& run, const std
       const double t = user.data.timestamps[f] - session_start;
       if (t > kPlottedSeconds) break;
       times.push_back(t);
-      predicted.push_back(run.predicted[i][dof] * kDegreesPerRadian);
+      predicted.push_back(run.predicted[i][dof] * core::kDegreesPerRadian);
       hand::Angles true_pose{};
-      truth.push_back(true_angles(user.data, f, true_pose)[dof] * kDegreesPerRadian);
+      truth.push_back(true_angles(user.data, f, true_pose)[dof] * core::kDegreesPerRadian);
     }
     const auto [lo, hi] =
         std::minmax({*std::min_element(predicted.begin(), predicted.end()), *std::min_element(truth.begin(), truth.end()),
@@ -322,7 +322,7 @@ void draw_cumulative_error(const train::AngleErrorReport& report, const std::str
 // The fixed view of the skeleton picture: fingers up, seen from the back of the hand turned by
 // 50 degrees towards the thumb, so flexion (towards the palm, -Z) and abduction (X) both show.
 svg::Point project(const hand::JointTransform& joint) {
-  constexpr double kYaw = 50.0 * kRadiansPerDegree;
+  constexpr double kYaw = 50.0 * core::kRadiansPerDegree;
   const double x = joint.position[0], y = joint.position[1], z = joint.position[2];
   return {x * std::cos(kYaw) - z * std::sin(kYaw), y};
 }
@@ -360,7 +360,7 @@ void draw_skeletons(const NewUser& user, const SessionRun& run, const hand::Hand
     hand::Angles truth{};
     true_angles(user.data, f, truth);
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
-      error += std::abs(run.skeleton_angles[k][d] - truth[d]) * kDegreesPerRadian / hand::kDofCount;
+      error += std::abs(run.skeleton_angles[k][d] - truth[d]) * core::kDegreesPerRadian / hand::kDofCount;
     char caption[96];
     std::snprintf(caption, sizeof caption, "t = %.1f s, mean error %.1f deg", user.data.timestamps[f] - session_start, error);
     const double x0 = 10 + 2 * cell * static_cast<double>(k);

@@ -70,7 +70,7 @@ struct ViewOptions {
 // as words, never torn): the hand, its pinch state, the maps the network read and wrote, the truth.
 struct ViewFrame {
   HandState hand;
-  XrHandAim aim;
+  hand::XrHandAim aim;
   std::array<float, grid::kStretchValues> stretch{};  // the calibrated cells on the two 5x5 stretch maps
   std::array<float, grid::kMapSlots> pose_map{};      // the pose's angles normalised by the joint limits, on the 5x5 pose map
   bool maps = false;                                  // stretch and pose_map hold the latest pose's
@@ -83,7 +83,7 @@ struct ViewFrame {
 // 0 is `start`), publishing a ViewFrame after each frame.
 class GloveStream {
  public:
-  GloveStream(GlovePoseEstimator& estimator, Latest<ViewFrame>& latest, std::atomic<bool>& stop)
+  GloveStream(GlovePoseEstimator& estimator, core::Latest<ViewFrame>& latest, std::atomic<bool>& stop)
       : estimator_(estimator), latest_(latest), stop_(stop) {}
 
   // `clock`: set to the stream's time at `served_from` (the recording's clock against the server's).
@@ -132,7 +132,7 @@ class GloveStream {
   }
 
   GlovePoseEstimator& estimator_;
-  Latest<ViewFrame>& latest_;
+  core::Latest<ViewFrame>& latest_;
   std::atomic<bool>& stop_;
   ViewFrame frame_;
 };
@@ -144,7 +144,7 @@ struct ViewShared {
       : format(*model, shipped_model), estimator(std::move(model), config) {}
   GloveLineFormat format;  // refers to the glove of the estimator's model
   GlovePoseEstimator estimator;
-  Latest<ViewFrame> latest;
+  core::Latest<ViewFrame> latest;
   GloveLineCounts notes;
   std::string failure;  // why the glove's stream stopped; written before stream_done
   std::atomic<bool> stop{false}, stream_done{false};
@@ -156,13 +156,13 @@ struct ViewShared {
 
 json degrees(const hand::Angles& angles) {
   json out = json::array();
-  for (double a : angles) out.push_back(std::round(a * kDegreesPerRadian * 100.0) / 100.0);
+  for (double a : angles) out.push_back(std::round(a * core::kDegreesPerRadian * 100.0) / 100.0);
   return out;
 }
 
 // The OpenXR joints' positions (wrist frame, millimetres) of `angles` on the estimator's hand.
-json joints_mm(const XrHandLocator& locator, const hand::Angles& angles) {
-  XrHandJoints joints;
+json joints_mm(const hand::XrHandLocator& locator, const hand::Angles& angles) {
+  hand::XrHandJoints joints;
   locator.locate(angles, nullptr, 0, joints);
   json list = json::array();
   for (const auto& j : joints.locations)
@@ -175,7 +175,7 @@ json joints_mm(const XrHandLocator& locator, const hand::Angles& angles) {
 // parents and radii), readable names, the maps' layouts, the calibration sequence.
 json meta_json(const GlovePoseEstimator& estimator, bool has_truth, const std::string& source) {
   const PoseModel& model = estimator.model();
-  XrHandJoints rest;
+  hand::XrHandJoints rest;
   estimator.locator().locate(hand::Angles{}, nullptr, 0, rest);
   json radii = json::array(), parents = json::array(), joint_names = json::array();
   for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
@@ -237,7 +237,7 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& 
     out["first_skipped"] = shared.notes.first_skipped;
     out["zeroed"] = shared.notes.calibration;
   }
-  const XrHandLocator& locator = estimator.locator();
+  const hand::XrHandLocator& locator = estimator.locator();
   out["t"] = frame.stream_time;
   out["step"] = state.calibration.step;
   out["calibration_frames"] = state.calibration.frames;
@@ -272,9 +272,9 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& 
     pinch.push_back({{"strength", frame.aim.pinch_strength[p]},
                      {"distance_mm",
                       std::isfinite(frame.aim.distance_mm[p]) ? json(std::round(frame.aim.distance_mm[p] * 10.0) / 10.0) : json(nullptr)},
-                     {"pinching", (frame.aim.status & (kXrAimIndexPinching << p)) != 0}});
+                     {"pinching", (frame.aim.status & (hand::kXrAimIndexPinching << p)) != 0}});
   out["pinch"] = pinch;
-  out["aim_valid"] = (frame.aim.status & kXrAimValid) != 0;
+  out["aim_valid"] = (frame.aim.status & hand::kXrAimValid) != 0;
   if (frame.maps) {
     const auto rows = [](const float* values) {
       json map = json::array();

@@ -74,7 +74,7 @@ class Sequence {
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (!(s.pose[d] >= limits.min()[d] - 1e-6 && s.pose[d] <= limits.max()[d] + 1e-6))  // slack: angles stored to 1e-6 degree
           throw Error("calibration sequence '" + id_ + "', step '" + s.name + "': " + hand::kDofs[d].name + " = " +
-                      std::to_string(s.pose[d] / kRadiansPerDegree) + " degrees, expected within the joint limits");
+                      std::to_string(s.pose[d] / core::kRadiansPerDegree) + " degrees, expected within the joint limits");
       total_ += s.seconds;
     }
   }
@@ -121,7 +121,7 @@ class Sequence {
         const std::size_t d = dof_or_fail(name, where, fail);
         if (!value.is_number()) throw fail(where + ": pose_degrees." + name + " is " + io::json::describe(value) + ", expected a number");
         seen[d] = true;
-        s.pose[d] = value.get<double>() * kRadiansPerDegree;
+        s.pose[d] = value.get<double>() * core::kRadiansPerDegree;
       }
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         if (!seen[d]) throw fail(where + ": pose_degrees lacks " + std::string(hand::kDofs[d].name) + ", expected all 25 angles");
@@ -131,7 +131,7 @@ class Sequence {
           if (!name.is_string()) throw fail(where + ": 'pinned' holds " + io::json::describe(name) + ", expected DoF names");
           s.pinned[dof_or_fail(name.get<std::string>(), where, fail)] = true;
         }
-        s.pinned_sd = f.number(item, "pinned_sd_degrees", where) * kRadiansPerDegree;
+        s.pinned_sd = f.number(item, "pinned_sd_degrees", where) * core::kRadiansPerDegree;
       }
       steps.push_back(std::move(s));
     }
@@ -154,7 +154,7 @@ class Sequence {
           << ",\n      \"seconds\": " << s.seconds << ",\n      \"pose_degrees\": {";
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
         out << (d ? "," : "") << (d % 4 == 0 ? "\n        " : " ") << io::json::quote(hand::kDofs[d].name) << ": "
-            << std::round(s.pose[d] / kRadiansPerDegree * 1e6) / 1e6;
+            << std::round(s.pose[d] / core::kRadiansPerDegree * 1e6) / 1e6;
       out << "\n      }";
       if (s.pins_any()) {
         out << ",\n      \"pinned\": [";
@@ -164,7 +164,7 @@ class Sequence {
             out << (first ? "" : ", ") << io::json::quote(hand::kDofs[d].name);
             first = false;
           }
-        out << "],\n      \"pinned_sd_degrees\": " << s.pinned_sd / kRadiansPerDegree;
+        out << "],\n      \"pinned_sd_degrees\": " << s.pinned_sd / core::kRadiansPerDegree;
       }
       out << "\n    }" << (i + 1 < steps_.size() ? "," : "") << "\n";
     }

@@ -21,7 +21,7 @@
 
 #include "../config.hpp"
 
-namespace glovepose {
+namespace glovepose::core {
 
 /// @brief One writer's newest T for many readers. T must be trivially copyable.
 template <typename T>
@@ -90,4 +90,4 @@ class Latest {
   std::array<Slot, 2> slots_;
 };
 
-}  // namespace glovepose
+}  // namespace glovepose::core

@@ -3,11 +3,11 @@
 /// read or write them (files, reports, the tool).
 #pragma once
 
-namespace glovepose {
+namespace glovepose::core {
 
 /// @brief Degrees per radian (180 / pi).
 inline constexpr double kDegreesPerRadian = 57.295779513082320876798;
 /// @brief Radians per degree (pi / 180).
 inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 
-}  // namespace glovepose
+}  // namespace glovepose::core

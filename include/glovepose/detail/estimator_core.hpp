@@ -140,7 +140,7 @@ class EstimatorCore {
     return trend_.at(t, out.angles);
   }
 
-  GLOVEPOSE_REALTIME Status joints_at(double t, XrHandJoints& out) const noexcept {
+  GLOVEPOSE_REALTIME Status joints_at(double t, hand::XrHandJoints& out) const noexcept {
     PredictedPose pose;
     const Status status = pose_at(t, pose);
     if (status != Status::Ok) {
@@ -151,9 +151,9 @@ class EstimatorCore {
     return Status::Ok;
   }
 
-  const XrHandAim& aim() const noexcept { return aim_tracker_.aim(); }
+  const hand::XrHandAim& aim() const noexcept { return aim_tracker_.aim(); }
 
-  const XrHandLocator& locator() const noexcept { return locator_; }
+  const hand::XrHandLocator& locator() const noexcept { return locator_; }
 
   // ---- calibration -------------------------------------------------------------------------
 
@@ -372,8 +372,8 @@ class EstimatorCore {
   std::unique_ptr<core::Team> team_;  // network_threads > 1 with a U-Net
   hand::Kinematics kinematics_;
   filter::Trend<hand::kDofCount> trend_;
-  XrHandLocator locator_;
-  XrAimTracker aim_tracker_;  // the pinch flags' hysteresis and the latest aim state
+  hand::XrHandLocator locator_;
+  hand::XrAimTracker aim_tracker_;  // the pinch flags' hysteresis and the latest aim state
   Eigen::VectorXd measurements_;
   Eigen::VectorXd cells_;
   Eigen::VectorXd normalized_;

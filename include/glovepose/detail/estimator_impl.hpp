@@ -40,9 +40,9 @@ GLOVEPOSE_INLINE core::Span<const double> GlovePoseEstimator::normalized_cells()
 GLOVEPOSE_INLINE HandState GlovePoseEstimator::state() const noexcept { return core_->state(); }
 GLOVEPOSE_INLINE const hand::ContactResult& GlovePoseEstimator::contact() const noexcept { return core_->contact(); }
 GLOVEPOSE_INLINE Status GlovePoseEstimator::pose_at(double t, PredictedPose& out) const noexcept { return core_->pose_at(t, out); }
-GLOVEPOSE_INLINE Status GlovePoseEstimator::joints_at(double t, XrHandJoints& out) const noexcept { return core_->joints_at(t, out); }
-GLOVEPOSE_INLINE const XrHandAim& GlovePoseEstimator::aim() const noexcept { return core_->aim(); }
-GLOVEPOSE_INLINE const XrHandLocator& GlovePoseEstimator::locator() const noexcept { return core_->locator(); }
+GLOVEPOSE_INLINE Status GlovePoseEstimator::joints_at(double t, hand::XrHandJoints& out) const noexcept { return core_->joints_at(t, out); }
+GLOVEPOSE_INLINE const hand::XrHandAim& GlovePoseEstimator::aim() const noexcept { return core_->aim(); }
+GLOVEPOSE_INLINE const hand::XrHandLocator& GlovePoseEstimator::locator() const noexcept { return core_->locator(); }
 
 GLOVEPOSE_INLINE void GlovePoseEstimator::start_calibration() noexcept { core_->start_calibration(); }
 GLOVEPOSE_INLINE CalibrationProgress GlovePoseEstimator::calibration_progress() const noexcept { return core_->calibration_progress(); }

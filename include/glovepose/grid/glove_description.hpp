@@ -192,8 +192,8 @@ class GloveDescription {
     hand::Angles lo{}, hi{};
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const auto& own = settings_.limits_degrees[d];
-      lo[d] = own ? own->min * kRadiansPerDegree : hand::kDofs[d].min;
-      hi[d] = own ? own->max * kRadiansPerDegree : hand::kDofs[d].max;
+      lo[d] = own ? own->min * core::kRadiansPerDegree : hand::kDofs[d].min;
+      hi[d] = own ? own->max * core::kRadiansPerDegree : hand::kDofs[d].max;
     }
     return hand::JointLimits(lo, hi);
   }

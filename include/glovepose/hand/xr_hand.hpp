@@ -21,7 +21,7 @@
 #include "pinch.hpp"
 #include "../core/latest.hpp"
 
-namespace glovepose {
+namespace glovepose::hand {
 
 /// @brief One hand's joints at one time, laid out for OpenXR (positions and velocities in the
 /// wrist joint's frame; hand/openxr_joints.hpp).
@@ -230,6 +230,6 @@ class XrAimTracker {
 /// @brief The newest aim state of one estimator for reader threads (core/latest.hpp): the estimator's
 /// thread publishes estimator.aim() beside its HandState (LatestHand); a reader matches the two by
 /// XrHandAim::sequence and Pose::sequence when it needs both of one pose.
-using LatestAim = Latest<XrHandAim>;
+using LatestAim = core::Latest<XrHandAim>;
 
-}  // namespace glovepose
+}  // namespace glovepose::hand

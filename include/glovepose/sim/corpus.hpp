@@ -141,7 +141,7 @@ inline calibration::Sequence guided_calibration_sequence(const std::vector<KeyPo
               s.pose[d] = 0.0;
               s.pinned[d] = true;
             }
-          s.pinned_sd = 2.0 * kRadiansPerDegree;
+          s.pinned_sd = 2.0 * core::kRadiansPerDegree;
         }
         steps.push_back(s);
       }

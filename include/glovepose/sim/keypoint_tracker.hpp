@@ -50,7 +50,7 @@ inline train::KeypointTrack track_keypoints(const hand::Kinematics& kinematics, 
   hand::KeypointPositions points;
   for (double t = from + phase; t <= to; t += 1.0 / config.rate_hz) {
     const auto wave = [&](std::size_t i) { return std::sin(6.283185307179586 * frequency[i] * t + start[i]); };
-    const double turn = 35.0 * kRadiansPerDegree;
+    const double turn = 35.0 * core::kRadiansPerDegree;
     Eigen::Affine3d root = Eigen::Affine3d::Identity();
     root.linear() = (Eigen::AngleAxisd(turn * wave(0), Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(turn * wave(1), Eigen::Vector3d::UnitY()) *
                      Eigen::AngleAxisd(turn * wave(2), Eigen::Vector3d::UnitZ()))

@@ -99,7 +99,7 @@ inline Eigen::MatrixXd fit_linear(const Eigen::MatrixXd& xtx, const Eigen::Matri
 }
 
 inline double mean_abs_deg(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const Eigen::MatrixXd& w) {
-  return (x * w - y).cwiseAbs().mean() * kDegreesPerRadian;
+  return (x * w - y).cwiseAbs().mean() * core::kDegreesPerRadian;
 }
 
 }  // namespace detail
@@ -130,7 +130,7 @@ inline RealismReport make_report(const CorpusConfig& config) {
       for (std::size_t d = 0; d < hand::kDofCount; ++d) {
         const std::size_t i = static_cast<std::size_t>(f) * hand::kDofCount + d;
         angles[d].push_back(r.angles[i]);
-        label_errors.push_back(std::abs(static_cast<double>(r.labels[i]) - r.angles[i]) * kDegreesPerRadian);
+        label_errors.push_back(std::abs(static_cast<double>(r.labels[i]) - r.angles[i]) * core::kDegreesPerRadian);
         if (hand::kDofs[d].finger == hand::Finger::Thumb) thumb_error += label_errors.back(), ++thumb_count;
       }
       ages.push_back(r.oldest_age[static_cast<std::size_t>(f)]);
@@ -320,8 +320,8 @@ inline std::string format_report(const RealismReport& r) {
   const hand::JointLimits limits;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) {
     const auto& s = r.dofs[d];
-    add("  %-24s %7.1f..%6.1f of %7.1f..%6.1f  %5.1f%%  %2d/10\n", hand::kDofs[d].name, s.p1 * kDegreesPerRadian, s.p99 * kDegreesPerRadian,
-        limits.min()[d] * kDegreesPerRadian, limits.max()[d] * kDegreesPerRadian, 100.0 * s.coverage, s.bins_used);
+    add("  %-24s %7.1f..%6.1f of %7.1f..%6.1f  %5.1f%%  %2d/10\n", hand::kDofs[d].name, s.p1 * core::kDegreesPerRadian, s.p99 * core::kDegreesPerRadian,
+        limits.min()[d] * core::kDegreesPerRadian, limits.max()[d] * core::kDegreesPerRadian, 100.0 * s.coverage, s.bins_used);
   }
   add("\nRe-donning vs pose change (gallery poses, noise-free, mean |dC| / cell range): re-donning %.3f, pose change %.3f (ratio %.2f)\n",
       r.redonning_change, r.pose_change, r.redonning_change / r.pose_change);

@@ -105,7 +105,7 @@ inline void label_recording(Recording& rec, const MotionSequence& motion, const 
   std::array<double, D> bias{};
   core::Rng subject_rng(seeds.subject), session_rng(seeds.session), rng(seeds.recording);
   for (std::size_t d = 0; d < D; ++d)
-    bias[d] = (subject_rng.normal(0.0, config.subject_bias_sd) + session_rng.normal(0.0, config.session_bias_sd)) * kRadiansPerDegree;
+    bias[d] = (subject_rng.normal(0.0, config.subject_bias_sd) + session_rng.normal(0.0, config.session_bias_sd)) * core::kRadiansPerDegree;
   std::array<double, D> wander{};  // unit-variance Ornstein-Uhlenbeck state per DoF
   for (double& z : wander) z = rng.normal(0.0, 1.0);
 
@@ -140,8 +140,8 @@ inline void label_recording(Recording& rec, const MotionSequence& motion, const 
       const hand::Finger finger = hand::kDofs[d].finger;
       const double flexion =
           truth[hand::dof_of(finger, hand::Motion::BaseFlexion)] + truth[hand::dof_of(finger, hand::Motion::MiddleFlexion)];
-      const double occluded = 1.0 + config.occlusion_gain * std::clamp(flexion / (2.0 * 90.0 * kRadiansPerDegree), 0.0, 1.0);
-      label[d] = truth[d] + bias[d] + wander[d] * detail::tracker_sd(config, d) * occluded * kRadiansPerDegree;
+      const double occluded = 1.0 + config.occlusion_gain * std::clamp(flexion / (2.0 * 90.0 * core::kRadiansPerDegree), 0.0, 1.0);
+      label[d] = truth[d] + bias[d] + wander[d] * detail::tracker_sd(config, d) * occluded * core::kRadiansPerDegree;
     }
     // The tracker's collision term: the error is shortened (bisection on its length) until the
     // fingers overlap no more than allowed.
@@ -168,7 +168,7 @@ inline void label_recording(Recording& rec, const MotionSequence& motion, const 
       failure.held = label;
       // The abduction step that brings the finger onto its neighbour: the sign with the larger overlap.
       const std::size_t abduction = hand::dof_of(failure.finger, hand::Motion::Abduction);
-      const double step = config.snap_abduction * kRadiansPerDegree;
+      const double step = config.snap_abduction * core::kRadiansPerDegree;
       hand::Angles plus = truth, minus = truth;
       plus[abduction] += step;
       minus[abduction] -= step;

@@ -222,7 +222,7 @@ inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Seq
   for (Eigen::Index r = 0; r < n; ++r)
     max_rms_z = std::max(max_rms_z, std::sqrt(((x.row(r).transpose() - mean).array() / scale.array()).square().mean()));
   PoseOffsetFit fit{calibration::PoseOffsetModel(sequence, model.info.inputs, std::move(weight), std::move(bias), mean, scale, max_rms_z),
-                    best_ridge, static_cast<long>(n), best_error * kDegreesPerRadian, y.cwiseAbs().mean() * kDegreesPerRadian};
+                    best_ridge, static_cast<long>(n), best_error * core::kDegreesPerRadian, y.cwiseAbs().mean() * core::kDegreesPerRadian};
   return fit;
 }
 

@@ -365,7 +365,7 @@ class AngleErrorAccumulator {
       if (!scored_[d]) continue;
       const auto p = static_cast<double>(predicted[d]);
       const auto t = static_cast<double>(truth[d]);
-      error[d] = std::abs(p - t) * kDegreesPerRadian;
+      error[d] = std::abs(p - t) * core::kDegreesPerRadian;
       if (!std::isfinite(p) || !std::isfinite(t) || !std::isfinite(error[d])) {
         ++skipped_;
         return false;

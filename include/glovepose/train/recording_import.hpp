@@ -344,7 +344,7 @@ class RecordingImporter {
       throw Error(at + ", line " + std::to_string(header_line) + ": DoF columns " + hand::dof_set_text(labelled) +
                   ", expected the DoFs of the takes before it (" + hand::dof_set_text(data_.labelled_dofs()) + ")");
     if (angles && data_.frames() == 0) data_.set_labelled_dofs(labelled);
-    const double deg = options_.degrees ? kRadiansPerDegree : 1.0;
+    const double deg = options_.degrees ? core::kRadiansPerDegree : 1.0;
     const std::size_t first_frame = data_.frames();
     std::vector<std::size_t> line_of;  // file line of each frame of this take
     std::vector<float> cells(static_cast<std::size_t>(glove_.cell_count()));

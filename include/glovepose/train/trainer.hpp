@@ -118,7 +118,7 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
       sum += std::abs(radians - angles[f * hand::kDofCount + d]);
       ++count;
     }
-  return count ? sum / static_cast<double>(count) * kDegreesPerRadian : NAN;
+  return count ? sum / static_cast<double>(count) * core::kDegreesPerRadian : NAN;
 }
 
 /// @brief Trains `net` on `train` (targets normalised by `limits`), keeps the tensors with the
