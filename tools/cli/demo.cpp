@@ -413,7 +413,7 @@ int demo(const DemoOptions& o) {
   if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
   draw_angles_over_time(user, run, files[1]);
   draw_cumulative_error(report, files[2]);
-  draw_skeletons(user, run, estimator.config().hand ? *estimator.config().hand : hand::HandModel::reference(), files[3]);
+  draw_skeletons(user, run, hand::HandModel::chosen_or_reference(estimator.config().hand), files[3]);
   std::cout << table << "\nwrote";
   for (const std::string& file : files) std::cout << " " << file;
   std::cout << "\n";

@@ -57,7 +57,7 @@ class EstimatorCore {
                              model_->pose_offset() && config_.calibration_method != CalibrationMethod::MinMax ? &model_->pose_offset()->sequence()
                                                                                                                  : nullptr),
         workspace_(model_->network().make_workspace(checked_threads(config_.network_threads))),
-        kinematics_(config_.hand ? *config_.hand : hand::HandModel::reference(), config_.handedness),
+        kinematics_(hand::HandModel::chosen_or_reference(config_.hand), config_.handedness),
         trend_(config_.prediction_window),
         locator_(kinematics_.model(), config_.handedness, model_->joint_limits()),
         aim_tracker_(locator_.mapper()) {

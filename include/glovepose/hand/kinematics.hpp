@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <utility>
 
 #include <Eigen/Geometry>
@@ -131,6 +132,10 @@ struct HandModel {
     for (std::size_t f = 0; f < kFingerCount; ++f) model.tip_length[f] = kReferenceTipLength[f];
     return model;
   }
+
+  /// @brief The hand a configuration names (EstimatorConfig::hand): `chosen`, or the reference
+  /// hand where none is chosen.
+  static HandModel chosen_or_reference(const std::shared_ptr<const HandModel>& chosen) { return chosen ? *chosen : reference(); }
 };
 
 /// @brief The mirror image of a rigid transform through the x = 0 plane, kept right-handed:
