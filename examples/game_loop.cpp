@@ -9,6 +9,8 @@
 // The glove is the simulator, streamed in real time; with a real glove, the sensor thread reads
 // rows from the glove's port instead.
 #include <glovepose/glovepose.hpp>
+#include <glovepose/hand/xr_hand.hpp>        // OpenXR joints and aim
+#include <glovepose/pose_prediction.hpp>     // predict, locate
 #include <glovepose/sim/corpus_dataset.hpp>  // the simulated glove only
 
 #include <Eigen/Geometry>
@@ -82,7 +84,9 @@ Bone global_transform(const HandRig& rig, int joint) {
   return {up.position + up.rotation * rig[joint].position, up.rotation * rig[joint].rotation};
 }
 
-float bend_degrees(const Bone& bone) { return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * static_cast<float>(core::kDegreesPerRadian); }
+float bend_degrees(const Bone& bone) {
+  return 2.0f * std::acos(std::min(1.0f, std::abs(bone.rotation.w()))) * static_cast<float>(core::kDegreesPerRadian);
+}
 
 }  // namespace
 

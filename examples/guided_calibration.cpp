@@ -8,6 +8,7 @@
 //
 // The user here is the simulator following the sequence, read out row by row as a real glove's
 // firmware delivers them; with a real glove, replace the source of rows.
+#include <glovepose/calibration/pose_offset.hpp>  // the model's sequence
 #include <glovepose/glovepose.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>  // the simulated user only
 

@@ -7,6 +7,7 @@
 // calibration), then moving naturally for 5 s, read out row by row (180 rows per 60 Hz cycle) as a
 // real glove's firmware delivers them. With a real glove, replace the loop's source of rows.
 #include <glovepose/glovepose.hpp>
+#include <glovepose/sensor/calibration.hpp>  // CalibrationRange::flat_sensors
 #include <glovepose/sim/corpus_dataset.hpp>  // the simulated glove only
 
 #include <cstdio>

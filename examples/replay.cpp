@@ -8,6 +8,8 @@
 // SESSION is a dataset file with raw rows (weights_format.md, "Dataset files"), for example
 //   glovepose simulate --subjects 1 --sessions 1 --gloves 1 --minutes 1 --raw-rows --out session.safetensors
 #include <glovepose/glovepose.hpp>
+#include <glovepose/grid/glove_description.hpp>
+#include <glovepose/sensor/calibration.hpp>
 #include <glovepose/io/dataset.hpp>
 #include <glovepose/train/metrics.hpp>
 
@@ -95,7 +97,7 @@ int main(int argc, char** argv) {
 
     const std::size_t rows = data.row_count;
     const io::RowClock clock = data.row_clock();  // when each raw row was read
-    Clock::time_point session_start;  // when, on this computer's clock, the session's time 0 is replayed
+    Clock::time_point session_start;              // when, on this computer's clock, the session's time 0 is replayed
     for (std::size_t f = 0; f < data.frames(); ++f) {
       if (f == 0 || !same_session(data, f - 1, f)) {  // a new session: its clock and stream start again
         estimator.reset();
