@@ -124,7 +124,7 @@ TEST_CASE("unet: a team's forward equals the one-thread forward bit for bit, eve
           std::vector<float> in(static_cast<std::size_t>(frames) * kUNetInputs), alone(static_cast<std::size_t>(frames) * kUNetOutputs),
               shared(alone.size());
           int differing = 0;
-          for (int trial = 0; trial < 5; ++trial) {
+          for (int trial = 0; trial < (kUnderTsan ? 2 : 5); ++trial) {  // every barrier still crossed many times
             for (float& v : in) v = u(rng);
             REQUIRE(net.forward(in.data(), alone.data(), frames, alone_ws) == Status::Ok);
             std::size_t allocations = 0;
@@ -167,7 +167,9 @@ TEST_CASE("team: an idle team of two uses under 1% of a core") {
 }
 
 TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shipped U-Net, without allocating per row") {
-  sim::CorpusConfig config = sim::CorpusConfig::one_session(41, 2.0, 2.0);
+  // Under ThreadSanitizer a quarter of the stream (102 s of the TSan suite's 168 s with all of it):
+  // still hundreds of team forwards, each crossing every barrier of the runner.
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(41, kUnderTsan ? 0.5 : 2.0, 2.0);
   config.recording.raw_rows = true;
   const io::Dataset data = sim::to_dataset(sim::simulate_corpus(config), config);
   const auto model = PoseModel::load(std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_unet64.safetensors");
@@ -197,7 +199,7 @@ TEST_CASE("estimator: network_threads 2 gives the one-thread poses of the shippe
       differing += alone.pose().angles != shared.pose().angles;
     }
   }
-  CHECK(poses > 500);
+  CHECK(poses > (kUnderTsan ? 250 : 1000));
   CHECK(differing == 0);
   CHECK(allocations == 0);
   EstimatorConfig bad;
