@@ -51,6 +51,20 @@ PAPER_TABLE1_HANDS: List[Tuple[int, str]] = [
     (800, "20×10×4"),
     (612, "17×9×4"),
 ]
+# Table 1, per subject (row i = subject i): (1) intra, (2) inter, (3) generic w/o calib., (4) generic w
+# calib., (5) tuned.
+PAPER_TABLE1_SUBJECTS: List[Dict[str, float]] = [
+    {"intra": 4.8, "inter": 5.5, "nocal": 6.4, "cal": 6.6, "tuned": 5.7},
+    {"intra": 5.3, "inter": 6.8, "nocal": 7.9, "cal": 7.0, "tuned": 6.1},
+    {"intra": 6.2, "inter": 7.8, "nocal": 8.6, "cal": 8.5, "tuned": 6.6},
+    {"intra": 5.2, "inter": 5.2, "nocal": 7.3, "cal": 6.9, "tuned": 5.6},
+    {"intra": 6.8, "inter": 6.3, "nocal": 8.1, "cal": 7.3, "tuned": 6.8},
+    {"intra": 5.1, "inter": 5.9, "nocal": 8.5, "cal": 7.5, "tuned": 6.4},
+    {"intra": 5.2, "inter": 5.9, "nocal": 8.8, "cal": 8.0, "tuned": 7.2},
+    {"intra": 5.6, "inter": 5.7, "nocal": 8.6, "cal": 8.2, "tuned": 6.7},
+    {"intra": 6.1, "inter": 6.5, "nocal": 9.0, "cal": 7.3, "tuned": 6.0},
+    {"intra": 7.5, "inter": 6.6, "nocal": 10.1, "cal": 9.1, "tuned": 8.1},
+]
 # Table 1, "Average error" row: (1) intra, (2) inter, (3) generic w/o calib., (4) generic w calib., (5) tuned.
 PAPER_TABLE1_AVERAGE = {"intra": 5.8, "inter": 6.2, "nocal": 8.3, "cal": 7.6, "tuned": 6.5}
 # Table 2: percentage of training data -> (personalised (2), generic (4)).

@@ -47,6 +47,8 @@ from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E40
 from glovepose_ref.glove import DOF_NAMES, glove_settings, glove_tables, median_frames  # noqa: E402
 
 CLAMP = 1.5
+MIN_RANGE_TO_NOISE = 12.0  # sensor::CalibrationConfig::min_range_to_noise
+NOISE_GAUSSIAN_SCALE = 0.465  # sensor::NoiseEstimator: its statistic for white noise of SD 1
 
 
 def id_list(text: str) -> list:
@@ -57,29 +59,55 @@ def id_list(text: str) -> list:
     return ids
 
 
-def onthefly_range(calibration: np.ndarray, window: int):
-    """min, max of the running median of `window` frames (sensor/calibration.hpp)."""
-    windows = np.lib.stride_tricks.sliding_window_view(calibration.astype(np.float64), window, axis=0)
+def _median3(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    return np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
+
+
+def noise_sd(frames: np.ndarray) -> np.ndarray:
+    """Per-sensor noise SD of frames in time order (sensor::NoiseEstimator): the mean over time of the
+    median of three consecutive |x - median3(x)| residuals, divided by its value for unit white
+    Gaussian noise (0.465); 0 with fewer than 5 frames."""
+    if len(frames) < 5:
+        return np.zeros(frames.shape[1])
+    r = np.abs(frames[1:-1] - _median3(frames[:-2], frames[1:-1], frames[2:]))
+    return _median3(r[:-2], r[1:-1], r[2:]).mean(axis=0) / NOISE_GAUSSIAN_SCALE
+
+
+def onthefly_range(calibration: np.ndarray, window: int, noise: bool = False):
+    """min, max of the running median of `window` frames (sensor/calibration.hpp); noise: also the
+    noise SD of that median (sensor::OnTheFlyCalibrator: noise_sd x median_noise_factor(window))."""
+    frames = calibration.astype(np.float64)
+    windows = np.lib.stride_tricks.sliding_window_view(frames, window, axis=0)
     medians = np.median(windows, axis=-1)
-    return medians.min(axis=0), medians.max(axis=0)
+    if not noise:
+        return medians.min(axis=0), medians.max(axis=0)
+    factor = math.sqrt(math.pi / (2.0 * window + math.pi - 2.0))
+    return medians.min(axis=0), medians.max(axis=0), noise_sd(frames) * factor
 
 
-def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, flat_range: float) -> np.ndarray:
+def normalize(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, flat_range: float, noise: np.ndarray | None = None) -> np.ndarray:
+    """Cells -> [-1, 1] by the range, clamped to +-CLAMP; flat sensors read 0, and with `noise` (the
+    range's noise SD) also noise-only ones, as sensor::CalibrationRange does."""
     span = hi - lo
     flat = (span <= flat_range * np.maximum(np.abs(lo), np.abs(hi))) | (span <= 0)
+    if noise is not None:
+        flat |= (noise > 0) & (span < MIN_RANGE_TO_NOISE * noise)
     out = np.clip(2.0 * (x - lo) / np.where(flat, 1.0, span) - 1.0, -CLAMP, CLAMP)
     out[:, flat] = 0.0
     return out
 
 
 def make_samples(data: dict, meta: dict, subjects, calibration: str, validation: float, settings: dict,
-                 gloves=None, sessions=None, stride: int = 1, history: int = 1, truth: bool = False):
+                 gloves=None, sessions=None, stride: int = 1, history: int = 1, truth: bool = False,
+                 noise_only: bool = False, outliers: bool = False):
     """(train, validation) dicts of inputs, targets (normalised), angles (radians), with the labelled mask.
 
     Runs of `subjects`, `gloves` and `sessions` (None: all); every `stride`-th kept frame of a run
     (train/samples.hpp). history > 1: each input is the window [N, history, cells] of the run's
     recording frames ending at the sample's frame (outliers included, the first frame repeated
-    before the run starts), for networks that read time. truth: also "true_angles" (simulated data)."""
+    before the run starts), for networks that read time. truth: also "true_angles" (simulated data).
+    noise_only: on-the-fly calibration also maps noise-only sensors to 0 (sensor::OnTheFlyCalibrator's
+    rule: range below 12 x the noise SD of the median). outliers: keep the collision-outlier frames."""
     cells = data["cells"].numpy().astype(np.float64)
     angles = data["angles"].numpy().astype(np.float64)
     subject, glove, session = data["subject"].numpy(), data["glove"].numpy(), data["session"].numpy()
@@ -98,7 +126,7 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
             continue
         run = (subject == key[0]) & (glove == key[1]) & (session == key[2])
         recording = np.flatnonzero(run & (kind == 0))
-        kept = np.flatnonzero(outlier[recording] == 0)[::stride]  # positions within the recording
+        kept = np.flatnonzero(outliers | (outlier[recording] == 0))[::stride]  # positions within the recording
         if not len(kept):
             continue
         x = cells[recording]
@@ -107,7 +135,8 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
             if len(calibration_frames) < window:
                 sys.exit(f"train_torch: subject {key[0]}, glove {key[1]}, session {key[2]} has {len(calibration_frames)} calibration frames, "
                          f"expected at least {window} for on-the-fly calibration")
-            x = normalize(x, *onthefly_range(calibration_frames, window), settings["flat_relative_range"])
+            lo, hi, *noise = onthefly_range(calibration_frames, window, noise=noise_only)
+            x = normalize(x, lo, hi, settings["flat_relative_range"], *noise)
         x = x[np.maximum(kept[:, None] + np.arange(1 - history, 1), 0)] if history > 1 else x[kept]
         a = angles[recording[kept]]
         toward = np.where(labelled, a, rest)
