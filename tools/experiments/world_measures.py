@@ -86,6 +86,14 @@ def die(message: str) -> None:
     sys.exit(f"world_measures: {message}")
 
 
+def write_json(path, value):
+    """`value` as JSON at `path`, whole or not at all (a partial file beside it, renamed over)."""
+    partial = path + ".partial"
+    with open(partial, "w") as f:
+        json.dump(value, f, indent=1)
+    os.replace(partial, path)
+
+
 # --------------------------------------------------------------------------------------------------
 # Dataset files (weights_format.md, "Dataset files") and their runs, calibrated as the library does.
 
@@ -199,8 +207,7 @@ def spread(args):
         print(f"| {name} | {lab.mean():.2f} | {lab.std(ddof=1):.2f} | {ratio} | {subj[int(lab.argmax())]} ({lab.max():.2f}) | {r} | {rank} | "
               f"{tru.mean():.2f} | {tru.std(ddof=1):.2f} | {subj[int(tru.argmax())]} ({tru.max():.2f}) |", flush=True)
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(rows, f, indent=1)
+        write_json(args.json, rows)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -249,10 +256,10 @@ def score(pred, y, target):
     return r2_pooled(pred, y) if target == "cells" else -np.abs(pred - y).mean() * DEG
 
 
-def fit_flexible(kind, x_tr, y_tr, x_va, y_va, target, rng, features):
+def fit_flexible(kind, x_tr, y_tr, x_va, y_va, target, rng, features, rff_lengths):
     """Chooses (length, lambda) on (tr -> va); returns the chosen settings."""
     lambdas = [1e-4, 1e-3, 1e-2, 1e-1, 1.0]
-    lengths = [None] if kind in ("linear", "poly2") else [float(v) for v in os.environ.get("MEASURE_RFF_LENGTHS", "4,8,16").split(",")]
+    lengths = [None] if kind in ("linear", "poly2") else rff_lengths
     best = (-np.inf, None, None)
     for length in lengths:
         seed = int(rng.integers(1 << 31))
@@ -265,7 +272,7 @@ def fit_flexible(kind, x_tr, y_tr, x_va, y_va, target, rng, features):
     return best[1], best[2]
 
 
-def cross_validate(person, inputs, target, kind, stride, features, rng):
+def cross_validate(person, inputs, target, kind, stride, features, rng, rff_lengths):
     """Held-out-session score of one model kind: pooled R^2 (target cells) or mean abs degrees (angles).
 
     The flexible map's bandwidth and ridge are chosen once per person on its first two sessions
@@ -276,18 +283,16 @@ def cross_validate(person, inputs, target, kind, stride, features, rng):
         length, lam = (None, 0), 1e-6
     else:
         length, lam = fit_flexible(kind, sess[0][inputs][::stride], sess[0][key][::stride], sess[1][inputs][::stride],
-                                   sess[1][key][::stride], target, rng, features)
+                                   sess[1][key][::stride], target, rng, features, rff_lengths)
     scores = []
     for k, test in enumerate(sess):
         train = [p for j, p in enumerate(sess) if j != k]
         x_tr = np.vstack([p[inputs][::stride] for p in train])
         y_tr = np.vstack([p[key][::stride] for p in train])
         feat = Features(kind, x_tr, np.random.default_rng(length[1]), length[0], features)
-        f = feat(x_tr)
-        w = np.linalg.solve(f.T @ f + lam * np.trace(f.T @ f) / f.shape[1] * np.eye(f.shape[1]), f.T @ y_tr)
-        pred = feat(test[inputs]) @ w
-        y = test[key]
-        scores.append(r2_pooled(pred, y) if target == "cells" else np.abs(pred - y).mean() * DEG)
+        w = ridge_path(feat(x_tr), y_tr, [lam])[0]
+        s = score(feat(test[inputs]) @ w, test[key], target)
+        scores.append(s if target == "cells" else -s)  # score is higher-better: minus the error in degrees
     return float(np.mean(scores)), (length[0], lam)
 
 
@@ -308,7 +313,11 @@ def linearity(args):
     if not lengths or min(lengths) <= 0:
         die(f"MEASURE_RFF_LENGTHS={os.environ.get('MEASURE_RFF_LENGTHS')!r}, expected positive numbers, comma-separated")
     parts = sessions(data, meta, outliers=True, raw="raw" in cell_kinds)
-    rng = np.random.default_rng(args.seed)
+    # The random features of each table and person come from their own stream: a run on some
+    # subjects gives those subjects' figures of a run on all.
+    def rng(stream, subject):
+        return np.random.default_rng([args.seed, stream, subject])
+
     subjects = sorted({p["subject"] for p in parts})
     if args.subjects:
         try:
@@ -327,7 +336,7 @@ def linearity(args):
     print(f"# {args.dataset}: world {meta.get('world')} without [{meta.get('world_without', '')}] set [{meta.get('world_set', '')}]; "
           f"training stride {args.stride}, RFF features {args.features}; flexible = the best of {kinds[1:]} on the held-out sessions")
     results = {}
-    for cells in cell_kinds:
+    for stream, cells in enumerate(cell_kinds):
         what = "on-the-fly calibrated per session" if cells == "cal" else "raw, pF"
         print(f"\n## cells ({what}) from the true angles: held-out-session R^2 pooled over the cells\n")
         print(f"| subject | {names} | flexible | share of the explainable variance the linear map misses | chosen (length, ridge) |")
@@ -335,7 +344,7 @@ def linearity(args):
         table = []
         for s in subjects:
             person = [dict(p, _cells=p[cells]) for p in parts if p["subject"] == s]
-            out = [cross_validate(person, "truth", "cells", k, args.stride, args.features, rng) for k in kinds]
+            out = [cross_validate(person, "truth", "cells", k, args.stride, args.features, rng(stream, s), lengths) for k in kinds]
             r = [o[0] for o in out]
             flex = max(r[1:])
             table.append(r + [flex, (flex - r[0]) / flex])
@@ -354,7 +363,7 @@ def linearity(args):
         table = []
         for s in subjects:
             person = [p for p in parts if p["subject"] == s]
-            out = [cross_validate(person, "cal", target, k, args.stride, args.features, rng) for k in kinds]
+            out = [cross_validate(person, "cal", target, k, args.stride, args.features, rng(2, s), lengths) for k in kinds]
             e = [o[0] for o in out]
             table.append(e + [min(e[1:]) / e[0]])
             print(f"| {s} | " + " | ".join(f"{v:.2f}" for v in e) + f" | {min(e[1:]) / e[0]:.3f} | " + ", ".join(f"{o[1]}" for o in out[1:]) + " |",
@@ -363,8 +372,7 @@ def linearity(args):
         print("| mean | " + " | ".join(f"{v:.2f}" for v in t[:, :-1].mean(axis=0)) + f" | {t[:, -1].mean():.3f} | |")
         results[f"angles_from_cells_{target}"] = t.tolist()
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(results, f, indent=1)
+        write_json(args.json, results)
 
 
 def main():

@@ -73,14 +73,12 @@ def noise_sd(frames: np.ndarray) -> np.ndarray:
     return _median3(r[:-2], r[1:-1], r[2:]).mean(axis=0) / NOISE_GAUSSIAN_SCALE
 
 
-def onthefly_range(calibration: np.ndarray, window: int, noise: bool = False):
-    """min, max of the running median of `window` frames (sensor/calibration.hpp); noise: also the
-    noise SD of that median (sensor::OnTheFlyCalibrator: noise_sd x median_noise_factor(window))."""
+def onthefly_range(calibration: np.ndarray, window: int):
+    """min, max and noise SD of the running median of `window` frames (sensor/calibration.hpp; the
+    noise as sensor::OnTheFlyCalibrator's: noise_sd x median_noise_factor(window))."""
     frames = calibration.astype(np.float64)
     windows = np.lib.stride_tricks.sliding_window_view(frames, window, axis=0)
     medians = np.median(windows, axis=-1)
-    if not noise:
-        return medians.min(axis=0), medians.max(axis=0)
     factor = math.sqrt(math.pi / (2.0 * window + math.pi - 2.0))
     return medians.min(axis=0), medians.max(axis=0), noise_sd(frames) * factor
 
@@ -135,8 +133,8 @@ def make_samples(data: dict, meta: dict, subjects, calibration: str, validation:
             if len(calibration_frames) < window:
                 sys.exit(f"train_torch: subject {key[0]}, glove {key[1]}, session {key[2]} has {len(calibration_frames)} calibration frames, "
                          f"expected at least {window} for on-the-fly calibration")
-            lo, hi, *noise = onthefly_range(calibration_frames, window, noise=noise_only)
-            x = normalize(x, lo, hi, settings["flat_relative_range"], *noise)
+            lo, hi, noise = onthefly_range(calibration_frames, window)
+            x = normalize(x, lo, hi, settings["flat_relative_range"], noise if noise_only else None)
         x = x[np.maximum(kept[:, None] + np.arange(1 - history, 1), 0)] if history > 1 else x[kept]
         a = angles[recording[kept]]
         toward = np.where(labelled, a, rest)
