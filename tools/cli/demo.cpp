@@ -11,6 +11,7 @@
 #include <glovepose/estimator.hpp>
 #include <glovepose/hand/joint_list.hpp>
 #include <glovepose/hand/kinematics.hpp>
+#include <glovepose/io/atomic_file.hpp>
 #include <glovepose/model/pose_network.hpp>
 #include <glovepose/pose_model_options.hpp>
 #include <glovepose/sensor/calibration.hpp>
@@ -408,9 +409,7 @@ int demo(const DemoOptions& o) {
   const fs::path out(o.out);
   const std::string files[] = {(out / "summary.txt").string(), (out / "angles_over_time.svg").string(),
                                (out / "cumulative_error.svg").string(), (out / "skeletons.svg").string()};
-  std::ofstream summary(files[0]);
-  summary << table;
-  if (!summary) throw Error("cannot write '" + files[0] + "', expected a writable file");
+  io::write_file_whole(files[0], "summary", [&](std::ostream& summary) { summary << table; });
   draw_angles_over_time(user, run, files[1]);
   draw_cumulative_error(report, files[2]);
   draw_skeletons(user, run, hand::HandModel::chosen_or_reference(estimator.config().hand), files[3]);

@@ -1,5 +1,6 @@
 // glovepose import: recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
 //   dataset file for train, eval and finetune.
+#include <glovepose/io/atomic_file.hpp>
 #include <glovepose/train/recording_import.hpp>
 
 #include <algorithm>
@@ -141,7 +142,8 @@ int import_recordings(const ImportOptions& o) {
                 take.median_rms_mm, take.p95_rms_mm, take.clock.offset, clock.c_str());
   }
   if (!o.keypoint_report.empty()) {
-    std::ofstream report(o.keypoint_report);
+    io::AtomicFile file(o.keypoint_report, "--keypoint-report");
+    std::ostream& report = file.stream();
     report << "take,subject,session,timestamp,residual_mm,labelled\n";
     for (const train::KeypointTakeReport& take : importer.keypoint_takes())
       for (std::size_t i = 0; i < take.frames; ++i) {
@@ -150,7 +152,7 @@ int import_recordings(const ImportOptions& o) {
                << (std::isnan(take.frame_rms_mm[i]) ? std::string("nan") : io::number_text(std::round(take.frame_rms_mm[i] * 1000) / 1000))
                << "," << (data.outlier[f] ? 0 : 1) << "\n";
       }
-    if (!report) throw Error("--keypoint-report '" + o.keypoint_report + "': cannot write, expected a writable file");
+    file.commit();
     std::printf("wrote %s: the fit residual behind every keypoint label\n", o.keypoint_report.c_str());
   }
   for (const std::string& warning : importer.warnings()) std::fprintf(stderr, "warning: %s\n", warning.c_str());

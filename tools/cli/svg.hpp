@@ -4,10 +4,10 @@
 #pragma once
 
 #include <glovepose/config.hpp>
+#include <glovepose/io/atomic_file.hpp>
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,14 +51,15 @@ class Document {
              escape(content) + "</text>\n";
   }
 
-  /// Writes the picture; throws glovepose::Error naming the file when it cannot be written.
+  /// Writes the picture, whole or not at all; throws glovepose::Error naming the file and the cause
+  /// when it cannot be written.
   void save(const std::string& path) const {
-    std::ofstream file(path, std::ios::binary);
-    file << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-         << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width_) << "\" height=\"" << num(height_) << "\" viewBox=\"0 0 "
-         << num(width_) << " " << num(height_) << "\" font-family=\"sans-serif\">\n"
-         << body_ << "</svg>\n";
-    if (!file) throw Error("cannot write '" + path + "', expected a writable file in an existing folder");
+    io::write_file_whole(path, "picture", [&](std::ostream& file) {
+      file << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+           << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width_) << "\" height=\"" << num(height_) << "\" viewBox=\"0 0 "
+           << num(width_) << " " << num(height_) << "\" font-family=\"sans-serif\">\n"
+           << body_ << "</svg>\n";
+    });
   }
 
   /// A coordinate or size with one decimal: a tenth of a pixel is below what a screen shows.

@@ -33,6 +33,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+from glovepose_ref.whole_file import write_whole  # noqa: E402  (the package imports torch)
+
 # --------------------------------------------------------------------------------------------------
 # The paper's numbers (Glauser et al. 2019, "Interactive Hand Pose Estimation using a Stretch-Sensing
 # Soft Glove", ACM TOG 38(4); /work/shared/paper/glauser2019_stretch_glove.md).
@@ -187,8 +190,7 @@ def corpus_hand_sizes(path: Optional[str]) -> Dict[int, List[float]]:
 
 
 def glove14(data_in: str, data_out: str, glove_out: str) -> None:
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
-    from glovepose_ref import safetensors_io  # noqa: E402  (imports torch)
+    from glovepose_ref import safetensors_io  # noqa: E402
 
     tensors, meta = safetensors_io.load(data_in)
     cells = tensors.get("cells")
@@ -216,7 +218,7 @@ def glove14(data_in: str, data_out: str, glove_out: str) -> None:
     lines += ["  ]", "}"]
     tmp_data, tmp_glove = data_out + ".partial", glove_out + ".partial"
     safetensors_io.save(tmp_data, tensors, meta)
-    Path(tmp_glove).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_whole(tmp_glove, "\n".join(lines) + "\n")
     os.replace(tmp_glove, glove_out)
     os.replace(tmp_data, data_out)
     print(f"wrote {data_out} ({cells.shape[0]} frames x 14 cells) and {glove_out}")
@@ -347,7 +349,7 @@ class Context:
 
     def write(self, lines: List[str]) -> None:
         text = "\n".join(lines).rstrip() + "\n"
-        Path(self.args.md).write_text(text, encoding="utf-8")
+        write_whole(self.args.md, text)
         sys.stdout.write(text)
 
 
@@ -764,7 +766,7 @@ def svg_plot(curves, path: str, title: str) -> None:
     out.append(f'<text x="{lx + 30}" y="{legend_y + 4:.1f}">paper, generic (4)</text>')
     out.append(f'<text x="{lx + 30}" y="{legend_y + 19:.1f}" fill="#555" font-size="11">key poses of Fig. 14 (top)</text>')
     out.append("</svg>")
-    Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
+    write_whole(path, "\n".join(out) + "\n")
 
 
 def report_fig14(ctx: Context) -> None:

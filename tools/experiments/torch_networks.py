@@ -37,6 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 from glovepose_ref import import_model, safetensors_io, use_fast_transposed_convolution  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
 from glovepose_ref.glove import glove_settings, glove_tables  # noqa: E402
+from glovepose_ref.whole_file import write_whole  # noqa: E402
 from glovepose_ref.paper_networks import PatchDiscriminator, build, parameters, sized  # noqa: E402
 from glovepose_ref.model import UNet  # noqa: E402
 from train_torch import Pipeline, id_list, initialize, make_samples, mean_error_deg, predict_radians  # noqa: E402
@@ -184,7 +185,7 @@ def main() -> int:
         result["vs_truth"] = {"mean_deg": round(mean_error_deg(model, behind, labelled, "cpu", settings, radians), 6)}
     else:
         result["vs_truth"] = None
-    Path(args.json).write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
+    write_whole(args.json, json.dumps(result, indent=1) + "\n")
     print(f"scored {result['frames']} frames: {result['mean_deg']:.3f} deg vs labels"
           + (f", {result['vs_truth']['mean_deg']:.3f} deg vs truth" if truth else "") + f"; wrote {args.json}", flush=True)
     return 0

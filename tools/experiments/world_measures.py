@@ -72,6 +72,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 from glovepose_ref import safetensors_io  # noqa: E402
 from glovepose_ref.export import JOINT_LIMITS_MAX, JOINT_LIMITS_MIN  # noqa: E402
 from glovepose_ref.glove import glove_settings  # noqa: E402
+from glovepose_ref.whole_file import write_whole  # noqa: E402
 from train_torch import make_samples  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -87,11 +88,8 @@ def die(message: str) -> None:
 
 
 def write_json(path, value):
-    """`value` as JSON at `path`, whole or not at all (a partial file beside it, renamed over)."""
-    partial = path + ".partial"
-    with open(partial, "w") as f:
-        json.dump(value, f, indent=1)
-    os.replace(partial, path)
+    """`value` as JSON at `path`, whole or not at all."""
+    write_whole(path, json.dumps(value, indent=1))
 
 
 # --------------------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
+#include "../io/atomic_file.hpp"
 #include "../sensor/calibration.hpp"
 
 namespace glovepose::calibration {
@@ -29,14 +30,15 @@ struct UserCalibration {
   sensor::CalibrationRange range;       ///< Per-sensor min-max.
   std::optional<hand::Angles> offsets;  ///< Pose-guided angle offsets (radians), if any.
 
-  /// @brief Writes the file. Throws glovepose::Error if it cannot be written.
+  /// @brief Writes the file, whole or not at all (io::AtomicFile). Throws glovepose::Error naming
+  /// the file and the cause if it cannot be written.
   void save(const std::string& path, const std::string& glove_id) const {
-    range.save(path, glove_id);
-    if (!offsets) return;
-    std::ofstream file(path, std::ios::app);
-    file << std::setprecision(17) << "pose_offsets\t" << hand::kDofCount << "\n";
-    for (std::size_t d = 0; d < hand::kDofCount; ++d) file << hand::kDofs[d].name << "\t" << (*offsets)[d] << "\n";
-    if (!file) throw Error("UserCalibration::save: writing '" + path + "' failed");
+    io::write_file_whole(path, "calibration file", [&](std::ostream& file) {
+      range.save(file, glove_id);
+      if (!offsets) return;
+      file << std::setprecision(17) << "pose_offsets\t" << hand::kDofCount << "\n";
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) file << hand::kDofs[d].name << "\t" << (*offsets)[d] << "\n";
+    });
   }
 
   /// @brief Reads a file written by save() (or by CalibrationRange::save) for `glove_id` and its

@@ -67,6 +67,7 @@
 #include "../core/units.hpp"
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
+#include "../io/atomic_file.hpp"
 #include "../io/json.hpp"
 #include "../io/number_text.hpp"
 #include "../sensor/calibration.hpp"
@@ -419,12 +420,10 @@ class GloveDescription {
     }
   }
 
-  /// @brief Writes to_json() to `path`; throws glovepose::Error if the file cannot be written.
+  /// @brief Writes to_json() to `path`, whole or not at all (io::AtomicFile); throws
+  /// glovepose::Error naming the file and the cause if it cannot be written.
   void write(const std::string& path) const {
-    std::ofstream file(path, std::ios::binary);
-    if (!file) throw Error("glove description file '" + path + "': cannot open for writing");
-    file << to_json();
-    if (!file.flush()) throw Error("glove description file '" + path + "': cannot write");
+    io::write_file_whole(path, "glove description file", [&](std::ostream& file) { file << to_json(); });
   }
 
   /// @brief The description as a metadata string of a model or dataset file: the JSON text.

@@ -23,6 +23,7 @@
 
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
+#include "atomic_file.hpp"
 #include "csv_fields.hpp"
 #include "number_text.hpp"
 #include "tensor_file.hpp"
@@ -360,12 +361,11 @@ struct Dataset {
     if (!out) throw Error("Dataset::write_csv: cannot write");
   }
 
-  /// @brief Writes the frames as a CSV file (see write_csv(std::ostream&)).
+  /// @brief Writes the frames as a CSV file (see write_csv(std::ostream&)), whole or not at all.
   void write_csv(const std::string& path) const {
-    std::ofstream file(path);
-    if (!file) throw Error("CSV file '" + path + "': cannot open for writing");
-    write_csv(file);
-    if (!file.flush()) throw Error("CSV file '" + path + "': cannot write");
+    AtomicFile file(path, "CSV file");
+    write_csv(file.stream());
+    file.commit();
   }
 
   /// @brief Reads CSV in the layout of write_csv(): the cell count comes from the header, angles

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "../config.hpp"
+#include "atomic_file.hpp"
 #include "half.hpp"
 #include "json.hpp"
 #include "number_text.hpp"
@@ -347,15 +348,15 @@ struct TensorFile {
     return out;
   }
 
-  /// @brief Writes serialize()'s bytes to `path`, streaming the tensors. Throws glovepose::Error
-  /// ("<kind> '<path>': ...") if it cannot be written.
+  /// @brief Writes serialize()'s bytes to `path`, streaming the tensors, whole or not at all
+  /// (io::AtomicFile). Throws glovepose::Error ("<kind> '<path>': ...") naming the cause if it
+  /// cannot be written; the file at `path` then keeps its previous contents.
   void write(const std::string& path, const std::string& kind = "tensor file") const {
     const std::string header = header_bytes();
-    std::ofstream file(path, std::ios::binary);
-    bool ok = static_cast<bool>(file) && file.write(header.data(), static_cast<std::streamsize>(header.size()));
-    for (const auto& entry : tensors)
-      ok = ok && file.write(entry.second.bytes.data(), static_cast<std::streamsize>(entry.second.bytes.size()));
-    if (!ok || !file.flush()) throw Error(kind + " '" + path + "': cannot write");
+    AtomicFile file(path, kind);
+    file.write(header.data(), header.size());
+    for (const auto& entry : tensors) file.write(entry.second.bytes.data(), entry.second.bytes.size());
+    file.commit();
   }
 
  private:

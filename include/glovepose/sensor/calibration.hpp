@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "../config.hpp"
+#include "../io/atomic_file.hpp"
 #include "../status.hpp"
 #include "calibration_config.hpp"
 
@@ -236,18 +237,20 @@ class CalibrationRange {
 
   /// @brief Writes the range as text: a header line ("glovepose-calibration 2"), the glove id, then
   /// "name<TAB>min<TAB>max<TAB>noise" per sensor with 17 significant digits (exact round trip), so
-  /// the range read back finds the same flat and noise-only sensors. Throws glovepose::Error if
-  /// unwritable.
+  /// the range read back finds the same flat and noise-only sensors. The file is written whole or
+  /// not at all (io::AtomicFile); throws glovepose::Error naming it and the cause if unwritable.
   void save(const std::string& path, const std::string& glove_id) const {
-    std::ofstream file(path);
-    if (!file) throw Error("CalibrationRange::save: cannot open '" + path + "' for writing");
+    io::write_file_whole(path, "calibration file", [&](std::ostream& file) { save(file, glove_id); });
+  }
+
+  /// @brief Writes save()'s text to a stream.
+  void save(std::ostream& file, const std::string& glove_id) const {
     file << kFileHeader << "\n"
          << "glove\t" << glove_id << "\n"
          << "sensors\t" << size() << "\n";
     file << std::setprecision(17);
     for (int i = 0; i < size(); ++i)
       file << names_[static_cast<std::size_t>(i)] << "\t" << min_(i) << "\t" << max_(i) << "\t" << noise_(i) << "\n";
-    if (!file) throw Error("CalibrationRange::save: writing '" + path + "' failed");
   }
 
   /// @brief Reads a file written by save(), or by a version before the noise column

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -21,6 +22,7 @@
 #include "../core/thread_pool.hpp"
 #include "../hand/contact.hpp"
 #include "../hand/pinch.hpp"
+#include "../io/atomic_file.hpp"
 #include "../model/pose_network.hpp"
 #include "../nn/weight_storage.hpp"
 #include "fingertip_metrics.hpp"
@@ -339,17 +341,26 @@ inline std::string format_text(const EvaluationResult& r) {
 
 namespace detail {
 
-// A file written whole or an Error naming `what` (the option that asked for it).
-struct CsvFile {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file{nullptr, &std::fclose};
-  std::string path, what;
-  CsvFile(const std::string& p, const std::string& w) : path(p), what(w) {
-    file.reset(std::fopen(path.c_str(), "w"));
-    if (!file) throw Error(what + ": cannot open '" + path + "' for writing");
+// A CSV file written whole (io::AtomicFile) or an Error naming `what` (the option that asked for
+// it), printf-formatted.
+class CsvFile {
+ public:
+  CsvFile(const std::string& path, const std::string& what) : file_(path, what) {}
+#if defined(__GNUC__)
+  __attribute__((format(printf, 2, 3)))
+#endif
+  void print(const char* format, ...) {
+    char text[512];
+    std::va_list args;
+    va_start(args, format);
+    const int n = std::vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    if (n > 0) file_.write(text, std::min(static_cast<std::size_t>(n), sizeof text - 1));
   }
-  void close() {
-    if (std::fclose(file.release()) != 0) throw Error(what + ": writing '" + path + "' failed");
-  }
+  void commit() { file_.commit(); }
+
+ private:
+  io::AtomicFile file_;
 };
 
 }  // namespace detail
@@ -360,23 +371,22 @@ struct CsvFile {
 inline void write_predictions(const std::string& path, const io::Dataset& data, const EvaluationResult& r,
                               const std::string& what = "predictions") {
   detail::CsvFile csv(path, what);
-  std::FILE* file = csv.file.get();
-  std::fprintf(file, "frame,time,subject,session");
+  csv.print("frame,time,subject,session");
   for (const char* prefix : {"label_", "pred_", "truth_"})
     if (prefix[0] != 't' || data.has_true_angles())
-      for (const hand::Dof& d : hand::kDofs) std::fprintf(file, ",%s%s", prefix, d.name);
-  std::fprintf(file, "\n");
+      for (const hand::Dof& d : hand::kDofs) csv.print(",%s%s", prefix, d.name);
+  csv.print("\n");
   for (long f = 0; f < r.frames(); ++f) {
     const auto i = static_cast<std::size_t>(r.source[static_cast<std::size_t>(f)]);
-    std::fprintf(file, "%zu,%.9g,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i]);
+    csv.print("%zu,%.9g,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i]);
     for (const std::vector<float>* v : {&r.labels, &r.predicted})
       for (std::size_t d = 0; d < hand::kDofCount; ++d)
-        std::fprintf(file, ",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
+        csv.print(",%.9g", static_cast<double>((*v)[static_cast<std::size_t>(f) * hand::kDofCount + d]));
     if (data.has_true_angles())
-      for (std::size_t d = 0; d < hand::kDofCount; ++d) std::fprintf(file, ",%.9g", static_cast<double>(data.true_angles[i * hand::kDofCount + d]));
-    std::fprintf(file, "\n");
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) csv.print(",%.9g", static_cast<double>(data.true_angles[i * hand::kDofCount + d]));
+    csv.print("\n");
   }
-  csv.close();
+  csv.commit();
 }
 
 /// @brief Writes one CSV row per scored frame (EvaluationOptions::pinch_distances): where it comes
@@ -387,22 +397,21 @@ inline void write_pinch_distances(const std::string& path, const io::Dataset& da
   if (r.pinch_distances.size() != r.source.size())
     throw Error(what + ": the evaluation kept no pinch distances, expected EvaluationOptions::pinch_distances");
   detail::CsvFile csv(path, what);
-  std::FILE* file = csv.file.get();
-  std::fprintf(file, "frame,time,subject,session,run_start");
+  csv.print("frame,time,subject,session,run_start");
   for (const char* prefix : {"true_mm_", "pred_mm_", "true_on_"})
     for (std::size_t k = 0; k < hand::kPinchPairCount; ++k)
-      std::fprintf(file, ",%s%s", prefix, hand::to_string(static_cast<hand::Finger>(k + 1)));
-  std::fprintf(file, "\n");
+      csv.print(",%s%s", prefix, hand::to_string(static_cast<hand::Finger>(k + 1)));
+  csv.print("\n");
   for (std::size_t f = 0; f < r.source.size(); ++f) {
     const auto i = static_cast<std::size_t>(r.source[f]);
     const PinchDistanceRow& row = r.pinch_distances[f];
-    std::fprintf(file, "%zu,%.9g,%d,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i], row.run_start ? 1 : 0);
-    for (double d : row.truth) std::fprintf(file, ",%.4f", d);
-    for (double d : row.predicted) std::fprintf(file, ",%.4f", d);
-    for (bool on : row.pinching) std::fprintf(file, ",%d", on ? 1 : 0);
-    std::fprintf(file, "\n");
+    csv.print("%zu,%.9g,%d,%d,%d", i, data.timestamps[i], data.subject[i], data.session[i], row.run_start ? 1 : 0);
+    for (double d : row.truth) csv.print(",%.4f", d);
+    for (double d : row.predicted) csv.print(",%.4f", d);
+    for (bool on : row.pinching) csv.print(",%d", on ? 1 : 0);
+    csv.print("\n");
   }
-  csv.close();
+  csv.commit();
 }
 
 }  // namespace glovepose::train

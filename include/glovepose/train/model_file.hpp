@@ -108,14 +108,15 @@ struct TrainedModel {
 };
 
 /// @brief Writes a model file: `info`, the tensors (stored as `dtype`: F32, F16 or BF16), and
-/// `provenance` (extra metadata such as the command and seed that made it).
+/// `provenance` (extra metadata such as the command and seed that made it), whole or not at all;
+/// errors name the "model file" and the cause.
 inline void save_model(const std::string& path, const model::ModelInfo& info, const nn::TensorMap& tensors,
                        const std::map<std::string, std::string>& provenance = {}, io::DType dtype = io::DType::F32) {
   nn::WeightFile file;
   file.tensors = tensors;
   for (const auto& [key, value] : provenance) file.metadata[key] = value;
   info.to(file);
-  file.write(path, dtype);
+  file.to_tensor_file(dtype).write(path, "model file");
 }
 
 /// @brief The tensors of a linear map ("weight" [25, cells], "bias" [25], as torch.nn.Linear).

@@ -25,6 +25,8 @@ from typing import Dict, Mapping, Tuple, Union
 import numpy as np
 import torch
 
+from .whole_file import write_whole
+
 PathLike = Union[str, Path]
 
 #: dtype name -> (torch dtype, little-endian numpy dtype of the raw bytes, bytes per element).
@@ -99,8 +101,9 @@ def serialize(tensors: Mapping[str, torch.Tensor], metadata: Mapping[str, str] |
 
 
 def save(path: PathLike, tensors: Mapping[str, torch.Tensor], metadata: Mapping[str, str] | None = None) -> None:
-    """Writes `tensors` and `metadata` to `path` (tensors sorted by name, header 8-byte padded)."""
-    Path(path).write_bytes(serialize(tensors, metadata))
+    """Writes `tensors` and `metadata` to `path` (tensors sorted by name, header 8-byte padded),
+    whole or not at all."""
+    write_whole(path, serialize(tensors, metadata))
 
 
 def deserialize(data: bytes, source: str = "<bytes>") -> Tuple[Dict[str, torch.Tensor], Dict[str, str]]:
