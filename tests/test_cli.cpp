@@ -91,7 +91,7 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"train", {"--data",     "--model",  "--out",       "--glove",      "--subjects",    "--exclude-subjects",
                  "--sessions", "--gloves", "--stride",    "--threads",    "--calibration", "--epochs",
                  "--batch",    "--lr",     "--optimizer", "--validation", "--seed",        "--max-minutes",
-                 "--quiet",    "--dtype",  "--augment"}},
+                 "--quiet",    "--dtype",  "--augment", "--resume", "--checkpoint-minutes"}},
       {"finetune", {"--data", "--model", "--out", "--subjects", "--stride", "--epochs", "--batch", "--lr", "--seed", "--dtype"}},
       {"eval",
        {"--data", "--model", "--subjects", "--stride", "--threads", "--calibration", "--json", "--replay-rows", "--mean-window",
@@ -384,15 +384,24 @@ TEST_CASE("cli: glovepose train, eval and finetune: a held-out subject, every ar
   CHECK(r.out.find("no recording frame of the dataset passes the selection") != std::string::npos);
 }
 
-TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk") {
-  const std::string data = small_corpus("interrupt"), out = temp("t_interrupted.safetensors");
+TEST_CASE("cli: Ctrl-C during training leaves the best model so far on disk, and a checkpoint only --resume goes on from") {
+  const std::string data = small_corpus("interrupt"), out = temp("t_interrupted.safetensors"), checkpoint = out + ".checkpoint";
   std::remove(out.c_str());
-  const Run r =
-      run("train --data " + data + " --architecture unet:8 --epochs 100000 --batch 64 --out " + out + " & sleep 4; kill -INT $!; wait $!");
+  std::remove(checkpoint.c_str());
+  const std::string train = "train --data " + data + " --architecture unet:8 --epochs 100000 --batch 64 --out " + out;
+  Run r = run(train + " & sleep 4; kill -INT $!; wait $!");
   CHECK(r.status == 130);
   CHECK(r.out.find("stopped") != std::string::npos);
+  CHECK(r.out.find("--resume goes on from " + checkpoint) != std::string::npos);
   const auto loaded = model::UNetModel<>::load(out);
   CHECK(loaded.info.width == 8);
+  r = run(train);  // the same run again, without --resume: refused before it could overwrite the checkpoint
+  CHECK(r.status == 1);
+  CHECK(r.out.find("'" + checkpoint + "' holds a run that was stopped; --resume goes on from it") != std::string::npos);
+  r = run(train + " --resume --batch 32");  // other settings
+  CHECK(r.status == 1);
+  CHECK(r.out.find("the checkpoint is of another run: its batch is 64, this run's 32") != std::string::npos);
+  std::remove(checkpoint.c_str());
 }
 
 namespace {

@@ -4,6 +4,7 @@
 //   train/training_setup.hpp, train/trainer.hpp); the options are train_options.hpp's.
 #include <glovepose/estimator_config.hpp>
 #include <glovepose/sim/subject_hands.hpp>
+#include <glovepose/train/checkpoint.hpp>
 #include <glovepose/train/evaluate.hpp>
 #include <glovepose/train/guided_calibration.hpp>
 #include <glovepose/train/model_file.hpp>
@@ -12,6 +13,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -34,7 +36,9 @@ void report_zeroed(const std::string& command, const train::Samples& samples, co
   for (const train::ZeroedSensors& z : train::zeroed_sensors(samples, glove)) std::fprintf(stderr, "%s: %s\n", command.c_str(), z.text().c_str());
 }
 
-// Trains (or fine-tunes) a network, saving the best model so far at every improvement.
+// Trains (or fine-tunes) a network, with a checkpoint beside --out at every epoch's end (and every
+// --checkpoint-minutes within one) that --resume goes on from; --out is written when training
+// ends, and the checkpoint then removed (kept when a signal or the time limit stopped it).
 int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo& info, const train::Samples& all,
                 std::map<std::string, std::string> provenance) {
   const auto [training, validation] = train::split_validation(all, o.validation);
@@ -53,11 +57,18 @@ int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo&
   config.on_progress = training::progress_bar(o.quiet);
   provenance["training_frames"] = std::to_string(training.frames());
   provenance["validation_frames"] = std::to_string(validation.frames());
-  config.on_best = [&](const train::TrainableNetwork& best, const train::EpochRecord& record) {
-    provenance["best_epoch"] = std::to_string(record.epoch + 1);  // 1-based, as printed
-    provenance["validation_error_deg"] = std::to_string(record.validation_error_deg);
-    train::save_model(o.out, info, best.parameters().to_tensors(), provenance, o.dtype);
-  };
+  const std::string checkpoint = o.out + ".checkpoint";
+  train::TrainingState resumed;
+  if (std::filesystem::exists(checkpoint)) {
+    if (!o.resume)
+      throw Error(o.command + ": '" + checkpoint + "' holds a run that was stopped; --resume goes on from it (or delete it to start again)");
+    resumed = train::read_checkpoint(checkpoint);
+    config.resume = &resumed;
+    if (!o.quiet)
+      std::fprintf(stderr, "%s: going on from '%s': epoch %d, step %ld\n", o.command.c_str(), checkpoint.c_str(), resumed.epoch + 1,
+                   resumed.step);
+  }
+  config.on_checkpoint = [&](const train::TrainingState& state) { train::write_checkpoint(checkpoint, state); };
   std::signal(SIGINT, on_interrupt);
   if (!o.quiet)
     std::fprintf(stderr, "%s %s (%zu parameters): %ld training frames, %ld validation frames, batch %d, %d threads\n", o.command.c_str(),
@@ -65,10 +76,18 @@ int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo&
                  o.threads);
   const train::TrainResult result = train::train_network(net, training, validation, info.joint_limits(), config, pool);
   std::signal(SIGINT, SIG_DFL);
-  std::printf("%s: %ld steps in %s (%.0f samples/s); kept epoch %d, validation error %.3f deg; wrote %s\n",
-              result.stopped ? "stopped" : "done", result.steps, training::duration(result.seconds).c_str(), result.samples_per_second,
-              result.best_epoch + 1, result.best_validation_error_deg, o.out.c_str());
   if (result.best_epoch < 0) throw Error("training stopped before the first epoch ended; no model was written");
+  provenance["best_epoch"] = std::to_string(result.best_epoch + 1);  // 1-based, as printed
+  provenance["validation_error_deg"] = std::to_string(result.best_validation_error_deg);
+  std::string history;  // every epoch's validation error: how the run went
+  for (const train::EpochRecord& r : result.epochs) history += (history.empty() ? "" : ",") + io::number_text(r.validation_error_deg);
+  provenance["validation_history_deg"] = history;
+  train::save_model(o.out, info, result.best, provenance, o.dtype);
+  if (!result.stopped) std::filesystem::remove(checkpoint);
+  std::printf("%s: %ld steps in %s (%.0f samples/s); kept epoch %d, validation error %.3f deg; wrote %s%s\n",
+              result.stopped ? "stopped" : "done", result.steps, training::duration(result.seconds).c_str(), result.samples_per_second,
+              result.best_epoch + 1, result.best_validation_error_deg, o.out.c_str(),
+              result.stopped ? ("; --resume goes on from " + checkpoint).c_str() : "");
   return interrupted.load() ? 130 : 0;
 }
 
@@ -200,8 +219,8 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
   };
   {
     auto [command, o] = add("train",
-                            "Trains a model on a dataset file on all cores, saving the best so far at every improvement "
-                            "(Ctrl-C stops and keeps it).",
+                            "Trains a model on a dataset file on all cores, with a checkpoint at every epoch's end that --resume "
+                            "goes on from (Ctrl-C stops and writes the best model so far).",
                             nullptr, true);
     const auto store = [o = o](training::Architecture a) { o->architecture = std::move(a); };
     CLI::Option* architecture = add_parsed_option<training::Architecture>(

@@ -96,6 +96,7 @@ struct Options {
   nn::WeightStorage storage = nn::WeightStorage::F32;  // eval: how the network holds the weights (--weights)
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
   bool contact = false;  // eval: the contact stage (hand/contact.hpp) on the predicted poses
+  bool resume = false;   // train, finetune: go on from the checkpoint beside --out
 };
 
 // Adds option `name` taking one of `choices` (their names are the value's name in the help).
@@ -187,6 +188,13 @@ inline void add_training_options(CLI::App& command, const std::shared_ptr<Option
       "stop training after M minutes (default: no limit)")
       ->check(at_least(0.0));
   command.add_flag("--quiet", o->quiet, "no progress on stderr");
+  command.add_flag("--resume", o->resume,
+                   "go on from the checkpoint beside --out (FILE.checkpoint) of a run that was stopped or killed, to the weights the "
+                   "whole run gives; without one, start");
+  add_number_option<double>(
+      command, "--checkpoint-minutes", "M", [o](double v) { o->training.checkpoint_seconds = 60.0 * v; },
+      "within an epoch, minutes between two checkpoints (default 10; one is written at every epoch's end)")
+      ->check(above(0.0));
   // --weights is the spelling of weight storage across the tool; --dtype the older one here.
   const std::vector<std::pair<std::string, io::DType>> dtypes{{"f32", io::DType::F32}, {"f16", io::DType::F16}, {"bf16", io::DType::BF16}};
   CLI::Option* weights = add_choice(command, "--weights", dtypes, o->dtype, "storage of the written model's weights (default f32)");

@@ -26,6 +26,14 @@ struct OptimizerConfig {
   double epsilon = 1e-8;                     ///< Adam: added to the denominator.
 };
 
+/// @brief An optimizer's state: Adam's moments per tensor (empty for SGD and untrained tensors) and
+/// the steps taken (Optimizer::state(), Optimizer::restore()).
+struct OptimizerState {
+  std::vector<std::vector<float>> mean;    ///< Mean of the gradients, per tensor.
+  std::vector<std::vector<float>> square;  ///< Mean of the squared gradients, per tensor.
+  long steps = 0;                          ///< Steps taken.
+};
+
 /// @brief Adam or SGD with per-tensor state.
 class Optimizer {
  public:
@@ -45,6 +53,23 @@ class Optimizer {
   OptimizerConfig& config() noexcept { return config_; }
   /// @brief Steps taken.
   long steps() const noexcept { return steps_; }
+
+  /// @brief The state, for a checkpoint.
+  OptimizerState state() const { return {mean_, square_, steps_}; }
+
+  /// @brief Continues from `s` (state() of an optimizer for the same parameters and rule). Throws
+  /// glovepose::Error naming the first tensor whose size differs.
+  void restore(OptimizerState s) {
+    if (s.mean.size() != mean_.size() || s.square.size() != square_.size())
+      throw Error("Optimizer::restore: state for " + std::to_string(s.mean.size()) + " tensors, expected " + std::to_string(mean_.size()));
+    for (std::size_t k = 0; k < mean_.size(); ++k)
+      if (s.mean[k].size() != mean_[k].size() || s.square[k].size() != square_[k].size())
+        throw Error("Optimizer::restore: tensor " + std::to_string(k) + " has " + std::to_string(s.mean[k].size()) +
+                    " moments, expected " + std::to_string(mean_[k].size()) + " (another network or update rule)");
+    mean_ = std::move(s.mean);
+    square_ = std::move(s.square);
+    steps_ = s.steps;
+  }
 
   /// @brief One update of every trainable tensor from its gradient, split over the pool's threads
   /// by contiguous ranges (element-wise, so the result does not depend on the thread count).

@@ -2,7 +2,8 @@
 /// @brief The training loop: shuffled mini-batches, the L2 loss, an optimiser step per batch, and
 /// model selection on a validation set (the paper keeps the model with the lowest validation
 /// error). Reproducible for a seed and a thread count; stoppable between steps (Ctrl-C in the CLI)
-/// with the best model so far handed to a callback whenever it improves.
+/// with the best model so far handed to a callback whenever it improves; resumable from a
+/// TrainingState (checkpoint.hpp keeps it in a file) to the same weights, bit for bit.
 #pragma once
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "../config.hpp"
 #include "../hand/dofs.hpp"
 #include "../core/random.hpp"
+#include "../io/number_text.hpp"
 #include "augmentation.hpp"
 #include "network.hpp"
 #include "optimizer.hpp"
@@ -47,6 +50,25 @@ struct EpochRecord {
   double seconds;               ///< Wall time since training started, at the epoch's end.
 };
 
+/// @brief Where a training run is, at the end of an epoch or between two steps: what train_network()
+/// needs to go on as if it had never stopped (TrainConfig::resume, TrainConfig::on_checkpoint).
+struct TrainingState {
+  int epoch = 0;                           ///< Epoch to go on with (0-based).
+  long step = 0;                           ///< Steps of that epoch already taken.
+  double loss_sum = 0.0;                   ///< Sum of that epoch's losses so far.
+  long steps = 0;                          ///< Optimiser steps in all.
+  long trained_frames = 0;                 ///< Frames trained on in all.
+  double seconds = 0.0;                    ///< Wall time of the run so far.
+  double train_seconds = 0.0;              ///< Of it, in the steps.
+  std::vector<EpochRecord> epochs;         ///< The finished epochs.
+  int best_epoch = -1;                     ///< Epoch of the kept model (-1: none yet).
+  double best_validation_error_deg = NAN;  ///< Its validation error.
+  nn::TensorMap best;                      ///< The kept model's tensors (PyTorch layout).
+  std::vector<std::vector<float>> values;  ///< Every tensor of the network, in its own memory order.
+  OptimizerState optimizer;                ///< The optimizer's moments and steps.
+  std::map<std::string, std::string> run;  ///< What is trained and how (run_identity()): a state resumes only the same run.
+};
+
 /// @brief Training settings.
 struct TrainConfig {
   int epochs = 10;                                   ///< Passes over the training frames.
@@ -58,6 +80,11 @@ struct TrainConfig {
   const std::atomic<bool>* stop = nullptr;           ///< Set from elsewhere (a signal handler) to stop between steps.
   std::function<void(const Progress&)> on_progress;  ///< Called after every step.
   std::function<void(const TrainableNetwork&, const EpochRecord&)> on_best;  ///< Called when validation improves.
+  /// Called with the state at the end of every epoch, every checkpoint_seconds within an epoch, and
+  /// where a stop (signal or time limit) interrupts one.
+  std::function<void(const TrainingState&)> on_checkpoint;
+  double checkpoint_seconds = 600.0;  ///< Within an epoch, the wall time between two on_checkpoint calls.
+  const TrainingState* resume = nullptr;  ///< Go on from this state (of the same run: run_identity()).
 };
 
 /// @brief Optimiser steps that the default number of epochs reaches at least (default_epochs()).
@@ -121,9 +148,40 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
   return count ? sum / static_cast<double>(count) * core::kDegreesPerRadian : NAN;
 }
 
+/// @brief What a run trains and how, as text: the network's tensors, the frames (counts and a
+/// checksum of their inputs and targets), the batch, epochs, seed, update rule and augmentation. A
+/// TrainingState resumes only a run with the same identity.
+inline std::map<std::string, std::string> run_identity(const TrainableNetwork& net, const Samples& train, const Samples& validation,
+                                                       const TrainConfig& config) {
+  std::uint64_t hash = 14695981039346656037ULL;  // FNV-1a over the bytes of the frames
+  const auto add = [&hash](const std::vector<float>& values) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
+    for (std::size_t i = 0; i < values.size() * sizeof(float); ++i) hash = (hash ^ bytes[i]) * 1099511628211ULL;
+  };
+  for (const Samples* s : {&train, &validation}) {
+    add(s->inputs);
+    add(s->targets);
+  }
+  const OptimizerConfig& o = config.optimizer;
+  const Augmentation& a = config.augmentation;
+  char checksum[17];
+  std::snprintf(checksum, sizeof checksum, "%016llx", static_cast<unsigned long long>(hash));
+  return {{"tensors", std::to_string(net.parameters().size()) + " (" + std::to_string(net.parameters().trainable_count()) + " trained values)"},
+          {"frames", std::to_string(train.frames()) + " training, " + std::to_string(validation.frames()) + " validation"},
+          {"frames_checksum", checksum},
+          {"batch", std::to_string(config.batch)},
+          {"epochs", std::to_string(config.epochs)},
+          {"seed", std::to_string(config.seed)},
+          {"optimizer", std::string(o.kind == OptimizerKind::Adam ? "adam" : "sgd") + " lr " + io::number_text(o.learning_rate) + " betas " +
+                            io::number_text(o.beta1) + " " + io::number_text(o.beta2) + " eps " + io::number_text(o.epsilon)},
+          {"augmentation", io::number_text(a.gain) + " " + io::number_text(a.offset) + " " + io::number_text(a.noise)}};
+}
+
 /// @brief Trains `net` on `train` (targets normalised by `limits`), keeps the tensors with the
-/// lowest validation error (the last ones when `validation` is empty). Throws glovepose::Error for
-/// mismatched sizes or a non-finite loss (naming the step).
+/// lowest validation error (the last ones when `validation` is empty). From config.resume it goes
+/// on where that state was and ends as the run that never stopped would have, bit for bit (the
+/// same thread count). Throws glovepose::Error for mismatched sizes, a non-finite loss (naming the
+/// step) or a state of another run (naming what differs).
 inline TrainResult train_network(TrainableNetwork& net, const Samples& train, const Samples& validation, const hand::JointLimits& limits,
                                  const TrainConfig& config, core::ThreadPool& pool) {
   if (train.cells != net.inputs())
@@ -139,28 +197,108 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
       t(static_cast<std::size_t>(batch) * kTargets), grad(static_cast<std::size_t>(batch) * kTargets);
   std::vector<long> order(static_cast<std::size_t>(train.frames()));
   TrainResult result;
+  const std::map<std::string, std::string> identity = run_identity(net, train, validation, config);
   const auto start = std::chrono::steady_clock::now();
-  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  double seconds_before = 0.0;  // of the run before it was resumed
+  const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   double train_seconds = 0.0;
   long trained_frames = 0;
+  int first_epoch = 0;
+  long first_step = 0;
+  double first_loss_sum = 0.0;
+  if (const TrainingState* s = config.resume) {
+    for (const auto& [key, value] : identity) {
+      const auto it = s->run.find(key);
+      const std::string was = it == s->run.end() ? "(none)" : it->second;
+      if (was != value)
+        throw Error("train: the checkpoint is of another run: its " + key + " is " + was + ", this run's " + value +
+                    "; expected the same data and settings");
+    }
+    const auto damaged = [](const std::string& what) { return Error("train: the checkpoint is damaged: " + what); };
+    if (s->epoch < 0 || s->epoch > config.epochs || s->step < 0 || (s->step > 0 && s->step >= steps_per_epoch) ||
+        (s->epoch == config.epochs && s->step != 0))
+      throw damaged("epoch " + std::to_string(s->epoch) + ", step " + std::to_string(s->step) + ", expected within the run's " +
+                    std::to_string(config.epochs) + " epochs of " + std::to_string(steps_per_epoch) + " steps");
+    if (s->epochs.size() != static_cast<std::size_t>(s->epoch) || s->best_epoch < -1 || s->best_epoch >= s->epoch || s->steps < 0 ||
+        s->trained_frames < 0 || s->optimizer.steps != s->steps)
+      throw damaged(std::to_string(s->epochs.size()) + " epoch records, kept epoch " + std::to_string(s->best_epoch) + ", " +
+                    std::to_string(s->steps) + " steps, expected one record per finished epoch, a finished epoch kept and the optimizer's steps");
+    const nn::TensorMap shapes = net.parameters().to_tensors();
+    if (s->best_epoch >= 0) {
+      if (s->best.size() != shapes.size()) throw damaged("the kept model has " + std::to_string(s->best.size()) + " tensors, expected " +
+                                                         std::to_string(shapes.size()));
+      for (const auto& [name, t] : shapes) {
+        const auto it = s->best.find(name);
+        if (it == s->best.end() || it->second.shape != t.shape || it->second.values.size() != t.values.size())
+          throw damaged("the kept model's tensor '" + name + "' is missing or of another shape, expected the network's");
+      }
+    }
+    ParameterSet& params = net.parameters();
+    if (s->values.size() != params.size())
+      throw Error("train: the checkpoint holds " + std::to_string(s->values.size()) + " tensors, expected " + std::to_string(params.size()));
+    for (std::size_t k = 0; k < params.size(); ++k) {
+      if (s->values[k].size() != params[k].size())
+        throw Error("train: the checkpoint's tensor '" + params[k].name + "' has " + std::to_string(s->values[k].size()) + " values, expected " +
+                    std::to_string(params[k].size()));
+      params[k].value = s->values[k];
+    }
+    optimizer.restore(s->optimizer);
+    result.epochs = s->epochs;
+    result.best_epoch = s->best_epoch;
+    result.best_validation_error_deg = s->best_validation_error_deg;
+    result.best = s->best;
+    result.steps = s->steps;
+    trained_frames = s->trained_frames;
+    train_seconds = s->train_seconds;
+    seconds_before = s->seconds;
+    first_epoch = s->epoch;
+    first_step = s->step;
+    first_loss_sum = s->loss_sum;
+  }
+  auto last_checkpoint = std::chrono::steady_clock::now();
+  const auto checkpoint = [&](int epoch, long step, double loss_sum) {
+    last_checkpoint = std::chrono::steady_clock::now();
+    if (!config.on_checkpoint) return;
+    TrainingState s;
+    s.epoch = epoch;
+    s.step = step;
+    s.loss_sum = loss_sum;
+    s.steps = result.steps;
+    s.trained_frames = trained_frames;
+    s.seconds = elapsed();
+    s.train_seconds = train_seconds;
+    s.epochs = result.epochs;
+    s.best_epoch = result.best_epoch;
+    s.best_validation_error_deg = result.best_validation_error_deg;
+    s.best = result.best;
+    for (const Parameter& p : net.parameters().all()) s.values.push_back(p.value);
+    s.optimizer = optimizer.state();
+    s.run = identity;
+    config.on_checkpoint(s);
+  };
   const auto keep = [&](const EpochRecord& record) {
     result.best_epoch = record.epoch;
     result.best_validation_error_deg = record.validation_error_deg;
     result.best = net.parameters().to_tensors();
     if (config.on_best) config.on_best(net, record);
   };
-  for (int epoch = 0; epoch < config.epochs && !result.stopped; ++epoch) {
+  for (int epoch = first_epoch; epoch < config.epochs && !result.stopped; ++epoch) {
     std::iota(order.begin(), order.end(), 0L);
     core::Rng rng(core::derive_seed(config.seed, {0x5348554646ULL, static_cast<std::uint64_t>(epoch)}));
     for (long i = train.frames() - 1; i > 0; --i)
       std::swap(order[static_cast<std::size_t>(i)], order[rng.next() % static_cast<std::uint64_t>(i + 1)]);
-    double loss_sum = 0.0;
-    long step = 0;
+    double loss_sum = epoch == first_epoch ? first_loss_sum : 0.0;
+    long step = epoch == first_epoch ? first_step : 0;
+    const long epoch_start_step = step;
     for (; step < steps_per_epoch; ++step) {
       if ((config.stop && config.stop->load()) || (config.max_seconds > 0.0 && elapsed() > config.max_seconds)) {
         result.stopped = true;
+        checkpoint(epoch, step, loss_sum);  // where the stop came, so a resumed run takes this epoch's next step
         break;
       }
+      if (step > epoch_start_step && std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count() >
+                                         config.checkpoint_seconds)
+        checkpoint(epoch, step, loss_sum);
       const auto step_start = std::chrono::steady_clock::now();
       for (int b = 0; b < batch; ++b) {
         const long i = order[static_cast<std::size_t>(step * batch + b)];
@@ -201,7 +339,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
         config.on_progress(p);
       }
     }
-    if (step == 0) break;  // stopped before this epoch trained anything
+    if (step == 0 || step == epoch_start_step) break;  // stopped before this epoch trained anything
     EpochRecord record{epoch, loss_sum / static_cast<double>(step), NAN, 0.0};
     if (validation.frames() > 0)
       record.validation_error_deg = mean_error_degrees(predict(net, validation, pool), validation.angles, limits, validation.labelled);
@@ -209,6 +347,7 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
     result.epochs.push_back(record);
     const bool better = validation.frames() == 0 || !(record.validation_error_deg >= result.best_validation_error_deg);
     if (better) keep(record);
+    if (!result.stopped) checkpoint(epoch + 1, 0, 0.0);
   }
   result.seconds = elapsed();
   result.samples_per_second = trained_frames / std::max(train_seconds, 1e-9);
