@@ -121,8 +121,29 @@ struct RequestHead {
   std::string method, target;
 };
 
+/// @brief The request line of a request's head (the bytes up to its blank line): status 200 with the
+/// method and target when it reads METHOD SP target SP HTTP/1.x (the method in capitals, the target
+/// a path of visible ASCII without quotes, angle brackets, backslashes or tabs), else 400.
+inline RequestHead parse_request_head(const std::string& head) {
+  RequestHead out;
+  const std::string line = head.substr(0, head.find("\r\n"));
+  const std::size_t a = line.find(' '), b = a == std::string::npos ? a : line.find(' ', a + 1);
+  out.status = 400;
+  if (a == std::string::npos || b == std::string::npos || line.find(' ', b + 1) != std::string::npos) return out;
+  out.method = line.substr(0, a);
+  out.target = line.substr(a + 1, b - a - 1);
+  const std::string version = line.substr(b + 1);
+  if (out.method.empty() || out.method.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ") != std::string::npos) return out;
+  if (out.target.empty() || out.target[0] != '/' || out.target.find_first_of("\t\"<>\\") != std::string::npos) return out;
+  for (char c : out.target)
+    if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e) return out;
+  if (version != "HTTP/1.1" && version != "HTTP/1.0") return out;
+  out.status = 200;
+  return out;
+}
+
 /// @brief Reads a request's head (up to the blank line) from `s`: at most `max_bytes`, within
-/// `milliseconds`, giving up when `stop` is set.
+/// `milliseconds`, giving up when `stop` is set; its request line as parse_request_head() reads it.
 inline RequestHead read_request_head(Socket s, std::size_t max_bytes, int milliseconds, const std::atomic<bool>& stop) {
   using Clock = std::chrono::steady_clock;
   const Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(milliseconds);
@@ -149,21 +170,7 @@ inline RequestHead read_request_head(Socket s, std::size_t max_bytes, int millis
     out.status = 431;
     return out;
   }
-  // The request line: METHOD SP target SP HTTP/1.x, the method in capitals, the target a path.
-  const std::string line = head.substr(0, head.find("\r\n"));
-  const std::size_t a = line.find(' '), b = a == std::string::npos ? a : line.find(' ', a + 1);
-  out.status = 400;
-  if (a == std::string::npos || b == std::string::npos || line.find(' ', b + 1) != std::string::npos) return out;
-  out.method = line.substr(0, a);
-  out.target = line.substr(a + 1, b - a - 1);
-  const std::string version = line.substr(b + 1);
-  if (out.method.empty() || out.method.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ") != std::string::npos) return out;
-  if (out.target.empty() || out.target[0] != '/' || out.target.find_first_of("\t\"<>\\") != std::string::npos) return out;
-  for (char c : out.target)
-    if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e) return out;
-  if (version != "HTTP/1.1" && version != "HTTP/1.0") return out;
-  out.status = 200;
-  return out;
+  return parse_request_head(head.substr(0, end));
 }
 
 /// @brief Answers with an error status and a one-line reason, then the connection closes.
@@ -198,7 +205,9 @@ inline std::pair<Socket, int> listen_on_loopback(int port) {
   address.sin_family = AF_INET;
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   address.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 || ::listen(s, 16) != 0) {
+  // The system's longest queue of connections not yet accepted: pages that connect in a burst are
+  // not made to wait for their SYN to be sent again.
+  if (::bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 || ::listen(s, SOMAXCONN) != 0) {
     close_socket(s);
     throw Error("cannot listen on 127.0.0.1:" + std::to_string(port) + ", expected a free port (--port)");
   }

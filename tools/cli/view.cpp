@@ -52,7 +52,9 @@ using nlohmann::json;
 constexpr std::size_t kMaxRequestHead = 8192;
 constexpr int kRequestTimeoutMs = 2000;
 constexpr int kSendTimeoutMs = 2000;
-constexpr std::size_t kMaxConnections = 32;
+// Connections served at once, one thread each (a stalled reader costs a thread until the send
+// time-out drops it); beyond, a request is answered 503 at once.
+constexpr std::size_t kMaxConnections = 256;
 constexpr std::chrono::duration<double> kEventPeriod(1.0 / 30.0);
 
 struct ViewOptions {
@@ -151,6 +153,10 @@ struct ViewShared {
   std::atomic<bool> preparing{false};            // the simulated user is being made
   Clock::time_point served_from = Clock::now();  // when the server started
   std::atomic<double> stream_clock{0.0};         // the glove stream's time at served_from (stdin: 0)
+  // The newest frame's event, made once for every page that streams it (state_event()).
+  mutable std::mutex event_lock;
+  mutable std::uint64_t event_number = 0;
+  mutable std::shared_ptr<const std::string> event_text;
 };
 
 
@@ -288,6 +294,19 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& 
   return out;
 }
 
+// The event-stream message of the newest frame and its number (0: none yet), serialised by the first
+// page's thread that asks for a frame and shared with the others: a hundred pages cost one
+// serialisation per frame, not a hundred.
+std::pair<std::shared_ptr<const std::string>, std::uint64_t> state_event(const ViewShared& shared) {
+  const std::lock_guard<std::mutex> hold(shared.event_lock);
+  if (shared.latest.published() != shared.event_number) {
+    ViewFrame frame;
+    shared.event_number = shared.latest.read(frame);
+    shared.event_text = std::make_shared<const std::string>("data: " + state_json(frame, shared.event_number, shared).dump() + "\n\n");
+  }
+  return {shared.event_text, shared.event_number};
+}
+
 const ViewAsset* find_asset(const std::string& path) {
 #if GLOVEPOSE_VIEW_PAGE
   for (const ViewAsset& asset : kViewAssets)
@@ -352,10 +371,9 @@ void serve_connection(Socket client, const ViewShared& shared, const std::string
     std::uint64_t sent = 0;
     Clock::time_point tick = Clock::now(), quiet_since = tick;
     while (!stop) {
-      ViewFrame frame;
-      const std::uint64_t number = shared.latest.read(frame);
+      const auto [event, number] = state_event(shared);
       if (number != sent) {
-        if (!send_all(client, "data: " + state_json(frame, number, shared).dump() + "\n\n")) return;
+        if (!send_all(client, *event)) return;
         sent = number;
         quiet_since = tick;
       } else if (tick - quiet_since > std::chrono::seconds(1)) {
