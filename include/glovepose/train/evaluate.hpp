@@ -346,7 +346,9 @@ namespace detail {
 class CsvFile {
  public:
   CsvFile(const std::string& path, const std::string& what) : file_(path, what) {}
-#if defined(__GNUC__)
+#if defined(__MINGW32__)  // libstdc++ selects MinGW's own (C99) printf, not msvcrt's: %zu works
+  __attribute__((format(gnu_printf, 2, 3)))
+#elif defined(__GNUC__)
   __attribute__((format(printf, 2, 3)))
 #endif
   void print(const char* format, ...) {
