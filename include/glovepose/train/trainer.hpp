@@ -1,9 +1,9 @@
 /// @file trainer.hpp
 /// @brief The training loop: shuffled mini-batches, the L2 loss, an optimiser step per batch, and
 /// model selection on a validation set (the paper keeps the model with the lowest validation
-/// error). Reproducible for a seed and a thread count; stoppable between steps (Ctrl-C in the CLI)
-/// with the best model so far handed to a callback whenever it improves; resumable from a
-/// TrainingState (checkpoint.hpp keeps it in a file) to the same weights, bit for bit.
+/// error). Reproducible for a seed and a thread count; stoppable between steps (Ctrl-C in the CLI),
+/// its state handed to a callback at every epoch's end and resumable from it (checkpoint.hpp keeps
+/// it in a file) to the same weights, bit for bit.
 #pragma once
 
 #include <algorithm>
@@ -79,7 +79,6 @@ struct TrainConfig {
   double max_seconds = 0.0;                          ///< Stop after this much wall time (0: no limit).
   const std::atomic<bool>* stop = nullptr;           ///< Set from elsewhere (a signal handler) to stop between steps.
   std::function<void(const Progress&)> on_progress;  ///< Called after every step.
-  std::function<void(const TrainableNetwork&, const EpochRecord&)> on_best;  ///< Called when validation improves.
   /// Called with the state at the end of every epoch, every checkpoint_seconds within an epoch, and
   /// where a stop (signal or time limit) interrupts one.
   std::function<void(const TrainingState&)> on_checkpoint;
@@ -280,7 +279,6 @@ inline TrainResult train_network(TrainableNetwork& net, const Samples& train, co
     result.best_epoch = record.epoch;
     result.best_validation_error_deg = record.validation_error_deg;
     result.best = net.parameters().to_tensors();
-    if (config.on_best) config.on_best(net, record);
   };
   for (int epoch = first_epoch; epoch < config.epochs && !result.stopped; ++epoch) {
     std::iota(order.begin(), order.end(), 0L);
