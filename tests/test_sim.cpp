@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <set>
 #include <utility>
@@ -55,6 +56,13 @@ CellArray cells_at(const GlovePhysics& p, const hand::Angles& a) {
   CellArray c{};
   p.capacitances(a, c);
   return c;
+}
+
+// Relative change of cell `c` from the rest pose when DoF `d` alone bends to `angle` (radians).
+double rise(const GlovePhysics& p, std::size_t d, double angle, std::size_t c) {
+  hand::Angles bent{};
+  bent[d] = angle;
+  return cells_at(p, bent)[c] / cells_at(p, hand::Angles{})[c] - 1.0;
 }
 
 }  // namespace
@@ -585,6 +593,105 @@ TEST_CASE("sim wear: the size coupling passes its share of the hand's size to th
   }
 }
 
+TEST_CASE("sim wear: a finger shorter or longer than the glove's leaves its cells off their joints") {
+  const std::vector<Subject> subjects = make_subjects(10, 1);
+  const Glove glove = make_glove(0, 1);
+  const auto sites = glauser2019_sites();
+  WearConfig wear;
+  wear.donning_shift = wear.cell_shift = wear.pre_stretch_spread = 0.0;  // the size's share alone
+  wear.size_coupling = 0.5;
+  wear.length_misplacement = 1.0;
+  for (const int who : {9, 5}) {  // 17 cm and 20.5 cm hands against the glove relaxed on 17.5 cm
+    const Subject& subject = subjects[static_cast<std::size_t>(who)];
+    // Joint places from the posed rest skeleton: the cell's joint against its digit's anchor (a
+    // finger's MCP, the thumb's MCP), straight-line, a computation apart from the model's chain.
+    const hand::Kinematics kinematics(subject.hand_model());
+    hand::Skeleton rest;
+    kinematics.pose(hand::Angles{}, rest);
+    core::Rng rng(3);
+    const GloveFit fit = don_glove(subject, glove, rng, wear);
+    double distal_shift = 0.0;
+    for (std::size_t c = 0; c < kCells; ++c) {
+      const CellSite& site = sites[c];
+      if (site.segment == sensor::Segment::Metacarpal || site.segment == sensor::Segment::Web) {
+        CHECK(fit.shift[c] == glove.placement[c]);
+        continue;
+      }
+      const auto finger = static_cast<hand::Finger>(site.digit);
+      const hand::Motion anchor = site.digit == 0 ? hand::Motion::MiddleFlexion : hand::Motion::BaseFlexion;
+      const auto joint_of = [&](std::size_t d) { return rest[static_cast<std::size_t>(hand::kDofs[d].phalanx)].translation(); };
+      const double x = (joint_of(static_cast<std::size_t>(site.flexion_dof)) - joint_of(hand::dof_of(finger, anchor))).norm();
+      const double k = subject.size.length / kGloveRelaxedLength * subject.finger_scale[static_cast<std::size_t>(site.digit)];
+      // Placed for the relaxed hand at x / k, moved by half the length difference: x/k (1 + 0.5 (k - 1)) - x.
+      const double expected = x / k * (1.0 + 0.5 * (k - 1.0)) - x;
+      // The rest finger is slightly bent: the straight line is up to 0.01% shorter than the bones.
+      CHECK(fit.shift[c] - glove.placement[c] == doctest::Approx(expected).epsilon(1e-3));
+      if (site.segment == sensor::Segment::Distal && site.digit > 0) distal_shift += expected / 4.0;
+    }
+    MESSAGE("subject " << who << ": the fingers' distal cells sit " << distal_shift << " mm off their joints");
+    if (who == 9) CHECK(distal_shift > 0.1);   // short fingers: the cells sit beyond the joints
+    if (who == 5) CHECK(distal_shift < -2.0);  // long fingers: before them
+  }
+  // The whole misplacement, without the coupling's help, costs the large hand's DIP cells signal:
+  // they catch less of the joint's bend zone.
+  const Subject& large = subjects[5];
+  wear.size_coupling = 0.0;
+  core::Rng rng(3);
+  const GlovePhysics misplaced(large, glove, don_glove(large, glove, rng, wear));
+  wear.length_misplacement = 0.0;
+  const GlovePhysics placed(large, glove, don_glove(large, glove, rng, wear));
+  const std::size_t dip = hand::dof_of(hand::Finger::Middle, hand::Motion::TipFlexion);
+  for (std::size_t c = 0; c < kCells; ++c) {
+    if (sites[c].flexion_dof != static_cast<int>(dip) || !sites[c].along) continue;
+    const double off = rise(misplaced, dip, 1.2, c), on = rise(placed, dip, 1.2, c);
+    MESSAGE("middle DIP cell " << c << " at 69 degrees: relative rise " << off << " misplaced, " << on << " on its joint");
+    CHECK(off < 0.9 * on);
+  }
+}
+
+TEST_CASE("sim wear: a glove too big leaves all of the shortfall as slack, which the first motion takes up") {
+  const std::vector<Subject> subjects = make_subjects(10, 1);
+  const Subject& small = subjects[9];  // 17 x 9 cm
+  const Subject& large = subjects[5];  // 20.5 x 10 cm
+  const Glove glove = make_glove(0, 1);
+  const auto sites = glauser2019_sites();
+  WearConfig wear;
+  wear.donning_shift = wear.cell_shift = wear.pre_stretch_spread = 0.0;
+  wear.size_coupling = 0.5;
+  wear.relaxed_length = 185.0;
+  wear.relaxed_width = 100.0;
+  CHECK(glove_slack(small, wear) == doctest::Approx((1.0 - 170.0 / 185.0) + (1.0 - 90.0 / 100.0)));
+  for (const double loose_slack : {0.0, 1.0}) {
+    wear.loose_slack = loose_slack;
+    for (const Subject* who : {&small, &large}) {
+      core::Rng rng(3);
+      const GloveFit fit = don_glove(*who, glove, rng, wear);
+      for (std::size_t c = 0; c < kCells; ++c) {
+        if (sites[c].segment == sensor::Segment::Metacarpal) continue;
+        const double k = who->size.length / 185.0 * who->finger_scale[static_cast<std::size_t>(sites[c].digit)];
+        // A shortfall reaches the cells in full at loose_slack 1, by the size coupling at 0; a stretch always by the coupling.
+        const double share = k < 1.0 ? 0.5 + 0.5 * loose_slack : 0.5;
+        CHECK(fit.pre_along[c] == doctest::Approx(1.0 + share * (k - 1.0)).epsilon(1e-12));
+      }
+    }
+  }
+  // The slack is a dead zone: a small flexion of the small hand's index PIP reaches its cell only
+  // once the textile is taut. Strain per radian at the joint is about r / L; below the slack the
+  // cell reads within the softplus ramp of its rest value.
+  core::Rng rng(3);
+  const GlovePhysics slack(small, glove, don_glove(small, glove, rng, wear));
+  wear.loose_slack = 0.0;
+  const GlovePhysics shared(small, glove, don_glove(small, glove, rng, wear));
+  const std::size_t pip = hand::dof_of(hand::Finger::Index, hand::Motion::MiddleFlexion);
+  for (std::size_t c = 0; c < kCells; ++c) {
+    if (sites[c].flexion_dof != static_cast<int>(pip) || !sites[c].along) continue;
+    const double all = rise(slack, pip, 0.05, c), part = rise(shared, pip, 0.05, c);  // 3 degrees
+    MESSAGE("index PIP cell " << c << " at 3 degrees: relative rise " << all << " all slack, " << part << " shared");
+    CHECK(all < 0.5 * part);
+    CHECK(rise(slack, pip, 1.2, c) > 0.5);  // taut once the slack is taken up: the large flexion still reads
+  }
+}
+
 TEST_CASE("sim wear: slip and gain drift follow their processes, continuous across a donning's recordings") {
   GloveMaterial material;
   material.drift_rate = 0.01;  // 1% per sqrt(minute)
@@ -716,12 +823,13 @@ TEST_CASE("sim worlds: every effect can be switched back to the clean world's, b
   // Each effect switches back exactly the parameters kEffectParameters lists: from a world with every
   // parameter at a value no world uses, the ones that change are those names, "tracker." the tracker's.
   World odd = worn;
-  for (const WorldParameter& p : world_parameters()) odd = with(odd, p.name, 0.125);
+  const auto odd_value = [](const WorldParameter& p) { return p.minimum + 0.125; };  // a value no world uses
+  for (const WorldParameter& p : world_parameters()) odd = with(odd, p.name, odd_value(p));
   for (std::size_t i = 0; i < kEffectNames.size(); ++i) {
     World w = without(odd, static_cast<Effect>(i));
     std::string changed, tracker;
     for (const WorldParameter& p : world_parameters()) {
-      if (p.field(w) != 0.125) changed += (changed.empty() ? "" : ",") + std::string(p.name);
+      if (p.field(w) != odd_value(p)) changed += (changed.empty() ? "" : ",") + std::string(p.name);
       if (std::string(p.name).rfind("tracker.", 0) == 0) tracker += (tracker.empty() ? "" : ",") + std::string(p.name);
     }
     CHECK_MESSAGE(changed == (std::string(kEffectParameters[i]) == "tracker." ? tracker : std::string(kEffectParameters[i])), kEffectNames[i]);
@@ -733,9 +841,12 @@ TEST_CASE("sim worlds: every parameter can be set by name, and the settings are 
   std::set<std::string> names;
   for (const WorldParameter& p : world_parameters()) {
     names.insert(p.name);
-    World w = with(worn, p.name, 0.125);  // a value no world uses
-    CHECK_MESSAGE(p.field(w) == 0.125, p.name);
-    CHECK(w.settings == std::string(p.name) + "=0.125");
+    const double value = p.minimum + 0.125;  // a value no world uses
+    World w = with(worn, p.name, value);
+    CHECK_MESSAGE(p.field(w) == value, p.name);
+    char text[64];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    CHECK(w.settings == std::string(p.name) + "=" + text);
     // Only that parameter changed: the others read as in the world it came from.
     for (const WorldParameter& q : world_parameters())
       if (std::string(q.name) != p.name) CHECK_MESSAGE(q.field(w) == q.field(worn), q.name);
@@ -747,6 +858,7 @@ TEST_CASE("sim worlds: every parameter can be set by name, and the settings are 
   CHECK(w.settings == "people.skin_spread=0.7,wear.slip_sd=2");
   CHECK_THROWS_WITH_AS(with(worn, "wear.gravity", 1.0), doctest::Contains("unknown world parameter 'wear.gravity', expected one of"), Error);
   CHECK_THROWS_WITH_AS(with(worn, "wear.slip_sd", -1.0), doctest::Contains("expected a finite value >= 0"), Error);
+  CHECK_THROWS_WITH_AS(with(worn, "wear.relaxed_length", 0.0), doctest::Contains("expected a finite value >= 100"), Error);
   for (const char* bad : {"wear.slip_sd", "wear.slip_sd=", "wear.slip_sd=1mm", "=1"})
     CHECK_THROWS_AS(with(worn, std::string(bad)), Error);
 }

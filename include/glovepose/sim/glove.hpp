@@ -14,7 +14,8 @@
 ///    finger abducts against its neighbours; web (abduction) cells see the change of the distance
 ///    between the two digits' proximal phalanxes; back-of-hand cells see the spread of the dorsal
 ///    knuckle points and the thumb's distance from the index knuckle, with distance fall-off.
-///  - pre-stretch: the glove's sheet is relaxed on a hand of kGloveRelaxedLength x Width x Height;
+///  - pre-stretch: the glove's sheet is relaxed on a hand of WearConfig::relaxed_length x
+///    relaxed_width x kGloveRelaxedHeight;
 ///    a bigger hand stretches every cell before any motion, a smaller one leaves slack that the first
 ///    motion only takes up (the textile carries no compression: a smooth ramp of width kSlackWidth).
 ///  - the textile stiffens at large stretch: strain saturates as kSaturation * tanh(s / kSaturation).
@@ -125,6 +126,19 @@ struct WearConfig {
   /// Share of a hand's size difference from the glove's relaxed hand that reaches the cells'
   /// pre-stretch; the jersey around the stiffer sensor sheet takes the rest (1: all of it).
   double size_coupling = 1.0;
+  /// A glove too big carries no load for the jersey to share, so all of the hand's shortfall should
+  /// reach the cells as slack: the share of the part size_coupling leaves out that does (1: the
+  /// physics; 0: slack coupled like a stretch, as the worlds fitted before this effect were).
+  double loose_slack = 0.0;
+  /// Length and width (mm) of the hand the glove's sheet is relaxed on (kGloveRelaxedLength, Width).
+  double relaxed_length = kGloveRelaxedLength;
+  double relaxed_width = kGloveRelaxedWidth;
+  /// Share of the finger cells' misplacement on a finger longer or shorter than the glove's that is
+  /// modelled: the cells are placed for the relaxed hand's joints and travel with the hand's length
+  /// only by size_coupling, so a cell x mm from the finger's base sits x (1 - c)(1 - k) / k mm off
+  /// its joint (k: the finger's length against the glove's, c: size_coupling). 1: the geometry; 0:
+  /// cells follow every hand's joints (the worlds fitted before this effect).
+  double length_misplacement = 0.0;
 };
 
 /// @brief The stretch ratio a cell gets from a hand whose size ratio to the glove's relaxed hand is
@@ -133,15 +147,23 @@ inline double coupled_size(double ratio, double coupling) noexcept {
   return coupling == 1.0 ? ratio : 1.0 + coupling * (ratio - 1.0);
 }
 
+/// @brief The stretch ratio a cell gets before any motion from a hand whose size ratio to the
+/// glove's relaxed hand is `ratio`: a stretch shared with the jersey (size_coupling), a shortfall
+/// as slack (WearConfig::loose_slack).
+inline double fitted_size(double ratio, const WearConfig& wear) noexcept {
+  const double slack_coupling = wear.size_coupling + wear.loose_slack * (1.0 - wear.size_coupling);
+  return coupled_size(ratio, ratio >= 1.0 ? wear.size_coupling : slack_coupling);
+}
+
 /// @brief How loosely the glove sits on `subject`: the shortfall of the hand's length and width
 /// against the hand the sheet is relaxed on (0 for a hand that fills the glove).
-inline double glove_slack(const Subject& subject) noexcept {
-  return std::max(0.0, 1.0 - subject.size.length / kGloveRelaxedLength) + std::max(0.0, 1.0 - subject.size.width / kGloveRelaxedWidth);
+inline double glove_slack(const Subject& subject, const WearConfig& wear = {}) noexcept {
+  return std::max(0.0, 1.0 - subject.size.length / wear.relaxed_length) + std::max(0.0, 1.0 - subject.size.width / wear.relaxed_width);
 }
 
 /// @brief The factor by which a loose fit multiplies the donning shifts and the slip.
 inline double loose_fit_factor(const Subject& subject, const WearConfig& wear) noexcept {
-  return 1.0 + wear.loose_gain * glove_slack(subject) / 0.1;
+  return 1.0 + wear.loose_gain * glove_slack(subject, wear) / 0.1;
 }
 
 /// @brief Where a cell is and how it couples to the hand (derived from the layout, plus the
@@ -211,6 +233,22 @@ inline Glove make_glove(int id, std::uint64_t seed, double placement_sd = 0.0) {
   return g;
 }
 
+/// @brief How far (mm, towards the fingertip positive) a finger cell sits off its joint because
+/// the hand's finger is `ratio` times as long as the glove's and only `coupling` of the difference
+/// moves the cells. The glove's fingers are anchored at their base (assumption: the finger crotches
+/// sit on the webs, the thumb's at its MCP), so a cell x mm beyond the base on the relaxed hand
+/// lands at x (1 + c (k - 1)) while its joint is at k x. Back-of-hand and web cells: 0.
+inline double size_misplacement(const hand::HandModel& hand, const CellSite& site, double ratio, double coupling) noexcept {
+  if (site.segment == sensor::Segment::Metacarpal || site.segment == sensor::Segment::Web || site.flexion_dof < 0) return 0.0;
+  const auto& dof = hand::kDofs[static_cast<std::size_t>(site.flexion_dof)];
+  // The digit's anchor joint: a finger's MCP (its base phalanx), the thumb's MCP (its middle one).
+  const hand::Motion anchor_motion = site.digit == 0 ? hand::Motion::MiddleFlexion : hand::Motion::BaseFlexion;
+  const int anchor = hand::kDofs[hand::dof_of(static_cast<hand::Finger>(site.digit), anchor_motion)].phalanx;
+  double along = 0.0;  // the joint's distance from the anchor on this hand (mm)
+  for (int p = anchor + 1; p <= dof.phalanx; ++p) along += hand.rest[static_cast<std::size_t>(p)].translation().norm();
+  return along * (1.0 - coupling) * (1.0 - ratio) / ratio;
+}
+
 /// @brief How the glove sits on one hand for one donning.
 struct GloveFit {
   CellArray shift{};       ///< mm along the digit (towards the fingertip positive) of each cell.
@@ -224,21 +262,23 @@ struct GloveFit {
 /// fabrication put them.
 inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng& rng, const WearConfig& wear = {}) {
   const auto sites = glauser2019_sites();
+  const hand::HandModel hand = subject.hand_model();
   GloveFit fit;
   const double loose = loose_fit_factor(subject, wear);
   const double global_shift = rng.normal(0.0, wear.donning_shift * loose);
   const double global_pre = rng.normal(1.0, wear.pre_stretch_spread / 2.0);
-  const double girth = std::sqrt(subject.size.width / kGloveRelaxedWidth * subject.size.height / kGloveRelaxedHeight);
+  const double girth = std::sqrt(subject.size.width / wear.relaxed_width * subject.size.height / kGloveRelaxedHeight);
   for (int c = 0; c < kCells; ++c) {
     const auto i = static_cast<std::size_t>(c);
     const CellSite& s = sites[i];
     const bool on_finger = s.segment != sensor::Segment::Metacarpal;
     const double length =
-        subject.size.length / kGloveRelaxedLength * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
-    const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / kGloveRelaxedWidth;
-    fit.shift[i] = glove.placement[i] + global_shift + rng.normal(0.0, wear.cell_shift * loose);
-    fit.pre_along[i] = coupled_size(length, wear.size_coupling) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
-    fit.pre_across[i] = coupled_size(across, wear.size_coupling) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+        subject.size.length / wear.relaxed_length * (on_finger ? subject.finger_scale[static_cast<std::size_t>(s.digit)] : 1.0);
+    const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / wear.relaxed_width;
+    fit.shift[i] = glove.placement[i] + global_shift + rng.normal(0.0, wear.cell_shift * loose) +
+                   wear.length_misplacement * size_misplacement(hand, s, length, wear.size_coupling);
+    fit.pre_along[i] = fitted_size(length, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_across[i] = fitted_size(across, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
   }
   return fit;
 }

@@ -43,13 +43,14 @@ struct World {
 struct WorldParameter {
   const char* name;
   double& (*field)(World&);
+  double minimum = 0.0;  ///< Smallest value that means something (a hand's size in mm is not 0).
 };
 
 /// @brief Every parameter a world's effects have, by name.
-inline const std::array<WorldParameter, 31>& world_parameters() {
+inline const std::array<WorldParameter, 35>& world_parameters() {
 #define GLOVEPOSE_WORLD_PARAMETER(group, field) \
-  WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; } }
-  static const std::array<WorldParameter, 31> table{
+  WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; }, 0.0 }
+  static const std::array<WorldParameter, 35> table{
       GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, twist_sd),
@@ -73,6 +74,10 @@ inline const std::array<WorldParameter, 31>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(wear, loose_gain),
       GLOVEPOSE_WORLD_PARAMETER(wear, placement_sd),
       GLOVEPOSE_WORLD_PARAMETER(wear, size_coupling),
+      GLOVEPOSE_WORLD_PARAMETER(wear, loose_slack),
+      WorldParameter{"wear.relaxed_length", [](World& w) -> double& { return w.wear.relaxed_length; }, 100.0},
+      WorldParameter{"wear.relaxed_width", [](World& w) -> double& { return w.wear.relaxed_width; }, 50.0},
+      GLOVEPOSE_WORLD_PARAMETER(wear, length_misplacement),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_share),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_width),
       GLOVEPOSE_WORLD_PARAMETER(material, drift_rate),
@@ -86,8 +91,8 @@ inline const std::array<WorldParameter, 31>& world_parameters() {
 }
 
 /// @brief `world` with the parameter `name` set to `value`, recorded in World::settings. Throws
-/// glovepose::Error for an unknown name (naming the known ones) or a negative or non-finite value
-/// (every parameter is a size, a rate or a time).
+/// glovepose::Error for an unknown name (naming the known ones) or a non-finite value below the
+/// parameter's minimum (every parameter is a size, a share, a rate or a time).
 inline World with(World world, const std::string& name, double value) {
   std::string known;
   for (const WorldParameter& p : world_parameters()) {
@@ -95,8 +100,11 @@ inline World with(World world, const std::string& name, double value) {
       known += (known.empty() ? "" : ", ") + std::string(p.name);
       continue;
     }
-    if (!(value >= 0.0) || !std::isfinite(value))
-      throw Error("world parameter " + name + " = " + std::to_string(value) + ", expected a finite value >= 0");
+    if (!(value >= p.minimum) || !std::isfinite(value)) {
+      char minimum[32];
+      std::snprintf(minimum, sizeof minimum, "%g", p.minimum);
+      throw Error("world parameter " + name + " = " + std::to_string(value) + ", expected a finite value >= " + minimum);
+    }
     p.field(world) = value;
     char text[64];
     std::snprintf(text, sizeof text, "%.6g", value);
