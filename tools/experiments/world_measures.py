@@ -186,6 +186,7 @@ def spread(args):
     print("| world | mean (labels) | SD | SD / paper | worst | r with paper | subject 9 rank | mean (truth) | SD (truth) | worst (truth) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     rows = {}
+    tens = []  # per ten-subject corpus: SD / paper's, r, subject 9's rank, its and subject 5's excess over the mean
     for path in args.datasets:
         data, meta = read_dataset(path)
         res = leave_one_subject_out(sessions(data, meta))
@@ -202,8 +203,16 @@ def spread(args):
             ratio = f"{lab.std(ddof=1) / paper.std(ddof=1):.2f}"
             r = f"{np.corrcoef(lab, paper)[0, 1]:+.2f}"
             rank = str(int((lab > lab[9]).sum()) + 1) if len(lab) > 9 else ""  # 1 = worst
+            tens.append((lab.std(ddof=1) / paper.std(ddof=1), np.corrcoef(lab, paper)[0, 1], int(rank), lab[9] - lab.mean(),
+                         lab[5] - lab.mean()))
         print(f"| {name} | {lab.mean():.2f} | {lab.std(ddof=1):.2f} | {ratio} | {subj[int(lab.argmax())]} ({lab.max():.2f}) | {r} | {rank} | "
               f"{tru.mean():.2f} | {tru.std(ddof=1):.2f} | {subj[int(tru.argmax())]} ({tru.max():.2f}) |", flush=True)
+    if len(tens) > 1:  # one ten-person SD varies by a factor of two between seeds: say the mean over them
+        t = np.array(tens)
+        print(f"over the {len(tens)} ten-subject corpora: SD / paper mean {t[:, 0].mean():.2f} ({t[:, 0].min():.2f}-{t[:, 0].max():.2f}); "
+              f"r with paper mean {t[:, 1].mean():+.2f}; subject 9's rank {', '.join(str(int(k)) for k in t[:, 2])}, "
+              f"above the mean by {t[:, 3].mean():+.2f} (paper {paper[9] - paper.mean():+.2f}); "
+              f"subject 5 above the mean by {t[:, 4].mean():+.2f} (paper {paper[5] - paper.mean():+.2f})")
     if args.json:
         write_json(args.json, rows)
 

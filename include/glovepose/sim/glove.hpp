@@ -150,7 +150,7 @@ inline double coupled_size(double ratio, double coupling) noexcept {
 /// @brief The stretch ratio a cell gets before any motion from a hand whose size ratio to the
 /// glove's relaxed hand is `ratio`: a stretch shared with the jersey (size_coupling), a shortfall
 /// as slack (WearConfig::loose_slack).
-inline double fitted_size(double ratio, const WearConfig& wear) noexcept {
+inline double rest_stretch(double ratio, const WearConfig& wear) noexcept {
   const double slack_coupling = wear.size_coupling + wear.loose_slack * (1.0 - wear.size_coupling);
   return coupled_size(ratio, ratio >= 1.0 ? wear.size_coupling : slack_coupling);
 }
@@ -237,7 +237,9 @@ inline Glove make_glove(int id, std::uint64_t seed, double placement_sd = 0.0) {
 /// the hand's finger is `ratio` times as long as the glove's and only `coupling` of the difference
 /// moves the cells. The glove's fingers are anchored at their base (assumption: the finger crotches
 /// sit on the webs, the thumb's at its MCP), so a cell x mm beyond the base on the relaxed hand
-/// lands at x (1 + c (k - 1)) while its joint is at k x. Back-of-hand and web cells: 0.
+/// lands at x (1 + c (k - 1)) while its joint is at k x. The cells travel by the size coupling on a
+/// short finger too (assumption: a loose sheet that did not follow a short finger at all would put
+/// them 1 / (1 - c) times as far off). Back-of-hand and web cells: 0.
 inline double size_misplacement(const hand::HandModel& hand, const CellSite& site, double ratio, double coupling) noexcept {
   if (site.segment == sensor::Segment::Metacarpal || site.segment == sensor::Segment::Web || site.flexion_dof < 0) return 0.0;
   const auto& dof = hand::kDofs[static_cast<std::size_t>(site.flexion_dof)];
@@ -277,8 +279,8 @@ inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng&
     const double across = on_finger && s.segment != sensor::Segment::Web ? girth : subject.size.width / wear.relaxed_width;
     fit.shift[i] = glove.placement[i] + global_shift + rng.normal(0.0, wear.cell_shift * loose) +
                    wear.length_misplacement * size_misplacement(hand, s, length, wear.size_coupling);
-    fit.pre_along[i] = fitted_size(length, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
-    fit.pre_across[i] = fitted_size(across, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_along[i] = rest_stretch(length, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
+    fit.pre_across[i] = rest_stretch(across, wear) * global_pre * rng.normal(1.0, wear.pre_stretch_spread);
   }
   return fit;
 }
