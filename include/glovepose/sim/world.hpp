@@ -48,8 +48,9 @@ struct WorldParameter {
 
 /// @brief Every parameter a world's effects have, by name.
 inline const std::array<WorldParameter, 35>& world_parameters() {
-#define GLOVEPOSE_WORLD_PARAMETER(group, field) \
-  WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; }, 0.0 }
+#define GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(group, field, minimum) \
+  WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; }, minimum }
+#define GLOVEPOSE_WORLD_PARAMETER(group, field) GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(group, field, 0.0)
   static const std::array<WorldParameter, 35> table{
       GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
@@ -75,8 +76,8 @@ inline const std::array<WorldParameter, 35>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(wear, placement_sd),
       GLOVEPOSE_WORLD_PARAMETER(wear, size_coupling),
       GLOVEPOSE_WORLD_PARAMETER(wear, loose_slack),
-      WorldParameter{"wear.relaxed_length", [](World& w) -> double& { return w.wear.relaxed_length; }, 100.0},
-      WorldParameter{"wear.relaxed_width", [](World& w) -> double& { return w.wear.relaxed_width; }, 50.0},
+      GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(wear, relaxed_length, 100.0),
+      GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(wear, relaxed_width, 50.0),
       GLOVEPOSE_WORLD_PARAMETER(wear, length_misplacement),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_share),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_width),
@@ -87,6 +88,7 @@ inline const std::array<WorldParameter, 35>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(people, calibration_shortfall),
       GLOVEPOSE_WORLD_PARAMETER(people, independent_fingers)};
 #undef GLOVEPOSE_WORLD_PARAMETER
+#undef GLOVEPOSE_WORLD_PARAMETER_AT_LEAST
   return table;
 }
 
