@@ -7,9 +7,12 @@ ends with the model of a run that never stopped, byte for byte (its weights and 
 history); after a successful run no temporary file or checkpoint is left; a full disk gives an
 error naming the file and the cause, a non-zero exit and the old file intact.
 
-    GLOVEPOSE_CLI=build/tools/glovepose /usr/bin/python3 tests/python/test_crash_writes.py [--kills N] [--seed S]
+    GLOVEPOSE_CLI=build/tools/glovepose GLOVEPOSE_SLOW_FSYNC=build/tools/libglovepose_slow_fsync.so \
+        /usr/bin/python3 tests/python/test_crash_writes.py [--kills N] [--seed S]
 
-CTest runs 6 kills per command; `--kills 50` is the long run (docs/testing.md)."""
+CTest runs 6 kills per command, with GLOVEPOSE_SLOW_FSYNC naming the build's
+libglovepose_slow_fsync.so (its kills aimed at a write then land in it); `--kills 50` is the long
+run (docs/testing.md)."""
 
 from __future__ import annotations
 
@@ -29,6 +32,10 @@ from runner import Skip, Suite  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI = os.environ.get("GLOVEPOSE_CLI", "")
+# A library whose fsync() sleeps first (tests/slow_fsync.cpp), preloaded into the runs killed while
+# they write: a calibration file of a few hundred bytes otherwise lives as a temporary file for
+# microseconds, and a kill aimed at it lands there in a few runs of a hundred.
+SLOW_FSYNC = os.environ.get("GLOVEPOSE_SLOW_FSYNC", "")
 MODEL = str(ROOT / "models" / "glovepose_fcn512.safetensors")
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -67,8 +74,9 @@ class Scenario:
     def kill_once(self, during_write: bool, duration: float) -> bool:
         """Starts the new file's command, kills it; True when a temporary file existed at the kill."""
         before = set(partials(self.target) + partials(self.checkpoint))
+        env = dict(os.environ, LD_PRELOAD=SLOW_FSYNC) if during_write and SLOW_FSYNC else None
         with open(self.stdin(1) or os.devnull, "rb") as f:
-            process = subprocess.Popen(self.command(1), stdin=f, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            process = subprocess.Popen(self.command(1), stdin=f, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
             if during_write:  # wait for the write to start, then a few milliseconds more at most
                 deadline = time.monotonic() + 3 * duration + 5
                 while process.poll() is None and time.monotonic() < deadline and not (set(partials(self.target) + partials(self.checkpoint)) - before):
