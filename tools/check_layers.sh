@@ -2,13 +2,13 @@
 # Fails when a header in include/glovepose includes a folder above its own layer. The order, lowest
 # first (docs/architecture.md, "Layers"): the base files config.hpp and status.hpp; core/ (the one
 # random generator); hand/ (the hand model, the vocabulary of poses); io/ (the container, JSON,
-# half floats, recordings); sensor/; filter/; nn/ (knows nothing of gloves or training); grid/;
+# half floats, recordings); sensor/; device/ (the wire protocol of a glove on a link); filter/; nn/ (knows nothing of gloves or training); grid/;
 # calibration/; model/ (the model file's metadata); train/; sim/; and the composition files at the
 # top (estimator.hpp, pose_model.hpp, ..., and detail/, their members' definitions). A header may
 # include its own folder and anything below it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/include/glovepose"
-order=(base core hand io sensor filter nn grid calibration model train sim top)
+order=(base core hand io sensor device filter nn grid calibration model train sim top)
 
 layer_of() {  # path relative to include/glovepose -> layer index
   local rel="$1" name
