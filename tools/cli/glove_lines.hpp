@@ -129,6 +129,91 @@ struct GloveLineSource {
   std::ostream* told = &std::cerr;
 };
 
+/// What reading a glove's stream does whatever its form (lines here, wire frames in glove_frames.hpp):
+/// the calibration made on the fly over the first seconds of stream time, the inputs fed to the
+/// estimator, the counts, and the checks when the stream ends. `unit` names what the stream is made
+/// of in messages ("line", "frame").
+class GloveFeed {
+ public:
+  GloveFeed(const GloveLineSource& source, const GloveLineFormat& format, GlovePoseEstimator& estimator,
+            std::optional<double> calibration_seconds, GloveLineCounts& counts, const std::function<void(Status)>& pushed, std::string unit)
+      : source_(source), format_(format), estimator_(estimator), seconds_(calibration_seconds), counts_(counts), pushed_(pushed),
+        unit_(std::move(unit)) {
+    if (seconds_) estimator_.start_calibration();
+  }
+
+  /// One input at stream time `t` (seconds): `push()` gives it to the estimator and returns its
+  /// status; `where()` names it in a message ("line 12").
+  template <typename Push, typename Where>
+  void input(double t, Push&& push, Where&& where) {
+    if (std::isnan(first_)) first_ = t;
+    last_ = t;
+    if (seconds_ && estimator_.calibration_progress().collecting && t - first_ >= *seconds_) finish_calibration();
+    const Status status = push();
+    pushed_(status);
+    const std::lock_guard<std::mutex> hold(counts_.lock);
+    ++counts_.inputs;
+    counts_.poses += status == Status::Solved;
+    if (status != Status::Solved && status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated &&
+        counts_.rejected++ == 0)
+      counts_.first_rejected = where() + ": " + to_string(status);
+  }
+
+  /// One more line or frame read (`skipped`: not understood, `why` says so; the first is told).
+  void read(bool skipped, const std::string& why = {}) {
+    const std::lock_guard<std::mutex> hold(counts_.lock);
+    ++counts_.lines;
+    if (!skipped || counts_.skipped++ > 0) return;
+    counts_.first_skipped = why;
+    *source_.told << source_.tool << ": " << source_.name << " " << why << "; skipped (" << unit_
+                  << "s that cannot be used are counted, the first is told)\n";
+  }
+
+  /// The stream ended: throws Error when it could not serve a pose (see read_glove_lines).
+  void end() const {
+    const std::lock_guard<std::mutex> hold(counts_.lock);
+    if (counts_.inputs == 0)
+      throw Error("no " + unit_ + " of " + source_.name + " understood (" + std::to_string(counts_.lines) + " " + unit_ +
+                  (counts_.lines == 1 ? "" : "s") + (counts_.skipped > 0 ? ", the first not understood: " + counts_.first_skipped : "") +
+                  "), expected " + unit_ + "s of " + format_.expected());
+    if (estimator_.calibration_progress().collecting)
+      throw Error(source_.name + " ended after " + io::number_text(last_ - first_) +
+                  " s of stream time, within the calibration (--calibration-seconds " + io::number_text(*seconds_) +
+                  "): no pose was computed, expected a stream that goes on after the calibration");
+    if (counts_.poses == 0)
+      throw Error("no pose computed from the " + std::to_string(counts_.inputs) + " inputs of " + source_.name + " (" +
+                  std::to_string(counts_.rejected) + " refused by the estimator" +
+                  (counts_.rejected > 0 ? ", the first: " + counts_.first_rejected : "") + "; frames: " + format_.frames_from() +
+                  "), expected frames the estimator takes");
+    if (counts_.skipped > 0)
+      *source_.told << source_.tool << ": " << counts_.skipped << " of " << counts_.lines << " " << unit_ << "s of " << source_.name
+                    << " not understood and skipped (the first: " << counts_.first_skipped << ")\n";
+  }
+
+ private:
+  // Ends the calibration at its time: enough frames, or an Error saying how many came.
+  void finish_calibration() {
+    const CalibrationProgress progress = estimator_.calibration_progress();
+    if (!progress.ready)
+      throw Error("the calibration took " + std::to_string(progress.frames) + " frames in the first " + io::number_text(*seconds_) +
+                  " s of stream time (--calibration-seconds), expected at least " + std::to_string(progress.frames_needed) +
+                  " (its running median's window; frames: " + format_.frames_from() + ")");
+    const std::string report = estimator_.finish_calibration().flat_report();
+    if (!report.empty()) *source_.told << source_.tool << ": calibration: " << report << "\n";
+    const std::lock_guard<std::mutex> hold(counts_.lock);
+    counts_.calibration = report;
+  }
+
+  const GloveLineSource& source_;
+  const GloveLineFormat& format_;
+  GlovePoseEstimator& estimator_;
+  std::optional<double> seconds_;
+  GloveLineCounts& counts_;
+  const std::function<void(Status)>& pushed_;
+  std::string unit_;
+  double first_ = std::nan(""), last_ = std::nan("");
+};
+
 /// Feeds `source`'s lines of `format` to `estimator` until they end (or `stop`), calling `pushed`
 /// with the estimator's status after each input. With `calibration_seconds` the first that many
 /// seconds of stream time calibrate on the fly (the model's glove's median window and flat and noise
@@ -136,31 +221,30 @@ struct GloveLineSource {
 /// understood are counted in `counts`, the first told on stderr when it comes, the count when the
 /// stream ends. Throws Error when the stream cannot serve a pose: no line understood, a header naming
 /// other columns or coming late, a calibration without enough frames, a stream that ends within the
-/// calibration, or no input the estimator took for a pose.
+/// calibration, or no input the estimator took for a pose. `first_bytes`: bytes already taken from
+/// `source.in` (glove_frames.hpp looks at a stream's start; no line end among them), read as the
+/// start of its first line.
 inline void read_glove_lines(const GloveLineSource& source, const GloveLineFormat& format, GlovePoseEstimator& estimator,
                              std::optional<double> calibration_seconds, GloveLineCounts& counts, const std::function<void(Status)>& pushed,
-                             const std::atomic<bool>* stop = nullptr) {
+                             const std::atomic<bool>* stop = nullptr, std::string first_bytes = {}) {
   const auto stopped = [&] { return stop != nullptr && stop->load(); };
-  // Ends the calibration at its time: enough frames, or an Error saying how many came.
-  const auto finish_calibration = [&] {
-    const CalibrationProgress progress = estimator.calibration_progress();
-    if (!progress.ready)
-      throw Error("the calibration took " + std::to_string(progress.frames) + " frames in the first " +
-                  io::number_text(*calibration_seconds) + " s of stream time (--calibration-seconds), expected at least " +
-                  std::to_string(progress.frames_needed) + " (its running median's window; frames: " + format.frames_from() + ")");
-    const std::string report = estimator.finish_calibration().flat_report();
-    if (!report.empty()) *source.told << source.tool << ": calibration: " << report << "\n";
-    const std::lock_guard<std::mutex> hold(counts.lock);
-    counts.calibration = report;
-  };
+  GloveFeed feed(source, format, estimator, calibration_seconds, counts, pushed, "line");
   std::string line;
   long line_no = 0;
   bool header_allowed = true;
   double units_per_second = 1.0;  // of the time column; a header may say milliseconds
-  double first = std::nan(""), last = std::nan("");
   std::vector<double> cells(static_cast<std::size_t>(estimator.model().cell_count()));
-  if (calibration_seconds) estimator.start_calibration();
-  while (!stopped() && std::getline(source.in, line)) {
+  bool first_pending = !first_bytes.empty();
+  const auto next_line = [&] {
+    const bool got = static_cast<bool>(std::getline(source.in, line));
+    if (first_pending) {  // the stream's first bytes begin its first line (and are a whole line if nothing follows)
+      line = first_bytes + (got ? line : std::string());
+      first_pending = false;
+      return true;
+    }
+    return got;
+  };
+  while (!stopped() && next_line()) {
     ++line_no;
     if (io::blank_csv_line(line) || line[line.find_first_not_of(" \t")] == '#') continue;
     GloveLineFormat::Kind kind;
@@ -169,13 +253,7 @@ inline void read_glove_lines(const GloveLineSource& source, const GloveLineForma
     try {
       kind = format.parse(line, line_no, cells, row, value, t);
     } catch (const Error& e) {
-      const std::lock_guard<std::mutex> hold(counts.lock);
-      ++counts.lines;
-      if (counts.skipped++ == 0) {
-        counts.first_skipped = e.what();
-        *source.told << source.tool << ": " << source.name << " " << e.what()
-                     << "; skipped (lines that do not parse are counted, the first is told)\n";
-      }
+      feed.read(true, e.what());
       continue;
     }
     if (kind == GloveLineFormat::Kind::Header) {
@@ -187,38 +265,17 @@ inline void read_glove_lines(const GloveLineSource& source, const GloveLineForma
     }
     header_allowed = false;
     t /= units_per_second;
-    if (std::isnan(first)) first = t;
-    last = t;
-    if (calibration_seconds && estimator.calibration_progress().collecting && t - first >= *calibration_seconds) finish_calibration();
-    const Status status = kind == GloveLineFormat::Kind::Cells ? estimator.push_cells(cells.data(), static_cast<int>(cells.size()), t)
-                                                               : estimator.push_row(row, value, t);
-    pushed(status);
-    const std::lock_guard<std::mutex> hold(counts.lock);
-    ++counts.lines;
-    ++counts.inputs;
-    counts.poses += status == Status::Solved;
-    if (status != Status::Solved && status != Status::Ok && status != Status::NotReady && status != Status::Uncalibrated &&
-        counts.rejected++ == 0)
-      counts.first_rejected = "line " + std::to_string(line_no) + ": " + to_string(status);
+    feed.input(
+        t,
+        [&] {
+          return kind == GloveLineFormat::Kind::Cells ? estimator.push_cells(cells.data(), static_cast<int>(cells.size()), t)
+                                                      : estimator.push_row(row, value, t);
+        },
+        [&] { return "line " + std::to_string(line_no); });
+    feed.read(false);
   }
   if (stopped()) return;
-  const std::lock_guard<std::mutex> hold(counts.lock);
-  if (counts.inputs == 0)
-    throw Error("no line of " + source.name + " understood (" + std::to_string(counts.lines) + (counts.lines == 1 ? " line" : " lines") +
-                (counts.skipped > 0 ? ", the first not understood: " + counts.first_skipped : "") + "), expected lines of " +
-                format.expected());
-  if (estimator.calibration_progress().collecting)
-    throw Error(source.name + " ended after " + io::number_text(last - first) +
-                " s of stream time, within the calibration (--calibration-seconds " + io::number_text(*calibration_seconds) +
-                "): no pose was computed, expected a stream that goes on after the calibration");
-  if (counts.poses == 0)
-    throw Error("no pose computed from the " + std::to_string(counts.inputs) + " inputs of " + source.name + " (" +
-                std::to_string(counts.rejected) + " refused by the estimator" +
-                (counts.rejected > 0 ? ", the first: " + counts.first_rejected : "") + "; frames: " + format.frames_from() +
-                "), expected frames the estimator takes");
-  if (counts.skipped > 0)
-    *source.told << source.tool << ": " << counts.skipped << " of " << counts.lines << " lines of " << source.name
-                 << " not understood and skipped (the first: " << counts.first_skipped << ")\n";
+  feed.end();
 }
 
 /// The on-the-fly calibration's seconds, or none when a saved calibration `file` was given.

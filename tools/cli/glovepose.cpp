@@ -50,7 +50,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "glove_lines.hpp"
+#include "glove_frames.hpp"
 
 using namespace glovepose;
 
@@ -77,15 +77,22 @@ void predict_raw(const PredictOptions& o, std::shared_ptr<const PoseModel> model
   if (!o.calibration.empty()) estimator.load_calibration(o.calibration);
   const cli::GloveLineFormat format(*model, false);
   cli::GloveLineCounts counts;
+  device::LinkCounts link;
   const std::string source = o.input.empty() ? "stdin" : "'" + o.input + "'";
-  cli::read_glove_lines(cli::GloveLineSource{in, source, "glovepose predict"}, format, estimator,
-                        cli::on_the_fly_seconds(o.calibration_seconds, o.calibration), counts, [&](Status status) {
-                          if (status == Status::Solved) print_angles(estimator.pose().angles);
-                        });
+  cli::read_glove_stream(
+      cli::GloveLineSource{in, source, "glovepose predict"}, format, estimator, cli::on_the_fly_seconds(o.calibration_seconds, o.calibration),
+      counts,
+      [&](Status status) {
+        if (status == Status::Solved) print_angles(estimator.pose().angles);
+      },
+      link);
   std::fflush(stdout);
   if (!o.save_calibration.empty()) estimator.save_calibration(o.save_calibration);
-  std::fprintf(stderr, "glovepose predict: %s: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n",
-               source.c_str(), counts.lines, counts.inputs, counts.skipped, counts.rejected, counts.poses);
+  const bool frames = link.bytes > 0;
+  std::fprintf(stderr, "glovepose predict: %s: %ld %s, %ld %s, %ld skipped, %ld refused by the estimator; %ld poses\n", source.c_str(),
+               counts.lines, frames ? "frames" : "lines", counts.inputs, frames ? "inputs" : "understood", counts.skipped, counts.rejected,
+               counts.poses);
+  if (frames) std::fprintf(stderr, "glovepose predict: %s: link: %s\n", source.c_str(), cli::link_summary(link).c_str());
 }
 
 // One row of `count` numbers; throws Error naming the line and column.
@@ -130,8 +137,10 @@ int predict(const PredictOptions& o) {
   const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model, options);  // the glove: from the file, or built in
   cli::check_glove(o.glove, model->glove(), o.model);
   std::ifstream file;
-  if (!o.input.empty()) {
-    file.open(o.input);
+  if (o.input.empty())
+    cli::binary_stdin();  // wire frames as sent (Windows); text lines take a carriage return as blank
+  else {
+    file.open(o.input, std::ios::binary);
     if (!file) throw Error("cannot open input '" + o.input + "'");
   }
   std::istream& in = o.input.empty() ? std::cin : file;

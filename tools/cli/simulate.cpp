@@ -1,23 +1,28 @@
 // glovepose simulate: simulates the paper's capture protocol (defaults: 10 subjects x 5 sessions x
 // 5 minutes, the glove kept on for 3, a 30 s calibration sequence before each session, 2 sessions
-// with a second glove) and writes one dataset file, or prints the realism report.
+// with a second glove) and writes one dataset file, streams it as a device would (--stream), or
+// prints the realism report.
+#include <glovepose/grid/glove_description.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/sim/report.hpp>
 
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
+#include "device_stream.hpp"
 
 namespace glovepose::cli {
 namespace {
 
 struct SimulateOptions {
   sim::CorpusConfig config;
-  std::string out, csv, sequence_file, world = sim::default_world().name;
+  std::string out, csv, sequence_file, world = sim::default_world().name, stream;
+  DeviceStreamSettings device;
   std::vector<std::string> without, settings;
   bool report = false, print_sequence = false;
 };
@@ -32,7 +37,9 @@ int simulate(SimulateOptions o) {
     std::cout << sim::guided_calibration_sequence(sim::pose_gallery()).to_json();
     return 0;
   }
-  if (!o.report && o.out.empty()) throw CLI::RequiredError("--out FILE (or --report, or --print-calibration-sequence)");
+  if (!o.report && o.out.empty() && o.stream.empty())
+    throw CLI::RequiredError("--out FILE (or --stream TARGET, --report, or --print-calibration-sequence)");
+  if (!o.stream.empty() && o.device.payload != StreamPayload::Cells) config.recording.raw_rows = true;
   if (!o.sequence_file.empty()) {
     config.guided_calibration = calibration::Sequence::read(o.sequence_file);
     config.calibration_seconds = config.guided_calibration->total_seconds();
@@ -47,6 +54,18 @@ int simulate(SimulateOptions o) {
   const std::vector<sim::SessionRecording> corpus = sim::simulate_corpus(config);
   const double simulated = seconds();
   const io::Dataset data = sim::to_dataset(corpus, config);
+  if (!o.stream.empty()) {
+    const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+    o.device.glove_id = glove.id();
+    o.device.cells = glove.cell_count();
+    ByteSink sink(o.stream);
+    std::fprintf(stderr, "glovepose simulate: %zu frames (%.1f s of readings) simulated in %.1f s; streaming to %s\n", data.frames(),
+                 static_cast<double>(data.frames()) / config.recording.cycle_rate, simulated, o.stream.c_str());
+    const DeviceStreamCounts sent = stream_dataset(data, o.device, sink);
+    std::fprintf(stderr, "glovepose simulate: streamed %llu frames, %llu bytes, in %.1f s\n", static_cast<unsigned long long>(sent.frames),
+                 static_cast<unsigned long long>(sent.bytes), seconds() - simulated);
+    if (o.out.empty()) return 0;
+  }
   data.write(o.out);
   if (!o.csv.empty()) data.write_csv(o.csv);
   std::printf("wrote %s: %zu frames (%d subjects, %zu recordings, %s raw rows); simulated in %.1f s, %.1f s in all\n", o.out.c_str(),
@@ -103,7 +122,26 @@ Command add_simulate(CLI::App& tool) {
       ->type_name("NAME=VALUE[,NAME=VALUE...]");
   CLI::Option* out = command->add_option("--out", o->out, "the dataset file written")->type_name("FILE");
   command->add_option("--csv", o->csv, "also write the frames as CSV text")->type_name("FILE")->needs(out);
-  CLI::Option* report = command->add_flag("--report", o->report, "print the realism report of the simulated people instead")->excludes(out);
+  CLI::Option* stream =
+      command
+          ->add_option("--stream", o->stream,
+                       "stream the readings as a glove would, in the wire protocol (docs/wire_protocol.md), to TARGET: '-' for stdout, a "
+                       "file, a named pipe, a pty or a serial port")
+          ->type_name("TARGET");
+  const std::map<std::string, StreamPayload> payloads{
+      {"measurements", StreamPayload::Measurements}, {"rows", StreamPayload::Rows}, {"cells", StreamPayload::Cells}};
+  command
+      ->add_option("--stream-payload", o->device.payload,
+                   "--stream: what each frame holds: 'measurements' (a cycle's rows, default), 'rows' (the same rows, each with its own "
+                   "time) or 'cells' (the solved cells)")
+      ->transform(CLI::CheckedTransformer(payloads, CLI::ignore_case))
+      ->needs(stream);
+  add_number(*command, "--speed", "X", o->device.speed, "--stream: multiples of real time (default 1; 0: as fast as the target reads)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->needs(stream);
+  add_number(*command, "--serial", "N", o->device.serial, "--stream: the device's serial number in its Hello (default 1)")->needs(stream);
+  CLI::Option* report =
+      command->add_flag("--report", o->report, "print the realism report of the simulated people instead")->excludes(out)->excludes(stream);
   command->add_flag("--print-calibration-sequence", o->print_sequence, "print the built-in guided calibration sequence as JSON and stop")
       ->excludes(out)
       ->excludes(report);

@@ -34,7 +34,7 @@
 #include <thread>
 
 #include "commands.hpp"
-#include "glove_lines.hpp"
+#include "glove_frames.hpp"
 #include "loopback_socket.hpp"
 #include "new_user.hpp"
 #include "session_options.hpp"
@@ -111,13 +111,19 @@ class GloveStream {
   // Lines of `format` from stdin until it ends (or stop): read_glove_lines, publishing after each
   // input, with a summary on stdout.
   void from_stdin(const GloveLineFormat& format, std::optional<double> calibration_seconds, GloveLineCounts& counts) {
-    read_glove_lines(
+    binary_stdin();
+    device::LinkCounts link;
+    read_glove_stream(
         GloveLineSource{std::cin, "stdin", "glovepose view"}, format, estimator_, calibration_seconds, counts,
-        [this](Status) { publish(estimator_.pose().timestamp); }, &stop_);
+        [this](Status) { publish(estimator_.pose().timestamp); }, link, &stop_);
     if (stop_) return;
     const std::lock_guard<std::mutex> hold(counts.lock);
-    std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", counts.lines, counts.inputs,
-                counts.skipped, counts.rejected, counts.poses);
+    if (link.bytes > 0)
+      std::printf("stdin: %ld frames, %ld inputs, %ld skipped, %ld refused by the estimator; %ld poses\nstdin: link: %s\n", counts.lines,
+                  counts.inputs, counts.skipped, counts.rejected, counts.poses, link_summary(link).c_str());
+    else
+      std::printf("stdin: %ld lines, %ld understood, %ld skipped, %ld refused by the estimator; %ld poses\n", counts.lines, counts.inputs,
+                  counts.skipped, counts.rejected, counts.poses);
     std::fflush(stdout);
   }
 

@@ -1,0 +1,236 @@
+"""The simulator as a device and the tool as its reader, through the wire protocol. The decoder here
+is written from docs/wire_protocol.md (struct and zlib's CRC-32), sharing no code with the C++
+encoder or parser:
+- `glovepose simulate --stream` writes frames that decode with valid CRCs, a Hello naming the glove,
+  contiguous sequence numbers and device times that advance one readout cycle per frame;
+- `glovepose predict --raw` on the frames prints the very poses (byte for byte) it prints for the
+  same readings as text lines made by this decoder, for raw rows and for cells;
+- with one byte in 10,000 flipped, predict drops exactly the frames this decoder finds damaged and
+  counts them as lost, and every frame it did not drop is used;
+- through a pty pair the bytes arrive unchanged (the target is put in raw mode), and --speed paces
+  the stream in real time.
+
+    GLOVEPOSE_CLI=build/tools/glovepose /usr/bin/python3 tests/python/test_wire_stream.py"""
+
+from __future__ import annotations
+
+import os
+import random
+import re
+import struct
+import subprocess
+import sys
+import threading
+import time
+import zlib
+from pathlib import Path
+from typing import List, NamedTuple, Tuple
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from runner import Skip, Suite  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+CLI = os.environ.get("GLOVEPOSE_CLI", "")
+MODEL = str(ROOT / "models" / "glovepose_fcn512.safetensors")
+suite = Suite("glovepose_wire_")
+SIM = ["simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.5", "--gloves", "1", "--calibration-seconds", "10",
+       "--seed", "6", "--threads", "1"]
+
+
+class Frame(NamedTuple):
+    kind: int
+    sequence: int
+    device_us: int
+    payload: bytes
+    start: int  # byte offset in the stream
+    end: int
+
+
+def decode(stream: bytes) -> List[Frame]:
+    """Every frame of an undamaged stream, in order; asserts the layout and both CRCs."""
+    frames, at = [], 0
+    while at < len(stream):
+        magic, version, kind, sequence, device_us, length, reserved, header_crc = struct.unpack_from("<2sBBIQHHI", stream, at)
+        assert magic == b"GP" and version == 1 and reserved == 0, f"frame at byte {at}: magic {magic!r}, version {version}"
+        assert header_crc == zlib.crc32(stream[at:at + 20]), f"frame at byte {at}: header CRC"
+        payload = stream[at + 24:at + 24 + length]
+        (payload_crc,) = struct.unpack_from("<I", stream, at + 24 + length)
+        assert payload_crc == zlib.crc32(payload), f"frame at byte {at}: payload CRC"
+        frames.append(Frame(kind, sequence, device_us, payload, at, at + 28 + length))
+        at += 28 + length
+    return frames
+
+
+def simulate(path: Path, payload: str) -> List[Frame]:
+    result = subprocess.run([CLI, *SIM, "--stream", str(path), "--stream-payload", payload, "--speed", "0"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return decode(path.read_bytes())
+
+
+def as_lines(frames: List[Frame]) -> str:
+    """The frames' readings as the text lines predict --raw reads, times in seconds of the device clock."""
+    out = []
+    for f in frames[1:]:
+        t = f.device_us * 1e-6
+        if f.kind == 2:  # rows: row u16, offset u16, value f32
+            for row, offset, value in struct.iter_unpack("<HHf", f.payload):
+                out.append(f"{row},{value!r},{t + offset * 1e-6!r}")
+        elif f.kind == 4:  # cells
+            out.append(",".join([repr(t)] + [repr(v) for (v,) in struct.iter_unpack("<f", f.payload)]))
+        else:
+            raise AssertionError(f"unexpected kind {f.kind}")
+    return "\n".join(out) + "\n"
+
+
+def predict(path: Path) -> Tuple[str, str]:
+    result = subprocess.run([CLI, "predict", "--model", MODEL, "--raw", "--calibration-seconds", "10", "--in", str(path)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout, result.stderr
+
+
+def link_counts(stderr: str) -> dict:
+    line = next(l for l in stderr.splitlines() if ": link: " in l)
+    return {name: int(n) for n, name in re.findall(r"(\d+) (frames passed on|bytes skipped|bad headers|bad payloads|lost|duplicated|late|restarts)", line)}
+
+
+def setup_checks():
+    if not CLI:
+        raise Skip("GLOVEPOSE_CLI is not set")
+
+
+@suite.test
+def simulated_frames_decode_as_documented():
+    setup_checks()
+    for payload, kind, size in (("rows", 2, 180 * 8), ("measurements", 3, 180 * 4), ("cells", 4, 44 * 4)):
+        frames = simulate(suite.tmp / f"{payload}.gpw", payload)
+        hello = frames[0]
+        assert hello.kind == 1 and hello.sequence == 0, hello[:3]
+        serial, rows, cells, id_length = struct.unpack_from("<IHHB", hello.payload)
+        glove = hello.payload[9:9 + id_length].decode()
+        assert (serial, rows, cells, len(hello.payload)) == (1, 0 if payload == "cells" else 180, 44, 9 + id_length), (serial, rows, cells)
+        assert glove == "glauser2019-44", glove
+        readings = frames[1:]
+        assert len(readings) == 60 * 40, len(readings)  # 10 s of calibration and 30 s of session at 60 Hz
+        assert all(f.kind == kind and len(f.payload) == size for f in readings)
+        assert [f.sequence for f in frames] == list(range(len(frames)))
+        steps = {b.device_us - a.device_us for a, b in zip(readings, readings[1:])}
+        assert steps <= {16666, 16667}, sorted(steps)  # one readout cycle, also from the calibration into the session
+        if payload == "rows":
+            offsets = [o for _, o, _ in struct.iter_unpack("<HHf", readings[0].payload)]
+            assert offsets[0] == 0 and offsets == sorted(offsets) and offsets[-1] in (16574, 16575), offsets[-3:]  # 179 of 180 row slots
+
+
+@suite.test
+def frames_give_the_poses_of_the_same_readings_as_lines():
+    setup_checks()
+    for payload in ("rows", "cells"):
+        wire = suite.tmp / f"same_{payload}.gpw"
+        frames = simulate(wire, payload)
+        text = suite.tmp / f"same_{payload}.csv"
+        text.write_text(as_lines(frames))
+        from_wire, told = predict(wire)
+        from_text, _ = predict(text)
+        assert from_wire.count("\n") > 1000, told
+        assert from_wire == from_text, f"{payload}: the poses from frames differ from those of the same readings as lines"
+        counts = link_counts(told)
+        assert counts["frames passed on"] == len(frames) and sum(v for k, v in counts.items() if k != "frames passed on") == 0, counts
+
+
+@suite.test
+def damaged_frames_are_dropped_and_counted_lost():
+    setup_checks()
+    wire = suite.tmp / "damaged.gpw"
+    frames = simulate(wire, "measurements")
+    data = bytearray(wire.read_bytes())
+    rng = random.Random(3)
+    damaged = set()
+    for i in range(frames[1].start, frames[-1].start):  # not the Hello, not the last frame (a loss no later frame reveals)
+        if rng.random() < 1e-4:
+            data[i] ^= rng.randrange(1, 256)
+            damaged.add(next(k for k, f in enumerate(frames) if f.start <= i < f.end))
+    assert len(damaged) >= 20, len(damaged)
+    wire.write_bytes(bytes(data))
+    poses, told = predict(wire)
+    counts = link_counts(told)
+    assert counts["lost"] == len(damaged), (counts, len(damaged))
+    assert counts["frames passed on"] == len(frames) - len(damaged), counts
+    assert counts["duplicated"] == counts["late"] == counts["restarts"] == 0, counts
+    # every frame passed on is used: one pose per measurement frame from 10 s after the first one used
+    used = [k for k in range(1, len(frames)) if k not in damaged]
+    session = [k for k in used if frames[k].device_us - frames[used[0]].device_us >= 10_000_000]
+    assert poses.count("\n") == 1 + len(session), (poses.count("\n"), len(session), len(damaged))  # and the header line
+
+
+def encode(kind: int, sequence: int, device_us: int, payload: bytes) -> bytes:
+    """A frame as docs/wire_protocol.md lays it out."""
+    header = struct.pack("<2sBBIQHH", b"GP", 1, kind, sequence, device_us, len(payload), 0)
+    return header + struct.pack("<I", zlib.crc32(header)) + payload + struct.pack("<I", zlib.crc32(payload))
+
+
+def hello(glove: str, rows: int = 180, cells: int = 44) -> bytes:
+    return encode(1, 0, 0, struct.pack("<IHHB", 77, rows, cells, len(glove)) + glove.encode())
+
+
+@suite.test
+def another_glove_or_no_reading_is_an_error():
+    setup_checks()
+    cases = [
+        (hello("someone-elses-glove"), "the device (serial 77) is glove 'someone-elses-glove' with 44 cells and 180 rows, expected glove "
+                                       "'glauser2019-44' with 44 cells and 180 rows"),
+        (hello("glauser2019-44", rows=90), "with 44 cells and 90 rows, expected glove 'glauser2019-44'"),
+        (hello("glauser2019-44"), "no frame of stdin understood (1 frame)"),
+        (hello("glauser2019-44") + encode(3, 1, 1000, struct.pack("<3f", 1, 2, 3)),
+         "no pose computed from the 1 inputs of stdin (1 refused by the estimator, the first: frame 1: size mismatch"),
+    ]
+    calibration = suite.tmp / "user.calibration"  # a saved calibration, so that every frame could make a pose
+    wire = suite.tmp / "for_calibration.gpw"
+    simulate(wire, "cells")
+    result = subprocess.run([CLI, "predict", "--model", MODEL, "--raw", "--calibration-seconds", "10", "--in", str(wire),
+                             "--save-calibration", str(calibration)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    for stream, message in cases:
+        result = subprocess.run([CLI, "predict", "--model", MODEL, "--raw", "--calibration", str(calibration)], input=stream, capture_output=True)
+        err = result.stderr.decode()
+        assert result.returncode != 0 and message in err, (result.returncode, err)
+
+
+@suite.test
+def a_pty_carries_every_byte_and_speed_paces_the_stream():
+    setup_checks()
+    reference = suite.tmp / "reference.gpw"
+    simulate(reference, "rows")
+    master, slave = os.openpty()
+    received = bytearray()
+
+    def read_all():
+        while True:
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:  # EIO once the last writer closed the slave
+                return
+            if not chunk:
+                return
+            received.extend(chunk)
+
+    reader = threading.Thread(target=read_all)
+    reader.start()
+    result = subprocess.run([CLI, *SIM, "--stream", os.ttyname(slave), "--stream-payload", "rows", "--speed", "0"], capture_output=True, text=True)
+    os.close(slave)
+    reader.join(timeout=60)
+    os.close(master)
+    assert result.returncode == 0, result.stderr
+    assert bytes(received) == reference.read_bytes(), f"{len(received)} bytes through the pty, {reference.stat().st_size} in the file"
+
+    # 2 s of readings (no calibration) at real time, then at 4x
+    short = [CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", str(2 / 60), "--gloves", "1", "--calibration-seconds", "0",
+             "--seed", "6", "--threads", "1", "--stream", str(suite.tmp / "paced.gpw")]
+    for speed, expected in (("1", 2.0), ("4", 0.5)):
+        result = subprocess.run(short + ["--speed", speed], capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        took = float(re.search(r"bytes, in ([0-9.]+) s", result.stderr).group(1))
+        assert expected - 0.05 <= took <= expected + 0.3, f"--speed {speed}: {took} s, expected {expected}"
+
+
+if __name__ == "__main__":
+    sys.exit(suite.run())
