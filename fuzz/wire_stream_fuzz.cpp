@@ -53,6 +53,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto check = [&](const device::Frame& f, const device::FrameParser& parser, std::vector<Seen>& out) {
     GLOVEPOSE_FUZZ_REQUIRE(device::known_kind(static_cast<std::uint8_t>(f.header.kind)));
     GLOVEPOSE_FUZZ_REQUIRE(f.payload.size() == f.header.payload_bytes && f.payload.size() <= device::kMaxPayloadBytes);
+    GLOVEPOSE_FUZZ_REQUIRE(f.bytes.size() == device::kHeaderBytes + f.payload.size() + device::kTrailerBytes &&
+                           f.bytes.data() + device::kHeaderBytes == f.payload.data());
     out.push_back(Seen{f.header, std::vector<std::uint8_t>(f.payload.begin(), f.payload.end())});
     if (&out == &whole) {
       const bool restarted = parser.counts().restarts != restarts_seen || f.header.kind == device::FrameKind::Hello;

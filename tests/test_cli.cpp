@@ -56,7 +56,7 @@ TEST_CASE(
     "cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the option named "
     "on stderr") {
   for (const std::string command :
-       {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import"}) {
+       {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import", "record"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
@@ -84,7 +84,8 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"info", {"FILE", "--model"}},
       {"simulate",
        {"--seed", "--subjects", "--sessions", "--minutes", "--gloves", "--calibration-seconds", "--calibration-sequence", "--raw-rows",
-        "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence"}},
+        "--mean-window", "--threads", "--out", "--csv", "--report", "--print-calibration-sequence", "--stream", "--stream-payload", "--speed",
+        "--serial"}},
       {"import",
        {"CSV", "--calibration", "--takes", "--subject", "--session", "--rate", "--glove", "--degrees", "--ignore", "--allow-flat",
         "--out"}},
@@ -100,7 +101,8 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"demo", {"--model", "--out", "--seed", "--minutes", "--weights", "--fixed16", "--f16", "--bf16"}},
       {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
       {"bench", {"--model", "--poses", "--json"}},
-      {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}}};
+      {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}},
+      {"record", {"--in", "--out", "--quiet"}}};
   for (const auto& entry : commands) {
     const std::string& command = entry.first;  // not a structured binding: clang 14 cannot capture one in INFO
     const auto& options = entry.second;

@@ -79,6 +79,8 @@ std::vector<std::uint32_t> parse(device::FrameParser& parser, const Bytes& bytes
       CHECK(f.header.kind == it->second.kind);
       CHECK(f.header.device_time_us == it->second.time);
       CHECK(Bytes(f.payload.begin(), f.payload.end()) == it->second.payload);
+      CHECK(f.bytes.size() == 28 + it->second.payload.size());
+      CHECK(Bytes(f.bytes.begin() + 24, f.bytes.end() - 4) == it->second.payload);
       got.push_back(f.header.sequence);
     });
     at += piece;

@@ -6,86 +6,15 @@
 #include <glovepose/device/wire_format.hpp>
 #include <glovepose/io/dataset.hpp>
 
-#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include <fcntl.h>
-#ifdef _WIN32
-#  include <io.h>
-#else
-#  include <termios.h>
-#  include <unistd.h>
-#endif
+#include "byte_link.hpp"
 
 namespace glovepose::cli {
-
-/// Where a stream of bytes goes: "-" for stdout, else a path opened for writing (a file, a named
-/// pipe, a pty or a serial port; a terminal is put in raw mode so no byte is translated).
-class ByteSink {
- public:
-  explicit ByteSink(const std::string& target) : target_(target) {
-    if (target == "-") {
-      fd_ = 1;
-#ifdef _WIN32
-      (void)_setmode(1, _O_BINARY);
-#endif
-      return;
-    }
-#ifdef _WIN32
-    fd_ = ::_open(target.c_str(), _O_WRONLY | _O_CREAT | _O_TRUNC | _O_BINARY, 0666);
-#else
-    fd_ = ::open(target.c_str(), O_WRONLY | O_CREAT | O_NOCTTY | O_CLOEXEC, 0666);
-#endif
-    if (fd_ < 0) throw Error("stream target '" + target + "': cannot open it for writing: " + std::strerror(errno));
-    owned_ = true;
-#ifndef _WIN32
-    termios mode{};
-    if (::isatty(fd_) && ::tcgetattr(fd_, &mode) == 0) {  // a pty or serial port: raw, 8 bits, no echo, no line end translation
-      ::cfmakeraw(&mode);
-      (void)::tcsetattr(fd_, TCSANOW, &mode);
-    }
-#endif
-  }
-  ByteSink(const ByteSink&) = delete;
-  ByteSink& operator=(const ByteSink&) = delete;
-  ~ByteSink() {
-    if (owned_) close_fd();
-  }
-
-  /// Writes all `size` bytes; throws Error when the other end is gone or refuses them.
-  void write(const std::uint8_t* data, std::size_t size) {
-    while (size > 0) {
-#ifdef _WIN32
-      const int n = ::_write(fd_, data, static_cast<unsigned>(size));
-#else
-      const ssize_t n = ::write(fd_, data, size);
-#endif
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) throw Error("stream target '" + target_ + "': cannot write: " + std::strerror(n < 0 ? errno : EIO));
-      data += n;
-      size -= static_cast<std::size_t>(n);
-    }
-  }
-
- private:
-  void close_fd() noexcept {
-#ifdef _WIN32
-    (void)::_close(fd_);
-#else
-    (void)::close(fd_);
-#endif
-  }
-
-  std::string target_;
-  int fd_ = -1;
-  bool owned_ = false;
-};
 
 /// What a simulated device sends.
 enum class StreamPayload { Measurements, Rows, Cells };

@@ -282,7 +282,7 @@ int main(int argc, char** argv) {
   std::string command_line = "glovepose";
   for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
   for (cli::Command& command : cli::add_training_commands(tool, command_line)) commands.push_back(std::move(command));
-  for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view}) commands.push_back(add(tool));
+  for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view, &cli::add_record}) commands.push_back(add(tool));
   try {
     tool.parse(argc, argv);
     if (*version) {

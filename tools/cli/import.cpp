@@ -1,5 +1,5 @@
-// glovepose import: recordings of any glove as CSV files with named columns (train/recording_import.hpp) into one
-//   dataset file for train, eval and finetune.
+// glovepose import: recordings of any glove as CSV files with named columns (train/recording_import.hpp), or
+//   as wire recordings (glovepose record; wire_take.hpp), into one dataset file for train, eval and finetune.
 #include <glovepose/io/atomic_file.hpp>
 #include <glovepose/train/recording_import.hpp>
 
@@ -10,10 +10,12 @@
 #include <fstream>
 #include <memory>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "wire_take.hpp"
 
 namespace glovepose::cli {
 namespace {
@@ -110,8 +112,15 @@ int import_recordings(const ImportOptions& o) {
   train::CsvImportOptions options = o.import;
   options.keypoint_scale = o.keypoint_unit == "m" ? 1000.0 : o.keypoint_unit == "cm" ? 10.0 : 1.0;
   options.keypoint_labels.offset = o.keypoint_offset;
-  train::RecordingImporter importer(std::move(glove), options);
-  for (const train::CsvTake& take : takes) importer.add(take);
+  train::RecordingImporter importer(glove, options);
+  for (const train::CsvTake& take : takes) {
+    if (const std::optional<std::string> csv = wire_take_as_csv(take.path, glove)) {  // a wire recording (glovepose record)
+      std::istringstream in(*csv);
+      importer.add(in, take);
+    } else {
+      importer.add(take);
+    }
+  }
   importer.finish();
   const io::Dataset& data = importer.dataset();
   data.write(o.out);

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <string>
 
@@ -21,7 +20,7 @@ namespace {
 
 struct SimulateOptions {
   sim::CorpusConfig config;
-  std::string out, csv, sequence_file, world = sim::default_world().name, stream;
+  std::string out, csv, sequence_file, world = sim::default_world().name, stream, payload = "measurements";
   DeviceStreamSettings device;
   std::vector<std::string> without, settings;
   bool report = false, print_sequence = false;
@@ -39,6 +38,7 @@ int simulate(SimulateOptions o) {
   }
   if (!o.report && o.out.empty() && o.stream.empty())
     throw CLI::RequiredError("--out FILE (or --stream TARGET, --report, or --print-calibration-sequence)");
+  o.device.payload = o.payload == "rows" ? StreamPayload::Rows : o.payload == "cells" ? StreamPayload::Cells : StreamPayload::Measurements;
   if (!o.stream.empty() && o.device.payload != StreamPayload::Cells) config.recording.raw_rows = true;
   if (!o.sequence_file.empty()) {
     config.guided_calibration = calibration::Sequence::read(o.sequence_file);
@@ -128,13 +128,12 @@ Command add_simulate(CLI::App& tool) {
                        "stream the readings as a glove would, in the wire protocol (docs/wire_protocol.md), to TARGET: '-' for stdout, a "
                        "file, a named pipe, a pty or a serial port")
           ->type_name("TARGET");
-  const std::map<std::string, StreamPayload> payloads{
-      {"measurements", StreamPayload::Measurements}, {"rows", StreamPayload::Rows}, {"cells", StreamPayload::Cells}};
   command
-      ->add_option("--stream-payload", o->device.payload,
+      ->add_option("--stream-payload", o->payload,
                    "--stream: what each frame holds: 'measurements' (a cycle's rows, default), 'rows' (the same rows, each with its own "
                    "time) or 'cells' (the solved cells)")
-      ->transform(CLI::CheckedTransformer(payloads, CLI::ignore_case))
+      ->check(CLI::IsMember({"measurements", "rows", "cells"}).description(""))
+      ->type_name("KIND")
       ->needs(stream);
   add_number(*command, "--speed", "X", o->device.speed, "--stream: multiples of real time (default 1; 0: as fast as the target reads)")
       ->check(CLI::Range(0.0, 1000.0))

@@ -106,7 +106,7 @@ class FrameParser {
       counts_.frame_bytes += whole;
       if (admit(header)) {
         ++counts_.frames;
-        on_frame(Frame{header, {payload, header.payload_bytes}});
+        on_frame(Frame{header, {payload, header.payload_bytes}, {p, whole}});
       }
     }
     if (at > 0) {

@@ -57,6 +57,7 @@ struct FrameHeader {
 struct Frame {
   FrameHeader header;
   core::Span<const std::uint8_t> payload;
+  core::Span<const std::uint8_t> bytes;  ///< The whole frame as it arrived, header to payload CRC.
 };
 
 /// @brief A single row's reading in a Rows frame: taken `offset_us` after the frame's device time.
