@@ -22,6 +22,23 @@
 
 namespace glovepose::cli {
 
+/// Feeds `size` bytes to `parser`, calling `use(const device::Frame&)` for each frame passed on.
+/// The parser's callback is noexcept, so an exception `use` throws waits there (later frames of the
+/// same bytes are not used) and is thrown again once feed() returns.
+template <typename Use>
+void feed_frames(device::FrameParser& parser, const std::uint8_t* data, std::size_t size, Use&& use) {
+  std::exception_ptr failed;
+  parser.feed(data, size, [&](const device::Frame& f) noexcept {
+    if (failed) return;
+    try {
+      use(f);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  });
+  if (failed) std::rethrow_exception(failed);
+}
+
 /// The link's counts as one line ("1200 frames; 0 bytes skipped, ...").
 inline std::string link_summary(const device::LinkCounts& c) {
   return std::to_string(c.frames) + " frames passed on; " + std::to_string(c.skipped_bytes) + " bytes skipped, " +
@@ -47,7 +64,6 @@ inline void read_glove_frames(const GloveLineSource& source, const GloveLineForm
   device::FrameParser parser;
   std::uint64_t dropped = 0;  // frames the parser counted as unusable, told as skipped
   const auto frame_name = [](const device::Frame& f) { return "frame " + std::to_string(f.header.sequence); };
-  std::exception_ptr failed;  // the parser's callback is noexcept: an Error waits there until feed() returns
   const auto use_frame = [&](const device::Frame& f) {
     const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
     Status status = Status::Ok;
@@ -96,14 +112,6 @@ inline void read_glove_frames(const GloveLineSource& source, const GloveLineForm
     }
     feed.read(status != Status::Ok, frame_name(f) + ": " + to_string(status));
   };
-  const auto on_frame = [&](const device::Frame& f) noexcept {
-    if (failed) return;
-    try {
-      use_frame(f);
-    } catch (...) {
-      failed = std::current_exception();
-    }
-  };
   const auto count_dropped = [&] {
     const device::LinkCounts& c = parser.counts();
     const std::uint64_t now = c.bad_headers + c.bad_payloads + c.lost + c.duplicates + c.late;
@@ -111,8 +119,7 @@ inline void read_glove_frames(const GloveLineSource& source, const GloveLineForm
       feed.read(true, "a frame damaged, lost or out of order (" + link_summary(c) + " so far)");
   };
   const auto parse = [&](const char* bytes, std::size_t size) {
-    parser.feed(reinterpret_cast<const std::uint8_t*>(bytes), size, on_frame);
-    if (failed) std::rethrow_exception(failed);
+    feed_frames(parser, reinterpret_cast<const std::uint8_t*>(bytes), size, use_frame);
     count_dropped();
   };
   parse(first_bytes.data(), first_bytes.size());

@@ -138,22 +138,11 @@ int record(const RecordOptions& o) {
       }
     }
   };
-  // The parser's callback is noexcept: a write error waits there until feed() returns.
-  std::string failed;
-  const auto guarded = [&](const device::Frame& f) noexcept {
-    if (!failed.empty()) return;
-    try {
-      on_frame(f);
-    } catch (const Error& e) {
-      failed = e.what();
-    }
-  };
   std::vector<std::uint8_t> buffer(1 << 16);
   while (!record_stop) {
     const long n = source.read(buffer.data(), buffer.size());
     if (n == 0) break;
-    if (n > 0) parser.feed(buffer.data(), static_cast<std::size_t>(n), guarded);
-    if (!failed.empty()) throw Error(failed);
+    if (n > 0) feed_frames(parser, buffer.data(), static_cast<std::size_t>(n), on_frame);
     if (Clock::now() - flushed >= std::chrono::seconds(1)) {
       file.flush();
       flushed = Clock::now();

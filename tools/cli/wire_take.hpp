@@ -11,7 +11,6 @@
 #include <glovepose/sensor/readout.hpp>
 
 #include <cstdio>
-#include <exception>
 #include <fstream>
 #include <iterator>
 #include <memory>
@@ -54,48 +53,41 @@ inline std::optional<std::string> wire_take_as_csv(const std::string& path, cons
   long lines = 0;
   std::vector<float> values(device::kMaxPayloadBytes / 4);
   sensor::Readout::Measurements measurements;
-  std::exception_ptr failed;
   device::FrameParser parser;
-  parser.feed(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(), [&](const device::Frame& f) noexcept {
-    if (failed) return;
-    try {
-      const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
-      if (f.header.kind == device::FrameKind::Hello) {
-        device::Hello hello;
-        if (device::read_hello(f, hello) == Status::Ok && hello.glove_id != glove.id())
-          throw Error(at + ": recorded from glove '" + std::string(hello.glove_id) + "', expected glove '" + glove.id() +
-                      "' (import --glove names another glove's description)");
-        return;
-      }
-      if (f.header.kind == device::FrameKind::Cells) {
-        if (device::read_values(f, values.data(), cells) == Status::Ok) {
-          add_line(t, [&](int c) { return values[static_cast<std::size_t>(c)]; }, static_cast<int>(cells));
-          ++lines;
-        }
-        return;
-      }
-      if (!readout)
-        throw Error(at + ": raw rows, but glove '" + glove.id() + "' has no wiring to solve them, expected a recording of its cells");
-      bool solved = false;
-      if (f.header.kind == device::FrameKind::Measurements) {
-        const std::size_t rows = static_cast<std::size_t>(readout->solver().layout().row_count());
-        if (device::read_values(f, values.data(), rows) != Status::Ok) return;
-        measurements.resize(static_cast<Eigen::Index>(rows));
-        for (std::size_t r = 0; r < rows; ++r) measurements(static_cast<Eigen::Index>(r)) = values[r];
-        solved = readout->push_frame(measurements, t) == Status::Solved;
-      } else {
-        (void)device::read_rows(f, [&](const device::RowReading& r) { solved |= readout->push_row(r.row, r.value, t + r.offset_us * 1e-6) == Status::Solved; });
-      }
-      if (solved) {
-        const sensor::CapacitanceFrame& frame = readout->frame();
-        add_line(frame.timestamp, [&](int c) { return frame.cells(c); }, static_cast<int>(frame.cells.size()));
+  feed_frames(parser, reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(), [&](const device::Frame& f) {
+    const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
+    if (f.header.kind == device::FrameKind::Hello) {
+      device::Hello hello;
+      if (device::read_hello(f, hello) == Status::Ok && hello.glove_id != glove.id())
+        throw Error(at + ": recorded from glove '" + std::string(hello.glove_id) + "', expected glove '" + glove.id() +
+                    "' (import --glove names another glove's description)");
+      return;
+    }
+    if (f.header.kind == device::FrameKind::Cells) {
+      if (device::read_values(f, values.data(), cells) == Status::Ok) {
+        add_line(t, [&](int c) { return values[static_cast<std::size_t>(c)]; }, static_cast<int>(cells));
         ++lines;
       }
-    } catch (...) {
-      failed = std::current_exception();
+      return;
+    }
+    if (!readout)
+      throw Error(at + ": raw rows, but glove '" + glove.id() + "' has no wiring to solve them, expected a recording of its cells");
+    bool solved = false;
+    if (f.header.kind == device::FrameKind::Measurements) {
+      const std::size_t rows = static_cast<std::size_t>(readout->solver().layout().row_count());
+      if (device::read_values(f, values.data(), rows) != Status::Ok) return;
+      measurements.resize(static_cast<Eigen::Index>(rows));
+      for (std::size_t r = 0; r < rows; ++r) measurements(static_cast<Eigen::Index>(r)) = values[r];
+      solved = readout->push_frame(measurements, t) == Status::Solved;
+    } else {
+      (void)device::read_rows(f, [&](const device::RowReading& r) { solved |= readout->push_row(r.row, r.value, t + r.offset_us * 1e-6) == Status::Solved; });
+    }
+    if (solved) {
+      const sensor::CapacitanceFrame& frame = readout->frame();
+      add_line(frame.timestamp, [&](int c) { return frame.cells(c); }, static_cast<int>(frame.cells.size()));
+      ++lines;
     }
   });
-  if (failed) std::rethrow_exception(failed);
   parser.finish();
   if (lines == 0)
     throw Error(at + ": no frame of readings (" + link_summary(parser.counts()) + "), expected frames of the glove's cells or raw rows");
