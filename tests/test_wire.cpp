@@ -282,6 +282,29 @@ TEST_CASE("sequence numbers wrap, a Hello or a jump far back restarts the sequen
   CHECK(parser.counts().duplicates == 0);
 }
 
+TEST_CASE("a Hello after a reconnection continues the sequence: the frames sent meanwhile are lost") {
+  const Stream s = make_stream(10, 35, 0);  // sequences 0-9, device times 1.0 s to 1.15 s
+  device::FrameParser parser;
+  CHECK(parse(parser, join(s.frames), s, 36).size() == 10);
+  // The link was down while the device sent 7 frames (10-16); on the new connection it says Hello
+  // (sequence 17, a later time), then goes on with 18.
+  device::FrameWriter writer(17);
+  const Bytes hello = as_bytes(writer.hello(2000000, 9, 180, 44, "glauser2019"));
+  const float value = 1.0F;
+  const Bytes next = as_bytes(writer.values(device::FrameKind::Cells, 2016667, &value, 1));
+  std::vector<std::uint32_t> got;
+  for (const Bytes* b : {&hello, &next}) parser.feed(b->data(), b->size(), [&](const device::Frame& f) { got.push_back(f.header.sequence); });
+  CHECK(got == std::vector<std::uint32_t>{17, 18});
+  CHECK(parser.counts().lost == 7);
+  CHECK(parser.counts().restarts == 0);
+  // A Hello ahead in sequence but with an earlier time is a device that began again.
+  device::FrameWriter restarted(40);
+  const Bytes again = as_bytes(restarted.hello(1000, 9, 180, 44, "glauser2019"));
+  parser.feed(again.data(), again.size(), [&](const device::Frame&) {});
+  CHECK(parser.counts().restarts == 1);
+  CHECK(parser.counts().lost == 7);
+}
+
 TEST_CASE("bytes that are no frame are skipped, a header claiming too long a payload is refused") {
   const Stream s = make_stream(4, 41);
   Bytes noise = {'G', 'P', 'G', 'x', 0, 'G'};

@@ -118,21 +118,25 @@ class FrameParser {
   // Sequence numbers in serial-number arithmetic with a window of the last 64, as a replay
   // window does: true for a frame newer than every one before it.
   bool admit(const FrameHeader& header) noexcept {
-    if (header.kind == FrameKind::Hello && started_) {
+    const auto ahead = static_cast<std::int32_t>(header.sequence - highest_);
+    // A Hello ahead in sequence and in device time is the same device after a reconnection: its
+    // sequence goes on and the frames sent meanwhile are lost. Any other Hello is a restart.
+    if (header.kind == FrameKind::Hello && started_ && (ahead <= 0 || header.device_time_us < highest_time_us_)) {
       ++counts_.restarts;
       started_ = false;
     }
     if (!started_) {
       started_ = true;
       highest_ = header.sequence;
+      highest_time_us_ = header.device_time_us;
       seen_ = 1;
       return true;
     }
-    const auto ahead = static_cast<std::int32_t>(header.sequence - highest_);
     if (ahead > 0) {
       counts_.lost += static_cast<std::uint32_t>(ahead) - 1;
       seen_ = static_cast<std::uint32_t>(ahead) >= kWindow ? 1 : (seen_ << ahead) | 1;
       highest_ = header.sequence;
+      highest_time_us_ = header.device_time_us;
       return true;
     }
     const auto behind = static_cast<std::uint32_t>(-static_cast<std::int64_t>(ahead));
@@ -149,6 +153,7 @@ class FrameParser {
     }
     ++counts_.restarts;  // far behind: the device began again without a Hello
     highest_ = header.sequence;
+    highest_time_us_ = header.device_time_us;
     seen_ = 1;
     return true;
   }
@@ -158,6 +163,7 @@ class FrameParser {
   LinkCounts counts_;
   bool started_ = false;
   std::uint32_t highest_ = 0;
+  std::uint64_t highest_time_us_ = 0;  // the device time of the frame with the highest sequence
   std::uint64_t seen_ = 0;
 };
 
