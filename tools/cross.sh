@@ -21,7 +21,7 @@ build="build-$platform"
 stage="$PWD/$build/header-packages"
 rm -rf "$stage"
 mkdir -p "$stage/usr/include" "$stage/usr/share/cmake" "$stage/usr/lib/cmake" "$stage/usr/share/eigen3"
-for dir in eigen3 xsimd nlohmann doctest CLI openxr; do ln -s "/usr/include/$dir" "$stage/usr/include/$dir"; done
+for dir in eigen3 xsimd nlohmann doctest CLI openxr boost; do ln -s "/usr/include/$dir" "$stage/usr/include/$dir"; done
 cp -r /usr/share/eigen3/cmake "$stage/usr/share/eigen3/cmake"
 cp -r /usr/share/cmake/nlohmann_json /usr/share/cmake/CLI11 "$stage/usr/share/cmake/"
 cp -r /usr/lib/cmake/doctest "$stage/usr/lib/cmake/"

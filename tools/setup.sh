@@ -28,6 +28,7 @@ tool_packages=(
   libxsimd-dev        # xsimd: the library's SIMD kernels
   nlohmann-json3-dev  # JSON, for the file formats the library reads (model files, glove descriptions) and the tools
   libcli11-dev        # CLI11, the glovepose tool's command-line parsing (the library headers do not need it)
+  libboost-dev        # Boost.Asio (header-only), the tool's device links: serial ports, TCP and UDP
 )
 # The test suite adds these (tools/test.sh: every test, in two trees, and the cross builds).
 test_packages=(

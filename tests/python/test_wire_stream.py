@@ -1,4 +1,4 @@
-"""The simulator as a device and the tool as its reader, through the wire protocol. The decoder here
+"""The simulator as a device and the tool as its reader, through the wire protocol. The decoder (wire_doc.py)
 is written from docs/wire_protocol.md (struct and zlib's CRC-32), sharing no code with the C++
 encoder or parser:
 - `glovepose simulate --stream` writes frames that decode with valid CRCs, a Hello naming the glove,
@@ -23,12 +23,12 @@ import subprocess
 import sys
 import threading
 import time
-import zlib
 from pathlib import Path
-from typing import List, NamedTuple, Tuple
+from typing import List, Tuple
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from runner import Skip, Suite  # noqa: E402
+from wire_doc import Frame, decode, encode  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI = os.environ.get("GLOVEPOSE_CLI", "")
@@ -36,33 +36,6 @@ MODEL = str(ROOT / "models" / "glovepose_fcn512.safetensors")
 suite = Suite("glovepose_wire_")
 SIM = ["simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.5", "--gloves", "1", "--calibration-seconds", "10",
        "--seed", "6", "--threads", "1"]
-
-
-class Frame(NamedTuple):
-    kind: int
-    sequence: int
-    device_us: int
-    payload: bytes
-    start: int  # byte offset in the stream
-    end: int
-
-
-def decode(stream: bytes, cut_tail: bool = False) -> List[Frame]:
-    """Every frame of an undamaged stream, in order; asserts the layout and both CRCs. `cut_tail`:
-    the stream may end within a frame (a recording killed while writing it), which is left out."""
-    frames, at = [], 0
-    while at < len(stream):
-        if cut_tail and (len(stream) - at < 24 or len(stream) - at < 28 + struct.unpack_from("<H", stream, at + 16)[0]):
-            break
-        magic, version, kind, sequence, device_us, length, reserved, header_crc = struct.unpack_from("<2sBBIQHHI", stream, at)
-        assert magic == b"GP" and version == 1 and reserved == 0, f"frame at byte {at}: magic {magic!r}, version {version}"
-        assert header_crc == zlib.crc32(stream[at:at + 20]), f"frame at byte {at}: header CRC"
-        payload = stream[at + 24:at + 24 + length]
-        (payload_crc,) = struct.unpack_from("<I", stream, at + 24 + length)
-        assert payload_crc == zlib.crc32(payload), f"frame at byte {at}: payload CRC"
-        frames.append(Frame(kind, sequence, device_us, payload, at, at + 28 + length))
-        at += 28 + length
-    return frames
 
 
 def simulate(path: Path, payload: str) -> List[Frame]:
@@ -164,12 +137,6 @@ def damaged_frames_are_dropped_and_counted_lost():
     used = [k for k in range(1, len(frames)) if k not in damaged]
     session = [k for k in used if frames[k].device_us - frames[used[0]].device_us >= 10_000_000]
     assert poses.count("\n") == 1 + len(session), (poses.count("\n"), len(session), len(damaged))  # and the header line
-
-
-def encode(kind: int, sequence: int, device_us: int, payload: bytes) -> bytes:
-    """A frame as docs/wire_protocol.md lays it out."""
-    header = struct.pack("<2sBBIQHH", b"GP", 1, kind, sequence, device_us, len(payload), 0)
-    return header + struct.pack("<I", zlib.crc32(header)) + payload + struct.pack("<I", zlib.crc32(payload))
 
 
 def hello(glove: str, rows: int = 180, cells: int = 44) -> bytes:

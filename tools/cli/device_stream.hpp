@@ -1,6 +1,7 @@
 // The simulator as a device (glovepose simulate --stream): a recording's readings written as the
 // wire protocol's frames (docs/wire_protocol.md) to a byte stream, at the pace they were recorded or
-// faster, so a reader meets what a real glove would send: a Hello, then one frame per readout cycle.
+// faster, so a reader meets what a real glove would send: a Hello, then one frame per readout cycle
+// (on UDP, a Hello again every second of device time).
 #pragma once
 
 #include <glovepose/device/wire_format.hpp>
@@ -12,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "byte_link.hpp"
+#include "device_link.hpp"
 
 namespace glovepose::cli {
 
@@ -36,7 +37,7 @@ struct DeviceStreamCounts {
 /// Streams `data` (its recordings one after another, as the device's clock runs on: each recording
 /// continues one readout cycle after the previous one's last frame) to `sink`: a Hello, then one
 /// frame per frame of `data` (its raw rows as Measurements or Rows, or its cells).
-inline DeviceStreamCounts stream_dataset(const io::Dataset& data, const DeviceStreamSettings& settings, ByteSink& sink) {
+inline DeviceStreamCounts stream_dataset(const io::Dataset& data, const DeviceStreamSettings& settings, FrameSink& sink) {
   const bool rows = settings.payload != StreamPayload::Cells;
   if (rows && data.row_count == 0) throw Error("streaming raw rows needs a dataset with raw rows, but it has none");
   const io::RowClock clock = data.row_clock();
@@ -45,12 +46,16 @@ inline DeviceStreamCounts stream_dataset(const io::Dataset& data, const DeviceSt
   DeviceStreamCounts counts;
   const auto send = [&](core::Span<const std::uint8_t> frame) {
     if (frame.empty()) throw Error("a frame too large for the wire protocol (at most 4096 payload bytes)");
-    sink.write(frame.data(), frame.size());
+    sink.send(frame);
     ++counts.frames;
     counts.bytes += frame.size();
   };
-  send(writer.hello(0, settings.serial, static_cast<std::uint16_t>(rows ? data.row_count : 0), static_cast<std::uint16_t>(settings.cells),
-                    settings.glove_id));
+  const auto hello = [&](std::uint64_t device_us) {
+    send(writer.hello(device_us, settings.serial, static_cast<std::uint16_t>(rows ? data.row_count : 0),
+                      static_cast<std::uint16_t>(settings.cells), settings.glove_id));
+  };
+  hello(0);
+  std::uint64_t said_at_us = 0;
   std::vector<device::RowReading> readings(data.row_count);
   const auto start = std::chrono::steady_clock::now();
   double base = 0.0;  // device seconds at the current recording's time 0
@@ -61,6 +66,7 @@ inline DeviceStreamCounts stream_dataset(const io::Dataset& data, const DeviceSt
       std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                 std::chrono::duration<double>(end / settings.speed)));
     const auto us = [](double seconds) { return static_cast<std::uint64_t>(std::llround(seconds * 1e6)); };
+    if (sink.datagrams() && us(end) >= said_at_us + 1000000) hello(said_at_us = us(end));
     if (settings.payload == StreamPayload::Cells) {
       send(writer.values(device::FrameKind::Cells, us(end), data.cells.data() + f * data.cell_count, data.cell_count));
     } else if (settings.payload == StreamPayload::Measurements) {

@@ -3,7 +3,9 @@
 // stream's checked frames, in order, in the wire format itself: predict --raw, view --stdin and
 // import read it. It never replaces a file; each frame is written when it arrives and the file is
 // flushed to the disk at least once a second, so a kill loses nothing written and a power cut at most
-// the last second, and what is left is a valid recording (a frame cut off at the end is ignored).
+// the last second, and what is left is a valid recording (a frame cut off at the end is ignored). A
+// serial port, pty or socket that goes away is reopened (glove_link.hpp) and the recording goes on,
+// with what was lost meanwhile counted.
 #include <glovepose/device/frame_parser.hpp>
 
 #include <atomic>
@@ -22,6 +24,7 @@
 #include "byte_link.hpp"
 #include "commands.hpp"
 #include "glove_frames.hpp"
+#include "glove_link.hpp"
 
 namespace glovepose::cli {
 namespace {
@@ -105,16 +108,16 @@ void print_health(const HealthSecond& h, const device::LinkCounts& now) {
 }
 
 int record(const RecordOptions& o) {
-  ByteSource source(o.in);
+  GloveLink link(o.in);
   RecordingFile file(o.out);
   stop_on_signals();
-  device::FrameParser parser;
+  const auto counts = [&] { return link.counts(); };
   HealthSecond health;
   double first_time = std::nan(""), last_time = std::nan("");
   long kept = 0;
   using Clock = std::chrono::steady_clock;
   Clock::time_point flushed = Clock::now();
-  const auto on_frame = [&](const device::Frame& f) {
+  const auto on_frame = [&](const device::Frame& f, double) {
     file.write(f.bytes);
     ++kept;
     const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
@@ -122,8 +125,8 @@ int record(const RecordOptions& o) {
     last_time = t;
     const long second = static_cast<long>(std::floor(t));
     if (second != health.second) {
-      if (health.second >= 0 && !o.quiet) print_health(health, parser.counts());
-      health = HealthSecond{second, 0, 0, 0, parser.counts()};
+      if (health.second >= 0 && !o.quiet) print_health(health, counts());
+      health = HealthSecond{second, 0, 0, 0, counts()};
     }
     ++health.frames;
     if (f.header.kind == device::FrameKind::Rows) {
@@ -138,26 +141,31 @@ int record(const RecordOptions& o) {
       }
     }
   };
-  std::vector<std::uint8_t> buffer(1 << 16);
+  LinkEvents told = link.events();
   while (!record_stop) {
-    const long n = source.read(buffer.data(), buffer.size());
-    if (n == 0) break;
-    if (n > 0) feed_frames(parser, buffer.data(), static_cast<std::size_t>(n), on_frame);
+    if (!link.poll(std::chrono::milliseconds(200), on_frame)) break;
     if (Clock::now() - flushed >= std::chrono::seconds(1)) {
       file.flush();
       flushed = Clock::now();
     }
+    const LinkEvents& now = link.events();
+    if (now.losses != told.losses && !o.quiet)
+      std::fprintf(stderr, "glovepose record: link '%s' lost (%s); reopening it\n", o.in.c_str(), now.last_problem.c_str());
+    if (now.connections != told.connections && !o.quiet)
+      std::fprintf(stderr, "glovepose record: link '%s' open again (%llu attempts failed so far)\n", o.in.c_str(),
+                   static_cast<unsigned long long>(now.failed_opens));
+    told = now;
   }
-  parser.finish();
   if (kept == 0) {
     file.discard();
     throw Error("no frame of the wire protocol in " + (o.in == "-" ? std::string("stdin") : "'" + o.in + "'") + " (" +
-                link_summary(parser.counts()) + "), expected a glove's frames (docs/wire_protocol.md); nothing recorded");
+                link_summary(counts()) + "), expected a glove's frames (docs/wire_protocol.md); nothing recorded");
   }
   file.flush();
-  if (!o.quiet) print_health(health, parser.counts());
-  std::fprintf(stderr, "glovepose record: %s: %ld frames, %.1f s of device time%s; link: %s\n", o.out.c_str(), kept, last_time - first_time,
-               record_stop ? " (stopped by a signal)" : "", link_summary(parser.counts()).c_str());
+  if (!o.quiet) print_health(health, counts());
+  std::fprintf(stderr, "glovepose record: %s: %ld frames, %.1f s of device time%s; link: %s; %s\n", o.out.c_str(), kept,
+               last_time - first_time, record_stop ? " (stopped by a signal)" : "", link_summary(counts()).c_str(),
+               link_events_summary(link).c_str());
   return 0;
 }
 
@@ -169,7 +177,7 @@ Command add_record(CLI::App& tool) {
       "record",
       "Records a glove's wire stream (docs/wire_protocol.md) into a new file as it arrives, flushed to the disk every second, with the "
       "link's health per second on stderr; predict --raw, view --stdin and import read the recording.");
-  command->add_option("--in", o->in, "the stream: '-' for stdin (default), a file, a named pipe, a pty or a serial port")->type_name("SOURCE");
+  command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE");
   command->add_option("--out", o->out, "the recording, a new file (never replaces one)")->type_name("FILE")->required();
   command->add_flag("--quiet", o->quiet, "no health line per second, only the summary");
   return {command, [o] { return record(*o); }};

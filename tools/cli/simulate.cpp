@@ -58,7 +58,7 @@ int simulate(SimulateOptions o) {
     const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
     o.device.glove_id = glove.id();
     o.device.cells = glove.cell_count();
-    ByteSink sink(o.stream);
+    FrameSink sink(o.stream);
     std::fprintf(stderr, "glovepose simulate: %zu frames (%.1f s of readings) simulated in %.1f s; streaming to %s\n", data.frames(),
                  static_cast<double>(data.frames()) / config.recording.cycle_rate, simulated, o.stream.c_str());
     const DeviceStreamCounts sent = stream_dataset(data, o.device, sink);
@@ -126,7 +126,7 @@ Command add_simulate(CLI::App& tool) {
       command
           ->add_option("--stream", o->stream,
                        "stream the readings as a glove would, in the wire protocol (docs/wire_protocol.md), to TARGET: '-' for stdout, a "
-                       "file, a named pipe, a pty or a serial port")
+                       "file, a named pipe, a pty or a serial port, or udp:HOST:PORT (a frame per datagram, a Hello every second)")
           ->type_name("TARGET");
   command
       ->add_option("--stream-payload", o->payload,
