@@ -56,7 +56,7 @@ TEST_CASE(
     "cli: every command answers --help with its usage on stdout and exit code 0, an unknown option with exit code 2 and the option named "
     "on stderr") {
   for (const std::string command :
-       {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import", "record"}) {
+       {"", "predict", "info", "simulate", "train", "finetune", "eval", "fit-guided", "demo", "soak", "bench", "view", "import", "record", "serve"}) {
     CAPTURE(command);
     for (const std::string help : {"--help", "-h"}) {
       const Run asked = run_stream(command + " " + help, 1);
@@ -102,7 +102,8 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"soak", {"--minutes", "--estimators", "--seed", "--source-minutes", "--model"}},
       {"bench", {"--model", "--poses", "--json"}},
       {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}},
-      {"record", {"--in", "--out", "--quiet"}}};
+      {"record", {"--in", "--out", "--quiet"}},
+      {"serve", {"--in", "--model", "--hand", "--calibration-seconds", "--calibration", "--profiles", "--user", "--engine", "--osc", "--seconds", "--stats", "--no-real-time"}}};
   for (const auto& entry : commands) {
     const std::string& command = entry.first;  // not a structured binding: clang 14 cannot capture one in INFO
     const auto& options = entry.second;

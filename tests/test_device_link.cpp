@@ -52,7 +52,7 @@ std::vector<std::uint32_t> read_until(cli::GloveLink& link, std::size_t enough) 
   std::vector<std::uint32_t> got;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (got.size() < enough && std::chrono::steady_clock::now() < give_up)
-    link.poll(std::chrono::milliseconds(50), [&](const device::Frame& f, double) {
+    link.poll(std::chrono::milliseconds(50), [&](const device::Frame& f, double, double) {
       if (f.header.kind != device::FrameKind::Cells) return;
       float value = 0;
       REQUIRE(device::read_values(f, &value, 1) == Status::Ok);

@@ -44,6 +44,7 @@ test_packages=(
   python3-pip python3-setuptools python3-venv  # `pip install ./python` (the Python package) into a virtual
                       #   environment (Debian's pip refuses the system's Python, PEP 668) without any registry
   ccache              # tools/test.sh and tools/cross.sh compile through it (objects kept between runs)
+  liblo-tools         # oscdump, the independent OSC receiver of glovepose serve's test (tests/python/test_serve.py)
   chromium            # the browser test opens glovepose view's page headless (tests/python/test_view.py)
 )
 packages=("${tool_packages[@]}")

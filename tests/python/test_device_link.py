@@ -20,17 +20,16 @@ import random
 import re
 import signal
 import socket
-import struct
 import subprocess
 import sys
 import time
-import tty
 from pathlib import Path
-from typing import Callable, List
+from typing import List
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from runner import Skip, Suite  # noqa: E402
-from wire_doc import Frame, decode, encode  # noqa: E402
+from glove_device import PtyPort, free_port, play, run_with_options  # noqa: E402
+from wire_doc import Frame, decode  # noqa: E402
 
 CLI = os.environ.get("GLOVEPOSE_CLI", "")
 suite = Suite("glovepose_link_")
@@ -56,45 +55,6 @@ def glove_frames() -> List[Frame]:
         _frames.extend(decode(path.read_bytes()))
         assert _frames[0].kind == 1 and all(f.kind == 4 for f in _frames[1:])
     return _frames
-
-
-def with_serial(hello: Frame, sequence: int, device_us: int, serial: int | None = None) -> bytes:
-    """The device's Hello for a new connection: its next sequence number and the time now."""
-    payload = hello.payload if serial is None else struct.pack("<I", serial) + hello.payload[4:]
-    return encode(1, sequence, device_us, payload)
-
-
-def play(frames: List[Frame], send: Callable[[bytes], None], reconnect: Callable[[], None], reopenings: int, rng: random.Random,
-         changed_serial: bool = False) -> List[int]:
-    """Sends the frames at OPTIONS.speed times real time; at `reopenings` random moments the link is
-    closed and opened again (`reconnect`), the frames of 0.05-0.4 s of device time meanwhile never
-    sent, and the first of those replaced by a Hello, as a device that goes on counting would send
-    on its new connection. Returns the sequences never sent."""
-    readings = frames[1:]
-    moments = sorted(rng.sample(range(30, len(readings) - 30), reopenings))
-    unsent: List[int] = []
-    start = time.monotonic()
-    first_us = readings[0].device_us
-    i = 0
-    send(encode(1, frames[0].sequence, frames[0].device_us, frames[0].payload))
-    while i < len(readings):
-        due = start + (readings[i].device_us - first_us) * 1e-6 / OPTIONS.speed
-        wait = due - time.monotonic()
-        if wait > 0:
-            time.sleep(wait)
-        if moments and i >= moments[0]:
-            moments.pop(0)
-            reconnect()
-            skip = max(1, int(rng.uniform(0.05, 0.4) * 60))
-            gone = readings[i:i + skip]
-            unsent.extend(f.sequence for f in gone[1:])
-            i += len(gone)
-            start -= len(gone) / 60 / OPTIONS.speed  # the device did not wait while the link was down
-            send(with_serial(frames[0], gone[0].sequence, gone[0].device_us, 78 if changed_serial else None))
-            continue
-        send(encode(4, readings[i].sequence, readings[i].device_us, readings[i].payload))
-        i += 1
-    return unsent
 
 
 def record(source: str, out: Path) -> subprocess.Popen:
@@ -135,40 +95,14 @@ def check_recording(path: Path, frames: List[Frame], err: str, opened: int, unse
 def a_pty_closed_and_reopened_loses_only_what_it_did_not_carry():
     setup_checks()
     frames = glove_frames()
-    link = suite.tmp / "glove-port"  # a stable name, as udev gives a glove (socat's link= likewise)
-    state = {}
-
-    def open_pty():
-        master, slave = os.openpty()
-        tty.setraw(slave)  # as a serial port's driver is: no byte is translated before the reader opens it
-        staged = suite.tmp / "glove-port.new"
-        staged.unlink(missing_ok=True)
-        staged.symlink_to(os.ttyname(slave))
-        os.replace(staged, link)
-        state["master"], state["slave"] = master, slave
-
-    def reconnect():
-        os.close(state["master"])  # the reader's side hangs up
-        os.close(state["slave"])
-        time.sleep(0.02)
-        open_pty()
-
-    open_pty()
+    port = PtyPort(suite.tmp / "glove-port")
     out = suite.tmp / "pty.gpw"
-    rec = record(str(link), out)
+    rec = record(str(port.name), out)
     time.sleep(0.3)
-    unsent = play(frames, lambda b: os.write(state["master"], b), reconnect, OPTIONS.reopen, random.Random(3))
+    unsent = play(frames, port.send, port.reopen, OPTIONS.reopen, random.Random(3), OPTIONS.speed)
     err = stop(rec)
-    os.close(state["master"])
-    os.close(state["slave"])
+    port.close()
     check_recording(out, frames, err, OPTIONS.reopen + 1, unsent)
-
-
-
-def free_port(kind: int) -> int:
-    with socket.socket(socket.AF_INET, kind) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class TcpDevice:
@@ -203,7 +137,7 @@ def a_tcp_device_dropped_and_reconnected():
     frames = glove_frames()
     out = suite.tmp / "tcp.gpw"
     device = TcpDevice(out)
-    unsent = play(frames, device.send, device.reconnect, OPTIONS.reopen, random.Random(4))
+    unsent = play(frames, device.send, device.reconnect, OPTIONS.reopen, random.Random(4), OPTIONS.speed)
     err = stop(device.rec)
     device.close()
     check_recording(out, frames, err, OPTIONS.reopen + 1, unsent)
@@ -221,7 +155,7 @@ def udp_datagrams_lost_on_the_way_are_counted():
     rng = random.Random(5)
     # one datagram per frame, 1 in 20 never sent: a datagram link has no connection to lose
     unsent = play(frames, lambda b: None if (b[3] == 4 and rng.random() < 0.05) else sender.sendto(b, ("127.0.0.1", port)),
-                  lambda: None, 0, rng)
+                  lambda: None, 0, rng, OPTIONS.speed)
     err = stop(rec)
     sender.close()
     kept = {f.sequence for f in decode(out.read_bytes())}
@@ -255,7 +189,7 @@ def another_glove_after_a_reconnection_is_an_error():
     frames = glove_frames()
     out = suite.tmp / "swapped.gpw"
     device = TcpDevice(out, reader_may_leave=True)
-    play(frames[:200], device.send, device.reconnect, 1, random.Random(6), changed_serial=True)
+    play(frames[:200], device.send, device.reconnect, 1, random.Random(6), OPTIONS.speed, changed_serial=True)
     _, err = device.rec.communicate(timeout=30)
     device.close()
     assert device.rec.returncode != 0, err
@@ -276,9 +210,4 @@ def a_port_that_is_not_there_is_an_error_at_once():
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--minutes", type=float, default=OPTIONS.minutes, help="the simulated take's length")
-    parser.add_argument("--reopen", type=int, default=OPTIONS.reopen, help="reopenings of each link")
-    parser.add_argument("--speed", type=float, default=OPTIONS.speed, help="times real time")
-    OPTIONS = parser.parse_args()
-    sys.exit(suite.run())
+    sys.exit(run_with_options(suite, OPTIONS, "reopenings of each link"))

@@ -6,6 +6,7 @@
 #include <glovepose/config.hpp>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -53,6 +54,21 @@ inline void close_fd(int fd) noexcept {
   (void)::_close(fd);
 #else
   (void)::close(fd);
+#endif
+}
+
+/// SIGINT and SIGTERM call `handler` (which sets a flag the command checks); on POSIX they also
+/// interrupt a read that waits (no SA_RESTART), so a command blocked on stdin or a pipe stops too.
+inline void stop_on_signals(void (*handler)(int)) {
+#ifdef _WIN32
+  std::signal(SIGINT, handler);
+  std::signal(SIGTERM, handler);
+#else
+  struct sigaction action {};
+  action.sa_handler = handler;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
 #endif
 }
 

@@ -55,6 +55,8 @@ Command add_bench(CLI::App& tool);
 Command add_view(CLI::App& tool);
 /// `glovepose record` (record.cpp).
 Command add_record(CLI::App& tool);
+/// `glovepose serve` (serve.cpp).
+Command add_serve(CLI::App& tool);
 
 /// A file shipped in models/ (a model, the calibration sequence): where `cmake --install` puts them
 /// relative to the executable (GLOVEPOSE_MODELS_FROM_BIN, ../share/glovepose/models by default);

@@ -34,7 +34,7 @@ namespace glovepose::cli {
 
 /// The help text of an option naming a link.
 inline constexpr const char* kLinkHelp =
-    "the glove's link: '-' for stdin (default), a file or named pipe, a pty or serial port (its path, or serial:PORT[@BAUD], "
+    "the glove's link: '-' for stdin, a file or named pipe, a pty or serial port (its path, or serial:PORT[@BAUD], "
     "115200 baud unless told), tcp:HOST:PORT, or udp:[ADDRESS:]PORT; a port or socket that goes away is reopened";
 
 /// Where a link's bytes come from, parsed from the user's text.
@@ -277,49 +277,66 @@ class DeviceLink {
   std::optional<Clock::time_point> down_since_;
 };
 
+/// Datagrams to one HOST:PORT (resolved once), sent without waiting: a device's frames on UDP, OSC.
+class UdpSender {
+ public:
+  /// `what` names the target in messages ("--osc '127.0.0.1:9000'").
+  UdpSender(const std::string& host, unsigned port, const std::string& what) : socket_(io_) {
+    boost::system::error_code e;
+    boost::asio::ip::udp::resolver resolver(io_);
+    const auto endpoints = resolver.resolve(boost::asio::ip::udp::v4(), host, std::to_string(port), e);
+    if (e || endpoints.empty()) throw Error(what + ": cannot resolve '" + host + "': " + e.message());
+    to_ = endpoints.begin()->endpoint();
+    socket_.open(to_.protocol(), e);
+    if (!e) socket_.non_blocking(true, e);
+    if (e) throw Error(what + ": cannot open a UDP socket: " + e.message());
+  }
+
+  /// Sends one datagram; false when it could not be sent. One nobody receives is sent: a sender on
+  /// UDP does not know or care whether anyone listens.
+  bool send(const std::uint8_t* data, std::size_t size) {
+    boost::system::error_code e;
+    socket_.send_to(boost::asio::buffer(data, size), to_, 0, e);
+    return !e || e == boost::asio::error::connection_refused;
+  }
+
+ private:
+  boost::asio::io_context io_;
+  boost::asio::ip::udp::socket socket_;
+  boost::asio::ip::udp::endpoint to_;
+};
+
 /// Where a device's frames go (glovepose simulate --stream): '-' for stdout or a path (a file, a named
 /// pipe, a pty or serial port: byte_link.hpp's ByteSink), or udp:HOST:PORT, one frame per datagram.
 class FrameSink {
  public:
-  explicit FrameSink(const std::string& target) {
+  explicit FrameSink(const std::string& target) : target_(target) {
     if (target.rfind("udp:", 0) != 0) {
       bytes_ = std::make_unique<ByteSink>(target);
       return;
     }
     const LinkAddress a = LinkAddress::parse(target);
-    boost::system::error_code e;
-    boost::asio::ip::udp::resolver resolver(io_);
-    const auto endpoints = resolver.resolve(boost::asio::ip::udp::v4(), a.where, std::to_string(a.port), e);
-    if (e || endpoints.empty()) throw Error("stream target '" + target + "': cannot resolve '" + a.where + "': " + e.message());
-    to_ = endpoints.begin()->endpoint();
-    udp_ = std::make_unique<boost::asio::ip::udp::socket>(io_);
-    udp_->open(to_.protocol(), e);
-    if (e) throw Error("stream target '" + target + "': cannot open a UDP socket: " + e.message());
-    target_ = target;
+    udp_ = std::make_unique<UdpSender>(a.where, a.port, "stream target '" + target + "'");
   }
 
   /// Whether the link has no connection (datagrams): a reader may start at any moment, so the
   /// device says its Hello again every second.
   bool datagrams() const { return udp_ != nullptr; }
 
-  /// Sends one whole frame; throws Error when a byte stream's other end is gone. A datagram nobody
-  /// receives is not an error: a device on UDP sends whether anyone listens or not.
+  /// Sends one whole frame; throws Error when a byte stream's other end is gone or a datagram
+  /// cannot be sent.
   void send(core::Span<const std::uint8_t> frame) {
     if (bytes_) {
       bytes_->write(frame.data(), frame.size());
-      return;
+    } else if (!udp_->send(frame.data(), frame.size())) {
+      throw Error("stream target '" + target_ + "': cannot send a datagram");
     }
-    boost::system::error_code e;
-    udp_->send_to(boost::asio::buffer(frame.data(), frame.size()), to_, 0, e);
-    if (e && e != boost::asio::error::connection_refused) throw Error("stream target '" + target_ + "': cannot send: " + e.message());
   }
 
  private:
-  std::unique_ptr<ByteSink> bytes_;
-  boost::asio::io_context io_;
-  std::unique_ptr<boost::asio::ip::udp::socket> udp_;
-  boost::asio::ip::udp::endpoint to_;
   std::string target_;
+  std::unique_ptr<ByteSink> bytes_;
+  std::unique_ptr<UdpSender> udp_;
 };
 
 }  // namespace glovepose::cli

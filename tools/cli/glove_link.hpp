@@ -46,8 +46,9 @@ class GloveLink {
       : link_(LinkAddress::parse(source), timing), identity_(std::move(expected)), buffer_(1 << 16) {}
 
   /// Reads for at most `wait` (a file or stdin: until bytes come) and calls
-  /// `use(const device::Frame&, double host_seconds)` for each frame passed on, Hellos included, with
-  /// its device time mapped onto host_seconds(). False once a file or stdin has ended.
+  /// `use(const device::Frame&, double mapped, double arrived)` for each frame passed on, Hellos
+  /// included: its device time mapped onto host_seconds(), and when its last byte was read. False
+  /// once a file or stdin has ended.
   template <typename Use>
   bool poll(std::chrono::milliseconds wait, Use&& use) {
     const long n = link_.read(buffer_.data(), buffer_.size(), wait);
@@ -68,7 +69,7 @@ class GloveLink {
         return;
       }
       clock_.add(f.header.device_time_us, arrived);
-      use(f, clock_.to_host(f.header.device_time_us));
+      use(f, clock_.to_host(f.header.device_time_us), arrived);
     });
     return true;
   }

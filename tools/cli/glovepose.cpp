@@ -25,6 +25,10 @@
 //       per-stage latency of one pose on this machine against the paper's 5 ms budget (bench.cpp).
 //   glovepose view [--port P] [--model FILE] [--seed S] [--replay FILE | --stdin] [--seconds N]
 //       the hand live in the browser, from a simulated, replayed or real glove (view.cpp).
+//   glovepose record --in SOURCE --out FILE [--quiet]
+//       a glove's wire stream kept in a new file as it arrives (record.cpp).
+//   glovepose serve --in SOURCE [--engine PORT] [--osc HOST:PORT] [--profiles DIR --user NAME] [--stats]
+//       a glove's poses published to engines and OSC as they come (serve.cpp).
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/grid/glove_description.hpp>
@@ -282,7 +286,7 @@ int main(int argc, char** argv) {
   std::string command_line = "glovepose";
   for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
   for (cli::Command& command : cli::add_training_commands(tool, command_line)) commands.push_back(std::move(command));
-  for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view, &cli::add_record}) commands.push_back(add(tool));
+  for (const auto add : {&cli::add_demo, &cli::add_soak, &cli::add_bench, &cli::add_view, &cli::add_record, &cli::add_serve}) commands.push_back(add(tool));
   try {
     tool.parse(argc, argv);
     if (*version) {

@@ -37,20 +37,6 @@ struct RecordOptions {
 std::atomic<bool> record_stop{false};
 extern "C" void record_on_signal(int) { record_stop = true; }
 
-// SIGINT and SIGTERM end the recording cleanly; on POSIX they interrupt a read that waits.
-void stop_on_signals() {
-#ifdef _WIN32
-  std::signal(SIGINT, record_on_signal);
-  std::signal(SIGTERM, record_on_signal);
-#else
-  struct sigaction action {};
-  action.sa_handler = record_on_signal;  // no SA_RESTART: read() returns EINTR
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-#endif
-}
-
 // The recording file: created new, appended to, flushed to the disk on request.
 class RecordingFile {
  public:
@@ -110,14 +96,14 @@ void print_health(const HealthSecond& h, const device::LinkCounts& now) {
 int record(const RecordOptions& o) {
   GloveLink link(o.in);
   RecordingFile file(o.out);
-  stop_on_signals();
+  stop_on_signals(record_on_signal);
   const auto counts = [&] { return link.counts(); };
   HealthSecond health;
   double first_time = std::nan(""), last_time = std::nan("");
   long kept = 0;
   using Clock = std::chrono::steady_clock;
   Clock::time_point flushed = Clock::now();
-  const auto on_frame = [&](const device::Frame& f, double) {
+  const auto on_frame = [&](const device::Frame& f, double, double) {
     file.write(f.bytes);
     ++kept;
     const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
@@ -177,7 +163,7 @@ Command add_record(CLI::App& tool) {
       "record",
       "Records a glove's wire stream (docs/wire_protocol.md) into a new file as it arrives, flushed to the disk every second, with the "
       "link's health per second on stderr; predict --raw, view --stdin and import read the recording.");
-  command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE");
+  command->add_option("--in", o->in, std::string(kLinkHelp) + " (default: stdin)")->type_name("SOURCE");
   command->add_option("--out", o->out, "the recording, a new file (never replaces one)")->type_name("FILE")->required();
   command->add_flag("--quiet", o->quiet, "no health line per second, only the summary");
   return {command, [o] { return record(*o); }};

@@ -93,6 +93,11 @@ inline void put_f32(std::uint8_t* p, float v) noexcept {
   std::memcpy(&bits, &v, 4);
   put_u32(p, bits);
 }
+inline void put_f64(std::uint8_t* p, double v) noexcept {
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &v, 8);
+  put_u64(p, bits);
+}
 inline std::uint16_t get_u16(const std::uint8_t* p) noexcept { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
 inline std::uint32_t get_u32(const std::uint8_t* p) noexcept {
   return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) | (static_cast<std::uint32_t>(p[2]) << 16) |

@@ -1,0 +1,258 @@
+"""glovepose serve: a glove's poses to many programs at once. The device is this test
+(glove_device.py: a simulated glove over a pty it closes and opens again); the engine stream's
+clients decode it as docs/pose_stream.md lays it out (struct and zlib here, no code shared with the
+service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
+- the poses every reading client gets are those `predict --raw` computes from the very bytes the
+  device sent (the same estimator, fed directly), to the 9 digits predict prints, with the same
+  stream times, none missing;
+- 8 clients at once, one of them stalled: the other 7 get every pose, and the service's own share
+  of the latency (its --stats figure) is printed, bounded at 10 ms at p99 (the target is 2 ms);
+- after each reopening of the pty, poses resume within 0.5 s, with the glove's profile kept;
+- the profile made on the fly is saved, and applied when serve starts again;
+- oscdump receives the documented messages with the estimator's angles.
+
+    GLOVEPOSE_CLI=build/tools/glovepose /usr/bin/python3 tests/python/test_serve.py
+    ... test_serve.py --minutes 10 --reopen 20 --speed 1   (the long run: 10 minutes in real time)"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import re
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import selectors
+import threading
+import time
+import zlib
+from pathlib import Path
+from typing import List, Tuple
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from glove_device import PtyPort, free_port, play, run_with_options  # noqa: E402
+from runner import Skip, Suite  # noqa: E402
+from wire_doc import decode  # noqa: E402
+
+CLI = os.environ.get("GLOVEPOSE_CLI", "")
+suite = Suite("glovepose_serve_")
+OPTIONS = argparse.Namespace(minutes=0.5, reopen=4, speed=1.0)
+MODEL = str(Path(__file__).resolve().parents[2] / "models" / "glovepose_fcn512.safetensors")  # serve's default
+CALIBRATION_SECONDS = "10"
+MESSAGE = struct.Struct("<2sBBIQdddHH25dI")  # docs/pose_stream.md, "The engine stream"
+
+
+def setup_checks():
+    if not CLI:
+        raise Skip("GLOVEPOSE_CLI is not set")
+    if shutil.which("oscdump") is None:
+        raise Skip("oscdump (Debian's liblo-tools, tools/setup.sh) is not installed")
+
+
+class Clients(threading.Thread):
+    """Engine-stream clients, each reading every message, with the time it arrived: one thread for all
+    of them (as an engine's one network thread), so that they take little of the machine's time."""
+
+    def __init__(self, port: int, count: int):
+        super().__init__(daemon=True)
+        self.socks = [socket.create_connection(("127.0.0.1", port)) for _ in range(count)]
+        self.messages: List[List[Tuple[float, tuple]]] = [[] for _ in range(count)]
+        self.selector = selectors.DefaultSelector()
+        for k, sock in enumerate(self.socks):
+            self.selector.register(sock, selectors.EVENT_READ, k)
+        self.buffers = [b""] * count
+        self.start()
+
+    def run(self):
+        open_ = len(self.socks)
+        while open_:
+            for key, _ in self.selector.select():
+                k = key.data
+                try:
+                    chunk = self.socks[k].recv(65536)
+                except OSError:
+                    chunk = b""
+                if not chunk:
+                    self.selector.unregister(self.socks[k])
+                    open_ -= 1
+                    continue
+                now = time.monotonic()
+                buffer = self.buffers[k] + chunk
+                while len(buffer) >= MESSAGE.size:
+                    fields = MESSAGE.unpack_from(buffer)
+                    assert fields[0] == b"GH" and fields[1] == 1 and fields[8] == 25 and fields[9] == 0, fields[:10]
+                    assert fields[-1] == zlib.crc32(buffer[:MESSAGE.size - 4]), "a message's CRC"
+                    self.messages[k].append((now, fields))
+                    buffer = buffer[MESSAGE.size:]
+                self.buffers[k] = buffer
+
+
+def start_serve(args: List[str], stdin=None) -> Tuple[subprocess.Popen, int, List[str]]:
+    serve = subprocess.Popen([CLI, "serve", *args, "--engine", "0", "--stats"], stdin=stdin, stderr=subprocess.PIPE, text=True)
+    lines: List[str] = []
+    port = 0
+    while not port:
+        line = serve.stderr.readline()
+        assert line, f"serve ended: {lines}"
+        lines.append(line)
+        found = re.search(r"engine stream on 127\.0\.0\.1:(\d+)", line)
+        port = int(found.group(1)) if found else 0
+    threading.Thread(target=lambda: lines.extend(iter(serve.stderr.readline, "")), daemon=True).start()
+    return serve, port, lines
+
+
+def predict(stream: Path, calibration: List[str]) -> List[List[str]]:
+    result = subprocess.run([CLI, "predict", "--model", MODEL, "--raw", "--in", str(stream), *calibration], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith("thumb_base_abduction,"), lines[0]  # the header: the angles' names
+    return [line.split(",") for line in lines[1:]]
+
+
+def as_printed(angles) -> List[str]:
+    return ["%.9g" % a for a in angles]
+
+
+@suite.test
+def poses_through_a_reopened_pty_equal_those_of_an_estimator_fed_directly():
+    setup_checks()
+    take = suite.tmp / "take.gpw"
+    result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", str(OPTIONS.minutes), "--gloves", "1",
+                             "--calibration-seconds", CALIBRATION_SECONDS, "--seed", "8", "--threads", "1", "--stream", str(take),
+                             "--stream-payload", "cells", "--speed", "0", "--serial", "77"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    frames = decode(take.read_bytes())
+    profiles = suite.tmp / "profiles"
+    profiles.mkdir()
+    port = PtyPort(suite.tmp / "glove-port")
+    osc_port = free_port(socket.SOCK_DGRAM)
+    osc_out = open(suite.tmp / "osc.txt", "w")
+    oscdump = subprocess.Popen(["oscdump", "-L", str(osc_port)], stdout=osc_out, stderr=subprocess.STDOUT)
+    serve, engine_port, log = start_serve(["--in", str(port.name), "--osc", f"127.0.0.1:{osc_port}", "--calibration-seconds",
+                                           CALIBRATION_SECONDS, "--profiles", str(profiles), "--user", "ana"])
+    clients = Clients(engine_port, 7)
+    stalled = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 2048)  # fills after a few messages, and is never read
+    stalled.connect(("127.0.0.1", engine_port))
+    time.sleep(0.5)  # serve takes the clients before the first pose
+
+    sent = bytearray()
+    resumed_marks: List[float] = []
+
+    def send(data: bytes):
+        sent.extend(data)
+        port.send(data)
+
+    play(frames, send, port.reopen, OPTIONS.reopen, random.Random(11), OPTIONS.speed, reconnected=lambda: resumed_marks.append(time.monotonic()))
+    time.sleep(0.5)
+    serve.send_signal(signal.SIGINT)
+    serve.wait(timeout=30)
+    time.sleep(0.3)
+    oscdump.terminate()
+    oscdump.wait()
+    osc_out.close()
+    port.close()
+    stalled.close()
+    text = "".join(log)
+    assert serve.returncode == 0, text
+
+    # The reference: predict --raw on the bytes the device sent, the same calibration on the fly.
+    delivered = suite.tmp / "delivered.gpw"
+    delivered.write_bytes(bytes(sent))
+    reference = predict(delivered, ["--calibration-seconds", CALIBRATION_SECONDS])
+    assert len(reference) > 100, len(reference)
+    for k, got in enumerate(clients.messages):
+        assert len(got) == len(reference), f"client {k}: {len(got)} poses, predict made {len(reference)}"
+        assert [f[4] for _, f in got] == list(range(got[0][1][4], got[0][1][4] + len(got))), f"client {k}: sequence numbers skip"
+        for i, ((_, f), expected) in enumerate(zip(got, reference)):
+            assert as_printed(f[10:35]) == expected, f"client {k}, pose {i}: {as_printed(f[10:35])[:3]} against {expected[:3]}"
+        times = [f[5] for _, f in got]
+        assert all(b > a for a, b in zip(times, times[1:])), f"client {k}: stream times go back"
+    missed = int(re.search(r"(\d+) missed by clients that did not read", text).group(1))
+    assert missed > 0, "the stalled client missed nothing: it was not stalled"
+
+    # The service's own added latency, and each client's delivery time.
+    latency = re.search(r"latency \(last byte read to pose sent\) over \d+ poses: p50 [0-9.]+ ms, p99 ([0-9.]+) ms; the service.s own "
+                        r"\(its frame.s handling to the pose sent, less the estimator.s work\): p50 [0-9.]+ ms, p99 ([0-9.]+) ms", text)
+    total_p99, p99 = float(latency.group(1)), float(latency.group(2))
+    # The target is 2 ms. On a 2-core virtual machine shared with the clients, oscdump and this device,
+    # runs measured p50 0.17-0.3 ms and p99 1.0-3.8 ms, the tail from stalls of the whole thread (even
+    # real-time scheduled, it loses the CPU for 2-6 ms now and then: docs/pose_stream.md). 10 ms
+    # catches a service that waits on a client or the disk per pose.
+    assert p99 <= 10.0, f"serve adds {p99} ms at p99: {text}"
+    delivery = sorted(arrived - f[7] for got in clients.messages for arrived, f in got)
+    client_p99 = delivery[int(0.99 * len(delivery))] * 1e3
+
+    # Poses resume after each reopening.
+    arrivals = [arrived for arrived, _ in clients.messages[0]]
+    waits = []
+    for mark in resumed_marks:
+        after = [t for t in arrivals if t > mark]
+        assert after, "no pose after a reopening"
+        waits.append(after[0] - mark)
+    assert len(resumed_marks) == OPTIONS.reopen and max(waits) <= 0.5, waits
+    opened = int(re.search(r"opened (\d+) time", text).group(1))
+    assert opened == OPTIONS.reopen + 1, text
+
+    # The profile was made on the fly and saved.
+    profile = profiles / "glauser2019-44-77-ana.calibration"
+    assert profile.exists() and "profile '" in text and "saved" in text, text
+
+    # OSC: every pose's angles and time, as oscdump shows them (float32 printed with 6 decimals).
+    osc = (suite.tmp / "osc.txt").read_text().splitlines()
+    angles = [line.split()[3:] for line in osc if " /glovepose/right/angles fffffffffffffffffffffffff " in line]
+    stamps = [line.split()[3:] for line in osc if " /glovepose/right/time hd " in line]
+    assert len(angles) == len(reference) and len(stamps) == len(reference), (len(angles), len(stamps), len(reference))
+    for a, expected in zip(angles, reference):
+        assert all(abs(float(x) - struct.unpack("<f", struct.pack("<f", float(e)))[0]) <= 1e-6 for x, e in zip(a, expected)), (a[:3], expected[:3])
+    assert [int(s[0]) for s in stamps] == [f[4] for _, f in clients.messages[0]]
+    print(f"  {len(reference)} poses to 7 clients and OSC, a stalled client missed {missed}; {len(resumed_marks)} reopenings, poses back"
+          f" after at most {max(waits) * 1e3:.0f} ms; serve adds p99 {p99:.3f} ms (read to sent, the estimator and backlogs included,"
+          f" {total_p99:.3f} ms), delivery to a client p99 {client_p99:.3f} ms")
+
+
+@suite.test
+def a_saved_profile_is_applied_when_serve_starts_again():
+    setup_checks()
+    profiles = suite.tmp / "profiles"
+    profile = profiles / "glauser2019-44-77-ana.calibration"
+    if not profile.exists():
+        raise Skip("needs the profile the test before saved")
+    later = suite.tmp / "later.gpw"
+    result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.2", "--gloves", "1", "--calibration-seconds",
+                             "0", "--seed", "8", "--threads", "1", "--stream", str(later), "--stream-payload", "cells", "--speed", "0", "--serial",
+                             "77"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    serve, engine_port, log = start_serve(["--in", "-", "--profiles", str(profiles), "--user", "ana"], stdin=subprocess.PIPE)
+    client = Clients(engine_port, 1)
+    time.sleep(0.3)  # serve takes the client before the first pose
+    serve.stdin.buffer.write(later.read_bytes())
+    serve.stdin.close()
+    serve.wait(timeout=60)
+    time.sleep(0.2)
+    text = "".join(log)
+    assert serve.returncode == 0, text
+    assert f"profile '{profile}' applied" in text, text
+    reference = predict(later, ["--calibration", str(profile)])
+    # A stream read all at once makes poses faster than this client reads them: it misses some (the
+    # sequence numbers say which), and gets the others as predict made them.
+    got = client.messages[0]
+    assert len(got) > 50 and got[-1][1][4] == len(reference), f"{len(got)} poses, the last {got[-1][1][4]}; predict made {len(reference)}"
+    for _, f in got:
+        assert as_printed(f[10:35]) == reference[f[4] - 1], f"pose {f[4]} differs from predict's"
+
+
+@suite.test
+def serve_given_nothing_to_do_says_so():
+    setup_checks()
+    for args, says in ((["--in", "-"], "nothing to serve to"), (["--in", "-", "--engine", "0", "--profiles", str(suite.tmp)], "needs --user")):
+        result = subprocess.run([CLI, "serve", *args], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=30)
+        assert result.returncode != 0 and says in result.stderr, (args, result.stderr)
+
+
+if __name__ == "__main__":
+    sys.exit(run_with_options(suite, OPTIONS, "reopenings of the pty"))
