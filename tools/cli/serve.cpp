@@ -81,8 +81,8 @@ class LatencyStats {
 
 // A live glove's poses should not wait for other programs: the thread asks for a real-time
 // scheduling class (Linux: SCHED_FIFO at a low priority, allowed to root, CAP_SYS_NICE or an
-// RLIMIT_RTPRIO; Windows: a time-critical thread). Measured with 7 clients on 2 cores: the service's
-// own p99 from 2.2 ms to 0.8 ms (docs/pose_stream.md). Says what it got.
+// RLIMIT_RTPRIO; Windows: a time-critical thread), so that other programs' work delays poses less
+// (docs/pose_stream.md). Says what it got.
 std::string ask_for_real_time() {
 #ifdef _WIN32
   return SetThreadPriority(GetCurrentThread(), THREAD_PRIORITY_TIME_CRITICAL) ? "a time-critical thread" : "normal priority (refused)";
