@@ -20,6 +20,7 @@
 #include "grid/grid_map.hpp"
 #include "hand/collision.hpp"
 #include "hand/dofs.hpp"
+#include "hand/finger_curls.hpp"
 #include "hand/joint_list.hpp"
 #include "hand/kinematics.hpp"
 #include "hand/openxr_joints.hpp"

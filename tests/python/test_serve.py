@@ -9,7 +9,15 @@ service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
   of the latency (its --stats figure) is printed, bounded at 10 ms at p99 (the target is 2 ms);
 - after each reopening of the pty, poses resume within 0.5 s, with the glove's profile kept;
 - the profile made on the fly is saved, and applied when serve starts again;
-- oscdump receives the documented messages with the estimator's angles.
+- oscdump receives the documented messages with the estimator's angles;
+- OpenGloves lines read from serve's pty, decoded as the protocol's documentation (opengloves-driver's
+  wiki, "Driver Input") and docs/pose_stream.md say, give the curls and splays of the documented
+  mapping of the estimator's angles (computed here from the hand model's published limits), while
+  the "driver" writes force feedback back; VRChat's avatar parameters reach oscdump, at most 20 sets
+  a second, with the same mapping's values;
+- the engine stream's C client (bindings/c, its sample stream_print.c) and C# client
+  (bindings/csharp/Runtime/PoseStream.cs, its sample Samples~/StreamPrint.cs, built with Mono's mcs)
+  print the poses predict computes, by their sequence numbers, with the same stream times.
 
     GLOVEPOSE_CLI=build/tools/glovepose /usr/bin/python3 tests/python/test_serve.py
     ... test_serve.py --minutes 10 --reopen 20 --speed 1   (the long run: 10 minutes in real time)"""
@@ -17,6 +25,7 @@ service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import random
 import re
@@ -29,6 +38,7 @@ import sys
 import selectors
 import threading
 import time
+import tty
 import zlib
 from pathlib import Path
 from typing import List, Tuple
@@ -39,6 +49,8 @@ from runner import Skip, Suite  # noqa: E402
 from wire_doc import decode  # noqa: E402
 
 CLI = os.environ.get("GLOVEPOSE_CLI", "")
+STREAM_PRINT = os.environ.get("GLOVEPOSE_STREAM_PRINT", "")  # bindings/c/stream_print.c, built
+CSHARP = Path(__file__).resolve().parents[2] / "bindings" / "csharp"
 suite = Suite("glovepose_serve_")
 OPTIONS = argparse.Namespace(minutes=0.5, reopen=4, speed=1.0)
 MODEL = str(Path(__file__).resolve().parents[2] / "models" / "glovepose_fcn512.safetensors")  # serve's default
@@ -84,7 +96,7 @@ class Clients(threading.Thread):
                 buffer = self.buffers[k] + chunk
                 while len(buffer) >= MESSAGE.size:
                     fields = MESSAGE.unpack_from(buffer)
-                    assert fields[0] == b"GH" and fields[1] == 1 and fields[8] == 25 and fields[9] == 0, fields[:10]
+                    assert fields[0] == b"GH" and fields[1] == 1 and fields[2] == 0 and fields[8] == 25 and fields[9] == 0, fields[:10]  # hand 0: right
                     assert fields[-1] == zlib.crc32(buffer[:MESSAGE.size - 4]), "a message's CRC"
                     self.messages[k].append((now, fields))
                     buffer = buffer[MESSAGE.size:]
@@ -244,6 +256,227 @@ def a_saved_profile_is_applied_when_serve_starts_again():
     assert len(got) > 50 and got[-1][1][4] == len(reference), f"{len(got)} poses, the last {got[-1][1][4]}; predict made {len(reference)}"
     for _, f in got:
         assert as_printed(f[10:35]) == reference[f[4] - 1], f"pose {f[4]} differs from predict's"
+
+
+HAND_MODEL = Path(__file__).resolve().parents[1] / "reference" / "hmodel_template.hpp"
+FINGERS = ("thumb", "index", "middle", "ring", "pinky")
+
+
+def documented_curls(angles: List[float]):
+    """docs/pose_stream.md, "Curls and splays", from the hand model's published upper limits (the
+    shipped model's): per finger the joint curls (OpenGloves' joints 0-3), the finger's curl and splay."""
+    limits = {m.group(1): float(m.group(2)) for m in re.finditer(r'\{\d+, "(\w+)", \d+, \'[XYZ]\', [-0-9.]+, ([-0-9.]+)\}', HAND_MODEL.read_text())}
+    names = list(limits)  # theta 9..33: the angles' order
+    assert len(names) == 25 and names[0] == "thumb_base_abduction", names
+    value = dict(zip(names, angles))
+    out = []
+    for finger in FINGERS:
+        flex = [min(max(value[f"{finger}_{part}_flexion"] / limits[f"{finger}_{part}_flexion"], 0.0), 1.0) for part in ("base", "middle", "tip")]
+        joints = flex if finger == "thumb" else [0.0] + flex
+        splay = min(max(value[f"{finger}_base_abduction"] / math.radians(20.0), -1.0), 1.0)
+        out.append((joints, sum(flex) / 3.0, splay))
+    return out
+
+
+def decode_opengloves(line: str, most: int):
+    """An OpenGloves line as the wiki documents it: keys (a letter, or letters in brackets) each
+    followed by digits. Returns {key: value / most}, splays mapped back to -1..1."""
+    found = re.findall(r"(\([A-Z]+\)|[A-Z])(\d*)", line)
+    assert "".join(k + v for k, v in found) == line, f"not keys and numbers: {line!r}"
+    values = {}
+    for key, digits in found:
+        fraction = int(digits) / most
+        values[key] = (2.0 * fraction - 1.0) if re.fullmatch(r"\([A-E]B\)", key) else fraction
+    return values
+
+
+@suite.test
+def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays():
+    setup_checks()
+    take = suite.tmp / "opengloves.gpw"
+    result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.2", "--gloves", "1", "--calibration-seconds",
+                             "5", "--seed", "9", "--threads", "1", "--stream", str(take), "--stream-payload", "cells", "--speed", "0"],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    reference = [[float(x) for x in row] for row in predict(take, ["--calibration-seconds", "5"])]
+    link = suite.tmp / "glovepose-right"
+    osc_port = free_port(socket.SOCK_DGRAM)
+    osc_out = open(suite.tmp / "vrchat.txt", "w")
+    oscdump = subprocess.Popen(["oscdump", "-L", str(osc_port)], stdout=osc_out, stderr=subprocess.STDOUT)
+    log = open(suite.tmp / "opengloves-serve.txt", "w+")
+    most = 1023
+    serve = subprocess.Popen([CLI, "serve", "--in", "-", "--calibration-seconds", "5", "--opengloves", f"pty:{link}", "--opengloves-joints",
+                              "--opengloves-max", str(most), "--vrchat", f"127.0.0.1:{osc_port}"], stdin=subprocess.PIPE, stderr=log)
+    deadline = time.monotonic() + 30
+    while not link.is_symlink():
+        assert serve.poll() is None and time.monotonic() < deadline, log.seek(0) or log.read()
+        time.sleep(0.02)
+    driver = os.open(link, os.O_RDWR | os.O_NOCTTY)  # as a driver opens the glove's port
+    tty.setraw(driver)
+    received = bytearray()
+
+    def read_lines():
+        while True:
+            try:
+                chunk = os.read(driver, 4096)
+            except OSError:
+                return
+            if not chunk:
+                return
+            received.extend(chunk)
+
+    reader = threading.Thread(target=read_lines, daemon=True)
+    reader.start()
+    data = take.read_bytes()
+    for at in range(0, len(data), 4096):  # about 20 frames at a time, at about 4 times the glove's rate
+        if at % (4096 * 8) == 0:
+            os.write(driver, b"A0B0C0D0E0\n")  # force feedback, as a driver sends it to the glove
+        serve.stdin.write(data[at:at + 4096])
+        serve.stdin.flush()
+        time.sleep(0.08)
+    serve.stdin.close()
+    serve.wait(timeout=60)
+    time.sleep(0.3)
+    oscdump.terminate()
+    oscdump.wait()
+    osc_out.close()
+    log.seek(0)
+    text = log.read()
+    assert serve.returncode == 0, text
+    assert not link.exists() and not link.is_symlink(), "serve left its pty's link behind"
+    os.close(driver)
+    reader.join(timeout=5)
+
+    # Every line read is the documented mapping of one of the estimator's poses, in order; lines the
+    # reader missed are the ones serve counted as skipped.
+    lines = bytes(received).decode("ascii").split("\n")
+    assert lines[-1] == "", "a line was cut off"
+    lines = lines[:-1]
+    sent, skipped = map(int, re.search(r"OpenGloves: (\d+) lines sent, (\d+) skipped", text).groups())
+    assert sent + skipped == len(reference) and len(lines) == sent and sent >= 0.9 * len(reference), (sent, skipped, len(lines), len(reference))
+    joint_keys = [[f"({chr(65 + f)}A{chr(65 + j)})" for j in range(3 if f == 0 else 4)] for f in range(5)]
+    worst = 0.0
+    at = 0
+    for line in lines:
+        values = decode_opengloves(line, most)
+        assert len(values) == 10 + 3 + 16, f"{len(values)} keys in {line!r}"
+        assert len(line) + 1 <= 225, f"a line of {len(line) + 1} bytes, documented at most 225"
+        best = None
+        while at < len(reference):  # the next pose this line can be
+            expected = documented_curls(reference[at])
+            at += 1
+            error = 0.0  # in the line's steps (1/most of a curl, 2/most of a splay)
+            for f, (joints, curl, splay) in enumerate(expected):
+                error = max(error, abs(values[chr(65 + f)] - curl) * most, abs(values[f"({chr(65 + f)}B)"] - splay) * most / 2)
+                error = max([error] + [abs(values[k] - j) * most for k, j in zip(joint_keys[f], joints)])
+            if error <= 0.5 + 1e-4:  # rounded to the nearest step (predict prints 9 digits, not the doubles)
+                best = error
+                break
+        assert best is not None, f"line {line!r} is no pose's documented curls and splays"
+        worst = max(worst, best)
+
+    # VRChat: sets of ten floats, at least 50 ms apart, each a pose's curls and splays.
+    names = [f"/avatar/parameters/Right{f.capitalize()}{kind}" for f in FINGERS for kind in ("Curl", "Splay")]
+    sets = []
+    for line in (suite.tmp / "vrchat.txt").read_text().splitlines():
+        stamp, address, types, value = line.split()
+        assert address in names and types == "f", line
+        seconds, fraction = stamp.split(".")
+        if address == names[0]:
+            sets.append((int(seconds, 16) + int(fraction, 16) / 2 ** 32, {}))
+        sets[-1][1][address] = float(value)
+    assert len(sets) >= 5, len(sets)
+    gaps = [b[0] - a[0] for a, b in zip(sets, sets[1:])]
+    assert min(gaps) >= 0.045, f"VRChat parameters {min(gaps) * 1e3:.1f} ms apart, expected at most 20 sets a second"
+    at = 0
+    for _, got in sets:
+        assert len(got) == 10, got
+        while True:
+            assert at < len(reference), f"VRChat set {got} is no pose's curls and splays"
+            expected = documented_curls(reference[at])
+            at += 1
+            if all(abs(got[names[2 * f]] - curl) <= 1e-6 and abs(got[names[2 * f + 1]] - splay) <= 1e-6 for f, (_, curl, splay) in enumerate(expected)):
+                break
+    print(f"  {len(lines)} OpenGloves lines of {len(reference)} poses decoded ({skipped} skipped), each within {worst:.3f} steps of the"
+          f" documented mapping; {len(sets)} VRChat parameter sets, at least {min(gaps) * 1e3:.0f} ms apart")
+
+
+@suite.test
+def the_c_and_csharp_clients_read_the_estimators_poses():
+    setup_checks()
+    if not STREAM_PRINT or shutil.which("mcs") is None or shutil.which("mono") is None:
+        raise Skip("needs GLOVEPOSE_STREAM_PRINT (the C client's sample) and Mono's mcs and mono (Debian's mono-mcs)")
+    printer = suite.tmp / "StreamPrint.exe"
+    built = subprocess.run(["mcs", "-nologo", "-unsafe", "-warnaserror", f"-out:{printer}", *map(str, sorted((CSHARP / "Runtime").glob("*.cs"))),
+                            str(CSHARP / "Samples~" / "StreamPrint.cs")], capture_output=True, text=True)
+    assert built.returncode == 0, built.stdout + built.stderr
+    take = suite.tmp / "clients.gpw"
+    result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.2", "--gloves", "1", "--calibration-seconds",
+                             "5", "--seed", "10", "--threads", "1", "--stream", str(take), "--stream-payload", "cells", "--speed", "0"],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    reference = predict(take, ["--calibration-seconds", "5"])
+    serve, engine_port, log = start_serve(["--in", "-", "--calibration-seconds", "5"], stdin=subprocess.PIPE)
+    clients = {"C": subprocess.Popen([STREAM_PRINT, "127.0.0.1", str(engine_port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True),
+               "C#": subprocess.Popen(["mono", str(printer), "127.0.0.1", str(engine_port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      text=True)}
+    time.sleep(2.0)  # mono starts, both connect before the first pose
+    data = take.read_bytes()
+    for at in range(0, len(data), 4096):  # at about twice the glove's rate: the clients keep up
+        serve.stdin.buffer.write(data[at:at + 4096])
+        serve.stdin.buffer.flush()
+        time.sleep(0.16)
+    serve.stdin.close()
+    serve.wait(timeout=60)
+    assert serve.returncode == 0, "".join(log)
+    for name, client in clients.items():
+        out, err = client.communicate(timeout=30)
+        assert client.returncode == 0, f"{name} client: {err}"
+        rows = [line.split(",") for line in out.splitlines()]
+        assert len(rows) >= 0.9 * len(reference), f"{name} client: {len(rows)} poses of {len(reference)}"
+        sequences = [int(row[0]) for row in rows]
+        assert sequences == sorted(set(sequences)) and sequences[-1] <= len(reference), f"{name} client: {len(sequences)} sequences, {sequences[:3]}...{sequences[-3:]}, predict made {len(reference)}"
+        for row in rows:
+            assert ["%.9g" % float(x) for x in row[2:]] == reference[int(row[0]) - 1], f"{name} client, pose {row[0]} differs from predict's"
+        times = [float(row[1]) for row in rows]
+        assert all(b > a for a, b in zip(times, times[1:])), f"{name} client: stream times go back"
+        print(f"  {name} client: {len(rows)} poses of {len(reference)}, each predict's")
+
+
+@suite.test
+def the_clients_read_split_messages_and_stop_at_a_corrupt_one():
+    """A stand-in service, its messages made from docs/pose_stream.md's table (struct and zlib here):
+    a message sent in two parts is read whole; one with a flipped byte is refused, not printed."""
+    setup_checks()
+    printer = suite.tmp / "StreamPrint.exe"
+    if not STREAM_PRINT or not printer.exists() or shutil.which("mono") is None:
+        raise Skip("needs the C client's sample and StreamPrint.exe (built by the test before)")
+
+    def message(sequence: int) -> bytes:
+        angles = [0.01 * sequence + 0.001 * d for d in range(25)]
+        body = struct.pack("<2sBBIQdddHH25d", b"GH", 1, 1, 0, sequence, sequence / 60.0, 100.0 + sequence / 60.0, 100.5, 25, 0, *angles)
+        return body + struct.pack("<I", zlib.crc32(body))
+
+    for name, command in (("C", [STREAM_PRINT]), ("C#", ["mono", str(printer)])):
+        listener = socket.create_server(("127.0.0.1", 0))
+        port = listener.getsockname()[1]
+        client = subprocess.Popen([*command, "127.0.0.1", str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        connection, _ = listener.accept()
+        first, second, third = message(1), message(2), bytearray(message(3))
+        connection.sendall(first)
+        connection.sendall(second[:100])  # the rest a moment later: the client waits for the whole message
+        time.sleep(0.3)
+        connection.sendall(second[100:])
+        third[60] ^= 0x01  # one bit of an angle: the CRC no longer matches
+        connection.sendall(bytes(third))
+        out, err = client.communicate(timeout=30)
+        connection.close()
+        listener.close()
+        rows = [line.split(",") for line in out.splitlines()]
+        assert [int(r[0]) for r in rows] == [1, 2], f"{name} client printed {out!r}"
+        sent = [2 / 60.0] + [0.01 * 2 + 0.001 * d for d in range(25)]
+        assert ["%.9g" % float(x) for x in rows[1][1:]] == ["%.9g" % v for v in sent], f"{name} client: {rows[1]}"
+        assert re.search(r"bad message|BadMessage", err), f"{name} client: {err!r}"
 
 
 @suite.test

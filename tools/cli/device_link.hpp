@@ -10,6 +10,7 @@
 #pragma once
 
 #include <glovepose/config.hpp>
+#include <glovepose/core/span.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -36,6 +37,16 @@ namespace glovepose::cli {
 inline constexpr const char* kLinkHelp =
     "the glove's link: '-' for stdin, a file or named pipe, a pty or serial port (its path, or serial:PORT[@BAUD], "
     "115200 baud unless told), tcp:HOST:PORT, or udp:[ADDRESS:]PORT; a port or socket that goes away is reopened";
+
+/// Opens `port` at `name` (/dev/ttyACM0, COM3) as 8N1 at `baud`, no flow control; `e` says why not.
+inline void open_serial_port(boost::asio::serial_port& port, const std::string& name, unsigned baud, boost::system::error_code& e) {
+  port.open(name, e);
+  if (!e) port.set_option(boost::asio::serial_port::baud_rate(baud), e);
+  if (!e) port.set_option(boost::asio::serial_port::character_size(8), e);
+  if (!e) port.set_option(boost::asio::serial_port::parity(boost::asio::serial_port::parity::none), e);
+  if (!e) port.set_option(boost::asio::serial_port::stop_bits(boost::asio::serial_port::stop_bits::one), e);
+  if (!e) port.set_option(boost::asio::serial_port::flow_control(boost::asio::serial_port::flow_control::none), e);
+}
 
 /// Where a link's bytes come from, parsed from the user's text.
 struct LinkAddress {
@@ -213,12 +224,7 @@ class DeviceLink {
     using Kind = LinkAddress::Kind;
     if (address_.kind == Kind::Serial) {
       auto port = std::make_unique<boost::asio::serial_port>(io_);
-      port->open(address_.where, e);
-      if (!e) port->set_option(boost::asio::serial_port::baud_rate(address_.baud), e);
-      if (!e) port->set_option(boost::asio::serial_port::character_size(8), e);
-      if (!e) port->set_option(boost::asio::serial_port::parity(boost::asio::serial_port::parity::none), e);
-      if (!e) port->set_option(boost::asio::serial_port::stop_bits(boost::asio::serial_port::stop_bits::one), e);
-      if (!e) port->set_option(boost::asio::serial_port::flow_control(boost::asio::serial_port::flow_control::none), e);
+      open_serial_port(*port, address_.where, address_.baud, e);
       if (!e) serial_ = std::move(port);
     } else if (address_.kind == Kind::Tcp) {
       boost::asio::ip::tcp::resolver resolver(io_);

@@ -1,10 +1,13 @@
 // Where glovepose serve sends poses: the engine stream (docs/pose_stream.md) to any number of TCP
-// clients on loopback, none of which can hold the others up, and OSC messages over UDP. Both on
-// Boost.Asio, non-blocking, with every buffer made before the first pose.
+// clients on loopback, none of which can hold the others up, OSC messages over UDP, and VRChat's
+// avatar parameters over OSC. All on Boost.Asio, non-blocking, with every buffer made before the
+// first pose. (OpenGloves: opengloves_output.hpp.)
 #pragma once
 
 #include <glovepose/device/crc32.hpp>
 #include <glovepose/device/wire_format.hpp>
+#include <glovepose/hand/finger_curls.hpp>
+#include <glovepose/hand/handedness.hpp>
 #include <glovepose/pose.hpp>
 
 #include <array>
@@ -27,9 +30,9 @@ struct PoseMessage {
   static constexpr std::uint8_t kVersion = 1;
   std::array<std::uint8_t, kBytes> bytes{};
 
-  /// `hand`: 0 left, 1 right; the pose's time is on the device's clock (s); `host_time`: that time
+  /// `hand`: the side, coded as hand::Handedness (0 right, 1 left, as the C ABI's GLOVEPOSE_HAND_*); the pose's time is on the device's clock (s); `host_time`: that time
   /// on the host's monotonic clock; `published`: when it is sent (host clock).
-  void encode(const Pose& pose, int hand, double host_time, double published) noexcept {
+  void encode(const Pose& pose, hand::Handedness hand, double host_time, double published) noexcept {
     std::uint8_t* p = bytes.data();
     p[0] = 'G';
     p[1] = 'H';
@@ -167,10 +170,13 @@ class EngineServer {
 /// of floats is a few lines.
 class OscSender {
  public:
-  explicit OscSender(const std::string& target) {
+  /// `option` names the target in messages.
+  explicit OscSender(const std::string& target, const std::string& option = "--osc") {
+    const std::string what = option + " '" + target + "'";
+    if (target.rfind("udp:", 0) == 0) throw Error(what + ": expected HOST:PORT (127.0.0.1:9000), without 'udp:'");
     const LinkAddress a = LinkAddress::parse("udp:" + target);
-    if (a.where == "0.0.0.0") throw Error("--osc '" + target + "': no host, expected HOST:PORT (127.0.0.1:9000)");
-    udp_ = std::make_unique<UdpSender>(a.where, a.port, "--osc '" + target + "'");
+    if (a.where == "0.0.0.0") throw Error(what + ": no host, expected HOST:PORT (127.0.0.1:9000)");
+    udp_ = std::make_unique<UdpSender>(a.where, a.port, what);
     message_.reserve(512);
   }
 
@@ -218,6 +224,42 @@ class OscSender {
   std::unique_ptr<UdpSender> udp_;
   std::vector<std::uint8_t> message_;
   std::uint64_t sent_ = 0, failed_ = 0;
+};
+
+/// A pose's curls and splays as VRChat avatar parameters (docs/pose_stream.md, "VRChat"): OSC
+/// messages /avatar/parameters/<Hand><Finger>Curl (0 to 1) and ...Splay (-1 to 1), one float each,
+/// at most once per kPeriod: VRChat applies parameters at its network rate, and more would only
+/// fill its queue.
+class AvatarParameters {
+ public:
+  static constexpr double kPeriod = 0.05;  ///< seconds: 20 updates a second
+
+  /// `hand`: "left" or "right".
+  AvatarParameters(const std::string& target, const std::string& hand) : osc_(target, "--vrchat") {
+    const std::string side = hand == "left" ? "Left" : "Right";
+    static constexpr const char* kFinger[hand::kFingerCount] = {"Thumb", "Index", "Middle", "Ring", "Pinky"};
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      curl_[f] = "/avatar/parameters/" + side + kFinger[f] + "Curl";
+      splay_[f] = "/avatar/parameters/" + side + kFinger[f] + "Splay";
+    }
+  }
+
+  /// Sends `curls` unless the last were sent less than kPeriod before `now` (seconds, any clock).
+  void publish(const hand::FingerCurls& curls, double now) {
+    if (now - last_ < kPeriod) return;
+    last_ = now;
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      osc_.begin(curl_[f], "f").f(static_cast<float>(curls.curl[f])).send();
+      osc_.begin(splay_[f], "f").f(static_cast<float>(curls.splay[f])).send();
+    }
+  }
+
+  const OscSender& osc() const { return osc_; }
+
+ private:
+  OscSender osc_;
+  std::array<std::string, hand::kFingerCount> curl_, splay_;
+  double last_ = -1e300;
 };
 
 }  // namespace glovepose::cli

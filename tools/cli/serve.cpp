@@ -1,6 +1,7 @@
 // glovepose serve: a glove's link (device_link.hpp) read, reopened when it goes away, its readings
 // turned into poses by an estimator, and each pose published at once to the engine stream (TCP on
-// loopback, any number of clients) and over OSC (docs/pose_stream.md). The calibration is the
+// loopback, any number of clients), over OSC, as VRChat avatar parameters and as OpenGloves lines
+// (docs/pose_stream.md). The calibration is the
 // glove's and the user's: with --profiles it is loaded when that glove says its Hello, or made on
 // the fly over the first seconds and then saved for the next time.
 #include <glovepose/estimator.hpp>
@@ -30,6 +31,7 @@
 #include "commands.hpp"
 #include "glove_frames.hpp"
 #include "glove_link.hpp"
+#include "opengloves_output.hpp"
 #include "pose_outputs.hpp"
 #include "session_options.hpp"
 
@@ -37,7 +39,9 @@ namespace glovepose::cli {
 namespace {
 
 struct ServeOptions {
-  std::string in, model, hand = "right", user, profiles, calibration, osc;
+  std::string in, model, hand = "right", user, profiles, calibration, osc, vrchat, opengloves;
+  unsigned opengloves_max = 4095;  // LucidVR's SteamVR driver's max_analog_value by default
+  bool opengloves_joints = false;
   nn::WeightStorage storage = nn::WeightStorage::F32;
   double calibration_seconds = kDefaultCalibrationSeconds;
   int engine_port = -1;  // -1: no engine stream
@@ -100,7 +104,8 @@ std::string profile_path(const ServeOptions& o, const GloveIdentity& glove) {
 }
 
 int serve(const ServeOptions& o) {
-  if (o.engine_port < 0 && o.osc.empty()) throw Error("nothing to serve to: expected --engine PORT, --osc HOST:PORT or both");
+  if (o.engine_port < 0 && o.osc.empty() && o.vrchat.empty() && o.opengloves.empty())
+    throw Error("nothing to serve to: expected at least one of --engine PORT, --osc HOST:PORT, --vrchat HOST:PORT, --opengloves TARGET");
   if (!o.profiles.empty() && o.user.empty()) throw Error("--profiles needs --user NAME: a profile is a glove's and a user's");
   PoseModelOptions model_options;
   model_options.storage = o.storage;
@@ -111,12 +116,18 @@ int serve(const ServeOptions& o) {
   if (o.engine_port >= 0) engine = std::make_unique<EngineServer>(static_cast<unsigned>(o.engine_port));
   std::unique_ptr<OscSender> osc;
   if (!o.osc.empty()) osc = std::make_unique<OscSender>(o.osc);
+  std::unique_ptr<AvatarParameters> vrchat;
+  if (!o.vrchat.empty()) vrchat = std::make_unique<AvatarParameters>(o.vrchat, o.hand);
+  OpenGlovesLine opengloves_line(o.opengloves_max, o.opengloves_joints);
+  std::unique_ptr<OpenGlovesPort> opengloves;
+  if (!o.opengloves.empty()) opengloves = std::make_unique<OpenGlovesPort>(o.opengloves);
   GloveLink link(o.in);
   stop_on_signals(serve_on_signal);
   if (engine) std::fprintf(stderr, "glovepose serve: engine stream on 127.0.0.1:%u\n", engine->port());
+  if (opengloves) std::fprintf(stderr, "glovepose serve: OpenGloves lines to '%s'\n", opengloves->device().c_str());
   if (link.address().reconnects() && !o.normal_scheduling) std::fprintf(stderr, "glovepose serve: %s\n", ask_for_real_time().c_str());
 
-  const int hand = o.hand == "left" ? 0 : 1;
+  const hand::Handedness hand = o.hand == "left" ? hand::Handedness::Left : hand::Handedness::Right;
   const std::string osc_angles = "/glovepose/" + o.hand + "/angles", osc_time = "/glovepose/" + o.hand + "/time";
   const std::string angle_types(hand::kDofCount, 'f');
   std::istringstream no_lines;
@@ -146,6 +157,14 @@ int serve(const ServeOptions& o) {
       for (const double a : pose.angles) osc->f(static_cast<float>(a));
       osc->send();
       osc->begin(osc_time, "hd").h(static_cast<std::int64_t>(pose.sequence)).d(pose.timestamp).send();
+    }
+    if (vrchat || opengloves) {
+      const hand::FingerCurls curls = hand::finger_curls(pose.angles, model->joint_limits());
+      if (vrchat) vrchat->publish(curls, now);
+      if (opengloves) {
+        opengloves_line.encode(curls);
+        opengloves->send(opengloves_line.data(), opengloves_line.size());
+      }
     }
     ++published;
     const double sent = host_seconds();
@@ -223,6 +242,12 @@ int serve(const ServeOptions& o) {
   }
   if (osc) std::fprintf(stderr, "glovepose serve: OSC: %llu messages, %llu not sent\n", static_cast<unsigned long long>(osc->sent()),
                         static_cast<unsigned long long>(osc->failed()));
+  if (vrchat)
+    std::fprintf(stderr, "glovepose serve: VRChat avatar parameters: %llu messages, %llu not sent\n",
+                 static_cast<unsigned long long>(vrchat->osc().sent()), static_cast<unsigned long long>(vrchat->osc().failed()));
+  if (opengloves)
+    std::fprintf(stderr, "glovepose serve: OpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before\n",
+                 static_cast<unsigned long long>(opengloves->counts().sent), static_cast<unsigned long long>(opengloves->counts().skipped));
   std::fprintf(stderr, "glovepose serve: latency (last byte read to pose sent) over %llu poses: p50 %.3f ms, p99 %.3f ms; the service's own "
                "(its frame's handling to the pose sent, less the estimator's work): p50 %.3f ms, p99 %.3f ms\n",
                static_cast<unsigned long long>(total.count()), total.quantile_ms(0.5), total.quantile_ms(0.99), own.quantile_ms(0.5),
@@ -241,7 +266,7 @@ Command add_serve(CLI::App& tool) {
   CLI::App* command = tool.add_subcommand(
       "serve",
       "Reads a glove's link (reopened when it goes away), turns its readings into poses and publishes each at once: the engine stream "
-      "(TCP on 127.0.0.1, any number of clients) and OSC over UDP (docs/pose_stream.md). With --profiles, a glove's and user's "
+      "(TCP on 127.0.0.1, any number of clients), OSC over UDP, VRChat avatar parameters and OpenGloves lines (docs/pose_stream.md). With --profiles, a glove's and user's "
       "calibration is loaded when that glove says its Hello, or made on the fly and saved.");
   command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE")->required();  // no default: a service reads a glove
   add_model_file(*command, o->model, std::string("weights (default: models/") + kShippedModel + ", shipped with glovepose)");
@@ -257,6 +282,19 @@ Command add_serve(CLI::App& tool) {
   add_number(*command, "--engine", "PORT", o->engine_port, "serve the engine stream on 127.0.0.1:PORT (0: a free port, printed)")
       ->check(CLI::Range(0, 65535));
   command->add_option("--osc", o->osc, "send OSC messages to HOST:PORT over UDP")->type_name("HOST:PORT");
+  command->add_option("--vrchat", o->vrchat, "send the finger curls and splays as VRChat avatar parameters (OSC) to HOST:PORT, 20 times a second")
+      ->type_name("HOST:PORT");
+  CLI::Option* opengloves = command->add_option("--opengloves", o->opengloves,
+                      "write OpenGloves lines (finger curls and splays) for SteamVR's or Monado's OpenGloves driver: pty:LINK (a new pty "
+                      "named by the symlink LINK), a serial port (serial:PORT[@BAUD] or its path) or a file")
+      ->type_name("TARGET");
+  add_number(*command, "--opengloves-max", "N", o->opengloves_max,
+             "the value of a full curl in OpenGloves lines: the driver's max_analog_value (default 4095, SteamVR's; Monado's is 1023)")
+      ->check(CLI::Range(1, 9999))
+      ->needs(opengloves);
+  command->add_flag("--opengloves-joints", o->opengloves_joints,
+                    "also each joint's curl in OpenGloves lines (SteamVR's driver only: the lines grow past Monado's 150 bytes)")
+      ->needs(opengloves);
   add_number(*command, "--seconds", "S", o->seconds, "stop after S seconds (default: at SIGINT or SIGTERM, or when a file ends)")
       ->check(above(0.0));
   command->add_flag("--no-real-time", o->normal_scheduling, "keep normal scheduling (by default a live link's thread asks for real-time)");

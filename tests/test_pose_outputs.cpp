@@ -1,0 +1,196 @@
+// glovepose serve's outputs (tools/cli/pose_outputs.hpp, opengloves_output.hpp) on loopback
+// sockets, where every platform has them: natively, under Wine for Windows and under qemu-user for
+// ARM64 (tests/python/test_serve.py drives the whole service on Linux). Messages are read back by
+// the layouts docs/pose_stream.md gives, byte by byte.
+#include <doctest/doctest.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/opengloves_output.hpp"
+#include "cli/pose_outputs.hpp"
+
+namespace {
+
+using namespace glovepose;
+using boost::asio::ip::tcp;
+using boost::asio::ip::udp;
+
+// A little-endian field of a message (docs/pose_stream.md, "The engine stream").
+std::uint64_t little_field(const std::uint8_t* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = bytes - 1; i >= 0; --i) v = (v << 8) | p[i];
+  return v;
+}
+double little_f64(const std::uint8_t* p) {
+  const std::uint64_t bits = little_field(p, 8);
+  double v = 0;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
+
+// Reads what has arrived on `socket` (non-blocking) onto `bytes`.
+void take_waiting(tcp::socket& socket, std::vector<std::uint8_t>& bytes) {
+  std::array<std::uint8_t, 65536> chunk{};
+  for (;;) {
+    boost::system::error_code e;
+    const std::size_t got = socket.read_some(boost::asio::buffer(chunk), e);
+    if (e || got == 0) return;
+    bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("serve's engine stream: reading clients get every pose whole, a stalled one misses some without holding them up") {
+  cli::EngineServer server(0);
+  boost::asio::io_context io;
+  std::vector<tcp::socket> readers;
+  const tcp::endpoint at(boost::asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(server.port()));
+  for (int k = 0; k < 3; ++k) {
+    readers.emplace_back(io);
+    readers.back().connect(at);
+    readers.back().non_blocking(true);
+  }
+  tcp::socket stalled(io);
+  stalled.open(tcp::v4());
+  stalled.set_option(boost::asio::socket_base::receive_buffer_size(2048));  // fills after a few messages, never read
+  stalled.connect(at);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (server.clients() < 4 && std::chrono::steady_clock::now() < give_up) {
+    server.accept();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  REQUIRE(server.clients() == 4);
+
+  constexpr int kPoses = 4000;  // 1 MB: far more than a stalled client's socket buffers hold
+  std::vector<std::vector<std::uint8_t>> got(readers.size());
+  cli::PoseMessage message;
+  Pose pose;
+  for (int i = 0; i < kPoses; ++i) {
+    pose.sequence = static_cast<std::uint64_t>(i) + 1;
+    pose.timestamp = i / 60.0;
+    pose.flags = static_cast<std::uint32_t>(i % 3);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) pose.angles[d] = 0.001 * i - 0.01 * static_cast<double>(d);
+    message.encode(pose, hand::Handedness::Left, 100.0 + i / 60.0, 200.0 + i);
+    server.publish(message);
+    for (std::size_t k = 0; k < readers.size(); ++k) take_waiting(readers[k], got[k]);
+  }
+  const auto drained = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (std::chrono::steady_clock::now() < drained) {
+    bool all = true;
+    for (std::size_t k = 0; k < readers.size(); ++k) {
+      take_waiting(readers[k], got[k]);
+      all = all && got[k].size() >= kPoses * cli::PoseMessage::kBytes;
+    }
+    if (all) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+
+  for (std::size_t k = 0; k < readers.size(); ++k) {
+    INFO("reader " << k);
+    REQUIRE(got[k].size() == kPoses * cli::PoseMessage::kBytes);
+    for (int i = 0; i < kPoses; ++i) {
+      const std::uint8_t* m = got[k].data() + static_cast<std::size_t>(i) * cli::PoseMessage::kBytes;
+      REQUIRE(m[0] == 'G');
+      REQUIRE(m[1] == 'H');
+      REQUIRE(m[2] == 1);
+      REQUIRE(m[3] == 1);  // left: GLOVEPOSE_HAND_LEFT
+      REQUIRE(little_field(m + 4, 4) == static_cast<std::uint64_t>(i % 3));
+      REQUIRE(little_field(m + 8, 8) == static_cast<std::uint64_t>(i) + 1);
+      REQUIRE(little_f64(m + 16) == i / 60.0);
+      REQUIRE(little_f64(m + 24) == 100.0 + i / 60.0);
+      REQUIRE(little_f64(m + 32) == 200.0 + i);
+      REQUIRE(little_field(m + 40, 2) == hand::kDofCount);
+      REQUIRE(little_f64(m + 44 + 8 * 7) == 0.001 * i - 0.07);
+      REQUIRE(little_field(m + 244, 4) == device::crc32(m, 244));
+    }
+  }
+  CHECK(server.counts().skipped > 0);  // the stalled client missed poses
+  CHECK(server.counts().sent >= 3u * kPoses);
+}
+
+TEST_CASE("serve's OpenGloves line: the documented example, keys in order, and the long form's joints") {
+  hand::Angles angles{};
+  for (const char* name : {"index_base_flexion", "index_middle_flexion", "index_tip_flexion"}) {
+    const std::size_t d = hand::dof_from_name(name);
+    angles[d] = 0.5 * hand::kDofs[d].max;
+  }
+  cli::OpenGlovesLine line(4095, false);
+  line.encode(hand::finger_curls(angles));
+  // docs/pose_stream.md, "OpenGloves": the example line.
+  CHECK(std::string(line.data(), line.size()) == "A0B2048C0D0E0(AB)2048(BB)2048(CB)2048(DB)2048(EB)2048\n");
+
+  cli::OpenGlovesLine joints(1023, true);
+  joints.encode(hand::finger_curls(angles));
+  CHECK(std::string(joints.data(), joints.size()) ==
+        "A0B512C0D0E0(AB)512(BB)512(CB)512(DB)512(EB)512(AAA)0(AAB)0(AAC)0(BAA)0(BAB)512(BAC)512(BAD)512(CAA)0(CAB)0(CAC)0(CAD)0"
+        "(DAA)0(DAB)0(DAC)0(DAD)0(EAA)0(EAB)0(EAC)0(EAD)0\n");
+
+  // The longest lines are the documented 66 and 225 bytes: every value at 4 digits (a metacarpal's at 1: it is 0).
+  hand::Angles bent{};
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) bent[d] = hand::kDofs[d].max;
+  cli::OpenGlovesLine full(4095, true), short_form(4095, false);
+  full.encode(hand::finger_curls(bent));
+  short_form.encode(hand::finger_curls(bent));
+  CHECK(short_form.size() == 66);
+  CHECK(full.size() == 225);
+  CHECK_THROWS_AS(cli::OpenGlovesLine(0, false), Error);
+}
+
+TEST_CASE("serve's VRChat parameters: OSC floats by the documented names, at most 20 sets a second") {
+  boost::asio::io_context io;
+  udp::socket receiver(io, udp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
+  receiver.non_blocking(true);
+  cli::AvatarParameters avatar("127.0.0.1:" + std::to_string(receiver.local_endpoint().port()), "left");
+  hand::Angles angles{};
+  angles[hand::dof_from_name("ring_middle_flexion")] = 1.0;
+  angles[hand::dof_from_name("pinky_base_abduction")] = -0.1;
+  const hand::FingerCurls curls = hand::finger_curls(angles);
+  avatar.publish(curls, 10.0);
+  avatar.publish(curls, 10.02);  // too soon: not sent
+  avatar.publish(curls, 10.051);
+
+  std::vector<std::pair<std::string, float>> messages;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (messages.size() < 20 && std::chrono::steady_clock::now() < give_up) {
+    std::array<char, 512> datagram{};
+    boost::system::error_code e;
+    const std::size_t n = receiver.receive(boost::asio::buffer(datagram), 0, e);
+    if (e) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
+    // OSC 1.0: the address, NUL-padded to 4 bytes; ",f" padded; a big-endian float32.
+    const std::string address(datagram.data());
+    const std::size_t tags = (address.size() + 4) / 4 * 4;
+    REQUIRE(n == tags + 4 + 4);
+    REQUIRE(std::string(datagram.data() + tags) == ",f");
+    std::uint32_t bits = 0;
+    for (int i = 0; i < 4; ++i) bits = (bits << 8) | static_cast<std::uint8_t>(datagram[tags + 4 + static_cast<std::size_t>(i)]);
+    float value = 0;
+    std::memcpy(&value, &bits, sizeof value);
+    messages.emplace_back(address, value);
+  }
+  REQUIRE(messages.size() == 20);  // two sets of ten
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::array<char, 512> extra{};
+  boost::system::error_code none;
+  receiver.receive(boost::asio::buffer(extra), 0, none);
+  CHECK(none);  // nothing more: the set at 10.02 s was not sent
+  const char* const fingers[] = {"Thumb", "Index", "Middle", "Ring", "Pinky"};
+  for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+    CHECK(messages[2 * f].first == std::string("/avatar/parameters/Left") + fingers[f] + "Curl");
+    CHECK(messages[2 * f].second == static_cast<float>(curls.curl[f]));
+    CHECK(messages[2 * f + 1].first == std::string("/avatar/parameters/Left") + fingers[f] + "Splay");
+    CHECK(messages[2 * f + 1].second == static_cast<float>(curls.splay[f]));
+  }
+  CHECK(messages[6].second == doctest::Approx(1.0 / 2.0 / 3.0));  // ring: middle flexion 1 rad of 2 rad, one joint of three
+  CHECK(messages[9].second == doctest::Approx(-0.1 / (20.0 * 3.14159265358979323846 / 180.0)));  // pinky splay
+}

@@ -1,0 +1,203 @@
+// glovepose serve's OpenGloves output: each pose as a line of OpenGloves' alpha encoding (the
+// input protocol of LucidVR's SteamVR driver and of Monado's OpenGloves driver, which show a hand
+// from it in any OpenVR or OpenXR application), its curls and splays from hand/finger_curls.hpp.
+// The encoding and the mapping are documented in docs/pose_stream.md ("OpenGloves").
+//   pty:LINK             (Linux, macOS) a new pseudo-terminal, its device named by the symlink LINK,
+//                        which a driver opens as if it were the glove's serial port
+//   serial:PORT[@BAUD]   a serial port (one end of a virtual pair such as com0com's on Windows)
+//   PATH                 a terminal as serial:PATH; else a file the lines are written to
+// A line the other end cannot take now is skipped (counted), never waited for: a driver that stops
+// reading does not hold up the poses.
+#pragma once
+
+#include <glovepose/hand/finger_curls.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/serial_port.hpp>
+#include <boost/asio/write.hpp>
+
+#include "byte_link.hpp"
+#include "device_link.hpp"
+
+#ifndef _WIN32
+#  include <boost/asio/posix/stream_descriptor.hpp>
+#  include <fcntl.h>
+#  include <stdlib.h>
+#  include <termios.h>
+#  include <unistd.h>
+#endif
+
+namespace glovepose::cli {
+
+/// One pose as a line of OpenGloves' alpha encoding: each key followed by its value as a whole
+/// number from 0 to `most` (the driver's max_analog_value: 4095 in LucidVR's SteamVR driver by
+/// default, 1023 in Monado's), the line ended by '\n'. Always the five finger curls A-E and the
+/// five splays (AB)-(EB), at most 66 bytes; with `joints`, also each joint's curl ((AAA) to
+/// (EAD), the thumb's unused 4th left out), up to 225 bytes: more than Monado's driver reads as one
+/// packet (150 bytes), so for the SteamVR driver only.
+class OpenGlovesLine {
+ public:
+  OpenGlovesLine(unsigned most, bool joints) : most_(most), joints_(joints) {
+    if (most < 1 || most > 9999) throw Error("--opengloves-max " + std::to_string(most) + ": expected 1 to 9999 (the driver's max_analog_value)");
+  }
+
+  /// Encodes `curls`; data() and size() are the line.
+  void encode(const hand::FingerCurls& curls) noexcept {
+    size_ = 0;
+    static constexpr char kFinger[hand::kFingerCount] = {'A', 'B', 'C', 'D', 'E'};
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) put(kFinger[f], nullptr, curls.curl[f]);
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) put(kFinger[f], "B", 0.5 * (curls.splay[f] + 1.0));  // splay -1..1 as 0..most
+    if (joints_) {
+      static constexpr const char* kJoint[hand::kCurlJoints] = {"AA", "AB", "AC", "AD"};
+      for (std::size_t f = 0; f < hand::kFingerCount; ++f)
+        for (std::size_t j = 0; j < (f == 0 ? 3 : hand::kCurlJoints); ++j) put(kFinger[f], kJoint[j], curls.joints[f][j]);
+    }
+    line_[size_++] = '\n';
+  }
+  const char* data() const noexcept { return line_.data(); }
+  std::size_t size() const noexcept { return size_; }
+
+ private:
+  // Writes the key (a finger's letter, or "(" letter rest ")" for a long key) and `fraction` of most.
+  void put(char finger, const char* rest, double fraction) noexcept {
+    char* p = line_.data() + size_;
+    const long value = std::lround(std::fmin(std::fmax(fraction, 0.0), 1.0) * most_);
+    const int n = rest ? std::snprintf(p, 16, "(%c%s)%ld", finger, rest, value) : std::snprintf(p, 16, "%c%ld", finger, value);
+    size_ += static_cast<std::size_t>(n);
+  }
+
+  std::array<char, 256> line_{};
+  std::size_t size_ = 0;
+  unsigned most_;
+  bool joints_;
+};
+
+/// What the OpenGloves output did.
+struct OpenGlovesCounts {
+  std::uint64_t sent = 0;     ///< lines handed whole to the port or file
+  std::uint64_t skipped = 0;  ///< lines skipped because the previous one was still being taken
+};
+
+/// Where the OpenGloves lines go (the forms at the top of this file).
+class OpenGlovesPort {
+ public:
+  explicit OpenGlovesPort(const std::string& target) {
+    const std::string what = "--opengloves '" + target + "'";
+    if (target.rfind("pty:", 0) == 0) {
+      open_pty(target.substr(4), what);
+    } else {
+      const LinkAddress a = LinkAddress::parse(target);
+      if (a.kind == LinkAddress::Kind::Serial) {
+        boost::system::error_code e;
+        serial_ = std::make_unique<boost::asio::serial_port>(io_);
+        open_serial_port(*serial_, a.where, a.baud, e);
+        if (e) throw Error(what + ": cannot open the serial port: " + e.message());
+        device_ = a.where;
+      } else if (a.kind == LinkAddress::Kind::File) {
+        file_ = std::make_unique<ByteSink>(a.where);
+        device_ = a.where;
+      } else {
+        throw Error(what + ": expected pty:LINK, a serial port (serial:PORT[@BAUD] or its path) or a file");
+      }
+    }
+    drain();
+  }
+  OpenGlovesPort(const OpenGlovesPort&) = delete;
+  OpenGlovesPort& operator=(const OpenGlovesPort&) = delete;
+  ~OpenGlovesPort() {
+#ifndef _WIN32
+    if (!link_.empty()) {
+      std::error_code e;
+      std::filesystem::remove(link_, e);
+    }
+    if (pty_device_ >= 0) ::close(pty_device_);
+#endif
+  }
+
+  /// What a driver opens: the pty's device, the serial port or the file.
+  const std::string& device() const { return device_; }
+
+  /// Sends one line whole, or skips it while the previous one is still being taken.
+  void send(const char* line, std::size_t size) {
+    io_.poll();  // finishes what the port has taken since, and reads what the driver sent
+    if (file_) {
+      file_->write(reinterpret_cast<const std::uint8_t*>(line), size);
+      ++counts_.sent;
+      return;
+    }
+    if (writing_) {
+      ++counts_.skipped;
+      return;
+    }
+    std::copy(line, line + size, out_.data());
+    writing_ = true;
+    ++counts_.sent;
+    const auto done = [this](const boost::system::error_code&, std::size_t) { writing_ = false; };
+    if (serial_) boost::asio::async_write(*serial_, boost::asio::buffer(out_.data(), size), done);
+#ifndef _WIN32
+    if (pty_) boost::asio::async_write(*pty_, boost::asio::buffer(out_.data(), size), done);
+#endif
+    io_.poll();
+  }
+
+  const OpenGlovesCounts& counts() const { return counts_; }
+
+ private:
+  // A driver may write to the glove (force feedback: "A0B0C0D0E0\n"); read and dropped, so that its
+  // writes never wait for a reader.
+  void drain() {
+    const auto again = [this](const boost::system::error_code& e, std::size_t) {
+      if (!e) drain();
+    };
+    if (serial_) serial_->async_read_some(boost::asio::buffer(in_), again);
+#ifndef _WIN32
+    if (pty_) pty_->async_read_some(boost::asio::buffer(in_), again);
+#endif
+  }
+
+  void open_pty(const std::string& link, const std::string& what) {
+#ifdef _WIN32
+    (void)link;
+    throw Error(what + ": a pty needs Linux or macOS; on Windows, give one end of a virtual serial port pair (serial:COM5)");
+#else
+    if (link.empty()) throw Error(what + ": no link, expected pty:LINK (the path a driver opens, e.g. pty:/tmp/glovepose-right)");
+    const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+    if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) throw Error(what + ": cannot make a pty: " + std::strerror(errno));
+    pty_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, master);
+    device_ = ::ptsname(master);
+    // Held open, in raw mode: the pty stays whole while drivers open and close it, and no byte is
+    // echoed back or translated.
+    pty_device_ = ::open(device_.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (pty_device_ < 0) throw Error(what + ": cannot open its pty '" + device_ + "': " + std::strerror(errno));
+    raw_if_terminal(pty_device_);
+    std::error_code e;
+    if (std::filesystem::is_symlink(std::filesystem::symlink_status(link, e))) std::filesystem::remove(link, e);
+    std::filesystem::create_symlink(device_, link, e);
+    if (e) throw Error(what + ": cannot name the pty '" + link + "': " + e.message() + " (an existing file is not replaced)");
+    link_ = link;
+#endif
+  }
+
+  std::string device_, link_;
+  boost::asio::io_context io_;
+  std::unique_ptr<boost::asio::serial_port> serial_;
+  std::unique_ptr<ByteSink> file_;
+#ifndef _WIN32
+  std::unique_ptr<boost::asio::posix::stream_descriptor> pty_;
+  int pty_device_ = -1;
+#endif
+  std::array<char, 256> out_{};
+  std::array<char, 256> in_{};
+  bool writing_ = false;
+  OpenGlovesCounts counts_;
+};
+
+}  // namespace glovepose::cli
