@@ -103,7 +103,9 @@ TEST_CASE("cli: each command's --help describes its options") {
       {"bench", {"--model", "--poses", "--json"}},
       {"view", {"--port", "--model", "--seed", "--replay", "--stdin", "--calibration-seconds", "--seconds"}},
       {"record", {"--in", "--out", "--quiet"}},
-      {"serve", {"--in", "--model", "--hand", "--calibration-seconds", "--calibration", "--profiles", "--user", "--engine", "--osc", "--seconds", "--stats", "--no-real-time"}}};
+      {"serve",
+       {"--in", "--left", "--right", "--model", "--hand", "--calibration-seconds", "--calibration", "--profiles", "--user", "--engine", "--osc",
+        "--vrchat", "--opengloves", "--opengloves-max", "--opengloves-joints", "--seconds", "--stats", "--no-real-time"}}};
   for (const auto& entry : commands) {
     const std::string& command = entry.first;  // not a structured binding: clang 14 cannot capture one in INFO
     const auto& options = entry.second;

@@ -15,6 +15,8 @@ service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
   mapping of the estimator's angles (computed here from the hand model's published limits), while
   the "driver" writes force feedback back; VRChat's avatar parameters reach oscdump, at most 20 sets
   a second, with the same mapping's values;
+- two gloves at once (--left, --right): each glove's poses, OpenGloves lines and profile are its
+  own, the engine stream carries both hands;
 - the engine stream's C client (bindings/c, its sample stream_print.c) and C# client
   (bindings/csharp/Runtime/PoseStream.cs, its sample Samples~/StreamPrint.cs, built with Mono's mcs)
   print the poses predict computes, by their sequence numbers, with the same stream times.
@@ -69,8 +71,9 @@ class Clients(threading.Thread):
     """Engine-stream clients, each reading every message, with the time it arrived: one thread for all
     of them (as an engine's one network thread), so that they take little of the machine's time."""
 
-    def __init__(self, port: int, count: int):
+    def __init__(self, port: int, count: int, hands=(0,)):  # 0 right, 1 left: serve's --hand right by default
         super().__init__(daemon=True)
+        self.hands = hands
         self.socks = [socket.create_connection(("127.0.0.1", port)) for _ in range(count)]
         self.messages: List[List[Tuple[float, tuple]]] = [[] for _ in range(count)]
         self.selector = selectors.DefaultSelector()
@@ -96,7 +99,7 @@ class Clients(threading.Thread):
                 buffer = self.buffers[k] + chunk
                 while len(buffer) >= MESSAGE.size:
                     fields = MESSAGE.unpack_from(buffer)
-                    assert fields[0] == b"GH" and fields[1] == 1 and fields[2] == 0 and fields[8] == 25 and fields[9] == 0, fields[:10]  # hand 0: right
+                    assert fields[0] == b"GH" and fields[1] == 1 and fields[2] in self.hands and fields[8] == 25 and fields[9] == 0, fields[:10]
                     assert fields[-1] == zlib.crc32(buffer[:MESSAGE.size - 4]), "a message's CRC"
                     self.messages[k].append((now, fields))
                     buffer = buffer[MESSAGE.size:]
@@ -402,6 +405,48 @@ def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays
 
 
 @suite.test
+def two_gloves_each_get_their_own_poses_lines_and_profile():
+    setup_checks()
+    takes, references = {}, {}
+    for hand, seed, serial in (("left", 12, 51), ("right", 13, 52)):
+        takes[hand] = suite.tmp / f"two-{hand}.gpw"
+        result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.2", "--gloves", "1",
+                                 "--calibration-seconds", "5", "--seed", str(seed), "--threads", "1", "--stream", str(takes[hand]),
+                                 "--stream-payload", "cells", "--speed", "0", "--serial", str(serial)], capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        references[hand] = predict(takes[hand], ["--calibration-seconds", "5"])
+    assert references["left"] != references["right"]
+    profiles = suite.tmp / "two-profiles"
+    profiles.mkdir()
+    serve, engine_port, log = start_serve(["--left", str(takes["left"]), "--right", str(takes["right"]), "--calibration-seconds", "5",
+                                           "--opengloves", str(suite.tmp / "two-{hand}.txt"), "--opengloves-max", "1023",
+                                           "--profiles", str(profiles), "--user", "ana"])
+    # serve starts on the files at once: a client connected now gets what it can (the sequences say which).
+    client = Clients(engine_port, 1, hands=(0, 1))
+    serve.wait(timeout=60)
+    time.sleep(0.3)
+    text = "".join(log)
+    assert serve.returncode == 0, text
+    for hand, serial in (("left", 51), ("right", 52)):
+        reference = references[hand]
+        assert f"{hand}: {len(reference)} poses published" in text, text
+        assert (profiles / f"glauser2019-44-{serial}-ana.calibration").exists(), text
+        lines = (suite.tmp / f"two-{hand}.txt").read_text().splitlines()
+        assert len(lines) == len(reference), (hand, len(lines), len(reference))
+        for line, pose in zip(lines, reference):
+            values = decode_opengloves(line, 1023)
+            for f, (_, curl, splay) in enumerate(documented_curls([float(x) for x in pose])):
+                assert abs(values[chr(65 + f)] - curl) * 1023 <= 0.5 + 1e-4 and abs(values[f"({chr(65 + f)}B)"] - splay) * 1023 / 2 <= 0.5 + 1e-4, (hand, line)
+    got = client.messages[0]
+    hands = {0: "right", 1: "left"}
+    for _, fields in got:
+        assert as_printed(fields[10:35]) == references[hands[fields[2]]][fields[4] - 1], f"{hands[fields[2]]} pose {fields[4]}"
+    assert {fields[2] for _, fields in got} == {0, 1}, "the engine stream did not carry both hands"
+    print(f"  two gloves: {len(references['left'])} + {len(references['right'])} poses, each glove's OpenGloves lines and profile its own;"
+          f" an engine client got {len(got)} messages of both hands")
+
+
+@suite.test
 def the_c_and_csharp_clients_read_the_estimators_poses():
     setup_checks()
     if not STREAM_PRINT or shutil.which("mcs") is None or shutil.which("mono") is None:
@@ -482,7 +527,9 @@ def the_clients_read_split_messages_and_stop_at_a_corrupt_one():
 @suite.test
 def serve_given_nothing_to_do_says_so():
     setup_checks()
-    for args, says in ((["--in", "-"], "nothing to serve to"), (["--in", "-", "--engine", "0", "--profiles", str(suite.tmp)], "needs --user")):
+    for args, says in ((["--in", "-"], "nothing to serve to"), (["--in", "-", "--engine", "0", "--profiles", str(suite.tmp)], "needs --user"),
+                       (["--engine", "0"], "no glove"), (["--left", "-", "--right", "-", "--engine", "0"], "both read stdin"),
+                       (["--left", "a", "--right", "b", "--opengloves", "x.txt"], "expected '{hand}'")):
         result = subprocess.run([CLI, "serve", *args], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=30)
         assert result.returncode != 0 and says in result.stderr, (args, result.stderr)
 

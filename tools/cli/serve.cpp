@@ -1,7 +1,7 @@
-// glovepose serve: a glove's link (device_link.hpp) read, reopened when it goes away, its readings
-// turned into poses by an estimator, and each pose published at once to the engine stream (TCP on
-// loopback, any number of clients), over OSC, as VRChat avatar parameters and as OpenGloves lines
-// (docs/pose_stream.md). The calibration is the
+// glovepose serve: a glove's link (device_link.hpp), or a left and a right glove's, read and reopened
+// when it goes away; the readings turned into poses by an estimator per glove, and each pose
+// published at once to the engine stream (TCP on loopback, any number of clients), over OSC, as
+// VRChat avatar parameters and as OpenGloves lines (docs/pose_stream.md). The calibration is the
 // glove's and the user's: with --profiles it is loaded when that glove says its Hello, or made on
 // the fly over the first seconds and then saved for the next time.
 #include <glovepose/estimator.hpp>
@@ -39,7 +39,7 @@ namespace glovepose::cli {
 namespace {
 
 struct ServeOptions {
-  std::string in, model, hand = "right", user, profiles, calibration, osc, vrchat, opengloves;
+  std::string in, left, right, model, hand = "right", user, profiles, calibration, osc, vrchat, opengloves;
   unsigned opengloves_max = 4095;  // LucidVR's SteamVR driver's max_analog_value by default
   bool opengloves_joints = false;
   nn::WeightStorage storage = nn::WeightStorage::F32;
@@ -103,159 +103,241 @@ std::string profile_path(const ServeOptions& o, const GloveIdentity& glove) {
   return (std::filesystem::path(o.profiles) / (glove.glove_id + "-" + std::to_string(glove.serial) + "-" + o.user + ".calibration")).string();
 }
 
+// Outputs every glove publishes to (the engine stream's messages carry the hand).
+struct SharedOutputs {
+  std::unique_ptr<EngineServer> engine;
+};
+
+// One glove: its link, estimator and calibration, its own outputs (OSC addresses, VRChat names and
+// OpenGloves port are per hand), and its counts and latencies.
+class ServedGlove {
+ public:
+  ServedGlove(const ServeOptions& o, const std::string& source, const std::string& hand_name, bool several,
+              const std::shared_ptr<const PoseModel>& model, SharedOutputs& shared)
+      : o_(o),
+        told_(several ? "glovepose serve: " + hand_name + ": " : "glovepose serve: "),
+        hand_(hand_name == "left" ? hand::Handedness::Left : hand::Handedness::Right),
+        model_(model),
+        estimator_(model),
+        shared_(shared),
+        link_(source),
+        source_{no_lines_, "link '" + source + "'", "glovepose serve"},
+        format_(*model, false),
+        opengloves_line_(o.opengloves_max, o.opengloves_joints),
+        osc_angles_("/glovepose/" + hand_name + "/angles"),
+        osc_time_("/glovepose/" + hand_name + "/time"),
+        angle_types_(hand::kDofCount, 'f') {
+    if (!o.calibration.empty()) estimator_.load_calibration(o.calibration);
+    if (!o.osc.empty()) osc_ = std::make_unique<OscSender>(o.osc);
+    if (!o.vrchat.empty()) vrchat_ = std::make_unique<AvatarParameters>(o.vrchat, hand_name);
+    if (!o.opengloves.empty()) {
+      std::string target = o.opengloves;
+      const std::size_t at = target.find("{hand}");
+      if (at != std::string::npos) target.replace(at, 6, hand_name);
+      opengloves_ = std::make_unique<OpenGlovesPort>(target);
+      std::fprintf(stderr, "%sOpenGloves lines to '%s'\n", told_.c_str(), opengloves_->device().c_str());
+    }
+    link_told_ = link_.events();
+  }
+
+  bool live() const { return link_.address().reconnects(); }
+  bool ended() const { return ended_; }
+
+  // Reads the link for at most `wait`, publishing each pose; false once a file or stdin has ended.
+  bool poll(std::chrono::milliseconds wait) {
+    if (ended_) return false;
+    if (!link_.poll(wait, [this](const device::Frame& f, double mapped, double arrived) { on_frame(f, mapped, arrived); })) {
+      ended_ = true;
+      return false;
+    }
+    if (frames_) frames_->count_dropped(link_.counts());
+    const LinkEvents& now = link_.events();
+    if (now.losses != link_told_.losses)
+      std::fprintf(stderr, "%slink '%s' lost (%s); reopening it\n", told_.c_str(), link_.address().text.c_str(), now.last_problem.c_str());
+    if (now.connections != link_told_.connections) std::fprintf(stderr, "%slink '%s' open again\n", told_.c_str(), link_.address().text.c_str());
+    link_told_ = now;
+    return true;
+  }
+
+  std::uint64_t published() const { return published_; }
+
+  void tell_stats(double span, std::size_t clients) {
+    std::fprintf(stderr, "%s%.1f poses/s, %zu engine clients; latency p50 %.3f ms, p99 %.3f ms; the service's own p50 %.3f ms, p99 %.3f ms\n",
+                 told_.c_str(), static_cast<double>(published_ - told_published_) / span, clients, total_.quantile_ms(0.5),
+                 total_.quantile_ms(0.99), own_.quantile_ms(0.5), own_.quantile_ms(0.99));
+    told_published_ = published_;
+  }
+
+  // The run's summary; throws Error when the glove gave no pose.
+  void finish() {
+    std::fprintf(stderr, "%s%llu poses published; link: %s; %s\n", told_.c_str(), static_cast<unsigned long long>(published_),
+                 link_summary(link_.counts()).c_str(), link_events_summary(link_).c_str());
+    if (osc_)
+      std::fprintf(stderr, "%sOSC: %llu messages, %llu not sent\n", told_.c_str(), static_cast<unsigned long long>(osc_->sent()),
+                   static_cast<unsigned long long>(osc_->failed()));
+    if (vrchat_)
+      std::fprintf(stderr, "%sVRChat avatar parameters: %llu messages, %llu not sent\n", told_.c_str(),
+                   static_cast<unsigned long long>(vrchat_->osc().sent()), static_cast<unsigned long long>(vrchat_->osc().failed()));
+    if (opengloves_)
+      std::fprintf(stderr, "%sOpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before\n", told_.c_str(),
+                   static_cast<unsigned long long>(opengloves_->counts().sent), static_cast<unsigned long long>(opengloves_->counts().skipped));
+    std::fprintf(stderr, "%slatency (last byte read to pose sent) over %llu poses: p50 %.3f ms, p99 %.3f ms; the service's own "
+                 "(its frame's handling to the pose sent, less the estimator's work): p50 %.3f ms, p99 %.3f ms\n",
+                 told_.c_str(), static_cast<unsigned long long>(total_.count()), total_.quantile_ms(0.5), total_.quantile_ms(0.99),
+                 own_.quantile_ms(0.5), own_.quantile_ms(0.99));
+    if (published_ == 0) {
+      if (feed_) feed_->end();  // says why no pose came
+      throw Error("no pose published from link '" + link_.address().text + "' (" + link_summary(link_.counts()) + "), expected a glove's frames");
+    }
+  }
+
+ private:
+  // Each pose, published at once to every output.
+  void on_pose(Status status) {
+    if (status != Status::Solved) return;
+    const Pose& pose = estimator_.pose();
+    const double now = host_seconds();
+    message_.encode(pose, hand_, mapped_, now);
+    if (shared_.engine) shared_.engine->publish(message_);
+    if (osc_) {
+      osc_->begin(osc_angles_, angle_types_);
+      for (const double a : pose.angles) osc_->f(static_cast<float>(a));
+      osc_->send();
+      osc_->begin(osc_time_, "hd").h(static_cast<std::int64_t>(pose.sequence)).d(pose.timestamp).send();
+    }
+    if (vrchat_ || opengloves_) {
+      const hand::FingerCurls curls = hand::finger_curls(pose.angles, model_->joint_limits());
+      if (vrchat_) vrchat_->publish(curls, now);
+      if (opengloves_) {
+        opengloves_line_.encode(curls);
+        opengloves_->send(opengloves_line_.data(), opengloves_line_.size());
+      }
+    }
+    ++published_;
+    const double sent = host_seconds();
+    total_.add(sent - arrived_);
+    own_.add(sent - handling_ - pose.compute_seconds);
+  }
+
+  // The feed starts with the glove's first frame: its Hello names the profile to use.
+  void start_feed(const device::Frame& f) {
+    std::optional<double> on_the_fly = on_the_fly_seconds(o_.calibration_seconds, o_.calibration);
+    if (!o_.profiles.empty() && f.header.kind == device::FrameKind::Hello && link_.identity()) {
+      const std::string path = profile_path(o_, *link_.identity());
+      if (std::filesystem::exists(path)) {
+        estimator_.load_calibration(path);
+        on_the_fly.reset();
+        std::fprintf(stderr, "%s%s: profile '%s' applied\n", told_.c_str(), link_.identity()->describe().c_str(), path.c_str());
+      } else {
+        save_profile_ = path;
+        std::fprintf(stderr, "%s%s: no profile for user '%s' yet: calibrating over the first %g s, then saving '%s'\n", told_.c_str(),
+                     link_.identity()->describe().c_str(), o_.user.c_str(), o_.calibration_seconds, path.c_str());
+      }
+    }
+    feed_ = std::make_unique<GloveFeed>(source_, format_, estimator_, on_the_fly, counts_, on_pose_, "frame");
+    frames_ = std::make_unique<FrameFeed>(*feed_, estimator_, source_.name);
+  }
+
+  void on_frame(const device::Frame& f, double mapped, double arrived) {
+    handling_ = host_seconds();
+    arrived_ = arrived;
+    mapped_ = mapped;
+    if (!frames_) start_feed(f);
+    if (link_.counts().restarts != restarts_) {  // the device began again: its clock too
+      restarts_ = link_.counts().restarts;
+      estimator_.reset();
+    }
+    frames_->use(f);
+    if (!save_profile_.empty() && !estimator_.calibration_progress().collecting && estimator_.calibration()) {
+      estimator_.save_calibration(save_profile_);
+      std::fprintf(stderr, "%sprofile '%s' saved\n", told_.c_str(), save_profile_.c_str());
+      save_profile_.clear();
+    }
+  }
+
+  const ServeOptions& o_;
+  std::string told_;
+  hand::Handedness hand_;
+  std::shared_ptr<const PoseModel> model_;
+  GlovePoseEstimator estimator_;
+  SharedOutputs& shared_;
+  GloveLink link_;
+  std::istringstream no_lines_;
+  GloveLineSource source_;
+  GloveLineFormat format_;
+  GloveLineCounts counts_;
+  std::function<void(Status)> on_pose_ = [this](Status status) { on_pose(status); };
+  std::unique_ptr<GloveFeed> feed_;
+  std::unique_ptr<FrameFeed> frames_;
+  std::string save_profile_;  // the profile to write once the calibration on the fly is done
+  std::unique_ptr<OscSender> osc_;
+  std::unique_ptr<AvatarParameters> vrchat_;
+  OpenGlovesLine opengloves_line_;
+  std::unique_ptr<OpenGlovesPort> opengloves_;
+  std::string osc_angles_, osc_time_, angle_types_;
+  PoseMessage message_;
+  // Per pose: from its frame's last byte read to the pose sent (all of it: also the wait behind the
+  // frames read with it, a backlog after a reconnection), and the service's own part: from the start
+  // of its frame's handling to the pose sent, less the estimator's work.
+  LatencyStats total_, own_;
+  double arrived_ = 0.0, handling_ = 0.0, mapped_ = 0.0;
+  std::uint64_t published_ = 0, told_published_ = 0, restarts_ = 0;
+  LinkEvents link_told_;
+  bool ended_ = false;
+};
+
 int serve(const ServeOptions& o) {
   if (o.engine_port < 0 && o.osc.empty() && o.vrchat.empty() && o.opengloves.empty())
     throw Error("nothing to serve to: expected at least one of --engine PORT, --osc HOST:PORT, --vrchat HOST:PORT, --opengloves TARGET");
   if (!o.profiles.empty() && o.user.empty()) throw Error("--profiles needs --user NAME: a profile is a glove's and a user's");
+  // The gloves: --in (on --hand), or --left and --right.
+  std::vector<std::pair<std::string, std::string>> sources;  // hand, link
+  if (!o.in.empty()) sources.emplace_back(o.hand, o.in);
+  if (!o.left.empty()) sources.emplace_back("left", o.left);
+  if (!o.right.empty()) sources.emplace_back("right", o.right);
+  if (sources.empty()) throw Error("no glove: expected --in SOURCE (with --hand), or --left SOURCE, --right SOURCE or both");
+  const bool several = sources.size() > 1;
+  if (several && o.left == "-" && o.right == "-") throw Error("--left and --right both read stdin ('-'): expected a link of its own for each glove");
+  if (several && !o.calibration.empty()) throw Error("--calibration is one glove's: with two gloves, use --profiles DIR --user NAME");
+  if (several && !o.opengloves.empty() && o.opengloves.find("{hand}") == std::string::npos)
+    throw Error("--opengloves '" + o.opengloves + "' with two gloves: expected '{hand}' in it, each glove's lines to its own target (pty:/tmp/glovepose-{hand})");
   PoseModelOptions model_options;
   model_options.storage = o.storage;
   const std::shared_ptr<const PoseModel> model = PoseModel::load(o.model.empty() ? shipped_model_path(kShippedModel) : o.model, model_options);
-  GlovePoseEstimator estimator(model);
-  if (!o.calibration.empty()) estimator.load_calibration(o.calibration);
-  std::unique_ptr<EngineServer> engine;
-  if (o.engine_port >= 0) engine = std::make_unique<EngineServer>(static_cast<unsigned>(o.engine_port));
-  std::unique_ptr<OscSender> osc;
-  if (!o.osc.empty()) osc = std::make_unique<OscSender>(o.osc);
-  std::unique_ptr<AvatarParameters> vrchat;
-  if (!o.vrchat.empty()) vrchat = std::make_unique<AvatarParameters>(o.vrchat, o.hand);
-  OpenGlovesLine opengloves_line(o.opengloves_max, o.opengloves_joints);
-  std::unique_ptr<OpenGlovesPort> opengloves;
-  if (!o.opengloves.empty()) opengloves = std::make_unique<OpenGlovesPort>(o.opengloves);
-  GloveLink link(o.in);
+  SharedOutputs shared;
+  if (o.engine_port >= 0) shared.engine = std::make_unique<EngineServer>(static_cast<unsigned>(o.engine_port));
+  std::vector<std::unique_ptr<ServedGlove>> gloves;
+  for (const auto& [hand_name, source] : sources) gloves.push_back(std::make_unique<ServedGlove>(o, source, hand_name, several, model, shared));
   stop_on_signals(serve_on_signal);
-  if (engine) std::fprintf(stderr, "glovepose serve: engine stream on 127.0.0.1:%u\n", engine->port());
-  if (opengloves) std::fprintf(stderr, "glovepose serve: OpenGloves lines to '%s'\n", opengloves->device().c_str());
-  if (link.address().reconnects() && !o.normal_scheduling) std::fprintf(stderr, "glovepose serve: %s\n", ask_for_real_time().c_str());
+  if (shared.engine) std::fprintf(stderr, "glovepose serve: engine stream on 127.0.0.1:%u\n", shared.engine->port());
+  const bool live = std::any_of(gloves.begin(), gloves.end(), [](const auto& g) { return g->live(); });
+  if (live && !o.normal_scheduling) std::fprintf(stderr, "glovepose serve: %s\n", ask_for_real_time().c_str());
 
-  const hand::Handedness hand = o.hand == "left" ? hand::Handedness::Left : hand::Handedness::Right;
-  const std::string osc_angles = "/glovepose/" + o.hand + "/angles", osc_time = "/glovepose/" + o.hand + "/time";
-  const std::string angle_types(hand::kDofCount, 'f');
-  std::istringstream no_lines;
-  const GloveLineSource source{no_lines, "link '" + o.in + "'", "glovepose serve"};
-  const GloveLineFormat format(*model, false);
-  GloveLineCounts counts;
-  std::unique_ptr<GloveFeed> feed;
-  std::unique_ptr<FrameFeed> frames;
-  std::string save_profile;  // the profile to write once the calibration on the fly is done
-  PoseMessage message;
-  // Per pose: from its frame's last byte read to the pose sent (all of it: also the wait behind the
-  // frames read with it, a backlog after a reconnection), and the service's own part: from the start
-  // of its frame's handling to the pose sent, less the estimator's work.
-  LatencyStats total, own;
-  double arrived = 0.0, handling = 0.0, mapped = 0.0;
-  std::uint64_t published = 0, restarts = 0;
-
-  // Each pose, published at once to every output.
-  const std::function<void(Status)> on_pose = [&](Status status) {
-    if (status != Status::Solved) return;
-    const Pose& pose = estimator.pose();
-    const double now = host_seconds();
-    message.encode(pose, hand, mapped, now);
-    if (engine) engine->publish(message);
-    if (osc) {
-      osc->begin(osc_angles, angle_types);
-      for (const double a : pose.angles) osc->f(static_cast<float>(a));
-      osc->send();
-      osc->begin(osc_time, "hd").h(static_cast<std::int64_t>(pose.sequence)).d(pose.timestamp).send();
-    }
-    if (vrchat || opengloves) {
-      const hand::FingerCurls curls = hand::finger_curls(pose.angles, model->joint_limits());
-      if (vrchat) vrchat->publish(curls, now);
-      if (opengloves) {
-        opengloves_line.encode(curls);
-        opengloves->send(opengloves_line.data(), opengloves_line.size());
-      }
-    }
-    ++published;
-    const double sent = host_seconds();
-    total.add(sent - arrived);
-    own.add(sent - handling - pose.compute_seconds);
-  };
-
-  // The feed starts with the glove's first frame: its Hello names the profile to use.
-  const auto start_feed = [&](const device::Frame& f) {
-    std::optional<double> on_the_fly = on_the_fly_seconds(o.calibration_seconds, o.calibration);
-    if (!o.profiles.empty() && f.header.kind == device::FrameKind::Hello && link.identity()) {
-      const std::string path = profile_path(o, *link.identity());
-      if (std::filesystem::exists(path)) {
-        estimator.load_calibration(path);
-        on_the_fly.reset();
-        std::fprintf(stderr, "glovepose serve: %s: profile '%s' applied\n", link.identity()->describe().c_str(), path.c_str());
-      } else {
-        save_profile = path;
-        std::fprintf(stderr, "glovepose serve: %s: no profile for user '%s' yet: calibrating over the first %g s, then saving '%s'\n",
-                     link.identity()->describe().c_str(), o.user.c_str(), o.calibration_seconds, path.c_str());
-      }
-    }
-    feed = std::make_unique<GloveFeed>(source, format, estimator, on_the_fly, counts, on_pose, "frame");
-    frames = std::make_unique<FrameFeed>(*feed, estimator, source.name);
-  };
-
-  const auto on_frame = [&](const device::Frame& f, double mapped_time, double arrived_time) {
-    handling = host_seconds();
-    arrived = arrived_time;
-    mapped = mapped_time;
-    if (!frames) start_feed(f);
-    if (link.counts().restarts != restarts) {  // the device began again: its clock too
-      restarts = link.counts().restarts;
-      estimator.reset();
-    }
-    frames->use(f);
-    if (!save_profile.empty() && !estimator.calibration_progress().collecting && estimator.calibration()) {
-      estimator.save_calibration(save_profile);
-      std::fprintf(stderr, "glovepose serve: profile '%s' saved\n", save_profile.c_str());
-      save_profile.clear();
-    }
-  };
-
+  // One thread reads every glove: with one, it waits up to 20 ms for its link; with two, 1 ms each
+  // in turn, so a frame waits at most about 1 ms while the other glove's link is read.
+  const std::chrono::milliseconds wait(several ? 1 : 20);
   using Clock = std::chrono::steady_clock;
   const auto started = Clock::now();
   auto told = started;
-  std::uint64_t told_published = 0;
-  LinkEvents link_told = link.events();
   while (!serve_stop) {
     if (o.seconds > 0 && Clock::now() - started >= std::chrono::duration<double>(o.seconds)) break;
-    if (engine) engine->accept();
-    if (!link.poll(std::chrono::milliseconds(20), on_frame)) break;
-    if (frames) frames->count_dropped(link.counts());
-    const LinkEvents& now = link.events();
-    if (now.losses != link_told.losses)
-      std::fprintf(stderr, "glovepose serve: link '%s' lost (%s); reopening it\n", o.in.c_str(), now.last_problem.c_str());
-    if (now.connections != link_told.connections) std::fprintf(stderr, "glovepose serve: link '%s' open again\n", o.in.c_str());
-    link_told = now;
+    if (shared.engine) shared.engine->accept();
+    bool reading = false;
+    for (auto& glove : gloves) reading = glove->poll(wait) || reading;
+    if (!reading) break;  // every file or stdin has ended
     if (o.stats && Clock::now() - told >= std::chrono::seconds(1)) {
       const double span = std::chrono::duration<double>(Clock::now() - told).count();
-      std::fprintf(stderr, "glovepose serve: %.1f poses/s, %zu engine clients; latency p50 %.3f ms, p99 %.3f ms; the service's own p50 %.3f ms, p99 %.3f ms\n",
-                   static_cast<double>(published - told_published) / span, engine ? engine->clients() : std::size_t{0},
-                   total.quantile_ms(0.5), total.quantile_ms(0.99), own.quantile_ms(0.5), own.quantile_ms(0.99));
+      for (auto& glove : gloves) glove->tell_stats(span, shared.engine ? shared.engine->clients() : std::size_t{0});
       told = Clock::now();
-      told_published = published;
     }
   }
-  std::fprintf(stderr, "glovepose serve: %llu poses published; link: %s; %s\n", static_cast<unsigned long long>(published),
-               link_summary(link.counts()).c_str(), link_events_summary(link).c_str());
-  if (engine) {
-    const EngineCounts& e = engine->counts();
+  if (shared.engine) {
+    const EngineCounts& e = shared.engine->counts();
     std::fprintf(stderr, "glovepose serve: engine stream: %llu clients, %llu messages sent, %llu missed by clients that did not read, %llu gone\n",
                  static_cast<unsigned long long>(e.clients), static_cast<unsigned long long>(e.sent), static_cast<unsigned long long>(e.skipped),
                  static_cast<unsigned long long>(e.gone));
   }
-  if (osc) std::fprintf(stderr, "glovepose serve: OSC: %llu messages, %llu not sent\n", static_cast<unsigned long long>(osc->sent()),
-                        static_cast<unsigned long long>(osc->failed()));
-  if (vrchat)
-    std::fprintf(stderr, "glovepose serve: VRChat avatar parameters: %llu messages, %llu not sent\n",
-                 static_cast<unsigned long long>(vrchat->osc().sent()), static_cast<unsigned long long>(vrchat->osc().failed()));
-  if (opengloves)
-    std::fprintf(stderr, "glovepose serve: OpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before\n",
-                 static_cast<unsigned long long>(opengloves->counts().sent), static_cast<unsigned long long>(opengloves->counts().skipped));
-  std::fprintf(stderr, "glovepose serve: latency (last byte read to pose sent) over %llu poses: p50 %.3f ms, p99 %.3f ms; the service's own "
-               "(its frame's handling to the pose sent, less the estimator's work): p50 %.3f ms, p99 %.3f ms\n",
-               static_cast<unsigned long long>(total.count()), total.quantile_ms(0.5), total.quantile_ms(0.99), own.quantile_ms(0.5),
-               own.quantile_ms(0.99));
-  if (published == 0) {
-    if (feed) feed->end();  // says why no pose came
-    throw Error("no pose published from link '" + o.in + "' (" + link_summary(link.counts()) + "), expected a glove's frames");
-  }
+  for (auto& glove : gloves) glove->finish();
   return 0;
 }
 
@@ -265,14 +347,19 @@ Command add_serve(CLI::App& tool) {
   auto o = std::make_shared<ServeOptions>();
   CLI::App* command = tool.add_subcommand(
       "serve",
-      "Reads a glove's link (reopened when it goes away), turns its readings into poses and publishes each at once: the engine stream "
+      "Reads a glove's link, or a left and a right glove's (reopened when they go away), turns the readings into poses and publishes each "
+      "at once: the engine stream "
       "(TCP on 127.0.0.1, any number of clients), OSC over UDP, VRChat avatar parameters and OpenGloves lines (docs/pose_stream.md). With --profiles, a glove's and user's "
       "calibration is loaded when that glove says its Hello, or made on the fly and saved.");
-  command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE")->required();  // no default: a service reads a glove
+  // No default link: a service reads a glove (serve() says so when none is given).
+  CLI::Option* in = command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE");
+  command->add_option("--left", o->left, "the left glove's link (as --in), with or without --right")->type_name("SOURCE")->excludes(in);
+  command->add_option("--right", o->right, "the right glove's link (as --in), with or without --left")->type_name("SOURCE")->excludes(in);
   add_model_file(*command, o->model, std::string("weights (default: models/") + kShippedModel + ", shipped with glovepose)");
   add_weight_storage(*command, o->storage, false);
-  command->add_option("--hand", o->hand, "which hand the glove is on, as the outputs name it (default right)")
-      ->check(CLI::IsMember({"left", "right"}));
+  command->add_option("--hand", o->hand, "which hand the --in glove is on, as the outputs name it (default right)")
+      ->check(CLI::IsMember({"left", "right"}))
+      ->needs(in);
   add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, nullptr);
   CLI::Option* profiles =
       command->add_option("--profiles", o->profiles, "a directory of calibration profiles, one per glove (its id and serial) and user")
@@ -286,7 +373,8 @@ Command add_serve(CLI::App& tool) {
       ->type_name("HOST:PORT");
   CLI::Option* opengloves = command->add_option("--opengloves", o->opengloves,
                       "write OpenGloves lines (finger curls and splays) for SteamVR's or Monado's OpenGloves driver: pty:LINK (a new pty "
-                      "named by the symlink LINK), a serial port (serial:PORT[@BAUD] or its path) or a file")
+                      "named by the symlink LINK), a serial port (serial:PORT[@BAUD] or its path) or a file; '{hand}' in it becomes "
+                      "left or right (needed with two gloves)")
       ->type_name("TARGET");
   add_number(*command, "--opengloves-max", "N", o->opengloves_max,
              "the value of a full curl in OpenGloves lines: the driver's max_analog_value (default 4095, SteamVR's; Monado's is 1023)")
