@@ -15,7 +15,7 @@ seconds="${1:-60}"
 shift || true
 build="${BUILD_DIR:-$here/build-fuzz}"
 jobs="${FUZZ_JOBS:-2}"
-all_targets=(tensor_file_fuzz glove_description_fuzz csv_import_fuzz recording_import_fuzz estimator_stream_fuzz calibration_files_fuzz keypoint_file_fuzz glove_lines_fuzz checkpoint_file_fuzz http_request_fuzz wire_stream_fuzz)
+all_targets=(tensor_file_fuzz glove_description_fuzz csv_import_fuzz recording_import_fuzz estimator_stream_fuzz calibration_files_fuzz keypoint_file_fuzz glove_lines_fuzz checkpoint_file_fuzz http_request_fuzz wire_stream_fuzz engine_stream_fuzz)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 
