@@ -9,12 +9,21 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "cli/opengloves_output.hpp"
 #include "cli/pose_outputs.hpp"
+
+#ifndef _WIN32
+#  include <fcntl.h>
+#  include <stdlib.h>
+#  include <termios.h>
+#  include <unistd.h>
+#endif
 
 namespace {
 
@@ -196,3 +205,166 @@ TEST_CASE("serve's VRChat parameters: OSC floats by the documented names, at mos
   CHECK(messages[6].second == doctest::Approx(1.0 / 2.0 / 3.0));  // ring: middle flexion 1 rad of 2 rad, one joint of three
   CHECK(messages[9].second == doctest::Approx(-0.1 / (20.0 * 3.14159265358979323846 / 180.0)));  // pinky splay
 }
+
+#ifndef _WIN32
+namespace {
+
+// A pseudo-terminal pair as a test's stand-in for a driver's serial port: the test holds `master`
+// (the driver's side), the output writes to the slave's path; closing master is the port going away.
+struct TestPty {
+  int master = -1;
+  std::string slave;
+  TestPty() {
+    master = ::posix_openpt(O_RDWR | O_NOCTTY);
+    REQUIRE(master >= 0);
+    REQUIRE(::grantpt(master) == 0);
+    REQUIRE(::unlockpt(master) == 0);
+    slave = ::ptsname(master);
+    termios mode{};
+    REQUIRE(::tcgetattr(master, &mode) == 0);
+    ::cfmakeraw(&mode);
+    REQUIRE(::tcsetattr(master, TCSANOW, &mode) == 0);
+    ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
+  }
+  ~TestPty() { close(); }
+  void close() {
+    if (master >= 0) ::close(master);
+    master = -1;
+  }
+};
+
+// Every byte waiting on `fd` (non-blocking) onto `text`.
+void read_waiting(int fd, std::string& text) {
+  std::array<char, 4096> chunk{};
+  for (;;) {
+    const ssize_t n = ::read(fd, chunk.data(), chunk.size());
+    if (n <= 0) return;
+    text.append(chunk.data(), static_cast<std::size_t>(n));
+  }
+}
+
+// The numbers of the lines "L<number>\n" in `text`, which must hold whole lines only.
+std::vector<long> line_numbers(const std::string& text) {
+  std::vector<long> numbers;
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    REQUIRE(end != std::string::npos);  // no line cut off
+    REQUIRE(text[at] == 'L');
+    numbers.push_back(std::stol(text.substr(at + 1, end - at - 1)));
+    at = end + 1;
+  }
+  return numbers;
+}
+
+// The test's line number `k`, always 8 bytes.
+std::string numbered_line(long k) {
+  std::string digits = std::to_string(k % 1000000);
+  return "L" + std::string(6 - digits.size(), '0') + digits + "\n";
+}
+
+std::string test_path(const char* name) {
+  return (std::filesystem::temp_directory_path() / (std::string(name) + "-" + std::to_string(::getpid()))).string();
+}
+
+}  // namespace
+
+TEST_CASE("serve's OpenGloves pty: lines no driver reads are discarded, so a driver that opens it late reads fresh ones") {
+  const std::string link = test_path("glovepose-og-pty");
+  cli::OpenGlovesPort port("pty:" + link);
+  long offered = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(1300)) {  // no driver for 1.3 s
+    const std::string line = numbered_line(offered++);
+    port.send(line.data(), line.size());
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  port.finish();
+  const cli::OpenGlovesCounts& c = port.counts();
+  CHECK(c.sent + c.skipped + c.failed == static_cast<std::uint64_t>(offered));
+  CHECK(c.failed == 0);
+  CHECK(c.unread > 0);
+
+  const int driver = ::open(link.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  REQUIRE(driver >= 0);
+  std::string text;
+  read_waiting(driver, text);
+  ::close(driver);
+  const std::vector<long> numbers = line_numbers(text);
+  REQUIRE(!numbers.empty());
+  for (std::size_t i = 1; i < numbers.size(); ++i) CHECK(numbers[i] > numbers[i - 1]);
+  CHECK(numbers.back() >= offered - 2);  // the newest line (the last one may have been skipped)
+  // What the driver found: the lines of at most the last kUnreadLimit (and those the count of
+  // discarded lines missed while they were still on their way into the pty), not the whole wait.
+  CHECK(numbers.size() <= c.sent - c.unread);
+  CHECK(numbers.size() < static_cast<std::size_t>(offered) / 2);
+  MESSAGE(offered << " lines offered over 1.3 s with no driver: " << c.sent << " sent, " << c.unread << " discarded unread, "
+                  << numbers.size() << " read by a driver that opened the pty then");
+}
+
+TEST_CASE("serve's OpenGloves serial port: lost when its other end goes, reopened when it comes back, every line counted") {
+  const std::string link = test_path("glovepose-og-serial");
+  std::filesystem::remove(link);
+  auto first = std::make_unique<TestPty>();
+  std::filesystem::create_symlink(first->slave, link);
+  cli::OpenGlovesPort port("serial:" + link, cli::LinkTiming{std::chrono::milliseconds(5), std::chrono::milliseconds(20), {}});
+  long offered = 0;
+  std::string before, after;
+  const auto offer = [&](int lines, TestPty* reader, std::string& text) {
+    for (int i = 0; i < lines; ++i) {
+      const std::string line = numbered_line(offered++);
+      port.send(line.data(), line.size());
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      if (reader) read_waiting(reader->master, text);
+    }
+  };
+  offer(50, first.get(), before);
+  port.finish();
+  read_waiting(first->master, before);
+  first->close();  // the driver's end goes away
+  offer(50, nullptr, before);
+  CHECK(port.events().losses == 1);
+  CHECK(port.events().connections == 1);
+
+  TestPty second;  // and comes back under the same name
+  std::filesystem::remove(link);
+  std::filesystem::create_symlink(second.slave, link);
+  offer(100, &second, after);
+  port.finish();
+  read_waiting(second.master, after);
+  std::filesystem::remove(link);
+
+  const cli::OpenGlovesCounts& c = port.counts();
+  CHECK(c.sent + c.skipped + c.failed == static_cast<std::uint64_t>(offered));
+  CHECK(port.events().connections == 2);
+  CHECK(port.events().failed_opens > 0);  // while the name pointed nowhere
+  const std::vector<long> a = line_numbers(before), b = line_numbers(after);
+  CHECK(a.size() + b.size() == c.sent);  // every line counted sent was read whole
+  CHECK(c.failed >= 49);                 // the lines offered while it was gone
+  REQUIRE(!a.empty());
+  REQUIRE(!b.empty());
+  CHECK(a.back() < 50);
+  CHECK(b.front() >= 100);
+}
+
+TEST_CASE("serve's OpenGloves serial port: one that takes nothing for a second is taken as hung and reopened") {
+  TestPty pty;  // never read: the port's buffers fill and a write waits
+  cli::OpenGlovesPort port("serial:" + pty.slave, cli::LinkTiming{std::chrono::milliseconds(5), std::chrono::milliseconds(20), {}});
+  long offered = 0;
+  const std::string line(200, 'x');
+  const auto start = std::chrono::steady_clock::now();
+  while (port.events().connections < 2 && std::chrono::steady_clock::now() - start < std::chrono::seconds(10)) {
+    port.send(line.data(), line.size());
+    ++offered;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  CHECK(port.events().losses == 1);
+  CHECK(port.events().connections == 2);
+  CHECK(port.events().last_problem.find("not taken in 1000 ms") != std::string::npos);
+  port.finish();
+  const cli::OpenGlovesCounts& c = port.counts();
+  CHECK(c.sent + c.skipped + c.failed == static_cast<std::uint64_t>(offered));
+  CHECK(c.skipped > 0);
+  CHECK(c.failed >= 1);
+}
+#endif

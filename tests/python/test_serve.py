@@ -355,8 +355,10 @@ def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays
     lines = bytes(received).decode("ascii").split("\n")
     assert lines[-1] == "", "a line was cut off"
     lines = lines[:-1]
-    sent, skipped = map(int, re.search(r"OpenGloves: (\d+) lines sent, (\d+) skipped", text).groups())
-    assert sent + skipped == len(reference) and len(lines) == sent and sent >= 0.9 * len(reference), (sent, skipped, len(lines), len(reference))
+    sent, skipped, failed, unread = map(int, re.search(r"OpenGloves: (\d+) lines sent, (\d+) skipped.*?, (\d+) failed.*?, (\d+) of those sent"
+                                                       r" discarded unread", text).groups())
+    assert sent + skipped + failed == len(reference) and failed == 0 and unread == 0, (sent, skipped, failed, unread, len(reference))
+    assert len(lines) == sent and sent >= 0.9 * len(reference), (sent, len(lines), len(reference))
     joint_keys = [[f"({chr(65 + f)}A{chr(65 + j)})" for j in range(3 if f == 0 else 4)] for f in range(5)]
     worst = 0.0
     at = 0

@@ -13,11 +13,13 @@
 #include <glovepose/hand/finger_curls.hpp>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <boost/asio/io_context.hpp>
@@ -31,6 +33,7 @@
 #  include <boost/asio/posix/stream_descriptor.hpp>
 #  include <fcntl.h>
 #  include <stdlib.h>
+#  include <sys/ioctl.h>
 #  include <termios.h>
 #  include <unistd.h>
 #endif
@@ -80,26 +83,33 @@ class OpenGlovesLine {
   bool joints_;
 };
 
-/// What the OpenGloves output did.
+/// What became of the lines offered to the OpenGloves output: sent + skipped + failed of them.
 struct OpenGlovesCounts {
-  std::uint64_t sent = 0;     ///< lines handed whole to the port or file
-  std::uint64_t skipped = 0;  ///< lines skipped because the previous one was still being taken
+  std::uint64_t sent = 0;     ///< taken whole by the port or file
+  std::uint64_t skipped = 0;  ///< skipped: the port was still taking the line before
+  std::uint64_t failed = 0;   ///< refused by the port, or offered while it was lost and being reopened
+  std::uint64_t unread = 0;   ///< (a pty) sent, then discarded unread: no driver read them for kUnreadLimit
 };
 
-/// Where the OpenGloves lines go (the forms at the top of this file).
+/// Where the OpenGloves lines go (the forms at the top of this file). A serial port that fails or
+/// hangs is closed and reopened with the device links' back-off (LinkTiming); a pty cannot be lost,
+/// and what no driver reads is discarded so that a driver that opens it later reads fresh poses.
 class OpenGlovesPort {
  public:
-  explicit OpenGlovesPort(const std::string& target) {
+  /// How long lines may wait in a pty unread before they are discarded, and a write to a serial
+  /// port may wait before the port is taken as hung.
+  static constexpr std::chrono::milliseconds kUnreadLimit{500}, kHungLimit{1000};
+
+  explicit OpenGlovesPort(const std::string& target, LinkTiming timing = {}) : timing_(timing), retry_after_(timing.first) {
     const std::string what = "--opengloves '" + target + "'";
     if (target.rfind("pty:", 0) == 0) {
       open_pty(target.substr(4), what);
     } else {
       const LinkAddress a = LinkAddress::parse(target);
       if (a.kind == LinkAddress::Kind::Serial) {
-        boost::system::error_code e;
-        serial_ = std::make_unique<boost::asio::serial_port>(io_);
-        open_serial_port(*serial_, a.where, a.baud, e);
-        if (e) throw Error(what + ": cannot open the serial port: " + e.message());
+        serial_address_ = a;
+        std::string problem;
+        if (!open_serial(problem)) throw Error(what + ": cannot open the serial port: " + problem);
         device_ = a.where;
       } else if (a.kind == LinkAddress::Kind::File) {
         file_ = std::make_unique<ByteSink>(a.where);
@@ -108,6 +118,7 @@ class OpenGlovesPort {
         throw Error(what + ": expected pty:LINK, a serial port (serial:PORT[@BAUD] or its path) or a file");
       }
     }
+    ++events_.connections;
     drain();
   }
   OpenGlovesPort(const OpenGlovesPort&) = delete;
@@ -127,39 +138,166 @@ class OpenGlovesPort {
 
   /// Sends one line whole, or skips it while the previous one is still being taken.
   void send(const char* line, std::size_t size) {
-    io_.poll();  // finishes what the port has taken since, and reads what the driver sent
+    poll();
     if (file_) {
       file_->write(reinterpret_cast<const std::uint8_t*>(line), size);
       ++counts_.sent;
       return;
     }
+    const auto now = Clock::now();
+    if (pty_open()) discard_unread(now);
+    if (serial_address_ && !serial_ && !reopen(now)) {
+      ++counts_.failed;
+      return;
+    }
     if (writing_) {
-      ++counts_.skipped;
+      if (serial_ && now - write_started_ > kHungLimit) {
+        lose("a line not taken in " + std::to_string(kHungLimit.count()) + " ms", now);
+        ++counts_.failed;
+      } else {
+        ++counts_.skipped;
+      }
       return;
     }
     std::copy(line, line + size, out_.data());
     writing_ = true;
-    ++counts_.sent;
-    const auto done = [this](const boost::system::error_code&, std::size_t) { writing_ = false; };
+    write_started_ = now;
+    const auto done = [this, size, generation = generation_](const boost::system::error_code& e, std::size_t n) {
+      if (generation != generation_) {  // the port it was written to is gone
+        ++counts_.failed;
+        return;
+      }
+      writing_ = false;
+      if (!e && n == size) {
+        ++counts_.sent;
+        remember(size);
+      } else {
+        ++counts_.failed;
+        if (serial_ && e != boost::asio::error::operation_aborted) lose(e ? e.message() : std::string("a line taken in part"), Clock::now());
+      }
+    };
     if (serial_) boost::asio::async_write(*serial_, boost::asio::buffer(out_.data(), size), done);
 #ifndef _WIN32
     if (pty_) boost::asio::async_write(*pty_, boost::asio::buffer(out_.data(), size), done);
 #endif
-    io_.poll();
+    poll();
+  }
+
+  /// Waits up to `wait` for the line being written, then gives it up (counted failed); after it the
+  /// counts add up to the lines offered.
+  void finish(std::chrono::milliseconds wait = std::chrono::milliseconds(200)) {
+    const auto end = Clock::now() + wait;
+    while (writing_ && Clock::now() < end) {
+      io_.restart();
+      io_.run_for(std::chrono::milliseconds(10));
+    }
+    if (!writing_) return;
+    boost::system::error_code ignored;
+    if (serial_) serial_->cancel(ignored);
+#ifndef _WIN32
+    if (pty_) pty_->cancel(ignored);
+#endif
+    poll();
   }
 
   const OpenGlovesCounts& counts() const { return counts_; }
+  /// The port's life: losses, reopenings and why it was last lost (a serial port only).
+  const LinkEvents& events() const { return events_; }
 
  private:
+  using Clock = std::chrono::steady_clock;
+
+  // Finishes what the port has taken since, and reads what the driver sent. restart(): an
+  // io_context that ran out of work (a read ended by a lost port) runs nothing more without it.
+  void poll() {
+    io_.restart();
+    io_.poll();
+  }
+
   // A driver may write to the glove (force feedback: "A0B0C0D0E0\n"); read and dropped, so that its
   // writes never wait for a reader.
   void drain() {
-    const auto again = [this](const boost::system::error_code& e, std::size_t) {
-      if (!e) drain();
+    const auto again = [this, generation = generation_](const boost::system::error_code& e, std::size_t) {
+      if (!e && generation == generation_) drain();
     };
     if (serial_) serial_->async_read_some(boost::asio::buffer(in_), again);
 #ifndef _WIN32
     if (pty_) pty_->async_read_some(boost::asio::buffer(in_), again);
+#endif
+  }
+
+  bool open_serial(std::string& problem) {
+    boost::system::error_code e;
+    auto port = std::make_unique<boost::asio::serial_port>(io_);
+    open_serial_port(*port, serial_address_->where, serial_address_->baud, e);
+    if (e) {
+      problem = e.message();
+      return false;
+    }
+    serial_ = std::move(port);
+    return true;
+  }
+
+  // Closes a failed or hung serial port; its pending work ends as failed, and send() reopens it.
+  void lose(const std::string& problem, Clock::time_point now) {
+    ++events_.losses;
+    events_.last_problem = problem;
+    ++generation_;
+    writing_ = false;
+    serial_.reset();  // cancels its pending write and read: their handlers see the old generation
+    retry_after_ = timing_.first;
+    next_attempt_ = now + retry_after_;
+  }
+
+  bool reopen(Clock::time_point now) {
+    if (now < next_attempt_) return false;
+    std::string problem;
+    if (!open_serial(problem)) {
+      ++events_.failed_opens;
+      events_.last_problem = problem;
+      retry_after_ = std::min(retry_after_ * 2, timing_.longest);
+      next_attempt_ = now + retry_after_;
+      return false;
+    }
+    ++events_.connections;
+    drain();
+    return true;
+  }
+
+  bool pty_open() const {
+#ifndef _WIN32
+    return pty_ != nullptr;
+#else
+    return false;
+#endif
+  }
+
+  // The sizes of the latest lines sent, newest last: what discarding unread bytes threw away.
+  void remember(std::size_t size) {
+    recent_[recent_next_++ % recent_.size()] = static_cast<std::uint16_t>(size);
+  }
+
+  // Lines that wait unread in the pty for kUnreadLimit have no reader: they are discarded (and the
+  // write they held up goes through), so that a driver that opens the pty later reads fresh poses.
+  void discard_unread(Clock::time_point now) {
+#ifndef _WIN32
+    int waiting = 0;
+    if (::ioctl(pty_device_, FIONREAD, &waiting) != 0 || waiting <= 0) {
+      unread_since_.reset();
+      return;
+    }
+    if (!unread_since_) unread_since_ = now;
+    if (now - *unread_since_ < kUnreadLimit) return;
+    (void)::tcflush(pty_device_, TCIFLUSH);
+    // Whole lines among the bytes thrown away (the oldest of them may have been read in part).
+    std::size_t bytes = static_cast<std::size_t>(waiting);
+    for (std::size_t back = 1; back <= std::min<std::size_t>(recent_next_, recent_.size()) && bytes > 0; ++back) {
+      bytes -= std::min<std::size_t>(bytes, recent_[(recent_next_ - back) % recent_.size()]);
+      ++counts_.unread;
+    }
+    unread_since_.reset();
+#else
+    (void)now;
 #endif
   }
 
@@ -187,7 +325,9 @@ class OpenGlovesPort {
   }
 
   std::string device_, link_;
+  LinkTiming timing_;
   boost::asio::io_context io_;
+  std::optional<LinkAddress> serial_address_;
   std::unique_ptr<boost::asio::serial_port> serial_;
   std::unique_ptr<ByteSink> file_;
 #ifndef _WIN32
@@ -196,8 +336,15 @@ class OpenGlovesPort {
 #endif
   std::array<char, 256> out_{};
   std::array<char, 256> in_{};
+  std::array<std::uint16_t, 512> recent_{};
+  std::size_t recent_next_ = 0;
+  std::optional<Clock::time_point> unread_since_;
   bool writing_ = false;
+  std::uint64_t generation_ = 0;  // which port a pending write or read was started on
+  Clock::time_point write_started_{}, next_attempt_{};
+  std::chrono::milliseconds retry_after_;
   OpenGlovesCounts counts_;
+  LinkEvents events_;
 };
 
 }  // namespace glovepose::cli

@@ -136,6 +136,7 @@ class ServedGlove {
       if (at != std::string::npos) target.replace(at, 6, hand_name);
       opengloves_ = std::make_unique<OpenGlovesPort>(target);
       std::fprintf(stderr, "%sOpenGloves lines to '%s'\n", told_.c_str(), opengloves_->device().c_str());
+      port_told_ = opengloves_->events();
     }
     link_told_ = link_.events();
   }
@@ -156,6 +157,13 @@ class ServedGlove {
       std::fprintf(stderr, "%slink '%s' lost (%s); reopening it\n", told_.c_str(), link_.address().text.c_str(), now.last_problem.c_str());
     if (now.connections != link_told_.connections) std::fprintf(stderr, "%slink '%s' open again\n", told_.c_str(), link_.address().text.c_str());
     link_told_ = now;
+    if (opengloves_) {
+      const LinkEvents& port = opengloves_->events();
+      if (port.losses != port_told_.losses)
+        std::fprintf(stderr, "%sOpenGloves port '%s' lost (%s); reopening it\n", told_.c_str(), opengloves_->device().c_str(), port.last_problem.c_str());
+      if (port.connections != port_told_.connections) std::fprintf(stderr, "%sOpenGloves port '%s' open again\n", told_.c_str(), opengloves_->device().c_str());
+      port_told_ = port;
+    }
     return true;
   }
 
@@ -178,9 +186,16 @@ class ServedGlove {
     if (vrchat_)
       std::fprintf(stderr, "%sVRChat avatar parameters: %llu messages, %llu not sent\n", told_.c_str(),
                    static_cast<unsigned long long>(vrchat_->osc().sent()), static_cast<unsigned long long>(vrchat_->osc().failed()));
-    if (opengloves_)
-      std::fprintf(stderr, "%sOpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before\n", told_.c_str(),
-                   static_cast<unsigned long long>(opengloves_->counts().sent), static_cast<unsigned long long>(opengloves_->counts().skipped));
+    if (opengloves_) {
+      opengloves_->finish();
+      const OpenGlovesCounts& c = opengloves_->counts();
+      const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+      std::fprintf(stderr, "%sOpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before, %llu failed "
+                   "(the port refused them or was lost), %llu of those sent discarded unread (no driver read them for %lld ms); "
+                   "the port lost %llu times, reopened %llu times\n", told_.c_str(), n(c.sent), n(c.skipped), n(c.failed), n(c.unread),
+                   static_cast<long long>(OpenGlovesPort::kUnreadLimit.count()), n(opengloves_->events().losses),
+                   n(opengloves_->events().connections - 1));
+    }
     std::fprintf(stderr, "%slatency (last byte read to pose sent) over %llu poses: p50 %.3f ms, p99 %.3f ms; the service's own "
                  "(its frame's handling to the pose sent, less the estimator's work): p50 %.3f ms, p99 %.3f ms\n",
                  told_.c_str(), static_cast<unsigned long long>(total_.count()), total_.quantile_ms(0.5), total_.quantile_ms(0.99),
@@ -282,7 +297,7 @@ class ServedGlove {
   LatencyStats total_, own_;
   double arrived_ = 0.0, handling_ = 0.0, mapped_ = 0.0;
   std::uint64_t published_ = 0, told_published_ = 0, restarts_ = 0;
-  LinkEvents link_told_;
+  LinkEvents link_told_, port_told_;
   bool ended_ = false;
 };
 
