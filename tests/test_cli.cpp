@@ -1,10 +1,12 @@
 #include <glovepose/grid/glove_description.hpp>
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/model/unet_model.hpp>
+#include <glovepose/nn/weights.hpp>
 #include <glovepose/io/dataset.hpp>
 
 #include <doctest/doctest.h>
 
+#include "drifting_device.hpp"
 #include "test_files.hpp"
 #include <nlohmann/json.hpp>
 
@@ -598,6 +600,7 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("imported 12 takes: " + std::to_string(reference.frames()) + " frames") == 0);
   CHECK(r.out.find("of 3 subjects, 6 sessions, glove 'maker-44', 44 cells, with the 25 DoF angles") != std::string::npos);
+  CHECK(r.out.find("calibration: every session has its calibration take") != std::string::npos);
   const io::Dataset imported = io::Dataset::read(imported_file);
   CHECK(imported.glove_layout() == "maker-44");
   CHECK(imported.cells == reference.cells);
@@ -611,6 +614,9 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
   const std::string from_import = temp("t_import_lin.safetensors"), from_reference = temp("t_reference_lin.safetensors");
   r = run("train --data " + imported_file + " --glove " + glove_file + " --architecture linear --exclude-subjects 2 --out " + from_import);
   REQUIRE_MESSAGE(r.status == 0, r.out);
+  // Four runs (two people, two sessions): the last one validates, never trained on.
+  CHECK_MESSAGE(r.out.find("train: validation on 1 held-out run of 4, never trained on") != std::string::npos, r.out);
+  CHECK(r.out.find("subject 1, glove 0, session 1") != std::string::npos);
   r = run("train --data " + reference_file + " --architecture linear --exclude-subjects 2 --out " + from_reference);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   const Run eval_import = run("eval --model " + from_import + " --data " + imported_file + " --subjects 2 --json");
@@ -680,6 +686,22 @@ TEST_CASE("cli: glovepose import reads a glove maker's CSV takes into the datase
     r = run("eval --model " + flat_model + " --data " + flat_file + " --subjects 1");
     REQUIRE_MESSAGE(r.status == 0, r.out);
     CHECK(r.out.find("eval: calibration of subject 1, glove 0, session 0: 1 flat sensor read 0: stretch_B7") != std::string::npos);
+  }
+
+  // A recording take without its calibration take: import says what that means, and train's
+  // refusal names the ways out.
+  {
+    const std::string alone = temp("imported_alone.safetensors");
+    r = run("import --glove " + glove_file + " --rate 60 --ignore frame,note --subject 0 " + temp("import_take_1.csv") + " --out " + alone);
+    REQUIRE_MESSAGE(r.status == 0, r.out);
+    CHECK_MESSAGE(r.out.find("calibration: 1 of 1 sessions have no calibration take (subject 0, glove 0, session 0): train and eval them "
+                             "with --calibration-mode training") != std::string::npos,
+                  r.out);
+    r = run("train --data " + alone + " --glove " + glove_file + " --architecture linear --out " + temp("t_never.safetensors"));
+    CHECK(r.status == 1);
+    CHECK_MESSAGE(r.out.find("or choose --calibration-mode training (the training frames' range, stored in the model) or none") !=
+                      std::string::npos,
+                  r.out);
   }
 
   // A CSV given where a dataset file belongs, or to predict, says how to import it.
@@ -844,7 +866,9 @@ TEST_CASE("cli: glovepose view --stdin serves poses from a described glove's cel
   CHECK(state["lines"] == 2401);
   CHECK(WEXITSTATUS(pclose(server)) == 0);
   const std::string told = slurp(temp("view14_stderr.txt"));
-  CHECK_MESSAGE(told.find("glovepose view: stdin line 103: 2 fields, expected 15") == 0, told);
+  CHECK_MESSAGE(told.find("glovepose view: calibration: on the fly over the first 10 s of stream time, the user moving through extreme "
+                          "poses\nglovepose view: stdin line 103: 2 fields, expected 15") == 0,
+                told);
   CHECK(told.find("glovepose view: calibration: 1 of 14 sensors read 0: cell_22 (") != std::string::npos);
   CHECK(told.find("glovepose view: 1 of 2401 lines of stdin not understood and skipped (the first: line 103: ") != std::string::npos);
 
@@ -1005,7 +1029,8 @@ TEST_CASE("cli: glovepose predict --raw takes a described glove's own readings, 
   CHECK(worst < 1e-6);  // radians: the same network on the same calibrated cells
   // The garbage line: told on stderr when it came, counted at the end.
   r = run_stream(predict + "--calibration " + temp("raw14.calibration") + " --in " + stream, 2);
-  CHECK_MESSAGE(r.out.find("glovepose predict: '" + stream +
+  CHECK_MESSAGE(r.out.find("glovepose predict: calibration: the saved calibration '" + temp("raw14.calibration") + "'\n"
+                           "glovepose predict: '" + stream +
                            "' line 702: 2 fields, expected 15 (a timestamp in seconds and the 14 cells "
                            "of glove 'main14': cell_0,cell_20,") == 0,
                 r.out);
@@ -1047,6 +1072,51 @@ TEST_CASE("cli: glovepose predict --raw takes a described glove's own readings, 
   const auto reloaded = csv_numbers(r.out, true);
   REQUIRE(reloaded.size() == 2400);
   for (std::size_t i = 0; i < on_the_fly.size(); ++i) CHECK(on_the_fly[i] == reloaded[600 + i]);
+
+  r = run_stream(predict + "--calibration-seconds 10 --in " + stream, 2);
+  CHECK(r.out.find("glovepose predict: calibration: on the fly over the first 10 s of stream time") == 0);
+
+  // A model trained with its training-set range uses that range unless told otherwise: every frame
+  // gives a pose, each the pose of its cells calibrated by the model's stored range (computed here
+  // from the file's metadata, clamped at +-1.5 as the estimator clamps); --calibration-seconds
+  // calibrates on the fly instead. A model trained on uncalibrated cells is refused.
+  const std::string training_model = temp("t_raw14_training.safetensors");
+  r = run("train --data " + glove.data + " --glove " + glove.glove_file +
+          " --architecture fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --calibration-mode training --quiet --out " + training_model);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run_stream("predict --model " + training_model + " --raw --in " + stream, 1);
+  REQUIRE(r.status == 0);
+  const auto by_training_range = csv_numbers(r.out, true);
+  REQUIRE(by_training_range.size() == 2400);
+  {
+    const nn::WeightFile file = nn::WeightFile::read(training_model);
+    const std::vector<double> min = file.meta_numbers("calibration_min"), max = file.meta_numbers("calibration_max");
+    REQUIRE(min.size() == cells);
+    std::ofstream out(temp("raw14_training_calibrated.csv"));
+    for (const auto& frame : frames)
+      for (std::size_t c = 0; c < cells; ++c)
+        out << number17(std::clamp(2.0 * (frame[c] - min[c]) / (max[c] - min[c]) - 1.0, -1.5, 1.5)) << (c + 1 < cells ? "," : "\n");
+  }
+  r = run_stream("predict --model " + training_model + " --in " + temp("raw14_training_calibrated.csv"), 1);
+  REQUIRE(r.status == 0);
+  const auto by_training_cells = csv_numbers(r.out, true);
+  REQUIRE(by_training_cells.size() == 2400);
+  double training_worst = 0.0;
+  for (std::size_t i = 0; i < 2400; ++i)
+    for (std::size_t k = 0; k < 25; ++k) training_worst = std::max(training_worst, std::abs(by_training_range[i][k] - by_training_cells[i][k]));
+  CHECK(training_worst < 1e-6);
+  r = run_stream("predict --model " + training_model + " --raw --in " + stream, 2);
+  CHECK_MESSAGE(r.out.find("glovepose predict: calibration: the model's training-set range, as it was trained") == 0, r.out);
+  r = run_stream("predict --model " + training_model + " --raw --calibration-seconds 10 --in " + stream, 1);
+  REQUIRE(r.status == 0);
+  CHECK(csv_numbers(r.out, true).size() == 1800);
+  const std::string uncalibrated_model = temp("t_raw14_none.safetensors");
+  r = run("train --data " + glove.data + " --glove " + glove.glove_file +
+          " --architecture fcn:16 --exclude-subjects 2 --epochs 1 --batch 256 --calibration-mode none --quiet --out " + uncalibrated_model);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("predict --model " + uncalibrated_model + " --raw --in " + stream);
+  CHECK(r.status == 1);
+  CHECK(r.out.find("the model was trained on uncalibrated cells (--calibration-mode none)") != std::string::npos);
 
   // Streams it cannot use: a non-zero exit and the reason.
   std::ofstream(temp("raw14_garbage.txt")) << "hello glove\n\nnot,a,frame\n# comment\n1;2;3\n";
@@ -1448,4 +1518,72 @@ TEST_CASE("cli: glovepose info FILE shows the weights' dtype on disk, the calibr
   for (const std::string key : {"training_command", "training_data", "training_seed", "pose_offset_command"})
     CHECK(positional.out.find(key + ": " + metadata[key].get<std::string>() + "\n") != std::string::npos);
   CHECK(positional.out.find("joint_limits_min") == std::string::npos);  // the model's own fields are shown by name, not dumped
+}
+
+TEST_CASE("cli: a drifting device's inputs demeaned: train compares windows, eval and predict --raw condition alike") {
+  // examples/wearable_device.glove.json without its demean_seconds, and two 1-minute sessions of it
+  // (drifting_device.hpp; tests/test_input_conditioning.cpp measures the gain).
+  const grid::GloveDescription example = grid::GloveDescription::read(std::string(GLOVEPOSE_SOURCE_DIR) + "/examples/wearable_device.glove.json");
+  grid::GloveSettings settings = example.settings();
+  settings.demean_seconds.clear();
+  const std::string glove_file = temp("wearable_plain.json"), data_file = temp("wearable.safetensors");
+  grid::GloveDescription(example.id(), example.cell_names(), example.map(), settings).write(glove_file);
+  const std::size_t channels = test::kDeviceChannels;
+  const io::Dataset data = test::drifting_sessions(0.05, 21, 1.0);
+  data.write(data_file);
+
+  // Windows compared on the held-out session; the best kept, carried in the model's description.
+  const std::string linear = temp("t_wearable_linear.safetensors");
+  Run r = run("train --data " + data_file + " --glove " + glove_file +
+              " --architecture linear --calibration-mode training --demean-seconds 0,10 --out " + linear);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK_MESSAGE(r.out.find("train: validation on 1 held-out run of 2, never trained on") != std::string::npos, r.out);
+  CHECK(r.out.find("demean 0 s: validation error ") != std::string::npos);
+  CHECK(r.out.find("demean 10 s: validation error ") != std::string::npos);
+  CHECK(r.out.find(" deg (kept)\n") != std::string::npos);
+  CHECK(r.out.find("wrote " + linear + ": inputs demeaned over 10 s") != std::string::npos);
+  CHECK_FALSE(std::ifstream(linear + ".demean-0.safetensors").good());  // the other candidate is not kept
+  CHECK(nn::WeightFile::read(linear).metadata.at("glove_description").find("\"demean_seconds\": 10") != std::string::npos);
+
+  // A network with its inputs demeaned: eval on the second session and predict --raw on the same
+  // readings as the glove sends them give the same angles (batch and real-time network paths).
+  const std::string fcn = temp("t_wearable_fcn.safetensors"), predictions = temp("wearable_predictions.csv");
+  r = run("train --data " + data_file + " --glove " + glove_file +
+          " --architecture fcn:16 --epochs 1 --batch 256 --calibration-mode training --demean-seconds 10 --quiet --out " + fcn);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  r = run("eval --model " + fcn + " --data " + data_file + " --sessions 1 --predictions " + predictions);
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  const std::string stream = temp("wearable_stream.csv");
+  {
+    std::ofstream out(stream);
+    out << "timestamp";
+    for (const std::string& name : example.cell_names()) out << "," << name;
+    out << "\n";
+    for (std::size_t i = 1800; i < data.frames(); ++i) {
+      out << number17(data.timestamps[i]);
+      for (std::size_t c = 0; c < channels; ++c) out << "," << number17(data.cells[i * channels + c]);
+      out << "\n";
+    }
+  }
+  r = run_stream("predict --model " + fcn + " --raw --in " + stream, 1);
+  REQUIRE(r.status == 0);
+  const auto raw = csv_numbers(r.out, true);
+  std::ifstream rows(predictions);
+  std::string line;
+  REQUIRE(std::getline(rows, line));
+  std::size_t i = 0;
+  double worst = 0.0;
+  while (std::getline(rows, line)) {
+    std::vector<double> v;
+    std::stringstream fields(line);
+    std::string field;
+    while (std::getline(fields, field, ',')) v.push_back(std::strtod(field.c_str(), nullptr));
+    REQUIRE(v.size() >= 4 + 50);
+    REQUIRE(i < raw.size());
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) worst = std::max(worst, std::abs(v[4 + 25 + d] - raw[i][d]));
+    ++i;
+  }
+  CHECK(i == 1800);
+  CHECK(raw.size() == 1800);
+  CHECK(worst < 1e-5);  // radians
 }

@@ -4,6 +4,7 @@
 // against the same figures computed here from the formula; the weight storages against the
 // real-time network's own batch path; the zeroed-sensor report's typed run and glove names.
 #include <glovepose/train/evaluate.hpp>
+#include <glovepose/train/training_setup.hpp>
 #include <glovepose/io/json.hpp>
 #include <glovepose/pose_model.hpp>
 
@@ -144,7 +145,9 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
   options.calibration = "sideways";
   CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("expected none, training, onthefly or guided"), Error);
   options.calibration = "onthefly";
-  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("has no calibration sequence"), Error);
+  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration: import the session's "
+                                         "calibration take with it (glovepose import --calibration FILE, the same subject and session), or choose "
+                                         "--calibration-mode training"), Error);
 }
 
 TEST_CASE("evaluate: weights held as the real-time network holds them, for both architectures") {
@@ -216,6 +219,90 @@ TEST_CASE("evaluate: zeroed sensors name their run's fields and the glove's cell
   CHECK(zeroed[1].text() == "calibration of subject 7, glove 3, session 12: 2 flat sensors read 0: " + glove.cell_names()[5] + ", " +
                                 glove.cell_names()[43]);
   CHECK(zeroed[1].sensors.front() == "strip5_x");  // the glove's own names, not the samples' positions
+}
+
+TEST_CASE("evaluate: a linear model fitted on one person keeps the other's angles within the joint limits, and counts those it clamped") {
+  const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+  const hand::JointLimits limits = glove.joint_limits();
+  io::Dataset data = closed_form_data();
+  const std::size_t cells = data.cell_count;
+  // The second person's cells swing three times as far: the map fitted on the first extrapolates.
+  for (std::size_t i = static_cast<std::size_t>(kPerRun) * cells; i < data.cells.size(); ++i) data.cells[i] *= 3.0f;
+  train::FrameFilter first;
+  first.subjects = {0};
+  const train::TrainingSetup setup = train::prepare_training(data, first, 1, "linear", 0, glove, model::CalibrationMode::None);
+  const train::LinearModelFit fit = train::fit_linear_model(setup.samples, 0.1, limits);
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_linear_clamped.safetensors";
+  train::save_model(path, setup.info, train::linear_tensors(fit.map));
+  train::TrainedModel model = train::load_model(path);
+
+  train::EvaluationOptions options;
+  options.threads = 1;
+  options.filter.subjects = {1};
+  const train::EvaluationResult r = train::evaluate(model, data, options);
+  REQUIRE(r.frames() == kPerRun);
+  // What the map gives unclamped, computed here from its weights; then clamped into [-1, 1].
+  std::size_t outside = 0;
+  std::vector<float> raw(hand::kDofCount);
+  for (long f = 0; f < kPerRun; ++f) {
+    const float* x = data.cells.data() + static_cast<std::size_t>(kPerRun + f) * cells;
+    REQUIRE(fit.map.predict(x, raw.data()) == Status::Ok);
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+      const double v = raw[d];
+      outside += v > 1.0 || v < -1.0;
+      const double kept = std::min(1.0, std::max(-1.0, v));
+      const double expected = limits.min()[d] + 0.5 * (kept + 1.0) * (limits.max()[d] - limits.min()[d]);
+      const float predicted = r.predicted[static_cast<std::size_t>(f) * hand::kDofCount + d];
+      CHECK(predicted >= static_cast<float>(limits.min()[d]) - 1e-6f);
+      CHECK(predicted <= static_cast<float>(limits.max()[d]) + 1e-6f);
+      CHECK(predicted == doctest::Approx(expected).epsilon(1e-6));
+    }
+  }
+  CHECK(outside > 1000);  // the case this guards: 0.6 x 3 reaches 1.8
+  CHECK(r.outside_limits == outside);
+  CHECK(io::json::parse(train::to_json(r)).at("outside_limits").get<long>() == static_cast<long>(outside));
+  CHECK(train::format_text(r).find("Outside the joint limits: " + std::to_string(outside) + " of " +
+                                   std::to_string(kPerRun * static_cast<long>(hand::kDofCount))) != std::string::npos);
+}
+
+TEST_CASE("evaluate: train validates on a held-out run when there are two, with the error eval gives on that run") {
+  const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+  const hand::JointLimits limits = glove.joint_limits();
+  io::Dataset data = closed_form_data();
+  for (float& c : data.cells) c += 0.01f * std::sin(static_cast<float>(&c - data.cells.data()));  // not exactly linear
+  const train::TrainingSetup setup = train::prepare_training(data, {}, 1, "linear", 0, glove, model::CalibrationMode::None);
+
+  const train::ValidationParts parts = train::split_validation(setup.samples, 0.1);
+  CHECK(parts.training.frames() == kPerRun);
+  CHECK(parts.validation.frames() == kPerRun);
+  for (std::int64_t source : parts.validation.source) CHECK(data.subject[static_cast<std::size_t>(source)] == 1);
+  CHECK(parts.description.find("1 held-out run of 2") != std::string::npos);
+  CHECK(parts.description.find("subject 1, glove 0, session 0") != std::string::npos);
+
+  const train::LinearModelFit fit = train::fit_linear_model(setup.samples, 0.1, limits);
+  CHECK(fit.training_frames == kPerRun);
+  CHECK(fit.validation == parts.description);
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_linear_held_out.safetensors";
+  train::save_model(path, setup.info, train::linear_tensors(fit.map));
+  train::TrainedModel model = train::load_model(path);
+  train::EvaluationOptions options;
+  options.threads = 1;
+  options.filter.subjects = {1};
+  const train::EvaluationResult held = train::evaluate(model, data, options);
+  CHECK(std::abs(held.vs_labels.overall.mean_deg - fit.validation_error_deg) <= 1e-6);
+
+  // The last part of every run instead: 24 frames of each, the rest trains.
+  const train::ValidationParts frames = train::split_validation(setup.samples, 0.1, train::ValidationSplit::Frames);
+  CHECK(frames.validation.frames() == 2 * 24);
+  CHECK(frames.description.find("the last 10% of the frames of each of 2 runs") != std::string::npos);
+  // One run: Auto falls back to frames; Runs is refused, naming the way out.
+  train::FrameFilter one;
+  one.subjects = {0};
+  const train::TrainingSetup single = train::prepare_training(data, one, 1, "linear", 0, glove, model::CalibrationMode::None);
+  CHECK(train::split_validation(single.samples, 0.1).validation.frames() == 24);
+  CHECK_THROWS_WITH_AS(train::split_validation(single.samples, 0.1, train::ValidationSplit::Runs),
+                       doctest::Contains("expected two or more (each take its own session)"), Error);
+  CHECK(train::split_validation(setup.samples, 0.0).validation.frames() == 0);
 }
 
 }  // namespace

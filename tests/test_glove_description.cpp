@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 #include <vector>
@@ -376,4 +377,26 @@ TEST_CASE("glove description: malformed joint limits, rate and calibration are r
   bad.calibration.min_range_to_noise = std::nan("");
   CHECK_THROWS_WITH_AS(GloveDescription("x", two.cell_names(), two.map(), bad), doctest::Contains("'calibration.min_range_to_noise' is nan"),
                        Error);
+}
+
+TEST_CASE("glove description: the example of a device that is not a glove loads, and weights_format.md shows it whole") {
+  const std::string path = std::string(GLOVEPOSE_SOURCE_DIR) + "/examples/wearable_device.glove.json";
+  const GloveDescription device = GloveDescription::read(path);
+  CHECK(device.id() == "wearable-16");
+  CHECK(device.cell_count() == 16);
+  CHECK(device.map().extra_input_count() == 16);  // every channel an extra input: none on the stretch maps
+  CHECK(device.cell_names().front() == "channel_00");
+  CHECK(device.cell_names().back() == "channel_15");
+  REQUIRE(device.rate_hz().has_value());
+  CHECK(*device.rate_hz() == 30.0);
+  // The 25 DoFs where the built-in glove's pose map has them.
+  const GloveDescription paper = GloveDescription::glauser2019();
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(same_slot(device.map().dof_slots()[d], paper.map().dof_slots()[d]));
+  // The documentation's block is the file, byte for byte.
+  std::ifstream doc(std::string(GLOVEPOSE_SOURCE_DIR) + "/weights_format.md"), file(path);
+  const std::string doc_text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  const std::string file_text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  CHECK(doc_text.find("```json\n" + file_text + "```\n") != std::string::npos);
+  // What the library writes of it reads back equal.
+  CHECK(GloveDescription::from_json(device.to_json()) == device);
 }

@@ -142,8 +142,8 @@ train::RecordingImporter importer(double scale = 1000.0) {
 
 }  // namespace
 
-TEST_CASE("import: keypoint columns in a take become labels near the truth") {
-  const Take take(41, hand::KeypointLayout::MediaPipe, 0.1, 0.0);  // the recorder paired rows 0.1 s late
+TEST_CASE("import: keypoint columns in a take become labels near the truth, on the take's own clock") {
+  const Take take(41, hand::KeypointLayout::MediaPipe, 0.0, 0.0);  // the recorder paired each row with the tracker's latest frame
   train::RecordingImporter in = importer();
   std::istringstream csv(take.glove_csv(true));
   in.add(csv, {"take.csv", 0, {}, {}});
@@ -159,11 +159,27 @@ TEST_CASE("import: keypoint columns in a take become labels near the truth") {
                                << " s, residual median " << report.median_rms_mm << " mm");
   CHECK(mean < 3.5);
   CHECK(kept > 0.95);
-  // A row shows the hand 0.1 s (and up to a tracker frame) before its time: the offset that puts
-  // each pose on the glove's frame showing it is -0.1 s less the glove's response (tens of ms).
-  CHECK(report.clock.offset < 0.0);
-  CHECK(report.clock.offset > -0.1);
+  // Keypoints in the take's rows share its clock: no search (a search finds the glove's response
+  // lag, tens of ms, and unlabels the first frames).
+  CHECK(report.clock.offset == 0.0);
+  CHECK(std::isnan(report.clock.correlation));
   CHECK(report.median_rms_mm == doctest::Approx(in.keypoint_subjects()[0].noise_mm * 0.82).epsilon(0.15));
+  // A right hand: the keypoints mirrored fit a hand much worse.
+  const train::KeypointSubjectReport& hand = in.keypoint_subjects()[0];
+  MESSAGE("fit residual as given " << hand.fit_mm << " mm, mirrored " << hand.mirrored_fit_mm << " mm");
+  CHECK(hand.fit_mm == doctest::Approx(report.median_rms_mm).epsilon(0.3));
+  CHECK(!(hand.mirrored_fit_mm < 1.5 * hand.fit_mm));
+  CHECK(in.warnings().empty());
+
+  // The same keypoints mirrored (a left hand's, or a tracker's mirrored frame) are refused, both fits named.
+  Take mirrored = take;
+  for (Eigen::Vector3d& p : mirrored.track.points) p.x() = -p.x();
+  train::RecordingImporter left = importer();
+  std::istringstream left_csv(mirrored.glove_csv(true));
+  left.add(left_csv, {"left.csv", 0, {}, {}});
+  CHECK_THROWS_WITH_AS(left.finish(), doctest::Contains("keypoints of subject 0 ('left.csv') fit a left hand, not a right one: median fit residual "),
+                       Error);
+  CHECK_THROWS_WITH_AS(left.finish(), doctest::Contains(" mm mirrored; expected a right hand's keypoints"), Error);
 }
 
 TEST_CASE("import: a keypoint file on the tracker's clock, the offset given or found") {

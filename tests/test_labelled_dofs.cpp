@@ -112,8 +112,8 @@ TEST_CASE(
   train::TrainConfig config;
   config.epochs = 3;
   config.batch = 32;
-  const auto [training, validation] = train::split_validation(samples, 0.2);
-  const train::TrainResult result = train::train_network(net, training, validation, limits, config, pool);
+  const train::ValidationParts parts = train::split_validation(samples, 0.2);
+  const train::TrainResult result = train::train_network(net, parts.training, parts.validation, limits, config, pool);
   CHECK(std::isfinite(result.best_validation_error_deg));  // scored over the labelled DoFs only
   const nn::TensorMap after = net.parameters().to_tensors();
   // The output layer: one row of weights and one bias per DoF.

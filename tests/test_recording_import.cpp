@@ -2,6 +2,7 @@
 // from (the reference: the arrays the test wrote, exact at 9 significant digits), and every kind of
 // bad take refused with its file, line and column named.
 #include <glovepose/train/recording_import.hpp>
+#include <glovepose/train/samples.hpp>
 
 #include <doctest/doctest.h>
 
@@ -298,7 +299,10 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
       csv(f, {"subject", "timestamp", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
   std::istringstream second(no_angles);
   CHECK_THROWS_WITH_AS(importer.add(second, {"u.csv", {}, {}, {}}),
-                       "CSV file 'u.csv', line 1: has no DoF columns, expected the DoFs as the takes before it", Error);
+                       "CSV file 'u.csv', line 1: has no DoF columns, expected the DoFs as the recording takes before it (a "
+                       "calibration take, given with --calibration or kind calibration, may be sensors only; recording takes all carry "
+                       "the reference or none do)",
+                       Error);
   CHECK(importer.dataset().frames() == 3);
   std::istringstream third_take(good);  // same subject and session, times from 0 again: not after the last frame
   CHECK_THROWS_WITH_AS(importer.add(third_take, take),
@@ -315,6 +319,55 @@ TEST_CASE("import: bad takes are refused naming the file, line and column and wh
   CHECK_THROWS_AS(train::RecordingImporter(small_glove(), ignoring), Error);
   CHECK_THROWS_WITH_AS(train::RecordingImporter(small_glove(), options()).add({"/no/such/file.csv", 0, {}, {}}),
                        "CSV file '/no/such/file.csv': cannot open, expected a readable file", Error);
+}
+
+TEST_CASE("import: a calibration take may be sensors only, before or after the labelled takes of its session") {
+  const Frames calibration = random_frames(40, 31), recording = random_frames(60, 32);
+  const auto none = [](const std::string&, std::size_t) { return std::string("4"); };
+  const std::string sensors = csv(calibration, {"subject", "thumb_bend", "index_bend", "middle_bend", "ring_bend", "pinky_bend"}, none);
+  const std::string labelled = csv(recording, all_columns({"subject"}), none);
+  const train::CsvTake calibration_take{"cal.csv", {}, 2, io::kKindCalibration};
+  const train::CsvTake recording_take{"rec.csv", {}, 2, io::kKindRecording};
+  for (const bool calibration_first : {true, false}) {
+    CAPTURE(calibration_first);
+    train::RecordingImporter importer(small_glove(), options());
+    std::istringstream a(calibration_first ? sensors : labelled), b(calibration_first ? labelled : sensors);
+    importer.add(a, calibration_first ? calibration_take : recording_take);
+    importer.add(b, calibration_first ? recording_take : calibration_take);
+    importer.finish();
+    const io::Dataset& data = importer.dataset();
+    REQUIRE(data.frames() == 100);
+    CHECK(data.labelled_dofs() == hand::all_dofs());
+    std::size_t recorded = 0;
+    for (std::size_t i = 0; i < data.frames(); ++i) {
+      const bool calibrating = data.kind[i] == io::kKindCalibration;
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+        const float angle = data.angles[i * hand::kDofCount + d];
+        if (calibrating) {
+          CHECK(std::isnan(angle));  // no reference in the calibration take
+        } else {
+          CHECK(angle == recording.angles[recorded * hand::kDofCount + d]);
+        }
+      }
+      recorded += !calibrating;
+    }
+    CHECK(recorded == 60);
+    data.validate();
+    // It calibrates its session on the fly, as a labelled calibration take would.
+    const train::Samples samples =
+        train::make_samples(data, {}, model::CalibrationMode::OnTheFly, nullptr, hand::JointLimits(), 1, small_glove().calibration());
+    CHECK(samples.frames() == 60);
+  }
+  // A recording take must carry the reference when the others do.
+  train::RecordingImporter importer(small_glove(), options());
+  std::istringstream first(labelled), second(sensors);
+  importer.add(first, recording_take);
+  CHECK_THROWS_WITH_AS(importer.add(second, {"rec2.csv", {}, 3, io::kKindRecording}),
+                       doctest::Contains("has no DoF columns, expected the DoFs as the recording takes before it"), Error);
+  // A labelled dataset's calibration frame has NaN angles only when it has none at all.
+  io::Dataset data = importer.dataset();
+  data.angles[0] = NAN;
+  CHECK_THROWS_WITH_AS(data.validate(), doctest::Contains("expected a finite angle"), Error);
 }
 
 TEST_CASE("import: a take labelling some DoFs: the others are NaN and not labelled, and every take must label the same") {

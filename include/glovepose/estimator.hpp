@@ -87,7 +87,8 @@ class GlovePoseEstimator {
   const Pose& pose() const noexcept;
   /// @brief The latest joint list (metres, quaternions; hand/joint_list_types.hpp), when joint_transforms is on.
   const hand::JointList& joints() const noexcept;
-  /// @brief The latest solved cell capacitances C_c (the network's input before calibration).
+  /// @brief The latest cells before calibration: the solved capacitances C_c, each input the glove
+  /// description conditions less its rolling mean (demean_seconds), as training saw them.
   core::Span<const double> cells() const noexcept;
   /// @brief The latest calibrated cells in [-1, 1] (the network's input), when a pose came from them.
   core::Span<const double> normalized_cells() const noexcept;

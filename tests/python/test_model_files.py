@@ -528,7 +528,8 @@ def test_cli_unet_extra_inputs_matches_predict() -> None:
 @test
 def test_cli_eval_matches() -> None:
     """`glovepose eval --calibration-mode none` vs PyTorch on the corpus's recording frames (kind 0, not
-    outliers): the raw cell capacitances go into each model as they are, so no calibration is redone.
+    outliers): the raw cell capacitances go into each model as they are, so no calibration is redone;
+    a linear map's outputs clamped to [-1, 1] (the joint limits), as glovepose clamps them.
     Covers the tool's files and export_model's (the tool reads FCN and linear files only this way)."""
     d = cli_dir()
     data, _ = safetensors_io.load(d / "c.safetensors")
@@ -542,7 +543,10 @@ def test_cli_eval_matches() -> None:
             radians = unet_predict_radians(m, info, cells)
         else:
             with torch.no_grad():
-                radians = info.denormalize(m(cells))
+                normalized = m(cells)
+                if info.architecture == "linear":  # glovepose clamps a linear map's outputs to the joint limits
+                    normalized = normalized.clamp(-1.0, 1.0)
+                radians = info.denormalize(normalized)
         err = (radians - truth).abs() * (180.0 / torch.pi)
         assert report["frames"] == cells.shape[0], (stem, report["frames"], cells.shape[0])
         mean, top = float(err.mean()), float(err.max())

@@ -243,11 +243,13 @@ inline constexpr double kDefaultCalibrationSeconds = 30.0;
 
 /// Adds how a glove's stream is calibrated: `--calibration-seconds S` (on the fly, `seconds`) or
 /// `--calibration FILE` (a saved one, `file`), one or the other, both needing `needs` when given.
-inline void add_glove_line_calibration(CLI::App& command, double& seconds, std::string& file, CLI::Option* needs) {
+inline void add_glove_line_calibration(CLI::App& command, double& seconds, bool& seconds_given, std::string& file, CLI::Option* needs) {
   CLI::Option* on_the_fly =
       add_number(command, "--calibration-seconds", "S", seconds,
-                 "the first S seconds of stream time calibrate on the fly while the user moves through extreme poses (default 30)")
-          ->check(above(0.0));
+                 "the first S seconds of stream time calibrate on the fly while the user moves through extreme poses (default 30; "
+                 "without it, a model trained with --calibration-mode training uses its training-set range)")
+          ->check(above(0.0))
+          ->each([&seconds_given](const std::string&) { seconds_given = true; });
   CLI::Option* saved = command
                            .add_option("--calibration", file,
                                        "a saved calibration of this user and glove (glovepose predict --save-calibration, or the "

@@ -278,9 +278,36 @@ inline void read_glove_lines(const GloveLineSource& source, const GloveLineForma
   feed.end();
 }
 
-/// The on-the-fly calibration's seconds, or none when a saved calibration `file` was given.
-inline std::optional<double> on_the_fly_seconds(double seconds, const std::string& file) {
-  return file.empty() ? std::optional<double>(seconds) : std::nullopt;
+/// How a stream's glove is calibrated: a saved calibration, the model's own (the training-set range
+/// of a model trained with it) or on the fly over the stream's first seconds.
+struct GloveCalibrationChoice {
+  std::optional<double> on_the_fly;  ///< Seconds of stream time to calibrate over; none: no calibration on the fly.
+  bool training_range = false;       ///< The model's training-set range (use_training_calibration()).
+  std::string text;                  ///< The choice in words, for the user.
+
+  /// Sets `estimator` up for it (a saved `file` is loaded by the caller, who may first look for one).
+  void apply(GlovePoseEstimator& estimator) const {
+    if (training_range) estimator.use_training_calibration();
+  }
+};
+
+/// The calibration a stream gets: the saved `file` when given; else on the fly over `seconds` when
+/// they were given or the model was trained so (on-the-fly calibration); else the model's
+/// training-set range. Throws Error for a model trained on uncalibrated cells, which the estimator
+/// (it calibrates every frame) cannot run as it was trained.
+inline GloveCalibrationChoice choose_glove_calibration(const PoseModel& model, double seconds, bool seconds_given, const std::string& file) {
+  const model::CalibrationMode trained = model.info().calibration;
+  if (trained == model::CalibrationMode::None)
+    throw Error("the model was trained on uncalibrated cells (--calibration-mode none), which a glove's stream cannot give (the estimator "
+                "calibrates every frame), expected a model trained with --calibration-mode onthefly or training");
+  if (!file.empty()) return {std::nullopt, false, "the saved calibration '" + file + "'"};
+  if (trained == model::CalibrationMode::Training && !seconds_given)
+    return {std::nullopt, true,
+            "the model's training-set range, as it was trained (--calibration-seconds S calibrates on the fly over the first S s "
+            "instead)"};
+  return {seconds, false,
+          "on the fly over the first " + io::number_text(seconds) + " s of stream time, the user moving through extreme poses" +
+              (trained == model::CalibrationMode::Training ? " (the model was trained with its training-set range)" : "")};
 }
 
 }  // namespace glovepose::cli

@@ -67,6 +67,7 @@ struct PredictOptions {
   bool no_header = false;
   bool raw = false;  // the glove's own readings, calibrated here
   double calibration_seconds = cli::kDefaultCalibrationSeconds;
+  bool calibration_seconds_given = false;
   std::string calibration, save_calibration;  // --raw: a saved calibration to use; where to save the one made on the fly
 };
 
@@ -78,13 +79,17 @@ void print_angles(const hand::Angles& angles) {
 // --raw: the glove's lines through an estimator, as view --stdin reads them; a row of angles per pose.
 void predict_raw(const PredictOptions& o, std::shared_ptr<const PoseModel> model, std::istream& in) {
   GlovePoseEstimator estimator(model);
+  const cli::GloveCalibrationChoice calibration =
+      cli::choose_glove_calibration(*model, o.calibration_seconds, o.calibration_seconds_given, o.calibration);
   if (!o.calibration.empty()) estimator.load_calibration(o.calibration);
+  calibration.apply(estimator);
+  std::fprintf(stderr, "glovepose predict: calibration: %s\n", calibration.text.c_str());
   const cli::GloveLineFormat format(*model, false);
   cli::GloveLineCounts counts;
   device::LinkCounts link;
   const std::string source = o.input.empty() ? "stdin" : "'" + o.input + "'";
   cli::read_glove_stream(
-      cli::GloveLineSource{in, source, "glovepose predict"}, format, estimator, cli::on_the_fly_seconds(o.calibration_seconds, o.calibration),
+      cli::GloveLineSource{in, source, "glovepose predict"}, format, estimator, calibration.on_the_fly,
       counts,
       [&](Status status) {
         if (status == Status::Solved) print_angles(estimator.pose().angles);
@@ -242,7 +247,7 @@ cli::Command add_predict(CLI::App& tool) {
       command->add_flag("--raw", o->raw,
                         "the glove's own readings, uncalibrated: 'timestamp,cell,...,cell' per line (or, for the built-in glove, raw rows "
                         "'row,value,timestamp' of its wiring)");
-  cli::add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, raw);
+  cli::add_glove_line_calibration(*command, o->calibration_seconds, o->calibration_seconds_given, o->calibration, raw);
   command->add_option("--save-calibration", o->save_calibration, "--raw: save the calibration made on the fly to FILE (for --calibration)")
       ->type_name("FILE")
       ->needs(raw)

@@ -2,12 +2,14 @@
 //   as wire recordings (glovepose record; wire_take.hpp), into one dataset file for train, eval and finetune.
 #include <glovepose/io/atomic_file.hpp>
 #include <glovepose/train/recording_import.hpp>
+#include <glovepose/train/samples.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -135,20 +137,49 @@ int import_recordings(const ImportOptions& o) {
   std::printf("imported %zu takes: %zu frames (%zu calibration) of %zu subjects, %zu sessions, glove '%s', %zu cells, %s\n", takes.size(),
               data.frames(), calibration, subjects.size(), sessions.size(), data.glove_layout().c_str(), data.cell_count,
               angles_text(data).c_str());
+  // What calibration each session carries: on-the-fly calibration (train's default) needs one.
+  std::map<std::int64_t, std::pair<std::size_t, std::size_t>> runs;  // recording and calibration frames per run
+  for (std::size_t i = 0; i < data.frames(); ++i) {
+    auto& [recorded, calibrating] = runs[train::run_key(data, i)];
+    ++(data.kind[i] == io::kKindCalibration ? calibrating : recorded);
+  }
+  std::string without;
+  std::size_t missing = 0, recorded_runs = 0;
+  for (const auto& [key, count] : runs) {
+    if (count.first == 0) continue;
+    ++recorded_runs;
+    if (count.second > 0) continue;
+    if (missing++ < 4) without += std::string(without.empty() ? "" : "; ") + train::RunId::of(key).text();
+  }
+  if (missing > 4) without += "; ...";
+  if (missing == 0)
+    std::printf("calibration: every session has its calibration take, as on-the-fly calibration (train's default) needs\n");
+  else
+    std::printf("calibration: %zu of %zu sessions have no calibration take (%s): train and eval them with --calibration-mode training "
+                "(the training frames' range) or none, or import each with its calibration take (--calibration FILE, the same "
+                "subject and session)\n",
+                missing, recorded_runs, without.c_str());
   for (const train::FlatSensor& flat : importer.flat_sensors())
     std::printf("flat sensor kept: '%s' in calibration lines %zu-%zu of '%s' (%.9g to %.9g); calibrated, it reads 0\n", flat.cell.c_str(),
                 flat.first_line, flat.last_line, flat.path.c_str(), flat.min, flat.max);
   for (const train::KeypointSubjectReport& hand : importer.keypoint_subjects())
-    std::printf("subject %d's hand from keypoints: %.0f mm from wrist to middle fingertip, keypoint noise %.1f mm (3D RMS)\n", hand.subject,
-                hand.hand_length_mm, hand.noise_mm);
+    std::printf("subject %d's hand from keypoints: %.0f mm from wrist to middle fingertip, keypoint noise %.1f mm (3D RMS); a right hand "
+                "(median fit residual %.1f mm, %.1f mm as a left one)\n",
+                hand.subject, hand.hand_length_mm, hand.noise_mm, hand.fit_mm, hand.mirrored_fit_mm);
   for (const train::KeypointTakeReport& take : importer.keypoint_takes()) {
     const std::string clock = std::isfinite(take.clock.correlation)
                                   ? "found by motion (correlation " + io::number_text(std::round(take.clock.correlation * 100) / 100) + ")"
-                                  : "given";
+                              : take.keypoint_file.empty() && !o.keypoint_offset ? "(the keypoints share the take's rows and clock)"
+                                                                                 : "given";
     const std::string source = take.keypoint_file.empty() ? take.path : take.path + " with '" + take.keypoint_file + "'";
-    std::printf("labels of %s (%s): %zu of %zu frames (%.1f%%), fit residual median %.1f mm, 95th %.1f mm, tracker clock offset %+.3f s %s\n",
+    std::size_t pinned = 0;  // the DoF most often at a joint limit
+    for (std::size_t d = 1; d < hand::kDofCount; ++d)
+      if (take.at_limit[d] > take.at_limit[pinned] || std::isnan(take.at_limit[pinned])) pinned = d;
+    std::printf("labels of %s (%s): %zu of %zu frames (%.1f%%), fit residual median %.1f mm, 95th %.1f mm, tracker clock offset %+.3f s %s; "
+                "most at a joint limit: %s, %.0f%% of the frames\n",
                 source.c_str(), hand::to_string(take.layout), take.labelled, take.frames, 100.0 * take.labelled / take.frames,
-                take.median_rms_mm, take.p95_rms_mm, take.clock.offset, clock.c_str());
+                take.median_rms_mm, take.p95_rms_mm, take.clock.offset, clock.c_str(), hand::kDofs[pinned].name,
+                100.0 * take.at_limit[pinned]);
   }
   if (!o.keypoint_report.empty()) {
     io::AtomicFile file(o.keypoint_report, "--keypoint-report");

@@ -44,6 +44,7 @@ struct ServeOptions {
   bool opengloves_joints = false;
   nn::WeightStorage storage = nn::WeightStorage::F32;
   double calibration_seconds = kDefaultCalibrationSeconds;
+  bool calibration_seconds_given = false;
   int engine_port = -1;  // -1: no engine stream
   double seconds = 0.0;  // 0: until a signal (or the end of a file or stdin)
   bool stats = false;
@@ -119,6 +120,7 @@ class ServedGlove {
         hand_(hand_name == "left" ? hand::Handedness::Left : hand::Handedness::Right),
         model_(model),
         estimator_(model),
+        calibration_(choose_glove_calibration(*model, o.calibration_seconds, o.calibration_seconds_given, o.calibration)),
         shared_(shared),
         link_(source),
         source_{no_lines_, "link '" + source + "'", "glovepose serve"},
@@ -128,6 +130,9 @@ class ServedGlove {
         osc_time_("/glovepose/" + hand_name + "/time"),
         angle_types_(hand::kDofCount, 'f') {
     if (!o.calibration.empty()) estimator_.load_calibration(o.calibration);
+    calibration_.apply(estimator_);
+    std::fprintf(stderr, "%scalibration: %s%s\n", told_.c_str(), calibration_.text.c_str(),
+                 o.profiles.empty() ? "" : ", unless the glove's and user's profile is found");
     if (!o.osc.empty()) osc_ = std::make_unique<OscSender>(o.osc);
     if (!o.vrchat.empty()) vrchat_ = std::make_unique<AvatarParameters>(o.vrchat, hand_name);
     if (!o.opengloves.empty()) {
@@ -236,13 +241,16 @@ class ServedGlove {
 
   // The feed starts with the glove's first frame: its Hello names the profile to use.
   void start_feed(const device::Frame& f) {
-    std::optional<double> on_the_fly = on_the_fly_seconds(o_.calibration_seconds, o_.calibration);
+    std::optional<double> on_the_fly = calibration_.on_the_fly;
     if (!o_.profiles.empty() && f.header.kind == device::FrameKind::Hello && link_.identity()) {
       const std::string path = profile_path(o_, *link_.identity());
       if (std::filesystem::exists(path)) {
         estimator_.load_calibration(path);
         on_the_fly.reset();
         std::fprintf(stderr, "%s%s: profile '%s' applied\n", told_.c_str(), link_.identity()->describe().c_str(), path.c_str());
+      } else if (!on_the_fly) {
+        std::fprintf(stderr, "%s%s: no profile for user '%s' yet, and none is made: the calibration is %s\n", told_.c_str(),
+                     link_.identity()->describe().c_str(), o_.user.c_str(), calibration_.text.c_str());
       } else {
         save_profile_ = path;
         std::fprintf(stderr, "%s%s: no profile for user '%s' yet: calibrating over the first %g s, then saving '%s'\n", told_.c_str(),
@@ -275,6 +283,7 @@ class ServedGlove {
   hand::Handedness hand_;
   std::shared_ptr<const PoseModel> model_;
   GlovePoseEstimator estimator_;
+  GloveCalibrationChoice calibration_;
   SharedOutputs& shared_;
   GloveLink link_;
   std::istringstream no_lines_;
@@ -375,7 +384,7 @@ Command add_serve(CLI::App& tool) {
   command->add_option("--hand", o->hand, "which hand the --in glove is on, as the outputs name it (default right)")
       ->check(CLI::IsMember({"left", "right"}))
       ->needs(in);
-  add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, nullptr);
+  add_glove_line_calibration(*command, o->calibration_seconds, o->calibration_seconds_given, o->calibration, nullptr);
   CLI::Option* profiles =
       command->add_option("--profiles", o->profiles, "a directory of calibration profiles, one per glove (its id and serial) and user")
           ->type_name("DIR")

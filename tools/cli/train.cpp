@@ -10,6 +10,7 @@
 #include <glovepose/train/model_file.hpp>
 #include <glovepose/train/training_setup.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -41,7 +42,10 @@ void report_zeroed(const std::string& command, const train::Samples& samples, co
 // ends, and the checkpoint then removed (kept when a signal or the time limit stopped it).
 int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo& info, const train::Samples& all,
                 std::map<std::string, std::string> provenance) {
-  const auto [training, validation] = train::split_validation(all, o.validation);
+  const train::ValidationParts parts = train::split_validation(all, o.validation, o.validation_split);
+  const train::Samples& training = parts.training;
+  const train::Samples& validation = parts.validation;
+  if (!o.quiet) std::fprintf(stderr, "%s: validation on %s\n", o.command.c_str(), parts.description.c_str());
   if (o.command == "train" && (!o.batch_set || !o.epochs_set)) {  // defaults from the data's size
     if (!o.batch_set) o.training.batch = train::default_batch(training.frames());
     if (!o.epochs_set) o.training.epochs = train::default_epochs(training.frames(), o.training.batch);
@@ -78,7 +82,8 @@ int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo&
   std::signal(SIGINT, SIG_DFL);
   if (result.best_epoch < 0) throw Error("training stopped before the first epoch ended; no model was written");
   provenance["best_epoch"] = std::to_string(result.best_epoch + 1);  // 1-based, as printed
-  provenance["validation_error_deg"] = std::to_string(result.best_validation_error_deg);
+  provenance["validation_error_deg"] = io::number_text(result.best_validation_error_deg);
+  provenance["validation"] = parts.description;
   std::string history;  // every epoch's validation error: how the run went
   for (const train::EpochRecord& r : result.epochs) history += (history.empty() ? "" : ",") + io::number_text(r.validation_error_deg);
   provenance["validation_history_deg"] = history;
@@ -91,13 +96,8 @@ int fit_network(Options o, train::TrainableNetwork& net, const model::ModelInfo&
   return interrupted.load() ? 130 : 0;
 }
 
-int train_command(Options o) {
-  if (o.architecture.name.empty()) throw CLI::RequiredError("--architecture");
-  const io::Dataset data = read_dataset(o.data);
-  o.filter = train::exclude_subjects(o.filter, data, o.exclude_subjects);
-  const grid::GloveDescription glove = train::glove_for_data(
-      data, o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file));
-  const model::CalibrationMode mode = model::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
+// Trains one model of `glove` (its conditioning included) on `data` into o.out.
+int train_with(Options o, const io::Dataset& data, const grid::GloveDescription& glove, model::CalibrationMode mode) {
   const std::string& architecture = o.architecture.name;
   const train::TrainingSetup setup = train::prepare_training(data, o.filter, o.stride, architecture, o.architecture.width, glove, mode);
   report_zeroed(o.command, setup.samples, glove);
@@ -109,10 +109,12 @@ int train_command(Options o) {
   if (o.architecture.kind == model::Architecture::Linear) {
     if (o.training.augmentation.active())
       throw CLI::ValidationError("--augment trains networks; a linear map is fitted by least squares on the frames as they are");
-    const train::LinearModelFit fit = train::fit_linear_model(setup.samples, o.validation, setup.info.joint_limits());
+    const train::LinearModelFit fit = train::fit_linear_model(setup.samples, o.validation, setup.info.joint_limits(), o.validation_split);
+    if (!o.quiet) std::fprintf(stderr, "%s: validation on %s\n", o.command.c_str(), fit.validation.c_str());
     provenance["training_frames"] = std::to_string(fit.training_frames);
     provenance["validation_frames"] = std::to_string(fit.validation_frames);
-    provenance["validation_error_deg"] = std::to_string(fit.validation_error_deg);
+    provenance["validation_error_deg"] = io::number_text(fit.validation_error_deg);
+    provenance["validation"] = fit.validation;
     train::save_model(o.out, setup.info, train::linear_tensors(fit.map), provenance, o.dtype);
     std::printf("done: linear least squares on %ld frames; validation error %.3f deg; wrote %s\n", fit.training_frames,
                 fit.validation_error_deg, o.out.c_str());
@@ -123,6 +125,49 @@ int train_command(Options o) {
   const std::unique_ptr<train::TrainableNetwork> net = train::make_network(setup.info, glove, o.training.batch);
   net->initialize(o.training.seed);
   return fit_network(o, *net, setup.info, setup.samples, provenance);
+}
+
+// `glove` with every input demeaned over `seconds` (0: every input as read), at the data's rate when it states none.
+grid::GloveDescription with_demean(const grid::GloveDescription& glove, double seconds, double rate) {
+  grid::GloveSettings settings = glove.settings();
+  settings.demean_seconds.assign(seconds > 0.0 ? static_cast<std::size_t>(glove.cell_count()) : 0, seconds);
+  if (!settings.rate_hz) settings.rate_hz = rate;
+  return grid::GloveDescription(glove.id(), glove.cell_names(), glove.map(), settings);
+}
+
+int train_command(Options o) {
+  if (o.architecture.name.empty()) throw CLI::RequiredError("--architecture");
+  const io::Dataset data = read_dataset(o.data);
+  o.filter = train::exclude_subjects(o.filter, data, o.exclude_subjects);
+  const grid::GloveDescription glove = train::glove_for_data(
+      data, o.glove_file.empty() ? grid::GloveDescription::glauser2019() : grid::GloveDescription::read(o.glove_file));
+  const model::CalibrationMode mode = model::calibration_mode(o.calibration.empty() ? "onthefly" : o.calibration);
+  if (o.demean_seconds.empty()) return train_with(o, data, glove, mode);
+  // --demean-seconds: a model per window, trained alike; the one with the least validation error
+  // (on held-out runs when there are two or more) is kept.
+  struct Candidate {
+    double seconds;
+    std::string path;
+    double error;
+  };
+  std::vector<Candidate> candidates;
+  for (const double seconds : o.demean_seconds) {
+    if (!(seconds >= 0.0)) throw CLI::ValidationError("--demean-seconds", io::number_text(seconds) + ", expected seconds >= 0 (0: as read)");
+    Options one = o;
+    one.out = o.out + ".demean-" + io::number_text(seconds) + ".safetensors";
+    if (!o.quiet) std::fprintf(stderr, "%s: inputs demeaned over %s s (0: as read) ...\n", o.command.c_str(), io::number_text(seconds).c_str());
+    if (const int status = train_with(one, data, with_demean(glove, seconds, data.frame_rate()), mode); status != 0) return status;
+    candidates.push_back({seconds, one.out, std::stod(nn::WeightFile::read(one.out).metadata.at("validation_error_deg"))});
+  }
+  const auto best = std::min_element(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.error < b.error; });
+  for (const Candidate& c : candidates) {
+    std::printf("demean %s s: validation error %.3f deg%s\n", io::number_text(c.seconds).c_str(), c.error, &c == &*best ? " (kept)" : "");
+    if (&c != &*best) std::filesystem::remove(c.path);
+  }
+  std::filesystem::rename(best->path, o.out);
+  std::printf("wrote %s: inputs demeaned over %s s (the glove description it carries says so)\n", o.out.c_str(),
+              io::number_text(best->seconds).c_str());
+  return 0;
 }
 
 int finetune_command(Options o) {
@@ -239,6 +284,12 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
         *command, o,
         {"10, or enough for 2000 steps", "1024 from 102,400 training frames, else about frames/100", "2e-4; 0.01 with sgd for an FCN"});
     add_glove_file(*command, o->glove_file, "the glove description the data was recorded with (default: the built-in glove)");
+    command->add_option("--demean-seconds", o->demean_seconds,
+                        "S[,S...]: take off each input's rolling mean over its last S seconds (a drift-removing high-pass; 0: as read), "
+                        "as the glove description's demean_seconds; several: a model each, the one with the least validation error "
+                        "kept and the comparison printed")
+        ->delimiter(',')
+        ->type_name("S[,S...]");
     finish(command, o, train_command);
   }
   {

@@ -92,6 +92,8 @@ struct Options {
   int stride = 1, threads = 0;
   train::TrainConfig training;
   double validation = 0.1;
+  train::ValidationSplit validation_split = train::ValidationSplit::Auto;
+  std::vector<double> demean_seconds;  // train: input conditioning windows to compare (--demean-seconds)
   io::DType dtype = io::DType::F32;  // storage of the written model
   nn::WeightStorage storage = nn::WeightStorage::F32;  // eval: how the network holds the weights (--weights)
   bool json = false, quiet = false, batch_set = false, lr_set = false, epochs_set = false;
@@ -182,6 +184,11 @@ inline void add_training_options(CLI::App& command, const std::shared_ptr<Option
   add_choice(command, "--optimizer", {{"adam", train::OptimizerKind::Adam}, {"sgd", train::OptimizerKind::Sgd}}, o->training.optimizer.kind,
              "the optimizer (default adam)");
   add_number(command, "--validation", "FRACTION", o->validation, "of the selected frames held out to pick the best epoch (default 0.1)");
+  add_choice(command, "--validation-split",
+             {{"auto", train::ValidationSplit::Auto}, {"runs", train::ValidationSplit::Runs}, {"frames", train::ValidationSplit::Frames}},
+             o->validation_split,
+             "which frames validate: runs (whole sessions never trained on, the last in the data), frames (the last part of every "
+             "session) or auto (default: runs when there are two or more)");
   add_number(command, "--seed", "S", o->training.seed, "seed of the initial weights, the batches and the augmentation (default 1)");
   add_number_option<double>(
       command, "--max-minutes", "M", [o](double v) { o->training.max_seconds = 60.0 * v; },

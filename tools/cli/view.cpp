@@ -64,6 +64,7 @@ struct ViewOptions {
   std::string replay;
   bool from_stdin = false;
   double calibration_seconds = kDefaultCalibrationSeconds;  // --stdin
+  bool calibration_seconds_given = false;
   std::string calibration;                                  // --stdin: a saved calibration instead (empty: none)
   double seconds = 0.0;                                     // 0: until the glove's stream ends (or Ctrl-C)
 };
@@ -478,8 +479,15 @@ int view(const ViewOptions& o) {
   const std::string meta =
       meta_json(shared->estimator, has_truth, o.from_stdin ? "stdin" : (simulated ? "simulated new user" : "replay of " + o.replay)).dump();
   const Clock::time_point start = shared->served_from;
-  if (!o.calibration.empty()) shared->estimator.load_calibration(o.calibration);
-  const std::optional<double> calibration_seconds = on_the_fly_seconds(o.calibration_seconds, o.calibration);
+  std::optional<double> calibration_seconds;
+  if (o.from_stdin) {
+    const GloveCalibrationChoice calibration =
+        choose_glove_calibration(*model, o.calibration_seconds, o.calibration_seconds_given, o.calibration);
+    if (!o.calibration.empty()) shared->estimator.load_calibration(o.calibration);
+    calibration.apply(shared->estimator);
+    calibration_seconds = calibration.on_the_fly;
+    std::fprintf(stderr, "glovepose view: calibration: %s\n", calibration.text.c_str());
+  }
   std::thread glove([shared, user, simulated, seed = o.session.seed, from_stdin = o.from_stdin, calibration_seconds] {
     try {
       GloveStream stream(shared->estimator, shared->latest, shared->stop);
@@ -552,7 +560,7 @@ Command add_view(CLI::App& tool) {
                      "in the order of its description), or for the built-in glove one raw row per line, "
                      "'row,value,timestamp'; the first --calibration-seconds of stream time calibrate, or --calibration FILE")
           ->excludes(replay);
-  add_glove_line_calibration(*command, o->calibration_seconds, o->calibration, from_stdin);
+  add_glove_line_calibration(*command, o->calibration_seconds, o->calibration_seconds_given, o->calibration, from_stdin);
   add_number(*command, "--seconds", "N", o->seconds, "stop serving after N seconds (default: when the stream ends)")->check(at_least(0.0));
   return {command, [o] { return view(*o); }};
 }

@@ -42,7 +42,7 @@ linear_data=$OUT/linear_seed${LINEAR_SEED}.safetensors
 [ -f "$linear_data" ] || log "$G" simulate "${WORLD_ARGS[@]}" --seed "$LINEAR_SEED" --subjects 10 --sessions 2 --minutes 2 --gloves 1 \
   --threads "$THREADS" --out "$linear_data" > /dev/null
 linear=$OUT/linear_seed${LINEAR_SEED}.model.safetensors
-[ -f "$linear" ] || log "$G" train --data "$linear_data" --architecture linear --out "$linear" > /dev/null
+[ -f "$linear" ] || log "$G" train --data "$linear_data" --architecture linear --validation-split frames --out "$linear" > /dev/null
 
 rm -f "$OUT/rows.tsv"
 row() {  # model label calibration window: eval -> JSON, and each person's mean error against the truth

@@ -51,7 +51,7 @@ for model in $MODELS; do
       name=${name}_aug$(echo "$augment" | tr ',' '_')
       extra=(--augment "$augment")
     fi
-    [ -f "$name.safetensors" ] || log "$G" train --data "$CORPUS" --architecture "$model" --gloves 0 --subjects "0-$((n - 1))" --stride 2 \
+    [ -f "$name.safetensors" ] || log "$G" train --data "$CORPUS" --architecture "$model" --gloves 0 --subjects "0-$((n - 1))" --stride 2 --validation-split frames \
       --epochs 10 --seed 1 --weights f16 --threads "$THREADS" --quiet "${extra[@]}" --out "$name.safetensors" > /dev/null
     [ -f "${name}_g.safetensors" ] || log "$G" fit-guided --model "$name.safetensors" --data "$FIT" --threads "$THREADS" \
       --out "${name}_g.safetensors" > /dev/null

@@ -38,6 +38,7 @@
 #include "../pose_model.hpp"
 #include "../pose_prediction.hpp"
 #include "../sensor/calibration.hpp"
+#include "../sensor/input_conditioning.hpp"
 #include "../sensor/layout.hpp"
 #include "../sensor/readout.hpp"
 #include "../sensor/solver.hpp"
@@ -76,6 +77,7 @@ class EstimatorCore {
     }
     cells_ = Eigen::VectorXd::Zero(model_->cell_count());
     normalized_ = Eigen::VectorXd::Zero(model_->cell_count());
+    conditioner_ = sensor::InputConditioner(model_->glove().demean_frames());
     skeleton_.fill(Eigen::Affine3d::Identity());
     if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
       throw Error(
@@ -116,6 +118,7 @@ class EstimatorCore {
     const bool restarted = !std::isfinite(last_cells_timestamp_) || timestamp - last_cells_timestamp_ > config_.readout.gap_seconds;
     if (restarted && smoothing_) smoothing_->reset();
     if (restarted && contact_) contact_->reset();
+    if (restarted) conditioner_.reset();
     cells_backwards_run_ = 0;
     cells_ = Eigen::Map<const Eigen::VectorXd>(cells, count);
     last_cells_timestamp_ = timestamp;
@@ -216,6 +219,7 @@ class EstimatorCore {
     last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
     cells_backwards_run_ = 0;
     calibration_session_.restart_clock();
+    conditioner_.reset();
   }
   const PoseModel& model() const noexcept { return *model_; }
   const EstimatorConfig& config() const noexcept { return config_; }
@@ -308,6 +312,7 @@ class EstimatorCore {
       if (smoothing_) smoothing_->reset();
       if (contact_) contact_->reset();
       trend_.reset();
+      conditioner_.reset();
     }
     readout_restarts_ = frame.health.restarts;
     return estimate(frame.cells, frame.timestamp, frame.oldest_age, frame.rejected, frame.health, start);
@@ -327,9 +332,15 @@ class EstimatorCore {
                   const sensor::ReadoutHealth& health, std::chrono::steady_clock::time_point start) noexcept {
     if (&cells != &cells_) cells_ = cells;
     rejected_ += rejected;
-    calibration_session_.add(cells, timestamp);  // takes the frame while a calibration collects
+    if (conditioner_.active()) {  // as training conditioned them (train::conditioned_for)
+      if (!cells_.allFinite()) return Status::NonFinite;  // a NaN would stay in the rolling means
+      conditioner_.apply(cells_.data(), cells_.data());
+      // Rounded as a dataset stores cells: the network's inputs are training's, bit for bit.
+      for (Eigen::Index c = 0; c < cells_.size(); ++c) cells_(c) = static_cast<float>(cells_(c));
+    }
+    calibration_session_.add(cells_, timestamp);  // takes the frame while a calibration collects
     if (!range_) return Status::Uncalibrated;
-    if (range_->normalize(cells, normalized_) != Status::Ok) return Status::NonFinite;
+    if (range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;
     std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u);
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
@@ -375,7 +386,8 @@ class EstimatorCore {
   hand::XrHandLocator locator_;
   hand::XrAimTracker aim_tracker_;  // the pinch flags' hysteresis and the latest aim state
   Eigen::VectorXd measurements_;
-  Eigen::VectorXd cells_;
+  Eigen::VectorXd cells_;  // the latest cells, conditioned when the glove says (conditioner_)
+  sensor::InputConditioner conditioner_;
   Eigen::VectorXd normalized_;
   double last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
   int cells_backwards_run_ = 0;

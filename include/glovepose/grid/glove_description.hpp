@@ -124,6 +124,9 @@ struct GloveSettings {
   std::array<std::optional<DofLimitsDegrees>, hand::kDofCount> limits_degrees{};  ///< Per DoF; none: hand::kDofs'.
   std::optional<double> rate_hz;                                                  ///< Frames per second, if known.
   GloveCalibration calibration{};                                                 ///< Median window and flat rule.
+  /// Per input, the seconds of its own past whose mean is taken off each reading (a drift-removing
+  /// high-pass, sensor/input_conditioning.hpp); 0: as read. Empty: every input as read.
+  std::vector<double> demean_seconds;
 };
 
 /// @brief A glove: id, cell names (one per sensor cell, in cell-id order), its GridMap and its
@@ -142,6 +145,9 @@ class GloveDescription {
     if (static_cast<int>(cell_names_.size()) != map_.cell_count())
       throw Error("GloveDescription '" + id_ + "': " + std::to_string(cell_names_.size()) + " cell names, expected " +
                   std::to_string(map_.cell_count()) + " (one per cell of the grid map)");
+    if (!settings_.demean_seconds.empty() && settings_.demean_seconds.size() != cell_names_.size())
+      throw Error("GloveDescription '" + id_ + "': demean_seconds for " + std::to_string(settings_.demean_seconds.size()) +
+                  " inputs, expected one per input (" + std::to_string(cell_names_.size()) + ") or none");
     for (std::size_t c = 0; c < cell_names_.size(); ++c) {
       if (cell_names_[c].empty())
         throw Error("GloveDescription '" + id_ + "': cell " + std::to_string(c) + " has an empty name, expected a name");
@@ -187,6 +193,22 @@ class GloveDescription {
   const GloveCalibration& calibration() const noexcept { return settings_.calibration; }
   /// @brief The glove's frame rate, when the description gives one.
   std::optional<double> rate_hz() const noexcept { return settings_.rate_hz; }
+  /// @brief Per input, the seconds of demean_seconds (0: as read); empty when no input is conditioned.
+  std::vector<double> conditioning_seconds() const {
+    const bool any = std::any_of(settings_.demean_seconds.begin(), settings_.demean_seconds.end(), [](double v) { return v > 0.0; });
+    return any ? settings_.demean_seconds : std::vector<double>{};
+  }
+  /// @brief Per input, the frames its rolling mean spans (demean_seconds at rate_hz, at least 2), 0
+  /// for an input read as it is; empty when no input is conditioned.
+  std::vector<int> demean_frames() const {
+    std::vector<int> frames;
+    for (std::size_t c = 0; c < settings_.demean_seconds.size(); ++c) {
+      const double seconds = settings_.demean_seconds[c];
+      if (seconds > 0.0 && frames.empty()) frames.assign(settings_.demean_seconds.size(), 0);
+      if (seconds > 0.0) frames[c] = std::max(2, static_cast<int>(std::lround(seconds * *settings_.rate_hz)));
+    }
+    return frames;
+  }
   /// @brief The joint limits a model for this glove normalises its outputs by: the description's
   /// where it gives them, hand::kDofs' elsewhere.
   hand::JointLimits joint_limits() const {
@@ -213,6 +235,7 @@ class GloveDescription {
   friend bool operator==(const GloveDescription& a, const GloveDescription& b) noexcept {
     if (a.id_ != b.id_ || a.cell_names_ != b.cell_names_) return false;
     if (a.settings_.rate_hz != b.settings_.rate_hz || !(a.settings_.calibration == b.settings_.calibration)) return false;
+    if (a.conditioning_seconds() != b.conditioning_seconds()) return false;
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       const auto &p = a.settings_.limits_degrees[d], &q = b.settings_.limits_degrees[d];
       if (p.has_value() != q.has_value() || (p && (p->min != q->min || p->max != q->max))) return false;
@@ -236,8 +259,11 @@ class GloveDescription {
       const Slot& s = map_.cell_slots()[c];
       out += "    {\"name\": " + io::json::quote(cell_names_[c]);
       out += s.on_maps() ? ", \"channel\": " + std::to_string(s.channel) + ", \"row\": " + std::to_string(s.row) +
-                               ", \"col\": " + std::to_string(s.col) + "}"
-                         : ", \"extra\": true}";
+                               ", \"col\": " + std::to_string(s.col)
+                         : ", \"extra\": true";
+      if (c < settings_.demean_seconds.size() && settings_.demean_seconds[c] > 0.0)
+        out += ", \"demean_seconds\": " + io::number_text(settings_.demean_seconds[c]);
+      out += "}";
       out += c + 1 < cell_names_.size() ? ",\n" : "\n";
     }
     out += "  ],\n  \"dofs\": [\n";
@@ -313,10 +339,21 @@ class GloveDescription {
       std::string where = "cells[" + std::to_string(c) + "]";
       if (!cell.is_object())
         throw fail(where + " is " + io::json::describe(cell) + ", expected an object {\"name\", \"channel\", \"row\", \"col\"}");
-      f.only(cell, {"name", "channel", "row", "col", "extra"}, where);
+      f.only(cell, {"name", "channel", "row", "col", "extra", "demean_seconds"}, where);
       const std::string name = f.string(cell, "name", where);
       if (name.empty()) throw fail(where + ": 'name' is empty, expected a cell name");
       where += " ('" + name + "')";
+      if (cell.contains("demean_seconds")) {
+        const double seconds = f.number(cell, "demean_seconds", where);
+        if (!(seconds > 0.0 && seconds <= kMaxDemeanSeconds))
+          throw fail(where + ": 'demean_seconds' is " + io::number_text(seconds) + ", expected a time > 0 s (at most " +
+                     io::number_text(kMaxDemeanSeconds) + ")");
+        if (!settings.rate_hz)
+          throw fail(where + " has 'demean_seconds' but the description has no 'rate_hz', expected the frames per second that make "
+                     "the seconds frames");
+        settings.demean_seconds.resize(cells.size(), 0.0);
+        settings.demean_seconds[c] = seconds;
+      }
       for (std::size_t earlier = 0; earlier < c; ++earlier)
         if (names[earlier] == name)
           throw fail(where + " has the name of cells[" + std::to_string(earlier) + "], expected unique cell names");
@@ -433,6 +470,7 @@ class GloveDescription {
 
  private:
   static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
+  static constexpr double kMaxDemeanSeconds = 600.0;  // a window kept in memory per input, frame by frame
   static constexpr double kMaxRangeToNoise = 1000.0;  // moving cells of simulated corpora reach 32-119: more would zero them
 
   static constexpr const char* kFailPrefix = "glove description: ";
@@ -453,6 +491,13 @@ class GloveDescription {
       throw Error(prefix + "'calibration.min_range_to_noise' is " + io::number_text(s.calibration.min_range_to_noise) +
                   ", expected a multiple of the noise SD >= 0 and at most " + io::number_text(kMaxRangeToNoise) +
                   " (12: a range below 12 x its noise SD is noise only; 0: off)");
+    for (const double seconds : s.demean_seconds) {
+      if (!(seconds >= 0.0 && seconds <= kMaxDemeanSeconds))
+        throw Error(prefix + "demean_seconds " + io::number_text(seconds) + ", expected a time >= 0 s (0: as read) and at most " +
+                    io::number_text(kMaxDemeanSeconds));
+      if (seconds > 0.0 && !s.rate_hz)
+        throw Error(prefix + "demean_seconds without 'rate_hz', expected the frames per second that make the seconds frames");
+    }
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
         throw Error(prefix + "DoF '" + hand::kDofs[d].name + "' has limits [" + io::number_text(own->min) + ", " +

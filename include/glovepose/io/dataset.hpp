@@ -181,6 +181,8 @@ struct Dataset {
     const hand::DofSet labelled = labelled_dofs();
     for (std::size_t i = 0; i < angles.size(); ++i) {
       const bool has = labelled[i % hand::kDofCount];
+      const std::size_t frame = i / hand::kDofCount;
+      if (has && std::isnan(angles[i]) && frame < kind.size() && kind[frame] == kKindCalibration) continue;  // a sensors-only calibration
       if (has ? !std::isfinite(angles[i]) : !std::isnan(angles[i]))
         throw Error("Dataset: tensor 'angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
                     hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(angles[i]) +

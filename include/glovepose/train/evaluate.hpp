@@ -122,6 +122,7 @@ struct EvaluationResult {
   std::string hands;                          ///< Whose hands the fingertips were measured on.
   bool contact = false;                       ///< The contact stage ran.
   std::size_t contact_adjusted = 0, contact_refused = 0;  ///< Poses it adjusted; adjustments refused (collision).
+  std::size_t outside_limits = 0;             ///< Predicted angles outside the joint limits (a linear map's clamped to them).
   std::vector<ZeroedSensors> zeroed;          ///< Sensors the calibrations zeroed.
   std::vector<std::int64_t> source;  ///< Per scored frame: its index in the dataset.
   std::vector<float> labels;         ///< Per scored frame, 25 label angles (radians; NaN: not labelled).
@@ -135,8 +136,10 @@ struct EvaluationResult {
 /// @brief The selected frames of `data` as `model` sees them: its glove and joint limits, and its
 /// calibration mode unless `calibration` ("none", "training", "onthefly"; "guided" calibrates on
 /// the fly) overrides it. Throws glovepose::Error when the data's glove is not the model's.
-inline std::pair<Samples, model::CalibrationMode> samples_for_model(const TrainedModel& trained, const io::Dataset& data,
+inline std::pair<Samples, model::CalibrationMode> samples_for_model(const TrainedModel& trained, const io::Dataset& recorded,
                                                                     const FrameFilter& filter, int stride, const std::string& calibration) {
+  std::optional<io::Dataset> storage;
+  const io::Dataset& data = conditioned_for(recorded, trained.glove, storage);  // as the estimator conditions its inputs
   if (data.glove_layout() != trained.glove.id())
     throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + trained.glove.id() + "'");
   const std::string requested = calibration == "guided" ? "onthefly" : calibration;
@@ -193,7 +196,8 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
     throw Error("evaluation calibration '" + choice + "', expected none, training, onthefly or guided (or empty: the model's)");
   std::optional<io::Dataset> replayed;
   if (options.replay) replay_rows(replayed.emplace(dataset), *options.replay);
-  const io::Dataset& data = replayed ? *replayed : dataset;
+  std::optional<io::Dataset> conditioned;
+  const io::Dataset& data = conditioned_for(replayed ? *replayed : dataset, model.glove, conditioned);
   const auto [samples, mode] = samples_for_model(model, data, options.filter, options.stride, choice);
   EvaluationResult r;
   r.rows_replayed = replayed.has_value();
@@ -205,7 +209,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   const std::map<std::int64_t, hand::Angles> offsets =
       guided ? guided_offsets(model, data, options.filter, pool) : std::map<std::int64_t, hand::Angles>{};
   const std::vector<float> normalized = options.weights == nn::WeightStorage::F32
-                                            ? model.predict(samples, pool)
+                                            ? model.predict(samples, pool, &r.outside_limits)
                                             : detail::predict_stored(model, samples, options.weights, pool.size());
   hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
   const hand::DofSet& trained = model.info.labelled_dofs;
@@ -294,7 +298,8 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
 /// @brief The result as `glovepose eval --json` prints it: the angle-error report (to_json of
 /// metrics_report.hpp) with "calibration", "weights" (the storage, as --weights spells it: "f32",
 /// "f16", "bf16" or "fixed16"), "mean_window", "lag_ms", "scored_against", "vs_labels", "vs_truth",
-/// "fingertips" and "contact" ({"adjusted_frames", "refused_frames"} or null).
+/// "fingertips", "contact" ({"adjusted_frames", "refused_frames"} or null) and "outside_limits"
+/// (predicted angles outside the joint limits: a linear map's are clamped to them).
 inline std::string to_json(const EvaluationResult& r) {
   const std::string tips =
       r.fingertips ? to_json(*r.fingertips, {{"scored_against", r.fingertips_vs_truth ? "\"truth\"" : "\"labels\""}, {"hands", "\"" + r.hands + "\""}})
@@ -312,11 +317,13 @@ inline std::string to_json(const EvaluationResult& r) {
                                {"vs_labels", summary_json(r.vs_labels, r.lag_ms)},
                                {"vs_truth", r.vs_truth ? summary_json(*r.vs_truth, r.truth_lag_ms) : "null"},
                                {"fingertips", tips},
-                               {"contact", contact}});
+                               {"contact", contact},
+                               {"outside_limits", std::to_string(r.outside_limits)}});
 }
 
 /// @brief The result as `glovepose eval` prints it: the angle-error table, the lag, the scores
-/// against the truth, the contact stage's counts and the fingertip table.
+/// against the truth, the angles outside the joint limits, the contact stage's counts and the
+/// fingertip table.
 inline std::string format_text(const EvaluationResult& r) {
   std::string out = format_table(r.vs_labels);
   char line[512];
@@ -329,6 +336,9 @@ inline std::string format_text(const EvaluationResult& r) {
                   r.vs_truth->overall.mean_deg, r.vs_truth->p95_deg, 100.0 * r.vs_truth->share_under_15deg, r.truth_lag_ms);
     out += line;
   }
+  std::snprintf(line, sizeof line, "Outside the joint limits: %zu of %zu predicted angles (a linear map's are clamped to them)\n",
+                r.outside_limits, r.predicted.size());
+  out += line;
   if (r.contact) {
     std::snprintf(line, sizeof line, "Contact stage: %zu poses adjusted (%.1f%%), %zu adjustments refused (collision)\n", r.contact_adjusted,
                   100.0 * static_cast<double>(r.contact_adjusted) / static_cast<double>(std::max<long>(r.frames(), 1)), r.contact_refused);

@@ -160,9 +160,11 @@ struct PoseOffsetFit {
 /// (true - predicted) angles over its session frames; ridge least squares on standardised features,
 /// the ridge strength chosen from `ridges` by `folds`-fold cross-validation over the runs. Throws
 /// glovepose::Error when fewer than 2 x folds runs are usable.
-inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const io::Dataset& data,
+inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Sequence& sequence, const io::Dataset& recorded,
                                      const FrameFilter& filter, core::ThreadPool& pool,
                                      const std::vector<double>& ridges = {0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0}, int folds = 5) {
+  std::optional<io::Dataset> storage;
+  const io::Dataset& data = conditioned_for(recorded, model.glove, storage);  // as the estimator conditions its inputs
   check_guided(data, sequence);
   const hand::JointLimits limits = model.info.joint_limits();
   const std::map<std::int64_t, Eigen::VectorXd> features =

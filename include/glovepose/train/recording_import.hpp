@@ -36,6 +36,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -96,6 +97,7 @@ struct KeypointTakeReport {
   std::size_t labelled = 0;          ///< Of those, with a trusted label.
   std::size_t first_frame = 0;       ///< The take's first frame in the dataset.
   std::vector<double> frame_rms_mm;  ///< Per frame of the take: the fit residual behind its label (TakeLabels::frame_rms_mm).
+  std::array<double, hand::kDofCount> at_limit{};  ///< Per DoF, the share of labelled frames within 1% of its range of a joint limit (NaN: not labelled).
 };
 
 /// @brief A subject's hand as finish() fitted it to their keypoints.
@@ -103,6 +105,8 @@ struct KeypointSubjectReport {
   std::int32_t subject = 0;
   double hand_length_mm = 0.0;       ///< Wrist to the middle fingertip along the bones.
   double noise_mm = 0.0;             ///< The keypoints' noise seen on the palm (3D RMS).
+  double fit_mm = 0.0;               ///< Median fit residual of the hand (a right hand) to its keypoints as given.
+  double mirrored_fit_mm = NAN;      ///< The same for the keypoints mirrored (a left hand's); NaN when they fit no hand.
 };
 
 /// @brief A sensor found flat in a calibration run that was kept (CsvImportOptions::allow_flat).
@@ -142,10 +146,12 @@ class RecordingImporter {
     const std::size_t before = data_.frames();
     const std::size_t flats_before = flat_.size(), pending_before = pending_.size(), warnings_before = warnings_.size();
     const auto metadata_before = data_.metadata;
+    const bool had_angles = data_.has_angles();
     try {
       read(in, take);
     } catch (...) {
       truncate(before);
+      if (!had_angles) data_.angles.clear();  // the NaN angles it gave the sensors-only calibration takes before it
       data_.metadata = metadata_before;
       flat_.resize(flats_before);
       pending_.resize(pending_before);
@@ -184,8 +190,31 @@ class RecordingImporter {
         throw Error("keypoints of subject " + std::to_string(subject) + " (" + files + "), " + e.what() + " (keypoint unit: " +
                     io::number_text(options_.keypoint_scale) + " mm; `glovepose import --keypoint-unit`)");
       }
-      keypoint_subjects_.push_back({subject, shape.hand_length_mm, shape.noise_mm * std::sqrt(3.0)});
       const hand::KeypointIk ik(hand::KeypointModel(*layout, hand::Kinematics(shape.model)), hand::JointLimits(), options_.keypoint_labels.ik);
+      // Which hand: the glove's model is a right hand, and a left hand's keypoints (or a tracker's
+      // mirrored frame) fit it only with joints bent the wrong way. Fitted both ways, the better
+      // side must be the one given.
+      KeypointSubjectReport report{subject, shape.hand_length_mm, shape.noise_mm * std::sqrt(3.0), median_fit_mm(ik, points), NAN};
+      std::vector<Eigen::Vector3d> mirrored = points;
+      for (Eigen::Vector3d& p : mirrored) p.x() = -p.x();
+      try {
+        const hand::HandShapeFit other = hand::fit_hand_shape(*layout, mirrored, hand::Kinematics());
+        report.mirrored_fit_mm = median_fit_mm(
+            hand::KeypointIk(hand::KeypointModel(*layout, hand::Kinematics(other.model)), hand::JointLimits(), options_.keypoint_labels.ik),
+            mirrored);
+      } catch (const Error&) {
+        // no hand fits them mirrored: they are a right hand's
+      }
+      const auto mm = [](double v) { return io::number_text(std::round(v * 10.0) / 10.0); };
+      if (report.mirrored_fit_mm * kHandednessMargin < report.fit_mm)
+        throw Error("keypoints of subject " + std::to_string(subject) + " (" + files + ") fit a left hand, not a right one: median fit residual " +
+                    mm(report.fit_mm) + " mm as given, " + mm(report.mirrored_fit_mm) + " mm mirrored; expected a right hand's keypoints, as "
+                    "the glove's hand model is: mirror them first (negate one coordinate, e.g. x)");
+      if (!(report.mirrored_fit_mm > kHandednessMargin * report.fit_mm))
+        warnings_.push_back("keypoints of subject " + std::to_string(subject) + " (" + files + "): a right hand fits them about as well as a left "
+                            "one (median fit residual " + mm(report.fit_mm) + " mm as given, " + mm(report.mirrored_fit_mm) +
+                            " mm mirrored): check that they are a right hand's");
+      keypoint_subjects_.push_back(report);
       for (const Pending& take : pending_) {
         if (take.subject != subject) continue;
         label(take, ik);
@@ -207,6 +236,26 @@ class RecordingImporter {
   const std::vector<FlatSensor>& flat_sensors() const noexcept { return flat_; }
 
  private:
+  // A DoF whose labels sit at a joint limit in more of a take's frames than this is warned about.
+  static constexpr double kPinnedShare = 0.25;
+  static constexpr double kPinnedRange = 0.01;  // within this share of its range of a limit: at the limit
+  // How much better one side must fit than the other to tell a right hand from a left one.
+  static constexpr double kHandednessMargin = 1.5;
+
+  // The median fit residual of `ik`'s hand over up to 300 frames spread across `points`.
+  static double median_fit_mm(const hand::KeypointIk& ik, const std::vector<Eigen::Vector3d>& points) {
+    const std::size_t count = ik.model().count(), frames = points.size() / count;
+    const std::size_t step = std::max<std::size_t>(1, frames / 300);
+    std::vector<double> residuals;
+    for (std::size_t f = 0; f < frames; f += step) {
+      hand::KeypointPositions observed{};
+      for (std::size_t k = 0; k < count; ++k) observed[k] = points[f * count + k];
+      const double rms = ik.solve(observed, hand::JointLimits().rest(), nullptr).rms_mm;
+      if (std::isfinite(rms)) residuals.push_back(rms);
+    }
+    return residuals.empty() ? NAN : core::percentile(residuals, 0.5);
+  }
+
   // What each column of a take holds.
   enum class Role { Cell, Dof, Keypoint, Subject, Session, Glove, Kind, Seconds, Milliseconds, Ignored };
   struct Column {
@@ -337,18 +386,27 @@ class RecordingImporter {
       if (labelled == hand::DofSet{})
         throw Error(at_header + ": keypoints that complete no digit, expected every keypoint of at least one digit");
     }
-    if (data_.frames() > 0 && angles != data_.has_angles())
+    // A calibration take may be sensors only (its frames' angles NaN) beside labelled takes.
+    const bool calibration_take = take.kind && *take.kind == io::kKindCalibration && !has(Role::Kind);
+    const bool only_calibration_before =
+        std::all_of(data_.kind.begin(), data_.kind.end(), [](std::uint8_t k) { return k == io::kKindCalibration; });
+    if (data_.frames() > 0 && angles != data_.has_angles() && !(angles ? only_calibration_before : calibration_take))
       throw Error(at + ", line " + std::to_string(header_line) + ": " + std::string(angles ? "has" : "has no") + " DoF columns, expected " +
-                  (data_.has_angles() ? "the DoFs" : "none") + " as the takes before it");
-    if (angles && data_.frames() > 0 && labelled != data_.labelled_dofs())
+                  (data_.has_angles() ? "the DoFs" : "none") +
+                  " as the recording takes before it (a calibration take, given with --calibration or kind calibration, may be "
+                  "sensors only; recording takes all carry the reference or none do)");
+    if (angles && data_.has_angles() && labelled != data_.labelled_dofs())
       throw Error(at + ", line " + std::to_string(header_line) + ": DoF columns " + hand::dof_set_text(labelled) +
                   ", expected the DoFs of the takes before it (" + hand::dof_set_text(data_.labelled_dofs()) + ")");
-    if (angles && data_.frames() == 0) data_.set_labelled_dofs(labelled);
+    if (angles && !data_.has_angles()) {
+      data_.angles.assign(data_.frames() * hand::kDofCount, NAN);  // sensors-only calibration takes before it
+      data_.set_labelled_dofs(labelled);
+    }
     const double deg = options_.degrees ? core::kRadiansPerDegree : 1.0;
     const std::size_t first_frame = data_.frames();
     std::vector<std::size_t> line_of;  // file line of each frame of this take
     std::vector<float> cells(static_cast<std::size_t>(glove_.cell_count()));
-    std::vector<float> pose(angles ? hand::kDofCount : 0);
+    std::vector<float> pose(angles || data_.has_angles() ? hand::kDofCount : 0);  // NaN in a sensors-only calibration take
     while (io::next_csv_line(in, line, line_no)) {
       const std::vector<std::string> fields = io::split_csv_line(line);
       const std::string at_line = at + ", line " + std::to_string(line_no);
@@ -453,7 +511,9 @@ class RecordingImporter {
                                     data_.cells.begin() + static_cast<std::ptrdiff_t>(take.end * C));
     TakeLabels labels;
     try {
-      labels = label_take(ik, take.track, labelled, times, cells, C, options_.keypoint_labels);
+      KeypointLabelConfig config = options_.keypoint_labels;
+      if (take.keypoint_file.empty() && !config.offset) config.offset = 0.0;  // keypoints in the take's own rows: one clock, no search
+      labels = label_take(ik, take.track, labelled, times, cells, C, config);
     } catch (const Error& e) {
       throw Error("keypoints of '" + take.path + "'" + (take.keypoint_file.empty() ? "" : " ('" + take.keypoint_file + "')") + ": " + e.what());
     }
@@ -478,6 +538,20 @@ class RecordingImporter {
       data_.outlier[frame] = labels.trusted[i] ? 0 : 1;
       for (std::size_t d = 0; d < D; ++d)
         data_.angles[frame * D + d] = !labelled[d] ? NAN : labels.trusted[i] ? labels.angles[i * D + d] : static_cast<float>(rest[d]);
+    }
+    // Labels pinned at a joint limit: the IK could not follow the keypoints (another hand, layout or unit).
+    const hand::JointLimits limits;
+    for (std::size_t d = 0; d < D; ++d) {
+      std::size_t pinned = 0;
+      for (std::size_t i = 0; i < report.frames; ++i) {
+        const double a = data_.angles[(take.first + i) * D + d];
+        pinned += labels.trusted[i] && std::min(a - limits.min()[d], limits.max()[d] - a) < kPinnedRange * (limits.max()[d] - limits.min()[d]);
+      }
+      report.at_limit[d] = labelled[d] && report.labelled > 0 ? static_cast<double>(pinned) / static_cast<double>(report.labelled) : NAN;
+      if (report.at_limit[d] > kPinnedShare)
+        warnings_.push_back("labels of '" + take.path + "': " + hand::kDofs[d].name + " at a joint limit in " +
+                            io::number_text(std::round(report.at_limit[d] * 100.0)) +
+                            "% of the labelled frames: are the keypoints of this hand, layout and unit?");
     }
     if (report.labelled == 0)
       throw Error("keypoints of '" + take.path + "'" + (take.keypoint_file.empty() ? "" : " ('" + take.keypoint_file + "')") + ": no frame with a trusted fit (median residual " + io::number_text(report.median_rms_mm) +

@@ -13,8 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -26,6 +28,8 @@
 #include "../grid/glove_description.hpp"
 #include "../hand/dofs.hpp"
 #include "../sensor/calibration.hpp"
+#include "../sensor/input_conditioning.hpp"
+#include "../sensor/readout_config.hpp"
 #include "../io/dataset.hpp"
 
 namespace glovepose::train {
@@ -94,6 +98,42 @@ struct Samples {
 inline std::int64_t run_key(const io::Dataset& data, std::size_t i) noexcept {
   return (static_cast<std::int64_t>(data.subject[i]) << 40) | (static_cast<std::int64_t>(data.glove[i]) << 20) |
          static_cast<std::int64_t>(data.session[i]);
+}
+
+/// @brief `data` with its cells conditioned as `glove` says (its demean_seconds; sensor::
+/// InputConditioner), made in `storage`: a stream starts over at each run (subject, glove,
+/// session), where time does not go forward and after a gap of more than `gap_seconds`, as the
+/// estimator starts over. `data` itself when the glove conditions nothing or `data` is conditioned
+/// so already (metadata "conditioning"); throws glovepose::Error when it was conditioned otherwise.
+inline const io::Dataset& conditioned_for(const io::Dataset& data, const grid::GloveDescription& glove, std::optional<io::Dataset>& storage,
+                                          double gap_seconds = sensor::ReadoutConfig{}.gap_seconds) {
+  const std::vector<int> windows = glove.demean_frames();
+  std::string marker;
+  for (const int w : windows) marker += (marker.empty() ? "demean frames " : ",") + std::to_string(w);
+  const auto done = data.metadata.find("conditioning");
+  if (done != data.metadata.end()) {
+    if (done->second == marker) return data;
+    throw Error("the dataset's cells are conditioned as '" + done->second + "', expected " +
+                (marker.empty() ? std::string("none") : "'" + marker + "'") + " (glove '" + glove.id() + "'): give the data as recorded");
+  }
+  if (windows.empty()) return data;
+  if (data.cell_count != windows.size())
+    throw Error("the dataset has " + std::to_string(data.cell_count) + " cells per frame, glove '" + glove.id() + "' conditions " +
+                std::to_string(windows.size()) + " inputs");
+  io::Dataset& out = storage.emplace(data);
+  sensor::InputConditioner conditioner(windows);
+  std::vector<double> frame(data.cell_count);
+  for (std::size_t i = 0; i < data.frames(); ++i) {
+    const bool starts = i == 0 || run_key(data, i) != run_key(data, i - 1) || !(data.timestamps[i] > data.timestamps[i - 1]) ||
+                        data.timestamps[i] - data.timestamps[i - 1] > gap_seconds;
+    if (starts) conditioner.reset();
+    float* cells = out.cells.data() + i * data.cell_count;
+    for (std::size_t c = 0; c < data.cell_count; ++c) frame[c] = cells[c];
+    conditioner.apply(frame.data(), frame.data());
+    for (std::size_t c = 0; c < data.cell_count; ++c) cells[c] = static_cast<float>(frame[c]);
+  }
+  out.metadata["conditioning"] = marker;
+  return out;
 }
 
 /// @brief The fields of a run key (run_key): one person's recording session with one glove.
@@ -191,7 +231,9 @@ inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, 
         if (it == runs.end())
           throw Error("samples: subject " + std::to_string(data.subject[i]) + ", glove " + std::to_string(data.glove[i]) + ", session " +
                       std::to_string(data.session[i]) +
-                      " has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration");
+                      " has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration: import the "
+                      "session's calibration take with it (glovepose import --calibration FILE, the same subject and session), or "
+                      "choose --calibration-mode training (the training frames' range, stored in the model) or none");
         r = &it->second;
       }
       r->normalize(raw, normalized);
@@ -218,19 +260,65 @@ inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, 
   return s;
 }
 
-/// @brief Splits samples into (training, validation): the last `fraction` of every run's frames
-/// validate, so neighbouring (nearly equal) frames do not sit on both sides.
-inline std::pair<Samples, Samples> split_validation(const Samples& all, double fraction) {
+/// @brief How training sets frames aside to score and pick a model.
+enum class ValidationSplit {
+  Auto,    ///< Runs when the samples hold two runs or more, else Frames.
+  Runs,    ///< Whole runs it never trains on: the last runs of the data, about `fraction` of the frames
+           ///< (at least one run, never all). What a new session or take will see.
+  Frames,  ///< The last `fraction` of every run's frames, so that neighbouring (nearly equal) frames
+           ///< do not sit on both sides. Optimistic: the same session validates.
+};
+
+/// @brief Training and validation samples, and which frames validate, in words for the user.
+struct ValidationParts {
+  Samples training, validation;
+  std::string description;
+};
+
+/// @brief Splits `all` into training and validation samples as `how` says; `fraction` 0 keeps no
+/// validation. Throws glovepose::Error for a fraction outside [0, 1) or Runs with one run.
+inline ValidationParts split_validation(const Samples& all, double fraction, ValidationSplit how = ValidationSplit::Auto) {
   if (!(fraction >= 0.0 && fraction < 1.0)) throw Error("validation fraction must be in [0, 1)");
+  std::vector<std::int64_t> order;  // runs in order of their first frame
   std::map<std::int64_t, long> total, seen;
-  for (std::int64_t k : all.run) ++total[k];
+  for (std::int64_t k : all.run)
+    if (total[k]++ == 0) order.push_back(k);
+  if (how == ValidationSplit::Runs && order.size() < 2)
+    throw Error("validation on held-out runs: the selected frames are one run (" + (order.empty() ? std::string("none") : RunId::of(order[0]).text()) +
+                "), expected two or more (each take its own session), or validation on frames (the last part of the run)");
+  if (how == ValidationSplit::Auto) how = order.size() >= 2 ? ValidationSplit::Runs : ValidationSplit::Frames;
   std::vector<long> train, validate;
+  std::string description;
+  if (fraction == 0.0) {
+    description = "none (validation fraction 0)";
+  } else if (how == ValidationSplit::Runs) {
+    std::set<std::int64_t> held;
+    long held_frames = 0;
+    for (auto k = order.rbegin(); k + 1 != order.rend() && static_cast<double>(held_frames) < fraction * static_cast<double>(all.frames()); ++k) {
+      held.insert(*k);
+      held_frames += total[*k];
+    }
+    std::string names;
+    std::size_t named = 0;
+    for (std::int64_t k : order)
+      if (held.count(k) && named++ < 4) names += (names.empty() ? "" : "; ") + RunId::of(k).text();
+    if (named > 4) names += "; ...";
+    description = std::to_string(held.size()) + " held-out run" + (held.size() == 1 ? "" : "s") + " of " +
+                        std::to_string(order.size()) + ", never trained on (" + std::to_string(held_frames) + " frames): " + names;
+    for (long i = 0; i < all.frames(); ++i) (held.count(all.run[static_cast<std::size_t>(i)]) ? validate : train).push_back(i);
+    return {all.subset(train), all.subset(validate), description};
+  } else {
+    char share[32];
+    std::snprintf(share, sizeof share, "%g%%", 100.0 * fraction);
+    description = std::string("the last ") + share + " of the frames of each of " + std::to_string(order.size()) + " run" +
+                        (order.size() == 1 ? "" : "s") + " (the same sessions it trains on: optimistic for a new session)";
+  }
   for (long i = 0; i < all.frames(); ++i) {
     const std::int64_t k = all.run[static_cast<std::size_t>(i)];
     const long cut = total[k] - static_cast<long>(std::floor(fraction * static_cast<double>(total[k])));
     (seen[k]++ < cut ? train : validate).push_back(i);
   }
-  return {all.subset(train), all.subset(validate)};
+  return {all.subset(train), all.subset(validate), description};
 }
 
 }  // namespace glovepose::train

@@ -68,8 +68,10 @@ struct TrainingSetup {
 /// @brief The metadata and samples of a new `architecture` model of `width` (make_model_info) on
 /// the frames of `data` that `filter` and `stride` select, calibrated by `mode` (Training: the range
 /// of those frames, stored in the metadata), for `glove` (glove_for_data).
-inline TrainingSetup prepare_training(const io::Dataset& data, const FrameFilter& filter, int stride, const std::string& architecture,
+inline TrainingSetup prepare_training(const io::Dataset& recorded, const FrameFilter& filter, int stride, const std::string& architecture,
                                       int width, const grid::GloveDescription& glove, model::CalibrationMode mode) {
+  std::optional<io::Dataset> storage;
+  const io::Dataset& data = conditioned_for(recorded, glove, storage);  // as the estimator conditions its inputs
   std::optional<sensor::CalibrationRange> range;
   if (mode == model::CalibrationMode::Training) range = training_range(data, filter, glove.calibration());
   TrainingSetup s;
@@ -84,16 +86,21 @@ struct LinearModelFit {
   nn::LinearMap map;
   long training_frames = 0, validation_frames = 0;
   double validation_error_deg = 0.0;  ///< Mean angle error on the validation frames.
+  std::string validation;             ///< Which frames validated (ValidationParts::description).
 };
 
-/// @brief Fits a linear map on `all` less its last `validation` fraction per run (split_validation)
-/// and scores it there in degrees within `limits`.
-inline LinearModelFit fit_linear_model(const Samples& all, double validation, const hand::JointLimits& limits) {
-  const auto [training, held] = split_validation(all, validation);
+/// @brief Fits a linear map on `all` less the `validation` fraction that `split` sets aside
+/// (split_validation) and scores it there in degrees within `limits`, as eval scores it.
+inline LinearModelFit fit_linear_model(const Samples& all, double validation, const hand::JointLimits& limits,
+                                       ValidationSplit split = ValidationSplit::Auto) {
+  const ValidationParts parts = split_validation(all, validation, split);
+  const Samples& training = parts.training;
+  const Samples& held = parts.validation;
   LinearModelFit fit{fit_linear(training.inputs.data(), training.frames(), training.cells, training.targets.data(), kTargets).to_map(),
-                     training.frames(), held.frames(), 0.0};
+                     training.frames(), held.frames(), 0.0, parts.description};
   std::vector<float> predicted(static_cast<std::size_t>(held.frames()) * kTargets);
   fit.map.predict(held.inputs.data(), predicted.data(), held.frames());
+  outside_limits(predicted.data(), predicted.size(), true);  // clamped as TrainedModel::predict clamps it, so eval agrees
   fit.validation_error_deg = mean_error_degrees(predicted, held.angles, limits, held.labelled);
   return fit;
 }
