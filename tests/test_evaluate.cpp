@@ -6,11 +6,13 @@
 #include <glovepose/train/evaluate.hpp>
 #include <glovepose/train/training_setup.hpp>
 #include <glovepose/io/json.hpp>
+#include <glovepose/estimator.hpp>
 #include <glovepose/pose_model.hpp>
 
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -176,7 +178,8 @@ TEST_CASE("evaluate: weights held as the real-time network holds them, for both 
       REQUIRE(r.predicted.size() == normalized.size() * hand::kDofCount);
       double worst = 0.0, moved = 0.0;
       for (std::size_t f = 0; f < normalized.size(); ++f) {
-        const hand::Angles angles = runtime->joint_limits().denormalize(runtime->model_outputs(normalized[f]));
+        // Held within the joint limits, as the estimator holds a pose (the FCN overshoots them here).
+        const hand::Angles angles = runtime->joint_limits().clamp(runtime->joint_limits().denormalize(runtime->model_outputs(normalized[f])));
         for (std::size_t d = 0; d < hand::kDofCount; ++d) {
           worst = std::max(worst, std::abs(r.predicted[f * hand::kDofCount + d] - angles[d]));
           moved =
@@ -263,6 +266,46 @@ TEST_CASE("evaluate: a linear model fitted on one person keeps the other's angle
   CHECK(io::json::parse(train::to_json(r)).at("outside_limits").get<long>() == static_cast<long>(outside));
   CHECK(train::format_text(r).find("Outside the joint limits: " + std::to_string(outside) + " of " +
                                    std::to_string(kPerRun * static_cast<long>(hand::kDofCount))) != std::string::npos);
+}
+
+TEST_CASE("evaluate: a network's angles beyond the joint limits are held at them, by eval and the estimator alike") {
+  // An FCN whose output biases are +-3: every normalised output lies far outside [-1, 1] (a
+  // network's last layer is linear). Eval and the real-time estimator give the limits exactly.
+  const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
+  const hand::JointLimits limits = glove.joint_limits();
+  const io::Dataset data = closed_form_data();
+  const train::TrainingSetup setup =
+      train::prepare_training(data, train::FrameFilter{}, 1, "fcn", 8, glove, model::CalibrationMode::Training);
+  const std::unique_ptr<train::TrainableNetwork> net = train::make_network(setup.info, glove, 64);
+  net->initialize(3);
+  const auto high = [](std::size_t d) { return d % 2 == 0; };  // even DoFs above their maximum, odd below their minimum
+  bool found = false;
+  for (train::Parameter& p : net->parameters().all())
+    if (p.shape == std::vector<std::int64_t>{static_cast<std::int64_t>(hand::kDofCount)}) {
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) p.value[d] = high(d) ? 3.0f : -3.0f;
+      found = true;
+    }
+  REQUIRE(found);
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_fcn_held.safetensors";
+  train::save_model(path, setup.info, net->parameters().to_tensors());
+
+  train::TrainedModel model = train::load_model(path);
+  train::EvaluationOptions options;
+  options.threads = 1;
+  const train::EvaluationResult r = train::evaluate(model, data, options);
+  REQUIRE(r.frames() == 2 * kPerRun);
+  CHECK(r.outside_limits == r.predicted.size());
+  for (std::size_t i = 0; i < r.predicted.size(); ++i) {
+    const std::size_t d = i % hand::kDofCount;
+    CHECK(r.predicted[i] == doctest::Approx(high(d) ? limits.max()[d] : limits.min()[d]).epsilon(1e-6));
+  }
+
+  GlovePoseEstimator estimator(PoseModel::load(path));
+  estimator.use_training_calibration();
+  std::vector<double> cells(data.cells.begin(), data.cells.begin() + static_cast<long>(data.cell_count));
+  REQUIRE(estimator.push_cells(cells.data(), static_cast<int>(cells.size()), 0.0) == Status::Solved);
+  for (std::size_t d = 0; d < hand::kDofCount; ++d)
+    CHECK(estimator.pose().angles[d] == doctest::Approx(high(d) ? limits.max()[d] : limits.min()[d]).epsilon(1e-12));
 }
 
 TEST_CASE("evaluate: train validates on a held-out run when there are two, with the error eval gives on that run") {

@@ -75,7 +75,8 @@ class PoseModel {
   /// (hand::JointLimits::rest()) whatever the glove does.
   const hand::DofSet& labelled_dofs() const noexcept;
   /// @brief The network's normalised outputs as the model reads them: DoFs outside labelled_dofs()
-  /// at the rest pose.
+  /// at the rest pose. Not yet held within the joint limits (the FCN's last layer is linear and can
+  /// overshoot them): a pose is held there as its last step, after any pose-guided offsets.
   GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept;
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept;

@@ -264,8 +264,8 @@ def glove_tables(info: ModelInfo) -> Tuple[List[Tuple[int, int, int]], List[Tupl
 def unet_predict_radians(model: UNet, info: ModelInfo, cells: torch.Tensor) -> torch.Tensor:
     """What `glovepose predict` computes, in PyTorch: [N, cells] calibrated values -> [N, 25] radians.
 
-    GridMap::to_stretch_maps (empty slots 0, float32), the U-Net, GridMap::from_pose_map and
-    JointLimits::denormalize (float64).
+    GridMap::to_stretch_maps (empty slots 0, float32), the U-Net, GridMap::from_pose_map, held
+    within the joint limits ([-1, 1]) and JointLimits::denormalize (float64).
     """
     cell_slots, dof_slots = glove_tables(info)
     assert cells.shape[1] == len(cell_slots) == info.inputs
@@ -275,7 +275,7 @@ def unet_predict_radians(model: UNet, info: ModelInfo, cells: torch.Tensor) -> t
     with torch.no_grad():
         pose = model(maps)[:, 0]
     normalized = torch.stack([pose[:, r, c] for r, c in dof_slots], dim=1)
-    return info.denormalize(normalized)
+    return info.denormalize(normalized.clamp(-1.0, 1.0))
 
 
 @test
@@ -424,7 +424,7 @@ def unet_extra_predict_radians(model: UNet, desc: Dict[str, object], cells: torc
     """`glovepose predict` for a glove with extra inputs, written out here from the description alone:
     [N, 16] calibrated values -> the [N, 2 + E, 5, 5] planes (stretch cells at their slots, 0
     elsewhere; then one constant plane per extra input, in input order) -> U-Net -> DoFs read at the
-    description's pose-map slots -> the reference joint limits (float64)."""
+    description's pose-map slots -> held within the joint limits -> the reference joint limits (float64)."""
     cell_list = desc["cells"]
     extra_count = sum(1 for c in cell_list if c.get("extra"))
     n = cells.shape[0]
@@ -441,7 +441,7 @@ def unet_extra_predict_radians(model: UNet, desc: Dict[str, object], cells: torc
     slot = {d["name"]: (d["row"], d["col"]) for d in desc["dofs"]}
     with torch.no_grad():
         pose = model(planes)[:, 0]
-    normalized = torch.stack([pose[:, slot[name][0], slot[name][1]] for name in DOF_NAMES], dim=1).to(torch.float64)
+    normalized = torch.stack([pose[:, slot[name][0], slot[name][1]] for name in DOF_NAMES], dim=1).to(torch.float64).clamp(-1.0, 1.0)
     lo = torch.tensor(JOINT_LIMITS_MIN, dtype=torch.float64)
     hi = torch.tensor(JOINT_LIMITS_MAX, dtype=torch.float64)
     return lo + 0.5 * (normalized + 1.0) * (hi - lo)
@@ -529,7 +529,7 @@ def test_cli_unet_extra_inputs_matches_predict() -> None:
 def test_cli_eval_matches() -> None:
     """`glovepose eval --calibration-mode none` vs PyTorch on the corpus's recording frames (kind 0, not
     outliers): the raw cell capacitances go into each model as they are, so no calibration is redone;
-    a linear map's outputs clamped to [-1, 1] (the joint limits), as glovepose clamps them.
+    every model's outputs held within [-1, 1] (the joint limits), as glovepose holds them.
     Covers the tool's files and export_model's (the tool reads FCN and linear files only this way)."""
     d = cli_dir()
     data, _ = safetensors_io.load(d / "c.safetensors")
@@ -543,10 +543,7 @@ def test_cli_eval_matches() -> None:
             radians = unet_predict_radians(m, info, cells)
         else:
             with torch.no_grad():
-                normalized = m(cells)
-                if info.architecture == "linear":  # glovepose clamps a linear map's outputs to the joint limits
-                    normalized = normalized.clamp(-1.0, 1.0)
-                radians = info.denormalize(normalized)
+                radians = info.denormalize(m(cells).clamp(-1.0, 1.0))  # glovepose holds every model's angles within the joint limits
         err = (radians - truth).abs() * (180.0 / torch.pi)
         assert report["frames"] == cells.shape[0], (stem, report["frames"], cells.shape[0])
         mean, top = float(err.mean()), float(err.max())

@@ -209,14 +209,15 @@ def initialize(module: nn.Module, seed: int) -> None:
 
 
 def predict_radians(model: nn.Module, inputs: torch.Tensor, device, settings: dict) -> torch.Tensor:
-    """The model's angles (radians, float64) for calibrated inputs, in batches, in eval mode."""
+    """The model's angles (radians, float64) for calibrated inputs, in batches, in eval mode, held
+    within the joint limits as glovepose holds them (so the validation error is `glovepose eval`'s)."""
     lo = torch.tensor(settings["joint_limits_min"], dtype=torch.float64)
     hi = torch.tensor(settings["joint_limits_max"], dtype=torch.float64)
     model.eval()
     with torch.no_grad():
         out = torch.cat([model(x.to(device)).cpu() for x in inputs.split(4096)]).double()
     model.train()
-    return lo + 0.5 * (out + 1.0) * (hi - lo)
+    return lo + 0.5 * (out.clamp(-1.0, 1.0) + 1.0) * (hi - lo)
 
 
 def mean_error_deg(model: nn.Module, samples: dict, labelled: torch.Tensor, device, settings: dict, radians=None) -> float:

@@ -347,7 +347,10 @@ class EstimatorCore {
     if (calibration_session_.collecting()) flags |= kPoseCalibrating;
     const Status net = network_angles(normalized_, pose_.raw_angles);
     if (net != Status::Ok) return net;
-    if (guided_) pose_.raw_angles = calibration::with_offsets(pose_.raw_angles, offsets_, model_->joint_limits());
+    // Held within the joint limits as the last step, the user's pose offsets (if any) added before:
+    // a network's overshoot is what the offsets correct for this user.
+    pose_.raw_angles = guided_ ? calibration::with_offsets(pose_.raw_angles, offsets_, model_->joint_limits())
+                               : model_->joint_limits().clamp(pose_.raw_angles);
     pose_.angles = pose_.raw_angles;
     if (smoothing_) (void)smoothing_->filter(pose_.raw_angles, timestamp, pose_.angles);
     kinematics_.pose(pose_.angles, skeleton_);  // the pinch state's fingertips, and the joints when asked

@@ -131,7 +131,7 @@ GLOVEPOSE_INLINE std::vector<hand::Angles> PoseModel::predict(const float* cells
   } catch (const Error& e) {
     throw Error(std::string("PoseModel::predict: ") + e.what());
   }
-  for (hand::Angles& a : angles) a = parts_->limits_.denormalize(model_outputs(a));
+  for (hand::Angles& a : angles) a = parts_->limits_.clamp(parts_->limits_.denormalize(model_outputs(a)));  // held as the estimator holds a pose
   return angles;
 }
 

@@ -122,7 +122,7 @@ struct EvaluationResult {
   std::string hands;                          ///< Whose hands the fingertips were measured on.
   bool contact = false;                       ///< The contact stage ran.
   std::size_t contact_adjusted = 0, contact_refused = 0;  ///< Poses it adjusted; adjustments refused (collision).
-  std::size_t outside_limits = 0;             ///< Predicted angles outside the joint limits (a linear map's clamped to them).
+  std::size_t outside_limits = 0;             ///< Predicted angles outside the joint limits (held at them).
   std::vector<ZeroedSensors> zeroed;          ///< Sensors the calibrations zeroed.
   std::vector<std::int64_t> source;  ///< Per scored frame: its index in the dataset.
   std::vector<float> labels;         ///< Per scored frame, 25 label angles (radians; NaN: not labelled).
@@ -153,9 +153,10 @@ inline std::pair<Samples, model::CalibrationMode> samples_for_model(const Traine
 namespace detail {
 
 // Normalised predictions (frames x 25) of the model's network with its weights held as `storage`,
-// as the real-time path holds them; DoFs the model was not trained on read the rest pose, as in
-// TrainedModel::predict.
-inline std::vector<float> predict_stored(const TrainedModel& model, const Samples& samples, nn::WeightStorage storage, int threads) {
+// as the real-time path holds them, within the joint limits unless `hold` is false (`outside` adds
+// how many were not); DoFs the model was not trained on read the rest pose, as in TrainedModel::predict.
+inline std::vector<float> predict_stored(const TrainedModel& model, const Samples& samples, nn::WeightStorage storage, int threads,
+                                         std::size_t& outside, bool hold) {
   const model::ModelInfo& info = model.info;
   if (!model.network)
     throw Error("weights " + std::string(nn::storage_name(storage)) + ": the model is " + info.architecture_name() +
@@ -169,8 +170,14 @@ inline std::vector<float> predict_stored(const TrainedModel& model, const Sample
   const hand::DofSet& labelled = info.labelled_dofs;
   std::vector<float> out(static_cast<std::size_t>(frames) * kTargets);
   for (long f = 0; f < frames; ++f) {
-    hand::Angles a = rows[static_cast<std::size_t>(f)];
-    if (labelled != hand::all_dofs()) a = limits.rest_unlabelled(a, labelled);
+    const hand::Angles& a = rows[static_cast<std::size_t>(f)];
+    std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
+  }
+  outside += outside_limits(out.data(), out.size(), hold);  // held as TrainedModel::predict holds F32's
+  for (long f = 0; f < frames && labelled != hand::all_dofs(); ++f) {
+    hand::Angles a{};
+    std::copy(out.begin() + f * kTargets, out.begin() + (f + 1) * kTargets, a.begin());
+    a = limits.rest_unlabelled(a, labelled);
     std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
   }
   return out;
@@ -209,8 +216,8 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   const std::map<std::int64_t, hand::Angles> offsets =
       guided ? guided_offsets(model, data, options.filter, pool) : std::map<std::int64_t, hand::Angles>{};
   const std::vector<float> normalized = options.weights == nn::WeightStorage::F32
-                                            ? model.predict(samples, pool, &r.outside_limits)
-                                            : detail::predict_stored(model, samples, options.weights, pool.size());
+                                            ? model.predict(samples, pool, &r.outside_limits, !guided)
+                                            : detail::predict_stored(model, samples, options.weights, pool.size(), r.outside_limits, !guided);
   hand::DofSet scored = samples.labelled;  // DoFs with reference angles that the model was trained on
   const hand::DofSet& trained = model.info.labelled_dofs;
   for (std::size_t d = 0; d < hand::kDofCount; ++d) scored[d] = scored[d] && trained[d];
@@ -299,7 +306,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
 /// metrics_report.hpp) with "calibration", "weights" (the storage, as --weights spells it: "f32",
 /// "f16", "bf16" or "fixed16"), "mean_window", "lag_ms", "scored_against", "vs_labels", "vs_truth",
 /// "fingertips", "contact" ({"adjusted_frames", "refused_frames"} or null) and "outside_limits"
-/// (predicted angles outside the joint limits: a linear map's are clamped to them).
+/// (predicted angles outside the joint limits, held at them).
 inline std::string to_json(const EvaluationResult& r) {
   const std::string tips =
       r.fingertips ? to_json(*r.fingertips, {{"scored_against", r.fingertips_vs_truth ? "\"truth\"" : "\"labels\""}, {"hands", "\"" + r.hands + "\""}})
@@ -336,7 +343,7 @@ inline std::string format_text(const EvaluationResult& r) {
                   r.vs_truth->overall.mean_deg, r.vs_truth->p95_deg, 100.0 * r.vs_truth->share_under_15deg, r.truth_lag_ms);
     out += line;
   }
-  std::snprintf(line, sizeof line, "Outside the joint limits: %zu of %zu predicted angles (a linear map's are clamped to them)\n",
+  std::snprintf(line, sizeof line, "Outside the joint limits: %zu of %zu predicted angles (held at them)\n",
                 r.outside_limits, r.predicted.size());
   out += line;
   if (r.contact) {

@@ -84,7 +84,7 @@ inline std::map<std::int64_t, Eigen::VectorXd> guided_features(TrainedModel& mod
   const hand::JointLimits limits = model.info.joint_limits();
   std::map<std::int64_t, Eigen::VectorXd> features;
   for (const auto& [key, run] : runs) {
-    const std::vector<float> normalized = model.predict(run.frames, pool);
+    const std::vector<float> normalized = model.predict(run.frames, pool, nullptr, false);  // as the estimator's offsets see them
     calibration::StepHoldMeans means(sequence, run.frames.cells);
     for (long f = 0; f < run.frames.frames(); ++f) {
       hand::Angles n{};
@@ -170,7 +170,7 @@ inline PoseOffsetFit fit_pose_offset(TrainedModel& model, const calibration::Seq
   const std::map<std::int64_t, Eigen::VectorXd> features =
       guided_features(model, sequence, calibration_runs(data, filter, model.glove.calibration()), pool);
   const Samples session = make_samples(data, filter, model::CalibrationMode::OnTheFly, nullptr, limits, 1, model.glove.calibration());
-  const std::vector<float> predicted = model.predict(session, pool);
+  const std::vector<float> predicted = model.predict(session, pool, nullptr, false);  // the offsets are added before the limits
   std::map<std::int64_t, Eigen::VectorXd> residual_sum;
   std::map<std::int64_t, long> residual_count;
   for (long f = 0; f < session.frames(); ++f) {

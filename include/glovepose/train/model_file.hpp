@@ -64,21 +64,6 @@ inline std::unique_ptr<TrainableNetwork> make_network(const model::ModelInfo& in
   throw Error("architecture '" + info.architecture_name() + "' has no trainable network, expected unet or fcn");
 }
 
-/// @brief How many of `count` normalised predictions lie outside the joint limits ([-1, 1]);
-/// with `clamp`, they are moved to them. A linear map is clamped: it extrapolates without bound (one
-/// fitted on a real recording reached -230 and +265 degrees on another take).
-inline std::size_t outside_limits(float* normalized, std::size_t count, bool clamp) noexcept {
-  std::size_t outside = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    const float v = normalized[i];
-    if (v > 1.0f || v < -1.0f) {
-      if (clamp) normalized[i] = v > 1.0f ? 1.0f : -1.0f;
-      ++outside;
-    }
-  }
-  return outside;
-}
-
 /// @brief A model read from a file: metadata, glove, and the network or linear map.
 struct TrainedModel {
   model::ModelInfo info;                                                 ///< Metadata.
@@ -96,20 +81,22 @@ struct TrainedModel {
     return std::move(*range);
   }
 
-  /// @brief Normalised predictions (frames x 25) for prepared samples, a linear map's clamped to
-  /// the joint limits (outside_limits); `outside`, when given, adds how many were outside them.
-  std::vector<float> predict(const Samples& samples, core::ThreadPool& pool, std::size_t* outside = nullptr) {
+  /// @brief Normalised predictions (frames x 25) for prepared samples, held within the joint limits
+  /// as the estimator holds them unless `hold` is false (pose-guided calibration holds after its
+  /// offsets: outside_limits); `outside`, when given, adds how many were outside them.
+  std::vector<float> predict(const Samples& samples, core::ThreadPool& pool, std::size_t* outside = nullptr, bool hold = true) {
     if (samples.cells != info.inputs)
       throw Error("the samples have " + std::to_string(samples.cells) + " cells per frame, the model takes " + std::to_string(info.inputs));
     std::vector<float> out(static_cast<std::size_t>(samples.frames()) * kTargets);
+    std::size_t beyond = 0;
     if (network) {
-      out = train::predict(*network, samples, pool);
+      out = train::predict(*network, samples, pool, &beyond, hold);
     } else {
       long rejected = -1;
       if (linear->predict(samples.inputs.data(), out.data(), samples.frames(), &rejected) != Status::Ok)
         throw Error("linear model: frame " + std::to_string(rejected) + " has a non-finite input");
+      beyond = outside_limits(out.data(), out.size(), hold);
     }
-    const std::size_t beyond = outside_limits(out.data(), out.size(), !network);
     if (outside) *outside += beyond;
     const hand::DofSet& labelled = info.labelled_dofs;
     if (labelled != hand::all_dofs()) {  // DoFs the model had no reference angles for read the rest pose

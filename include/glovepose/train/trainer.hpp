@@ -118,15 +118,38 @@ struct TrainResult {
   bool stopped = false;                    ///< Stopped early (signal or time limit).
 };
 
+/// @brief How many of `count` normalised predictions lie outside the joint limits ([-1, 1]); with
+/// `hold`, each is moved to them. Every model's poses are held there as their last step, as the
+/// estimator holds them: a linear map extrapolates without bound (one fitted on a real recording
+/// reached -230 and +265 degrees on another take), and so does the FCN, whose last layer is linear
+/// (the U-Net's tanh keeps it within). The truth lies within the limits, so holding can only bring
+/// a prediction closer. Pose-guided calibration holds after adding its offsets (with_offsets), so
+/// its predictions are taken as they are (`hold` false).
+inline std::size_t outside_limits(float* normalized, std::size_t count, bool hold = true) noexcept {
+  std::size_t outside = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const float v = normalized[i];
+    if (v > 1.0f || v < -1.0f) {
+      if (hold) normalized[i] = v > 1.0f ? 1.0f : -1.0f;
+      ++outside;
+    }
+  }
+  return outside;
+}
+
 /// @brief The network's outputs (normalised, frames x 25) for every frame of `samples`, in
-/// evaluation mode, in chunks of the network's max batch.
-inline std::vector<float> predict(TrainableNetwork& net, const Samples& samples, core::ThreadPool& pool) {
+/// evaluation mode, in chunks of the network's max batch, held within the joint limits unless
+/// `hold` is false (outside_limits); `outside`, when given, is set to how many were outside them.
+inline std::vector<float> predict(TrainableNetwork& net, const Samples& samples, core::ThreadPool& pool, std::size_t* outside = nullptr,
+                                  bool hold = true) {
   std::vector<float> out(static_cast<std::size_t>(samples.frames()) * kTargets);
   for (long f = 0; f < samples.frames(); f += net.max_batch()) {
     const int n = static_cast<int>(std::min<long>(net.max_batch(), samples.frames() - f));
     net.forward(samples.inputs.data() + f * samples.cells, n, false, pool);
     std::copy(net.output(), net.output() + static_cast<long>(n) * kTargets, out.begin() + f * kTargets);
   }
+  const std::size_t beyond = outside_limits(out.data(), out.size(), hold);
+  if (outside) *outside = beyond;
   return out;
 }
 

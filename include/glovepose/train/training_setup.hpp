@@ -100,7 +100,7 @@ inline LinearModelFit fit_linear_model(const Samples& all, double validation, co
                      training.frames(), held.frames(), 0.0, parts.description};
   std::vector<float> predicted(static_cast<std::size_t>(held.frames()) * kTargets);
   fit.map.predict(held.inputs.data(), predicted.data(), held.frames());
-  outside_limits(predicted.data(), predicted.size(), true);  // clamped as TrainedModel::predict clamps it, so eval agrees
+  outside_limits(predicted.data(), predicted.size());  // held as TrainedModel::predict holds it, so eval agrees
   fit.validation_error_deg = mean_error_degrees(predicted, held.angles, limits, held.labelled);
   return fit;
 }
