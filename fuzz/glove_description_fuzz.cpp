@@ -6,7 +6,8 @@
 /// Invariants: bad input is refused with glovepose::Error only; an accepted description writes
 /// (to_json) text that parses to an equal description, maps plausible cells to finite stretch
 /// maps, and has usable settings: joint limits that JointLimits accepts (finite, min < max), a
-/// median window of at least one frame, a flat rule in [0, 1).
+/// median window of at least one frame, a flat rule in [0, 1), input conditioning that the
+/// estimator accepts and that conditions a frame to finite values.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include <glovepose/grid/glove_description.hpp>
+#include <glovepose/sensor/input_conditioning.hpp>
 
 #include "fuzz_check.hpp"
 
@@ -41,6 +43,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   std::vector<double> cells(static_cast<std::size_t>(glove->cell_count()));
   for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = -1.0 + 2.0 * static_cast<double>(c) / static_cast<double>(cells.size());
+
+  const std::vector<int> windows = glove->demean_frames();  // the estimator's conditioner, as it builds it
+  GLOVEPOSE_FUZZ_REQUIRE(windows.empty() || windows.size() == cells.size());
+  glovepose::sensor::InputConditioner conditioner(windows);  // throws (a finding) for a window it refuses
+  std::vector<double> conditioned(cells.size());
+  for (int frame = 0; frame < 3 && conditioner.active(); ++frame) {
+    conditioner.apply(cells.data(), conditioned.data());
+    for (const double v : conditioned) GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(v));
+  }
   std::array<float, glovepose::grid::kStretchValues> maps{};
   GLOVEPOSE_FUZZ_REQUIRE(glove->map().to_stretch_maps(cells.data(), maps) == glovepose::Status::Ok);
   GLOVEPOSE_FUZZ_REQUIRE(glovepose::fuzz::all_finite(maps));

@@ -85,6 +85,12 @@ TEST_CASE("input conditioning: a glove description's demean_seconds, written, re
   std::string zero = text;
   zero.replace(zero.find("\"demean_seconds\": 10"), 20, "\"demean_seconds\": 0");
   refused(zero, "cells[0] ('channel_00'): 'demean_seconds' is 0, expected a time > 0 s");
+  // Windows the estimator would keep gigabytes for: 16 inputs x 600 s at 10 kHz.
+  std::string huge = text;
+  huge.replace(huge.find("\"rate_hz\": 30"), 13, "\"rate_hz\": 10000");
+  for (std::size_t at = huge.find("\"demean_seconds\": 10"); at != std::string::npos; at = huge.find("\"demean_seconds\": 10", at))
+    huge.replace(at, 20, "\"demean_seconds\": 600");
+  refused(huge, "keep 96000000 readings in all, expected at most 16777216");
 }
 
 TEST_CASE("input conditioning: the dataset training reads and the estimator's cells are the same, bit for bit") {

@@ -471,6 +471,7 @@ class GloveDescription {
  private:
   static constexpr double kMaxMedianSeconds = 10.0;  // the paper's window is 1/3 s
   static constexpr double kMaxDemeanSeconds = 600.0;  // a window kept in memory per input, frame by frame
+  static constexpr double kMaxDemeanFrames = 16777216.0;  // every input's window together: 128 MiB of readings
   static constexpr double kMaxRangeToNoise = 1000.0;  // moving cells of simulated corpora reach 32-119: more would zero them
 
   static constexpr const char* kFailPrefix = "glove description: ";
@@ -497,6 +498,14 @@ class GloveDescription {
                     io::number_text(kMaxDemeanSeconds));
       if (seconds > 0.0 && !s.rate_hz)
         throw Error(prefix + "demean_seconds without 'rate_hz', expected the frames per second that make the seconds frames");
+    }
+    if (s.rate_hz) {
+      double frames = 0.0;
+      for (const double seconds : s.demean_seconds) frames += seconds * *s.rate_hz;
+      if (frames > kMaxDemeanFrames)
+        throw Error(prefix + "demean_seconds at rate_hz " + io::number_text(*s.rate_hz) + " keep " + std::to_string(std::llround(frames)) +
+                    " readings in all, expected at most " + std::to_string(std::llround(kMaxDemeanFrames)) +
+                    " (shorter windows, fewer inputs demeaned)");
     }
     for (std::size_t d = 0; d < hand::kDofCount; ++d)
       if (const auto& own = s.limits_degrees[d]; own && !(own->min < own->max && std::isfinite(own->min) && std::isfinite(own->max)))
