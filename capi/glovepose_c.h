@@ -473,6 +473,11 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose_at(const glovepose
  * GLOVEPOSE_NOT_READY (out->active = 0) before the first pose. Per-frame: never allocates. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_xr_joints(const glovepose_estimator* estimator, double time,
                                                                    glovepose_xr_hand* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The latest frame's cells before calibration into out[0..count): the solved capacitances,
+ * each input the glove description conditions (demean_seconds) less its rolling mean, as training
+ * saw them; zeros before the first frame. count must be the model's cell count. Per-frame: never
+ * allocates.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or GLOVEPOSE_SIZE_MISMATCH. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estimator, double* out,
                                                                int32_t count) GLOVEPOSE_C_NOEXCEPT;
 /** @brief The pinch and aim state of the latest pose (XR_FB_hand_tracking_aim; see

@@ -3,10 +3,10 @@
 #include <glovepose/model/unet_model.hpp>
 #include <glovepose/nn/weights.hpp>
 #include <glovepose/io/dataset.hpp>
+#include <glovepose/sim/wearable_device.hpp>
 
 #include <doctest/doctest.h>
 
-#include "drifting_device.hpp"
 #include "test_files.hpp"
 #include <nlohmann/json.hpp>
 
@@ -1522,14 +1522,14 @@ TEST_CASE("cli: glovepose info FILE shows the weights' dtype on disk, the calibr
 
 TEST_CASE("cli: a drifting device's inputs demeaned: train compares windows, eval and predict --raw condition alike") {
   // examples/wearable_device.glove.json without its demean_seconds, and two 1-minute sessions of it
-  // (drifting_device.hpp; tests/test_input_conditioning.cpp measures the gain).
+  // (sim/wearable_device.hpp; tests/test_input_conditioning.cpp measures the gain).
   const grid::GloveDescription example = grid::GloveDescription::read(std::string(GLOVEPOSE_SOURCE_DIR) + "/examples/wearable_device.glove.json");
   grid::GloveSettings settings = example.settings();
   settings.demean_seconds.clear();
   const std::string glove_file = temp("wearable_plain.json"), data_file = temp("wearable.safetensors");
   grid::GloveDescription(example.id(), example.cell_names(), example.map(), settings).write(glove_file);
-  const std::size_t channels = test::kDeviceChannels;
-  const io::Dataset data = test::drifting_sessions(0.05, 21, 1.0);
+  const std::size_t channels = sim::kWearableChannels;
+  const io::Dataset data = sim::drifting_wearable_sessions(0.05, 21, 1.0);
   data.write(data_file);
 
   // Windows compared on the held-out session; the best kept, carried in the model's description.

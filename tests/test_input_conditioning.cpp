@@ -5,13 +5,12 @@
 // drift, the error on a session no model saw with and without it.
 #include <glovepose/estimator.hpp>
 #include <glovepose/sensor/input_conditioning.hpp>
+#include <glovepose/sim/wearable_device.hpp>
 #include <glovepose/train/evaluate.hpp>
 #include <glovepose/train/model_file.hpp>
 #include <glovepose/train/training_setup.hpp>
 
 #include <doctest/doctest.h>
-
-#include "drifting_device.hpp"
 
 #include <cmath>
 #include <memory>
@@ -23,8 +22,8 @@
 namespace glovepose::input_conditioning_test {
 namespace {
 
-constexpr std::size_t kChannels = test::kDeviceChannels;
-using test::drifting_sessions;
+constexpr std::size_t kChannels = sim::kWearableChannels;
+using sim::drifting_wearable_sessions;
 
 // The example device of weights_format.md with every channel demeaned over `seconds` (0: none).
 grid::GloveDescription device(double seconds) {
@@ -95,7 +94,7 @@ TEST_CASE("input conditioning: a glove description's demean_seconds, written, re
 
 TEST_CASE("input conditioning: the dataset training reads and the estimator's cells are the same, bit for bit") {
   const grid::GloveDescription glove = device(2.0);
-  io::Dataset data = drifting_sessions(0.2, 5, 0.5);
+  io::Dataset data = drifting_wearable_sessions(0.2, 5, 0.5);
   std::optional<io::Dataset> storage;
   const io::Dataset& trained_on = train::conditioned_for(data, glove, storage);
   REQUIRE(&trained_on != &data);
@@ -129,7 +128,7 @@ TEST_CASE("input conditioning: the dataset training reads and the estimator's ce
 }
 
 TEST_CASE("input conditioning: on a device whose channels drift, demeaned inputs cut the error on a session no model saw") {
-  const io::Dataset data = drifting_sessions(0.05, 7, 3.0);
+  const io::Dataset data = drifting_wearable_sessions(0.05, 7, 3.0);
   double error[2] = {0.0, 0.0};
   for (const bool demean : {false, true}) {
     const grid::GloveDescription glove = device(demean ? 10.0 : 0.0);

@@ -478,7 +478,8 @@ class Estimator(_Closing):
 
     def cells(self) -> np.ndarray:
         """The latest solved cell capacitances (cell_count,), pF: the network's input before
-        calibration (cell_names order; zeros before the first frame)."""
+        calibration (cell_names order; zeros before the first frame), each input the glove
+        description conditions (demean_seconds) less its rolling mean, as training saw them."""
         out = np.zeros(self._model.cell_count, dtype=np.float64)
         _check(_lib.glovepose_estimator_get_cells(self._handle, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), out.size))
         return out

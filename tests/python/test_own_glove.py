@@ -51,11 +51,12 @@ def readme_commands():
 
 
 def run(command, cwd):
-    """One documented command as written (`build/` is this build; `< FILE` feeds FILE to stdin);
-    its stdout, or exit with its output when it fails."""
+    """One documented command as written (`build/` is this build, `examples/...` the repository's
+    examples; `< FILE` feeds FILE to stdin); its stdout, or exit with its output when it fails."""
     args = shlex.split(command)
     if args[0].startswith("build/"):
         args[0] = os.path.join(BUILD, args[0][len("build/"):])
+    args = [os.path.join(ROOT, a) if a.startswith("examples/") else a for a in args]
     feed = None
     if "<" in args:
         feed = os.path.join(cwd, args[args.index("<") + 1])
