@@ -78,6 +78,10 @@ class PoseModel {
   /// at the rest pose. Not yet held within the joint limits (the FCN's last layer is linear and can
   /// overshoot them): a pose is held there as its last step, after any pose-guided offsets.
   GLOVEPOSE_REALTIME hand::Angles model_outputs(const hand::Angles& normalized) const noexcept;
+  /// @brief A pose's angles (radians) from the network's normalised outputs, without pose-guided
+  /// offsets: model_outputs() in the joint limits' units, held within them. What predict() and an
+  /// estimator without offsets give.
+  GLOVEPOSE_REALTIME hand::Angles held_angles(const hand::Angles& normalized) const noexcept;
   /// @brief The training data's per-cell range, when the file records one.
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept;
   /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.

@@ -180,7 +180,7 @@ int predict(const PredictOptions& o) {
     hand::Angles normalized{};
     if (model->network().normalized_dofs(map, values.data(), normalized, ws) != Status::Ok)
       throw Error("line " + std::to_string(line_no) + ": the network refused the input (a result beyond float's range)");
-    print_angles(model->joint_limits().denormalize(model->model_outputs(normalized)));
+    print_angles(model->held_angles(normalized));
   }
   return 0;
 }

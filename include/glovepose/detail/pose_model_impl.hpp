@@ -112,6 +112,10 @@ GLOVEPOSE_INLINE hand::Angles PoseModel::model_outputs(const hand::Angles& norma
   return out;
 }
 
+GLOVEPOSE_INLINE hand::Angles PoseModel::held_angles(const hand::Angles& normalized) const noexcept {
+  return parts_->limits_.clamp(parts_->limits_.denormalize(model_outputs(normalized)));
+}
+
 GLOVEPOSE_INLINE std::vector<hand::Angles> PoseModel::predict(const float* cells, long frames, const sensor::CalibrationRange& range,
                                                             int threads) const {
   const int n = cell_count();
@@ -131,7 +135,7 @@ GLOVEPOSE_INLINE std::vector<hand::Angles> PoseModel::predict(const float* cells
   } catch (const Error& e) {
     throw Error(std::string("PoseModel::predict: ") + e.what());
   }
-  for (hand::Angles& a : angles) a = parts_->limits_.clamp(parts_->limits_.denormalize(model_outputs(a)));  // held as the estimator holds a pose
+  for (hand::Angles& a : angles) a = held_angles(a);
   return angles;
 }
 
