@@ -224,6 +224,19 @@ TEST_CASE("evaluate: zeroed sensors name their run's fields and the glove's cell
   CHECK(zeroed[1].sensors.front() == "strip5_x");  // the glove's own names, not the samples' positions
 }
 
+// The fitted linear map written as a model file `name`, read back and evaluated on subject 1, as
+// `glovepose train` and `eval` would.
+train::EvaluationResult evaluate_saved(const model::ModelInfo& info, const train::LinearModelFit& fit, const io::Dataset& data,
+                                       const std::string& name) {
+  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/" + name + ".safetensors";
+  train::save_model(path, info, train::linear_tensors(fit.map));
+  train::TrainedModel model = train::load_model(path);
+  train::EvaluationOptions options;
+  options.threads = 1;
+  options.filter.subjects = {1};
+  return train::evaluate(model, data, options);
+}
+
 TEST_CASE("evaluate: a linear model fitted on one person keeps the other's angles within the joint limits, and counts those it clamped") {
   const grid::GloveDescription glove = grid::GloveDescription::glauser2019();
   const hand::JointLimits limits = glove.joint_limits();
@@ -235,14 +248,7 @@ TEST_CASE("evaluate: a linear model fitted on one person keeps the other's angle
   first.subjects = {0};
   const train::TrainingSetup setup = train::prepare_training(data, first, 1, "linear", 0, glove, model::CalibrationMode::None);
   const train::LinearModelFit fit = train::fit_linear_model(setup.samples, 0.1, limits);
-  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_linear_clamped.safetensors";
-  train::save_model(path, setup.info, train::linear_tensors(fit.map));
-  train::TrainedModel model = train::load_model(path);
-
-  train::EvaluationOptions options;
-  options.threads = 1;
-  options.filter.subjects = {1};
-  const train::EvaluationResult r = train::evaluate(model, data, options);
+  const train::EvaluationResult r = evaluate_saved(setup.info, fit, data, "evaluate_linear_clamped");
   REQUIRE(r.frames() == kPerRun);
   // What the map gives unclamped, computed here from its weights; then clamped into [-1, 1].
   std::size_t outside = 0;
@@ -325,13 +331,7 @@ TEST_CASE("evaluate: train validates on a held-out run when there are two, with 
   const train::LinearModelFit fit = train::fit_linear_model(setup.samples, 0.1, limits);
   CHECK(fit.training_frames == kPerRun);
   CHECK(fit.validation == parts.description);
-  const std::string path = std::string(GLOVEPOSE_TEST_TMP_DIR) + "/evaluate_linear_held_out.safetensors";
-  train::save_model(path, setup.info, train::linear_tensors(fit.map));
-  train::TrainedModel model = train::load_model(path);
-  train::EvaluationOptions options;
-  options.threads = 1;
-  options.filter.subjects = {1};
-  const train::EvaluationResult held = train::evaluate(model, data, options);
+  const train::EvaluationResult held = evaluate_saved(setup.info, fit, data, "evaluate_linear_held_out");
   CHECK(std::abs(held.vs_labels.overall.mean_deg - fit.validation_error_deg) <= 1e-6);
 
   // The last part of every run instead: 24 frames of each, the rest trains.

@@ -160,13 +160,17 @@ inline double mean_error_degrees(const std::vector<float>& predicted, const std:
   double sum = 0.0;
   std::size_t count = 0;
   const std::size_t frames = angles.size() / hand::kDofCount;
-  for (std::size_t f = 0; f < frames; ++f)
+  for (std::size_t f = 0; f < frames; ++f) {
+    hand::Angles normalized{};
+    std::copy(predicted.begin() + static_cast<long>(f * hand::kDofCount), predicted.begin() + static_cast<long>((f + 1) * hand::kDofCount),
+              normalized.begin());
+    const hand::Angles radians = limits.denormalize(normalized);  // as eval turns predictions into angles
     for (std::size_t d = 0; d < hand::kDofCount; ++d) {
       if (!scored[d]) continue;
-      const double radians = limits.min()[d] + 0.5 * (predicted[f * hand::kDofCount + d] + 1.0) * (limits.max()[d] - limits.min()[d]);
-      sum += std::abs(radians - angles[f * hand::kDofCount + d]);
+      sum += std::abs(radians[d] - angles[f * hand::kDofCount + d]);
       ++count;
     }
+  }
   return count ? sum / static_cast<double>(count) * core::kDegreesPerRadian : NAN;
 }
 
