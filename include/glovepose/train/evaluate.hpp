@@ -166,20 +166,13 @@ inline std::vector<float> predict_stored(const TrainedModel& model, const Sample
   const model::PoseNetwork network = model::PoseNetwork::from_tensors(info, model.network->parameters().to_tensors(), storage);
   const long frames = samples.frames();
   const std::vector<hand::Angles> rows = network.normalized_dofs_batch(model.glove.map(), samples.inputs.data(), samples.cells, frames, threads);
-  const hand::JointLimits limits = info.joint_limits();
-  const hand::DofSet& labelled = info.labelled_dofs;
   std::vector<float> out(static_cast<std::size_t>(frames) * kTargets);
   for (long f = 0; f < frames; ++f) {
     const hand::Angles& a = rows[static_cast<std::size_t>(f)];
     std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
   }
   outside += outside_limits(out.data(), out.size(), hold);  // held as TrainedModel::predict holds F32's
-  for (long f = 0; f < frames && labelled != hand::all_dofs(); ++f) {
-    hand::Angles a{};
-    std::copy(out.begin() + f * kTargets, out.begin() + (f + 1) * kTargets, a.begin());
-    a = limits.rest_unlabelled(a, labelled);
-    std::copy(a.begin(), a.end(), out.begin() + f * kTargets);
-  }
+  model.rest_unlabelled(out);
   return out;
 }
 

@@ -98,17 +98,22 @@ struct TrainedModel {
       beyond = outside_limits(out.data(), out.size(), hold);
     }
     if (outside) *outside += beyond;
-    const hand::DofSet& labelled = info.labelled_dofs;
-    if (labelled != hand::all_dofs()) {  // DoFs the model had no reference angles for read the rest pose
-      const hand::JointLimits limits = info.joint_limits();
-      for (long f = 0; f < samples.frames(); ++f) {
-        hand::Angles a{};
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) a[d] = out[static_cast<std::size_t>(f) * kTargets + d];
-        a = limits.rest_unlabelled(a, labelled);
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) out[static_cast<std::size_t>(f) * kTargets + d] = static_cast<float>(a[d]);
-      }
-    }
+    rest_unlabelled(out);
     return out;
+  }
+
+  /// @brief In normalised predictions (frames x 25), the DoFs the model had no reference angles for
+  /// set to the rest pose.
+  void rest_unlabelled(std::vector<float>& normalized) const {
+    const hand::DofSet& labelled = info.labelled_dofs;
+    if (labelled == hand::all_dofs()) return;
+    const hand::JointLimits limits = info.joint_limits();
+    for (std::size_t f = 0; f < normalized.size() / kTargets; ++f) {
+      hand::Angles a{};
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) a[d] = normalized[f * kTargets + d];
+      a = limits.rest_unlabelled(a, labelled);
+      for (std::size_t d = 0; d < hand::kDofCount; ++d) normalized[f * kTargets + d] = static_cast<float>(a[d]);
+    }
   }
 };
 
