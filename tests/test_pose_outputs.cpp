@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -153,6 +154,63 @@ TEST_CASE("serve's OpenGloves line: the documented example, keys in order, and t
   CHECK(short_form.size() == 66);
   CHECK(full.size() == 225);
   CHECK_THROWS_AS(cli::OpenGlovesLine(0, false), Error);
+}
+
+namespace {
+
+// A float32 field of an OpenGloves pipe message at byte `at` (docs/pose_stream.md, "OpenGloves":
+// little-endian, no padding).
+float pipe_float(const std::uint8_t* message, std::size_t at) {
+  const auto bits = static_cast<std::uint32_t>(little_field(message + at, 4));
+  float v = 0;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
+
+// Checks a pipe message against the curls it was made of, field by field as documented:
+// flexion[5][4] at 0, splay[5] at 80, the joystick at 100 and 104, eight buttons at 108, the trigger at 116.
+void check_pipe_message(const std::uint8_t* message, const hand::FingerCurls& curls) {
+  for (std::size_t f = 0; f < 5; ++f) {
+    for (std::size_t j = 0; j < 4; ++j) CHECK(pipe_float(message, 4 * (4 * f + j)) == static_cast<float>(curls.joints[f][j]));
+    CHECK(pipe_float(message, 80 + 4 * f) == static_cast<float>(curls.splay[f]));
+  }
+  CHECK(pipe_float(message, 100) == 0.0f);
+  CHECK(pipe_float(message, 104) == 0.0f);
+  for (std::size_t b = 108; b < 116; ++b) CHECK(message[b] == 0);
+  CHECK(pipe_float(message, 116) == 0.0f);
+}
+
+// A pose whose index and middle bend by `k` thousandths of their limits and whose index splays by
+// k/2000: each pose of a run its own.
+hand::FingerCurls numbered_curls(long k) {
+  hand::Angles angles{};
+  const double share = static_cast<double>(k % 1000) / 1000.0;
+  for (const char* name : {"index_base_flexion", "index_middle_flexion", "middle_tip_flexion"}) {
+    const std::size_t d = hand::dof_from_name(name);
+    angles[d] = share * hand::kDofs[d].max;
+  }
+  angles[hand::dof_from_name("index_base_abduction")] = 0.5 * share * hand::kFullSplay;
+  angles[hand::dof_from_name("thumb_tip_flexion")] = 0.7 * hand::kDofs[hand::dof_from_name("thumb_tip_flexion")].max;
+  return hand::finger_curls(angles);
+}
+
+}  // namespace
+
+TEST_CASE("serve's OpenGloves pipe message: the SteamVR driver's 120 bytes, decoded as documented") {
+  cli::OpenGlovesPipeMessage message;
+  static_assert(cli::OpenGlovesPipeMessage::size() == 120, "NamedPipeInputDataVersion::v2 is 120 bytes");
+  for (const long k : {0L, 1L, 500L, 999L}) {
+    const hand::FingerCurls curls = numbered_curls(k);
+    message.encode(curls);
+    check_pipe_message(reinterpret_cast<const std::uint8_t*>(message.data()), curls);
+  }
+  // The thumb's unused 4th joint repeats its tip, as in the long OpenGloves line.
+  message.encode(numbered_curls(3));
+  CHECK(pipe_float(reinterpret_cast<const std::uint8_t*>(message.data()), 12) == doctest::Approx(0.7).epsilon(1e-6));
+  CHECK(pipe_float(reinterpret_cast<const std::uint8_t*>(message.data()), 8) == doctest::Approx(0.7).epsilon(1e-6));
+#ifndef _WIN32
+  CHECK_THROWS_WITH_AS(cli::OpenGlovesPort("pipe:glove"), doctest::Contains("needs Windows"), Error);
+#endif
 }
 
 TEST_CASE("serve's VRChat parameters: OSC floats by the documented names, at most 20 sets a second") {
@@ -366,5 +424,102 @@ TEST_CASE("serve's OpenGloves serial port: one that takes nothing for a second i
   CHECK(c.sent + c.skipped + c.failed == static_cast<std::uint64_t>(offered));
   CHECK(c.skipped > 0);
   CHECK(c.failed >= 1);
+}
+#endif
+
+#ifdef _WIN32
+namespace {
+
+// The driver's end of OpenGloves' pipe, as LucidVR's SteamVR driver makes it (a message pipe, one
+// instance, duplex, buffers of one message, read one message at a time): served once, read until
+// `stop`, then disconnected and closed, as the driver does when SteamVR quits.
+class DriverPipe {
+ public:
+  explicit DriverPipe(const std::string& name) {
+    handle_ = ::CreateNamedPipeA(name.c_str(), PIPE_ACCESS_DUPLEX, PIPE_TYPE_MESSAGE | PIPE_READMODE_MESSAGE | PIPE_WAIT, 1, 120, 120, 5, nullptr);
+    REQUIRE(handle_ != INVALID_HANDLE_VALUE);
+    thread_ = std::thread([this] {
+      const bool connected = ::ConnectNamedPipe(handle_, nullptr) || ::GetLastError() == ERROR_PIPE_CONNECTED;
+      std::array<std::uint8_t, 256> buffer{};
+      while (connected && !stop_) {
+        DWORD got = 0;
+        if (!::ReadFile(handle_, buffer.data(), static_cast<DWORD>(buffer.size()), &got, nullptr)) break;
+        if (!stop_) messages_.emplace_back(buffer.begin(), buffer.begin() + got);
+      }
+      ::DisconnectNamedPipe(handle_);
+      ::CloseHandle(handle_);
+      done_ = true;
+    });
+  }
+  DriverPipe(const DriverPipe&) = delete;
+  DriverPipe& operator=(const DriverPipe&) = delete;
+  ~DriverPipe() {
+    if (thread_.joinable()) thread_.join();
+  }
+  // Stops reading at the next message (`wake` sends it) and returns the messages read before.
+  template <typename Wake>
+  std::vector<std::vector<std::uint8_t>> quit(Wake wake) {
+    stop_ = true;
+    while (!done_) wake();  // a message it reads ends its read
+    thread_.join();
+    return std::move(messages_);
+  }
+
+ private:
+  std::atomic<bool> stop_{false}, done_{false};
+  HANDLE handle_ = INVALID_HANDLE_VALUE;
+  std::thread thread_;
+  std::vector<std::vector<std::uint8_t>> messages_;
+};
+
+}  // namespace
+
+TEST_CASE("serve's OpenGloves named pipe: messages as the SteamVR driver reads them, written once it serves, again after it comes back") {
+  const std::string name = "\\\\.\\pipe\\glovepose-opengloves-" + std::to_string(::GetCurrentProcessId());
+  cli::OpenGlovesPort port("pipe:" + name, cli::LinkTiming{std::chrono::milliseconds(5), std::chrono::milliseconds(20), {}});
+  CHECK(port.takes_messages());
+  CHECK(port.events().connections == 0);  // no driver yet
+  cli::OpenGlovesPipeMessage message;
+  long offered = 0;
+  const auto offer = [&](int count) {
+    for (int i = 0; i < count; ++i) {
+      message.encode(numbered_curls(offered++));
+      port.send(message.data(), message.size());
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  };
+  offer(20);  // before the driver serves the pipe: failed
+  CHECK(port.counts().failed >= 19);
+  std::vector<std::vector<std::vector<std::uint8_t>>> runs;
+  for (int run = 0; run < 2; ++run) {
+    std::vector<std::vector<std::uint8_t>> read;
+    {
+      DriverPipe driver(name);  // SteamVR starts
+      offer(200);
+      read = driver.quit([&] { offer(1); });  // and quits
+    }
+    runs.push_back(std::move(read));
+    offer(50);  // nobody serves the pipe: lost, then failed
+  }
+  port.finish();
+  const cli::OpenGlovesCounts& c = port.counts();
+  CHECK(c.sent + c.skipped + c.failed == static_cast<std::uint64_t>(offered));
+  CHECK(port.events().connections == 2);
+  CHECK(port.events().losses == 2);
+  // Each driver read whole 120-byte messages, each an offered pose, in order, most of those offered.
+  long last = -1;
+  for (const auto& read : runs) {
+    CHECK(read.size() >= 150);
+    for (const auto& m : read) {
+      REQUIRE(m.size() == 120);
+      // The pose's number from the middle's tip (k/1000 of its limit), then the whole message.
+      const long k = std::lround(pipe_float(m.data(), 4 * (4 * 2 + 3)) * 1000.0f);
+      CHECK(k > last);
+      last = k;
+      check_pipe_message(m.data(), numbered_curls(k));
+    }
+  }
+  MESSAGE(offered << " poses offered: " << c.sent << " sent, " << c.skipped << " skipped, " << c.failed << " failed; the two drivers read "
+                  << runs[0].size() << " and " << runs[1].size());
 }
 #endif

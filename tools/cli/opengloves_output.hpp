@@ -5,6 +5,8 @@
 //   pty:LINK             (Linux, macOS) a new pseudo-terminal, its device named by the symlink LINK,
 //                        which a driver opens as if it were the glove's serial port
 //   serial:PORT[@BAUD]   a serial port (one end of a virtual pair such as com0com's on Windows)
+//   pipe:NAME            (Windows) a named pipe that LucidVR's SteamVR driver serves, written one
+//                        OpenGlovesPipeMessage per pose
 //   PATH                 a terminal as serial:PATH; else a file the lines are written to
 // A line the other end cannot take now is skipped (counted), never waited for: a driver that stops
 // reading does not hold up the poses.
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -25,6 +28,11 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/serial_port.hpp>
 #include <boost/asio/write.hpp>
+#ifdef _WIN32
+#  include <boost/asio/windows/stream_handle.hpp>
+#  include <system_error>
+#  include <windows.h>
+#endif
 
 #include "byte_link.hpp"
 #include "device_link.hpp"
@@ -83,6 +91,45 @@ class OpenGlovesLine {
   bool joints_;
 };
 
+/// One pose as the message of OpenGloves' named pipe (LucidVR's SteamVR driver on Windows, which
+/// serves `\\.\pipe\vrapplication\input\glove\v2\<left|right>` and reads one message of 120 bytes:
+/// its NamedPipeInputDataVersion::v2). Little-endian, no padding (docs/pose_stream.md, "OpenGloves"):
+/// each joint's curl as float32 (flexion[5][4], fingers thumb to pinky, joints base to tip), each
+/// finger's splay in -1..1 (float32 x 5), the joystick x and y (float32, 0), eight one-byte
+/// buttons and gestures (0) and the trigger's value (float32, 0).
+/// The pipe LucidVR's SteamVR driver serves for a hand's messages, "{hand}" standing for left or
+/// right (`--opengloves pipe:` names it).
+inline constexpr const char* kDriverPipe = R"(\\.\pipe\vrapplication\input\glove\v2\{hand})";
+
+class OpenGlovesPipeMessage {
+ public:
+  static constexpr std::size_t kSize = 120;
+
+  /// Encodes `curls`; data() and size() are the message.
+  void encode(const hand::FingerCurls& curls) noexcept {
+    bytes_.fill(0);
+    std::size_t at = 0;
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f)
+      for (std::size_t j = 0; j < hand::kCurlJoints; ++j) at = put(at, curls.joints[f][j]);
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) at = put(at, curls.splay[f]);
+    // The joystick, the buttons and gestures and the trigger stay 0: a glove of stretch sensors has none.
+  }
+  const char* data() const noexcept { return reinterpret_cast<const char*>(bytes_.data()); }
+  static constexpr std::size_t size() noexcept { return kSize; }
+
+ private:
+  // Writes `value` as a little-endian float32 at `at`; the next field's offset.
+  std::size_t put(std::size_t at, double value) noexcept {
+    const float f = static_cast<float>(value);
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &f, sizeof bits);
+    for (int b = 0; b < 4; ++b) bytes_[at + static_cast<std::size_t>(b)] = static_cast<std::uint8_t>(bits >> (8 * b));
+    return at + 4;
+  }
+
+  std::array<std::uint8_t, kSize> bytes_{};
+};
+
 /// What became of the lines offered to the OpenGloves output: sent + skipped + failed of them.
 struct OpenGlovesCounts {
   std::uint64_t sent = 0;     ///< taken whole by the port or file
@@ -91,9 +138,11 @@ struct OpenGlovesCounts {
   std::uint64_t unread = 0;   ///< (a pty) sent, then discarded unread: no driver read them for kUnreadLimit
 };
 
-/// Where the OpenGloves lines go (the forms at the top of this file). A serial port that fails or
-/// hangs is closed and reopened with the device links' back-off (LinkTiming); a pty cannot be lost,
-/// and what no driver reads is discarded so that a driver that opens it later reads fresh poses.
+/// Where the OpenGloves lines (or pipe messages) go (the forms at the top of this file). A serial
+/// port or named pipe that fails or hangs is closed and reopened with the device links' back-off
+/// (LinkTiming); a named pipe need not exist yet (the driver serves it once SteamVR runs). A pty
+/// cannot be lost, and what no driver reads is discarded so that a driver that opens it later reads
+/// fresh poses.
 class OpenGlovesPort {
  public:
   /// How long lines may wait in a pty unread before they are discarded, and a write to a serial
@@ -104,6 +153,9 @@ class OpenGlovesPort {
     const std::string what = "--opengloves '" + target + "'";
     if (target.rfind("pty:", 0) == 0) {
       open_pty(target.substr(4), what);
+    } else if (target.rfind("pipe:", 0) == 0) {
+      open_first_pipe(target.substr(5), what);
+      return;
     } else {
       const LinkAddress a = LinkAddress::parse(target);
       if (a.kind == LinkAddress::Kind::Serial) {
@@ -133,8 +185,10 @@ class OpenGlovesPort {
 #endif
   }
 
-  /// What a driver opens: the pty's device, the serial port or the file.
+  /// What a driver opens: the pty's device, the serial port or the file; or the pipe it serves.
   const std::string& device() const { return device_; }
+  /// True for a named pipe: it takes OpenGlovesPipeMessage's messages, not lines.
+  bool takes_messages() const { return !pipe_name_.empty(); }
 
   /// Sends one line whole, or skips it while the previous one is still being taken.
   void send(const char* line, std::size_t size) {
@@ -146,12 +200,12 @@ class OpenGlovesPort {
     }
     const auto now = Clock::now();
     if (pty_open()) discard_unread(now);
-    if (serial_address_ && !serial_ && !reopen(now)) {
+    if (reopenable() && !port_open() && !reopen(now)) {
       ++counts_.failed;
       return;
     }
     if (writing_) {
-      if (serial_ && now - write_started_ > kHungLimit) {
+      if (port_open() && now - write_started_ > kHungLimit) {
         lose("a line not taken in " + std::to_string(kHungLimit.count()) + " ms", now);
         ++counts_.failed;
       } else {
@@ -173,11 +227,13 @@ class OpenGlovesPort {
         remember(size);
       } else {
         ++counts_.failed;
-        if (serial_ && e != boost::asio::error::operation_aborted) lose(e ? e.message() : std::string("a line taken in part"), Clock::now());
+        if (port_open() && e != boost::asio::error::operation_aborted) lose(e ? e.message() : std::string("a line taken in part"), Clock::now());
       }
     };
     if (serial_) boost::asio::async_write(*serial_, boost::asio::buffer(out_.data(), size), done);
-#ifndef _WIN32
+#ifdef _WIN32
+    if (pipe_) boost::asio::async_write(*pipe_, boost::asio::buffer(out_.data(), size), done);
+#else
     if (pty_) boost::asio::async_write(*pty_, boost::asio::buffer(out_.data(), size), done);
 #endif
     poll();
@@ -194,7 +250,9 @@ class OpenGlovesPort {
     if (!writing_) return;
     boost::system::error_code ignored;
     if (serial_) serial_->cancel(ignored);
-#ifndef _WIN32
+#ifdef _WIN32
+    if (pipe_) pipe_->cancel(ignored);
+#else
     if (pty_) pty_->cancel(ignored);
 #endif
     poll();
@@ -238,13 +296,60 @@ class OpenGlovesPort {
     return true;
   }
 
-  // Closes a failed or hung serial port; its pending work ends as failed, and send() reopens it.
+  // A serial port or a named pipe: closed when it fails or hangs, and reopened.
+  bool reopenable() const { return serial_address_.has_value() || !pipe_name_.empty(); }
+  bool port_open() const {
+#ifdef _WIN32
+    if (pipe_) return true;
+#endif
+    return serial_ != nullptr;
+  }
+  bool open_port(std::string& problem) { return pipe_name_.empty() ? open_serial(problem) : open_pipe(problem); }
+
+  // The pipe's name; opened now if its driver serves it, else by send() once it does.
+  void open_first_pipe(const std::string& name, const std::string& what) {
+#ifdef _WIN32
+    if (name.empty()) throw Error(what + ": no name, expected pipe:NAME (\\\\.\\pipe\\...)");
+    pipe_name_ = device_ = name;
+    std::string problem;
+    if (open_pipe(problem)) {
+      ++events_.connections;
+    } else {
+      ++events_.failed_opens;
+      events_.last_problem = problem;
+    }
+#else
+    (void)name;
+    throw Error(what + ": a named pipe needs Windows; on Linux and macOS give pty:LINK or a serial port");
+#endif
+  }
+
+  // A client's end of the pipe, for writing only (the driver writes nothing back).
+  bool open_pipe(std::string& problem) {
+#ifdef _WIN32
+    const HANDLE handle = ::CreateFileA(pipe_name_.c_str(), GENERIC_WRITE, 0, nullptr, OPEN_EXISTING, FILE_FLAG_OVERLAPPED, nullptr);
+    if (handle == INVALID_HANDLE_VALUE) {
+      problem = std::error_code(static_cast<int>(::GetLastError()), std::system_category()).message();
+      return false;
+    }
+    pipe_ = std::make_unique<boost::asio::windows::stream_handle>(io_, handle);
+    return true;
+#else
+    problem = "a named pipe needs Windows";
+    return false;
+#endif
+  }
+
+  // Closes a failed or hung port; its pending work ends as failed, and send() reopens it.
   void lose(const std::string& problem, Clock::time_point now) {
     ++events_.losses;
     events_.last_problem = problem;
     ++generation_;
     writing_ = false;
     serial_.reset();  // cancels its pending write and read: their handlers see the old generation
+#ifdef _WIN32
+    pipe_.reset();
+#endif
     retry_after_ = timing_.first;
     next_attempt_ = now + retry_after_;
   }
@@ -252,7 +357,7 @@ class OpenGlovesPort {
   bool reopen(Clock::time_point now) {
     if (now < next_attempt_) return false;
     std::string problem;
-    if (!open_serial(problem)) {
+    if (!open_port(problem)) {
       ++events_.failed_opens;
       events_.last_problem = problem;
       retry_after_ = std::min(retry_after_ * 2, timing_.longest);
@@ -324,13 +429,15 @@ class OpenGlovesPort {
 #endif
   }
 
-  std::string device_, link_;
+  std::string device_, link_, pipe_name_;
   LinkTiming timing_;
   boost::asio::io_context io_;
   std::optional<LinkAddress> serial_address_;
   std::unique_ptr<boost::asio::serial_port> serial_;
   std::unique_ptr<ByteSink> file_;
-#ifndef _WIN32
+#ifdef _WIN32
+  std::unique_ptr<boost::asio::windows::stream_handle> pipe_;
+#else
   std::unique_ptr<boost::asio::posix::stream_descriptor> pty_;
   int pty_device_ = -1;
 #endif

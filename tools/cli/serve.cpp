@@ -136,11 +136,12 @@ class ServedGlove {
     if (!o.osc.empty()) osc_ = std::make_unique<OscSender>(o.osc);
     if (!o.vrchat.empty()) vrchat_ = std::make_unique<AvatarParameters>(o.vrchat, hand_name);
     if (!o.opengloves.empty()) {
-      std::string target = o.opengloves;
+      std::string target = o.opengloves == "pipe:" ? std::string("pipe:") + kDriverPipe : o.opengloves;
       const std::size_t at = target.find("{hand}");
       if (at != std::string::npos) target.replace(at, 6, hand_name);
       opengloves_ = std::make_unique<OpenGlovesPort>(target);
-      std::fprintf(stderr, "%sOpenGloves lines to '%s'\n", told_.c_str(), opengloves_->device().c_str());
+      std::fprintf(stderr, "%sOpenGloves %s to '%s'%s\n", told_.c_str(), opengloves_->takes_messages() ? "messages" : "lines",
+                   opengloves_->device().c_str(), opengloves_->events().connections == 0 ? " (not served yet: tried again until it is)" : "");
       port_told_ = opengloves_->events();
     }
     link_told_ = link_.events();
@@ -166,7 +167,8 @@ class ServedGlove {
       const LinkEvents& port = opengloves_->events();
       if (port.losses != port_told_.losses)
         std::fprintf(stderr, "%sOpenGloves port '%s' lost (%s); reopening it\n", told_.c_str(), opengloves_->device().c_str(), port.last_problem.c_str());
-      if (port.connections != port_told_.connections) std::fprintf(stderr, "%sOpenGloves port '%s' open again\n", told_.c_str(), opengloves_->device().c_str());
+      if (port.connections != port_told_.connections)
+        std::fprintf(stderr, "%sOpenGloves port '%s' open%s\n", told_.c_str(), opengloves_->device().c_str(), port.connections > 1 ? " again" : "");
       port_told_ = port;
     }
     return true;
@@ -195,11 +197,12 @@ class ServedGlove {
       opengloves_->finish();
       const OpenGlovesCounts& c = opengloves_->counts();
       const auto n = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
-      std::fprintf(stderr, "%sOpenGloves: %llu lines sent, %llu skipped while the other end had not taken the one before, %llu failed "
+      const char* unit = opengloves_->takes_messages() ? "messages" : "lines";
+      std::fprintf(stderr, "%sOpenGloves: %llu %s sent, %llu skipped while the other end had not taken the one before, %llu failed "
                    "(the port refused them or was lost), %llu of those sent discarded unread (no driver read them for %lld ms); "
-                   "the port lost %llu times, reopened %llu times\n", told_.c_str(), n(c.sent), n(c.skipped), n(c.failed), n(c.unread),
+                   "the port lost %llu times, reopened %llu times\n", told_.c_str(), n(c.sent), unit, n(c.skipped), n(c.failed), n(c.unread),
                    static_cast<long long>(OpenGlovesPort::kUnreadLimit.count()), n(opengloves_->events().losses),
-                   n(opengloves_->events().connections - 1));
+                   n(std::max<std::uint64_t>(opengloves_->events().connections, 1) - 1));
     }
     std::fprintf(stderr, "%slatency (last byte read to pose sent) over %llu poses: p50 %.3f ms, p99 %.3f ms; the service's own "
                  "(its frame's handling to the pose sent, less the estimator's work): p50 %.3f ms, p99 %.3f ms\n",
@@ -228,7 +231,10 @@ class ServedGlove {
     if (vrchat_ || opengloves_) {
       const hand::FingerCurls curls = hand::finger_curls(pose.angles, model_->joint_limits());
       if (vrchat_) vrchat_->publish(curls, now);
-      if (opengloves_) {
+      if (opengloves_ && opengloves_->takes_messages()) {
+        opengloves_message_.encode(curls);
+        opengloves_->send(opengloves_message_.data(), opengloves_message_.size());
+      } else if (opengloves_) {
         opengloves_line_.encode(curls);
         opengloves_->send(opengloves_line_.data(), opengloves_line_.size());
       }
@@ -297,6 +303,7 @@ class ServedGlove {
   std::unique_ptr<OscSender> osc_;
   std::unique_ptr<AvatarParameters> vrchat_;
   OpenGlovesLine opengloves_line_;
+  OpenGlovesPipeMessage opengloves_message_;
   std::unique_ptr<OpenGlovesPort> opengloves_;
   std::string osc_angles_, osc_time_, angle_types_;
   PoseMessage message_;
@@ -323,7 +330,7 @@ int serve(const ServeOptions& o) {
   const bool several = sources.size() > 1;
   if (several && o.left == "-" && o.right == "-") throw Error("--left and --right both read stdin ('-'): expected a link of its own for each glove");
   if (several && !o.calibration.empty()) throw Error("--calibration is one glove's: with two gloves, use --profiles DIR --user NAME");
-  if (several && !o.opengloves.empty() && o.opengloves.find("{hand}") == std::string::npos)
+  if (several && !o.opengloves.empty() && o.opengloves != "pipe:" && o.opengloves.find("{hand}") == std::string::npos)
     throw Error("--opengloves '" + o.opengloves + "' with two gloves: expected '{hand}' in it, each glove's lines to its own target (pty:/tmp/glovepose-{hand})");
   PoseModelOptions model_options;
   model_options.storage = o.storage;
@@ -397,8 +404,9 @@ Command add_serve(CLI::App& tool) {
       ->type_name("HOST:PORT");
   CLI::Option* opengloves = command->add_option("--opengloves", o->opengloves,
                       "write OpenGloves lines (finger curls and splays) for SteamVR's or Monado's OpenGloves driver: pty:LINK (a new pty "
-                      "named by the symlink LINK), a serial port (serial:PORT[@BAUD] or its path) or a file; '{hand}' in it becomes "
-                      "left or right (needed with two gloves)")
+                      "named by the symlink LINK), a serial port (serial:PORT[@BAUD] or its path) or a file; or on Windows its messages "
+                      "to the named pipe of SteamVR's driver (pipe: alone; pipe:NAME another); '{hand}' in it becomes left or right "
+                      "(needed with two gloves)")
       ->type_name("TARGET");
   add_number(*command, "--opengloves-max", "N", o->opengloves_max,
              "the value of a full curl in OpenGloves lines: the driver's max_analog_value (default 4095, SteamVR's; Monado's is 1023)")
