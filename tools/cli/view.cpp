@@ -1,32 +1,17 @@
-// glovepose view: a live view of the hand in the browser. A local web server (loopback only) serves
-//   a page (tools/cli/web: three.js, embedded at build time) that draws the hand model's own spheres
-//   and capsules (the OpenXR joints with their radii, on the subject's hand), the truth overlaid when
-//   the source is simulated, the two 5x5 stretch maps and the 5x5 pose map, angle traces, the pinch
-//   state, the trust flags, the calibration step with its target pose, and the latency; the server
-//   pushes the newest hand to every open page about 30 times a second (Server-Sent Events, GET /events).
+// glovepose view: a live view of the hand in the browser (the page and its server: view_server.hpp).
 //   The glove is a simulated new user streamed in real time (default), a recorded dataset with raw rows
 //   replayed in real time (--replay), or a real glove on stdin (--stdin): any glove's frames, one
 //   "timestamp,cell,...,cell" line each (the model's glove's cells in the order of its description),
 //   or the built-in glove's raw rows, one "row,value,timestamp" line each; the first 30 s of stream
 //   time, or --calibration-seconds, are the calibration, or --calibration FILE is a saved one
-//   (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing").
-#include <glovepose/calibration/pose_offset.hpp>
+//   (tools/cli/glove_lines.hpp; docs/own_glove.md, "Live viewing"). glovepose serve --view shows a
+//   served glove on the same page.
 #include <glovepose/estimator.hpp>
-#include <glovepose/grid/grid_map.hpp>
-#include <glovepose/hand/xr_hand.hpp>
-#include <glovepose/model/pose_network.hpp>
 #include <glovepose/sim/subject.hpp>
 
-#include <nlohmann/json.hpp>
-
-#include <algorithm>
-#include <array>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <list>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -35,27 +20,14 @@
 
 #include "commands.hpp"
 #include "glove_frames.hpp"
-#include "loopback_socket.hpp"
 #include "new_user.hpp"
 #include "session_options.hpp"
-#include "view_page.hpp"
+#include "view_server.hpp"
 
 namespace glovepose::cli {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using nlohmann::json;
-
-// The server's limits: a request head is at most 8 KB and must arrive within 2 s (else 431 or
-// 408); a page that takes no data for 2 s is dropped; at most 32 connections at once (else 503).
-// Events go out about 30 times a second, the rate the page draws at.
-constexpr std::size_t kMaxRequestHead = 8192;
-constexpr int kRequestTimeoutMs = 2000;
-constexpr int kSendTimeoutMs = 2000;
-// Connections served at once, one thread each (a stalled reader costs a thread until the send
-// time-out drops it); beyond, a request is answered 503 at once.
-constexpr std::size_t kMaxConnections = 256;
-constexpr std::chrono::duration<double> kEventPeriod(1.0 / 30.0);
 
 struct ViewOptions {
   int port = 8765;
@@ -69,31 +41,17 @@ struct ViewOptions {
   double seconds = 0.0;                                     // 0: until the glove's stream ends (or Ctrl-C)
 };
 
-// What the glove's thread hands to the server's threads after each input (through a Latest: copied
-// as words, never torn): the hand, its pinch state, the maps the network read and wrote, the truth.
-struct ViewFrame {
-  HandState hand;
-  hand::XrHandAim aim;
-  std::array<float, grid::kStretchValues> stretch{};  // the calibrated cells on the two 5x5 stretch maps
-  std::array<float, grid::kMapSlots> pose_map{};      // the pose's angles normalised by the joint limits, on the 5x5 pose map
-  bool maps = false;                                  // stretch and pose_map hold the latest pose's
-  hand::Angles truth{};                               // the simulated person's true angles at this frame
-  bool has_truth = false;
-  double stream_time = 0.0;  // the glove stream's clock at this frame (s)
-};
-
 // The glove's thread: streams rows into the estimator at the pace of their timestamps (stream time
-// 0 is `start`), publishing a ViewFrame after each frame.
+// 0 is `start`), publishing the hand to the server after each frame.
 class GloveStream {
  public:
-  GloveStream(GlovePoseEstimator& estimator, core::Latest<ViewFrame>& latest, std::atomic<bool>& stop)
-      : estimator_(estimator), latest_(latest), stop_(stop) {}
+  GloveStream(GlovePoseEstimator& estimator, ViewServer& server, std::atomic<bool>& stop) : estimator_(estimator), server_(server), stop_(stop) {}
 
-  // `clock`: set to the stream's time at `served_from` (the recording's clock against the server's).
-  void recorded(const NewUser& user, Clock::time_point served_from, std::atomic<double>& clock) {
+  // The server's stream clock is set to the recording's time when it started.
+  void recorded(const NewUser& user) {
     const Clock::time_point start = Clock::now();
     const double t0 = row_time(user, 0, 0);
-    clock = t0 - std::chrono::duration<double>(start - served_from).count();
+    server_.set_stream_clock(t0 - std::chrono::duration<double>(start - server_.served_from()).count());
     const bool truth = user.data.has_true_angles();
     estimator_.start_calibration();
     for (std::size_t f = 0; f < user.data.frames() && !stop_; ++f) {
@@ -102,10 +60,9 @@ class GloveStream {
           start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(user.data.timestamps[f] - t0)));
       for (std::size_t r = 0; r < user.data.row_count; ++r)
         (void)estimator_.push_row(static_cast<int>(r), user.data.raw_rows[f * user.data.row_count + r], row_time(user, f, r));
-      frame_.has_truth = truth;
       if (truth)
-        for (std::size_t d = 0; d < hand::kDofCount; ++d) frame_.truth[d] = user.data.true_angles[f * hand::kDofCount + d];
-      publish(user.data.timestamps[f]);
+        for (std::size_t d = 0; d < hand::kDofCount; ++d) truth_[d] = user.data.true_angles[f * hand::kDofCount + d];
+      server_.publish(estimator_, user.data.timestamps[f], truth ? &truth_ : nullptr);
     }
   }
 
@@ -116,7 +73,7 @@ class GloveStream {
     device::LinkCounts link;
     read_glove_stream(
         GloveLineSource{std::cin, "stdin", "glovepose view"}, format, estimator_, calibration_seconds, counts,
-        [this](Status) { publish(estimator_.pose().timestamp); }, link, &stop_);
+        [this](Status) { server_.publish(estimator_, estimator_.pose().timestamp); }, link, &stop_);
     if (stop_) return;
     const std::lock_guard<std::mutex> hold(counts.lock);
     if (link.bytes > 0)
@@ -129,21 +86,10 @@ class GloveStream {
   }
 
  private:
-  void publish(double stream_time) {
-    frame_.hand = estimator_.state();
-    frame_.aim = estimator_.aim();
-    frame_.stream_time = stream_time;
-    frame_.maps = frame_.hand.pose.valid &&
-                  estimator_.model().glove().map().to_stretch_maps(estimator_.normalized_cells().data(), frame_.stretch) == Status::Ok;
-    if (frame_.maps)
-      estimator_.model().glove().map().to_pose_map(estimator_.model().joint_limits().normalize(frame_.hand.pose.angles), frame_.pose_map);
-    latest_.publish(frame_);
-  }
-
   GlovePoseEstimator& estimator_;
-  core::Latest<ViewFrame>& latest_;
+  ViewServer& server_;
   std::atomic<bool>& stop_;
-  ViewFrame frame_;
+  hand::Angles truth_{};
 };
 
 // What the server and the glove's thread share. The thread holds it too: detached while it waits
@@ -153,295 +99,12 @@ struct ViewShared {
       : format(*model, shipped_model), estimator(std::move(model), config) {}
   GloveLineFormat format;  // refers to the glove of the estimator's model
   GlovePoseEstimator estimator;
-  core::Latest<ViewFrame> latest;
   GloveLineCounts notes;
-  std::string failure;  // why the glove's stream stopped; written before stream_done
+  std::unique_ptr<ViewServer> server;  // made once the estimator is
+  std::string failure;                 // why the glove's stream stopped; written before stream_done
   std::atomic<bool> stop{false}, stream_done{false};
-  std::atomic<bool> preparing{false};            // the simulated user is being made
-  Clock::time_point served_from = Clock::now();  // when the server started
-  std::atomic<double> stream_clock{0.0};         // the glove stream's time at served_from (stdin: 0)
-  // The newest frame's event, made once for every page that streams it (state_event()).
-  mutable std::mutex event_lock;
-  mutable std::uint64_t event_number = 0;
-  mutable std::shared_ptr<const std::string> event_text;
 };
 
-
-json degrees(const hand::Angles& angles) {
-  json out = json::array();
-  for (double a : angles) out.push_back(std::round(a * core::kDegreesPerRadian * 100.0) / 100.0);
-  return out;
-}
-
-// The OpenXR joints' positions (wrist frame, millimetres) of `angles` on the estimator's hand.
-json joints_mm(const hand::XrHandLocator& locator, const hand::Angles& angles) {
-  hand::XrHandJoints joints;
-  locator.locate(angles, nullptr, 0, joints);
-  json list = json::array();
-  for (const auto& j : joints.locations)
-    list.push_back({std::round(j.pose.position.x * 1e4) / 10.0, std::round(j.pose.position.y * 1e4) / 10.0,
-                    std::round(j.pose.position.z * 1e4) / 10.0});
-  return list;
-}
-
-// What does not change while the tool runs, sent once to each page: the hand's geometry (the joints'
-// parents and radii), readable names, the maps' layouts, the calibration sequence.
-json meta_json(const GlovePoseEstimator& estimator, bool has_truth, const std::string& source) {
-  const PoseModel& model = estimator.model();
-  hand::XrHandJoints rest;
-  estimator.locator().locate(hand::Angles{}, nullptr, 0, rest);
-  json radii = json::array(), parents = json::array(), joint_names = json::array();
-  for (std::size_t j = 0; j < hand::kXrJointCount; ++j) {
-    radii.push_back(std::round(rest.locations[j].radius * 1e4) / 10.0);
-    parents.push_back(hand::kXrJointParent[j]);
-    joint_names.push_back(hand::kXrJointNames[j]);
-  }
-  json dof_names = json::array(), dof_fingers = json::array();
-  for (const hand::Dof& dof : hand::kDofs) {
-    dof_names.push_back(dof.name);
-    dof_fingers.push_back(static_cast<int>(dof.finger));
-  }
-  // Each map as 5 rows of 5 names (null: an empty slot).
-  const auto grid = [] { return json(std::vector<std::vector<json>>(grid::kGridSize, std::vector<json>(grid::kGridSize, nullptr))); };
-  json stretch = json::array({grid(), grid()}), pose = grid();
-  const grid::GridMap& map = model.glove().map();
-  for (std::size_t c = 0; c < map.cell_slots().size(); ++c) {
-    const grid::Slot& s = map.cell_slots()[c];
-    if (s.on_maps()) stretch[s.channel][s.row][s.col] = model.glove().cell_names()[c];
-  }
-  for (std::size_t d = 0; d < hand::kDofCount; ++d) pose[map.dof_slots()[d].row][map.dof_slots()[d].col] = hand::kDofs[d].name;
-  json steps = json::array();
-  if (model.pose_offset())
-    for (const auto& step : model.pose_offset()->sequence().steps())
-      steps.push_back({{"name", step.name}, {"instruction", step.instruction}, {"seconds", step.seconds}});
-  json fault = json::array();
-  for (int b = 0; b < kPoseFlagCount; ++b) fault.push_back((kPoseFaultFlags & (1u << b)) != 0);
-  return {{"source", source},
-          {"has_truth", has_truth},
-          {"side", estimator.config().handedness == hand::Handedness::Left ? "left" : "right"},
-          {"radii_mm", radii},
-          {"parents", parents},
-          {"joint_names", joint_names},
-          {"dof_names", dof_names},
-          {"dof_fingers", dof_fingers},
-          {"stretch_names", stretch},
-          {"pose_names", pose},
-          {"glove", model.glove().id()},
-          {"steps", steps},
-          {"flag_is_fault", fault},
-          {"pinch_threshold_mm", hand::kPinchThresholdMm},
-          {"pinch_release_mm", hand::kPinchReleaseMm},
-          {"event_hz", 1.0 / kEventPeriod.count()}};
-}
-
-// The newest frame as the page's JSON (angles in degrees, positions in millimetres in the wrist
-// frame, maps in [-1, 1] as 5 x 5 rows).
-json state_json(const ViewFrame& frame, std::uint64_t number, const ViewShared& shared) {
-  const HandState& state = frame.hand;
-  const GlovePoseEstimator& estimator = shared.estimator;
-  json out = {{"active", state.pose.valid},
-              {"calibrating", state.calibration.collecting},
-              {"published", number},
-              {"preparing", shared.preparing.load()}};
-  {
-    const std::lock_guard<std::mutex> hold(shared.notes.lock);
-    out["lines"] = shared.notes.lines;
-    out["skipped"] = shared.notes.skipped;
-    out["first_skipped"] = shared.notes.first_skipped;
-    out["zeroed"] = shared.notes.calibration;
-  }
-  const hand::XrHandLocator& locator = estimator.locator();
-  out["t"] = frame.stream_time;
-  out["step"] = state.calibration.step;
-  out["calibration_frames"] = state.calibration.frames;
-  out["sequence_seconds"] = state.calibration.sequence_seconds;
-  out["target_joints"] = nullptr;
-  if (state.calibration.collecting && state.calibration.step >= 0 && estimator.model().pose_offset()) {
-    const auto& steps = estimator.model().pose_offset()->sequence().steps();
-    const auto& step = steps[static_cast<std::size_t>(state.calibration.step)];
-    out["step_name"] = step.name;
-    out["instruction"] = step.instruction;
-    out["target_joints"] = joints_mm(locator, step.pose);
-  }
-  out["truth_joints"] = frame.has_truth ? joints_mm(locator, frame.truth) : json(nullptr);
-  out["truth_deg"] = frame.has_truth ? degrees(frame.truth) : json(nullptr);
-  if (!state.pose.valid) return out;
-  json flags = json::array();
-  for (int b = 0; b < kPoseFlagCount; ++b)
-    if (state.pose.flags & (1u << b)) flags.push_back(pose_flag_name(b));
-  const double stream_now = shared.stream_clock + std::chrono::duration<double>(Clock::now() - shared.served_from).count();
-  out["seq"] = state.pose.sequence;
-  out["angles"] = state.pose.angles;  // radians, for tools reading GET /state
-  out["angles_deg"] = degrees(state.pose.angles);
-  out["trusted"] = state.pose.trusted();
-  out["flags"] = state.pose.flags;
-  out["flag_names"] = flags;
-  out["joints"] = joints_mm(locator, state.pose.angles);
-  out["compute_us"] = std::round(1e7 * state.pose.compute_seconds) / 10.0;
-  out["oldest_age_ms"] = std::round(1e4 * state.pose.oldest_age) / 10.0;
-  out["age_ms"] = std::round(1e4 * std::max(0.0, stream_now - state.pose.timestamp)) / 10.0;
-  json pinch = json::array();
-  for (std::size_t p = 0; p < hand::kPinchPairCount; ++p)
-    pinch.push_back({{"strength", frame.aim.pinch_strength[p]},
-                     {"distance_mm",
-                      std::isfinite(frame.aim.distance_mm[p]) ? json(std::round(frame.aim.distance_mm[p] * 10.0) / 10.0) : json(nullptr)},
-                     {"pinching", (frame.aim.status & (hand::kXrAimIndexPinching << p)) != 0}});
-  out["pinch"] = pinch;
-  out["aim_valid"] = (frame.aim.status & hand::kXrAimValid) != 0;
-  if (frame.maps) {
-    const auto rows = [](const float* values) {
-      json map = json::array();
-      for (int r = 0; r < grid::kGridSize; ++r)
-        map.push_back(std::vector<float>(values + r * grid::kGridSize, values + (r + 1) * grid::kGridSize));
-      return map;
-    };
-    out["stretch"] = json::array({rows(frame.stretch.data()), rows(frame.stretch.data() + grid::kMapSlots)});
-    out["pose_map"] = rows(frame.pose_map.data());
-  }
-  return out;
-}
-
-// The event-stream message of the newest frame and its number (0: none yet), serialised by the first
-// page's thread that asks for a frame and shared with the others: a hundred pages cost one
-// serialisation per frame, not a hundred.
-std::pair<std::shared_ptr<const std::string>, std::uint64_t> state_event(const ViewShared& shared) {
-  const std::lock_guard<std::mutex> hold(shared.event_lock);
-  if (shared.latest.published() != shared.event_number) {
-    ViewFrame frame;
-    shared.event_number = shared.latest.read(frame);
-    shared.event_text = std::make_shared<const std::string>("data: " + state_json(frame, shared.event_number, shared).dump() + "\n\n");
-  }
-  return {shared.event_text, shared.event_number};
-}
-
-const ViewAsset* find_asset(const std::string& path) {
-#if GLOVEPOSE_VIEW_PAGE
-  for (const ViewAsset& asset : kViewAssets)
-    if (path == asset.path || (path == "/index.html" && std::strcmp(asset.path, "/") == 0)) return &asset;
-#else
-  (void)path;
-#endif
-  return nullptr;
-}
-
-const char* content_type(const std::string& path) {
-  const auto ends = [&](const char* tail) {
-    const std::size_t n = std::strlen(tail);
-    return path.size() >= n && path.compare(path.size() - n, n, tail) == 0;
-  };
-  if (ends(".js")) return "text/javascript; charset=utf-8";
-  if (ends(".txt")) return "text/plain; charset=utf-8";
-  return "text/html; charset=utf-8";
-}
-
-// One connection, on its own thread (so a slow or stalled client holds up only itself): its request
-// head within the limits, then a file, the state, or the event stream until the tool stops or the
-// page goes away.
-void serve_connection(Socket client, const ViewShared& shared, const std::string& meta) {
-  const std::atomic<bool>& stop = shared.stop;
-  set_send_timeout(client, kSendTimeoutMs);
-  const RequestHead head = read_request_head(client, kMaxRequestHead, kRequestTimeoutMs, stop);
-  if (head.status == 0) return;  // the peer went away
-  if (head.status != 200) {
-    send_error(client, head.status);
-    return;
-  }
-  const bool get = head.method == "GET";
-  if (!get && head.method != "HEAD") {
-    send_error(client, 405);
-    return;
-  }
-  const std::string path = head.target.substr(0, head.target.find('?'));
-  const auto answer = [&](const char* type, const std::string& body) {
-    send_all(client, std::string("HTTP/1.1 200 OK\r\nContent-Type: ") + type + "\r\nContent-Length: " + std::to_string(body.size()) +
-                         "\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n" + (get ? body : std::string()));
-  };
-  if (path == "/state") {
-    ViewFrame frame;
-    const std::uint64_t number = shared.latest.read(frame);
-    answer("application/json", state_json(frame, number, shared).dump());
-    return;
-  }
-  if (path == "/meta") {
-    answer("application/json", meta);
-    return;
-  }
-  if (path == "/events") {
-    const std::string head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n";
-    if (!get) {
-      (void)send_all(client, head);
-      return;
-    }
-    if (!send_all(client, head + "event: meta\ndata: " + meta + "\n\n")) return;
-    // The newest frame at each tick, when there is a new one; a comment every second otherwise, so
-    // that a page whose tool went quiet still finds out when it went away.
-    std::uint64_t sent = 0;
-    Clock::time_point tick = Clock::now(), quiet_since = tick;
-    while (!stop) {
-      const auto [event, number] = state_event(shared);
-      if (number != sent) {
-        if (!send_all(client, *event)) return;
-        sent = number;
-        quiet_since = tick;
-      } else if (tick - quiet_since > std::chrono::seconds(1)) {
-        if (!send_all(client, ": waiting for the glove\n\n")) return;
-        quiet_since = tick;
-      }
-      tick += std::chrono::duration_cast<Clock::duration>(kEventPeriod);
-      std::this_thread::sleep_until(tick);
-    }
-    return;
-  }
-  const ViewAsset* asset = find_asset(path);
-  if (asset == nullptr) {
-    send_error(client, 404);
-    return;
-  }
-  std::string body;
-  body.reserve(asset->size);
-  for (const char* const* chunk = asset->chunks; *chunk != nullptr; ++chunk) body += *chunk;
-  answer(content_type(path), body);
-}
-
-// The connections being served: one thread each; finished ones are joined as new ones come.
-class Connections {
- public:
-  ~Connections() { join_all(); }
-  bool full() {
-    reap();
-    return running_.size() >= kMaxConnections;
-  }
-  template <typename Serve>
-  void start(Socket client, Serve serve) {
-    auto& c = running_.emplace_back();
-    c.done = std::make_shared<std::atomic<bool>>(false);
-    c.thread = std::thread([client, serve, done = c.done] {
-      serve(client);
-      close_socket(client);
-      *done = true;
-    });
-  }
-  void join_all() {
-    for (auto& c : running_) c.thread.join();
-    running_.clear();
-  }
-
- private:
-  struct Running {
-    std::thread thread;
-    std::shared_ptr<std::atomic<bool>> done;
-  };
-  void reap() {
-    for (auto it = running_.begin(); it != running_.end();)
-      if (*it->done) {
-        it->thread.join();
-        it = running_.erase(it);
-      } else {
-        ++it;
-      }
-  }
-  std::list<Running> running_;
-};
 
 int view(const ViewOptions& o) {
 #if !GLOVEPOSE_VIEW_PAGE
@@ -470,15 +133,14 @@ int view(const ViewOptions& o) {
   EstimatorConfig config;
   if (simulated) config.hand = std::make_shared<const hand::HandModel>(sim::make_subjects(1, o.session.seed, sim::default_world().people)[0].hand_model());
   const auto shared = std::make_shared<ViewShared>(model, o.session.model.empty(), config);
-  shared->preparing = simulated;  // until the glove's thread has made the simulated user
-  const SocketLibrary sockets;
-  const auto [server, port] = listen_on_loopback(o.port);
-  std::printf("glovepose view: http://127.0.0.1:%d/\n", port);  // at once: the simulated user is made on the glove's thread
+  const ViewSource source{o.from_stdin ? "stdin" : (simulated ? "simulated new user" : "replay of " + o.replay),
+                          simulated || user->data.has_true_angles()};
+  shared->server = std::make_unique<ViewServer>(shared->estimator, o.port, source, shared->notes);
+  ViewServer& server = *shared->server;
+  server.set_preparing(simulated);  // until the glove's thread has made the simulated user
+  std::printf("glovepose view: http://127.0.0.1:%d/\n", server.port());  // at once: the simulated user is made on the glove's thread
   std::fflush(stdout);
-  const bool has_truth = simulated || user->data.has_true_angles();
-  const std::string meta =
-      meta_json(shared->estimator, has_truth, o.from_stdin ? "stdin" : (simulated ? "simulated new user" : "replay of " + o.replay)).dump();
-  const Clock::time_point start = shared->served_from;
+  const Clock::time_point start = server.served_from();
   std::optional<double> calibration_seconds;
   if (o.from_stdin) {
     const GloveCalibrationChoice calibration =
@@ -490,15 +152,15 @@ int view(const ViewOptions& o) {
   }
   std::thread glove([shared, user, simulated, seed = o.session.seed, from_stdin = o.from_stdin, calibration_seconds] {
     try {
-      GloveStream stream(shared->estimator, shared->latest, shared->stop);
+      GloveStream stream(shared->estimator, *shared->server, shared->stop);
       if (from_stdin) {
         stream.from_stdin(shared->format, calibration_seconds, shared->notes);
       } else {
         if (simulated) {
           *user = simulate_new_user(seed, 10.0, shared->estimator.model());
-          shared->preparing = false;
+          shared->server->set_preparing(false);
         }
-        stream.recorded(*user, shared->served_from, shared->stream_clock);
+        stream.recorded(*user);
       }
     } catch (const Error& e) {
       shared->failure = e.what();
@@ -511,22 +173,9 @@ int view(const ViewOptions& o) {
     return failed() ||
            (o.seconds > 0.0 ? std::chrono::duration<double>(Clock::now() - start).count() >= o.seconds : shared->stream_done.load());
   };
-  {
-    Connections connections;
-    while (!finished()) {
-      if (!wait_readable(server, 100)) continue;
-      const Socket client = ::accept(server, nullptr, nullptr);
-      if (client == kNoSocket) continue;
-      if (connections.full()) {  // refused at once rather than queued behind the open streams
-        send_error(client, 503);
-        close_socket(client);
-        continue;
-      }
-      connections.start(client, [&shared = *shared, &meta](Socket c) { serve_connection(c, shared, meta); });
-    }
-    shared->stop = true;  // the event streams end at their next tick
-  }
-  close_socket(server);
+  server.serve_until(finished);
+  server.stop();
+  shared->stop = true;  // the glove's thread stops at its next frame
   if (shared->stream_done || !o.from_stdin)
     glove.join();  // a recording stops at its next frame
   else
