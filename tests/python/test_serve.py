@@ -17,6 +17,10 @@ service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
   a second, with the same mapping's values;
 - two gloves at once (--left, --right): each glove's poses, OpenGloves lines and profile are its
   own, the engine stream carries both hands;
+- two live gloves, each on a pty reopened 6 times at random moments while both stream in real
+  time, each with its viewer (--view): every pose of each hand is the estimator's, poses resume
+  within 0.5 s of each reopening after the calibration, and each viewer's /state shows the
+  calibration's steps, then the same poses;
 - the engine stream's C client (bindings/c, its sample stream_print.c) and C# client
   (bindings/csharp/Runtime/PoseStream.cs, its sample Samples~/StreamPrint.cs, built with Mono's mcs)
   print the poses predict computes, by their sequence numbers, with the same stream times.
@@ -27,6 +31,7 @@ service), and liblo's oscdump (Debian's liblo-tools) receives the OSC messages:
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import random
@@ -446,6 +451,102 @@ def two_gloves_each_get_their_own_poses_lines_and_profile():
     assert {fields[2] for _, fields in got} == {0, 1}, "the engine stream did not carry both hands"
     print(f"  two gloves: {len(references['left'])} + {len(references['right'])} poses, each glove's OpenGloves lines and profile its own;"
           f" an engine client got {len(got)} messages of both hands")
+
+
+def viewer_get(port: int, path: str = "/state") -> dict:
+    """GET /state or /meta of a viewer page (docs/own_glove.md, "Live viewing")."""
+    with socket.create_connection(("127.0.0.1", port), timeout=2) as sock:
+        sock.sendall(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
+        data = b""
+        while chunk := sock.recv(65536):
+            data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    assert head.startswith(b"HTTP/1.1 200"), head
+    return json.loads(body)
+
+
+@suite.test
+def two_live_gloves_through_reopened_ptys_each_with_its_viewer():
+    setup_checks()
+    frames, ports, sent, resumed = {}, {}, {}, {}
+    REOPENINGS = 6  # noqa: N806 - a constant of this test
+    for hand, seed, serial in (("left", 21, 61), ("right", 22, 62)):
+        take = suite.tmp / f"live-{hand}.gpw"
+        result = subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.35", "--gloves", "1",
+                                 "--calibration-seconds", CALIBRATION_SECONDS, "--seed", str(seed), "--threads", "1", "--stream", str(take),
+                                 "--stream-payload", "cells", "--speed", "0", "--serial", str(serial)], capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        frames[hand] = decode(take.read_bytes())
+        ports[hand] = PtyPort(suite.tmp / f"live-{hand}-port")
+        sent[hand], resumed[hand] = bytearray(), []
+    serve, engine_port, log = start_serve(["--left", str(ports["left"].name), "--right", str(ports["right"].name), "--calibration-seconds",
+                                           CALIBRATION_SECONDS, "--view", "0"])
+    views = {m.group(1): int(m.group(2)) for m in re.finditer(r"serve: (left|right): viewer on http://127\.0\.0\.1:(\d+)/", "".join(log))}
+    assert set(views) == {"left", "right"} and views["left"] != views["right"], log
+    sequence = viewer_get(views["left"], "/meta")["steps"]  # the model's calibration sequence, if it has one
+    client = Clients(engine_port, 1, hands=(0, 1))
+    time.sleep(0.5)
+
+    def device(hand: str, seed: int):
+        def send(data: bytes):
+            sent[hand].extend(data)
+            ports[hand].send(data)
+        play(frames[hand], send, ports[hand].reopen, REOPENINGS, random.Random(seed), 1.0,
+             reconnected=lambda: resumed[hand].append(time.monotonic()))
+
+    devices = [threading.Thread(target=device, args=(hand, seed)) for hand, seed in (("left", 31), ("right", 32))]
+    for d in devices:
+        d.start()
+    states = {"left": [], "right": []}  # what each viewer showed, polled while the gloves stream
+    while any(d.is_alive() for d in devices):
+        for hand, port in views.items():
+            states[hand].append(viewer_get(port))
+        time.sleep(0.2)
+    for d in devices:
+        d.join()
+    time.sleep(0.5)
+    serve.send_signal(signal.SIGINT)
+    serve.wait(timeout=30)
+    for port in ports.values():
+        port.close()
+    time.sleep(0.3)
+    text = "".join(log)
+    assert serve.returncode == 0, text
+
+    hands = {0: "right", 1: "left"}
+    for hand in ("left", "right"):
+        delivered = suite.tmp / f"live-{hand}-delivered.gpw"
+        delivered.write_bytes(bytes(sent[hand]))
+        reference = predict(delivered, ["--calibration-seconds", CALIBRATION_SECONDS])
+        got = [(arrived, f) for arrived, f in client.messages[0] if hands[f[2]] == hand]
+        # Every pose of the glove, the estimator's, in order, none missing.
+        assert len(got) == len(reference), (hand, len(got), len(reference))
+        for (_, f), expected in zip(got, reference):
+            assert as_printed(f[10:35]) == expected, f"{hand} pose {f[4]}"
+        # After each reopening of its pty once poses flow (not during the calibration, which has none),
+        # the glove's poses resume within 0.5 s.
+        assert len(resumed[hand]) == REOPENINGS
+        marks = [mark for mark in resumed[hand] if mark > got[0][0]]
+        assert len(marks) >= 2, (hand, len(marks))
+        waits = [min(t for t, _ in got if t > mark) - mark for mark in marks]
+        assert max(waits) <= 0.5, (hand, waits)
+        assert re.search(rf"serve: {hand}: \d+ poses published; link: .*opened {REOPENINGS + 1} times", text), text
+        # Its viewer: calibrating first (with the step under way when the model has a sequence), then
+        # the estimator's poses, the same ones the engine stream carried.
+        shown = states[hand]
+        calibrating = [st for st in shown if st["calibrating"]]
+        assert calibrating, f"{hand}: the viewer never showed the calibration"
+        posed = [st for st in shown if st.get("seq")]
+        assert len(posed) >= 20, (hand, len(posed))
+        for st in posed:
+            assert as_printed(st["angles"]) == reference[st["seq"] - 1], f"{hand} viewer pose {st['seq']}"
+        assert all(b["seq"] >= a["seq"] for a, b in zip(posed, posed[1:]))
+        with_step = [st for st in calibrating if st["step"] >= 0]
+        if sequence:
+            assert with_step and all(st["instruction"] for st in with_step), f"{hand}: the viewer showed no step of the sequence"
+        print(f"  {hand}: {len(got)} poses, the estimator's, through {REOPENINGS} reopenings ({len(marks)} after the calibration, poses back"
+              f" after at most {max(waits) * 1e3:.0f} ms); its viewer"
+              f" showed {len(calibrating)} calibrating states ({len(with_step)} with a step), then {len(posed)} poses equal to the stream's")
 
 
 @suite.test

@@ -1,9 +1,10 @@
 // glovepose serve: a glove's link (device_link.hpp), or a left and a right glove's, read and reopened
 // when it goes away; the readings turned into poses by an estimator per glove, and each pose
 // published at once to the engine stream (TCP on loopback, any number of clients), over OSC, as
-// VRChat avatar parameters and as OpenGloves lines (docs/pose_stream.md). The calibration is the
-// glove's and the user's: with --profiles it is loaded when that glove says its Hello, or made on
-// the fly over the first seconds and then saved for the next time.
+// VRChat avatar parameters, as OpenGloves lines or pipe messages (docs/pose_stream.md), and to the
+// viewer's page in the browser (view_server.hpp). The calibration is the glove's and the user's:
+// with --profiles it is loaded when that glove says its Hello, or made on the fly over the first
+// seconds and then saved for the next time.
 #include <glovepose/estimator.hpp>
 #include <glovepose/pose_model.hpp>
 #include <glovepose/pose_model_options.hpp>
@@ -34,6 +35,7 @@
 #include "opengloves_output.hpp"
 #include "pose_outputs.hpp"
 #include "session_options.hpp"
+#include "view_server.hpp"
 
 namespace glovepose::cli {
 namespace {
@@ -46,6 +48,7 @@ struct ServeOptions {
   double calibration_seconds = kDefaultCalibrationSeconds;
   bool calibration_seconds_given = false;
   int engine_port = -1;  // -1: no engine stream
+  int view_port = -1;    // -1: no viewer
   double seconds = 0.0;  // 0: until a signal (or the end of a file or stdin)
   bool stats = false;
   bool normal_scheduling = false;  // else a live link's thread asks for real-time scheduling
@@ -113,8 +116,9 @@ struct SharedOutputs {
 // OpenGloves port are per hand), and its counts and latencies.
 class ServedGlove {
  public:
+  // `view_port`: the viewer's port for this glove (-1: none).
   ServedGlove(const ServeOptions& o, const std::string& source, const std::string& hand_name, bool several,
-              const std::shared_ptr<const PoseModel>& model, SharedOutputs& shared)
+              const std::shared_ptr<const PoseModel>& model, SharedOutputs& shared, int view_port)
       : o_(o),
         told_(several ? "glovepose serve: " + hand_name + ": " : "glovepose serve: "),
         hand_(hand_name == "left" ? hand::Handedness::Left : hand::Handedness::Right),
@@ -145,6 +149,12 @@ class ServedGlove {
       port_told_ = opengloves_->events();
     }
     link_told_ = link_.events();
+    if (view_port >= 0) {
+      view_ = std::make_unique<ViewServer>(estimator_, view_port, ViewSource{hand_name + " glove, link '" + source + "'", false}, counts_);
+      view_started_ = host_seconds();
+      view_->start();
+      std::fprintf(stderr, "%sviewer on http://127.0.0.1:%d/\n", told_.c_str(), view_->port());
+    }
   }
 
   bool live() const { return link_.address().reconnects(); }
@@ -215,8 +225,14 @@ class ServedGlove {
   }
 
  private:
-  // Each pose, published at once to every output.
+  // Each frame: shown by the viewer (while the calibration collects, with no pose yet, its step),
+  // and its pose published at once to every output.
   void on_pose(Status status) {
+    if (view_ && (status == Status::Solved || status == Status::Uncalibrated)) {
+      // The page's latency: the device's clock when the viewer started, from this frame's mapping.
+      view_->set_stream_clock(device_time_ - (mapped_ - view_started_));
+      view_->publish(estimator_, device_time_);
+    }
     if (status != Status::Solved) return;
     const Pose& pose = estimator_.pose();
     const double now = host_seconds();
@@ -271,6 +287,7 @@ class ServedGlove {
     handling_ = host_seconds();
     arrived_ = arrived;
     mapped_ = mapped;
+    device_time_ = static_cast<double>(f.header.device_time_us) * 1e-6;
     if (!frames_) start_feed(f);
     if (link_.counts().restarts != restarts_) {  // the device began again: its clock too
       restarts_ = link_.counts().restarts;
@@ -311,15 +328,17 @@ class ServedGlove {
   // frames read with it, a backlog after a reconnection), and the service's own part: from the start
   // of its frame's handling to the pose sent, less the estimator's work.
   LatencyStats total_, own_;
-  double arrived_ = 0.0, handling_ = 0.0, mapped_ = 0.0;
+  double arrived_ = 0.0, handling_ = 0.0, mapped_ = 0.0, device_time_ = 0.0;
+  std::unique_ptr<ViewServer> view_;  // declared after the estimator and counts it reads: destroyed first
+  double view_started_ = 0.0;         // host_seconds() when the viewer started
   std::uint64_t published_ = 0, told_published_ = 0, restarts_ = 0;
   LinkEvents link_told_, port_told_;
   bool ended_ = false;
 };
 
 int serve(const ServeOptions& o) {
-  if (o.engine_port < 0 && o.osc.empty() && o.vrchat.empty() && o.opengloves.empty())
-    throw Error("nothing to serve to: expected at least one of --engine PORT, --osc HOST:PORT, --vrchat HOST:PORT, --opengloves TARGET");
+  if (o.engine_port < 0 && o.osc.empty() && o.vrchat.empty() && o.opengloves.empty() && o.view_port < 0)
+    throw Error("nothing to serve to: expected at least one of --engine PORT, --osc HOST:PORT, --vrchat HOST:PORT, --opengloves TARGET, --view PORT");
   if (!o.profiles.empty() && o.user.empty()) throw Error("--profiles needs --user NAME: a profile is a glove's and a user's");
   // The gloves: --in (on --hand), or --left and --right.
   std::vector<std::pair<std::string, std::string>> sources;  // hand, link
@@ -338,7 +357,11 @@ int serve(const ServeOptions& o) {
   SharedOutputs shared;
   if (o.engine_port >= 0) shared.engine = std::make_unique<EngineServer>(static_cast<unsigned>(o.engine_port));
   std::vector<std::unique_ptr<ServedGlove>> gloves;
-  for (const auto& [hand_name, source] : sources) gloves.push_back(std::make_unique<ServedGlove>(o, source, hand_name, several, model, shared));
+  for (const auto& [hand_name, source] : sources) {
+    // The viewer: a page per glove, the right's on --view PORT and the left's on PORT + 1 (0: free ones).
+    const int view_port = o.view_port < 0 ? -1 : (o.view_port == 0 || !several || hand_name == "right" ? o.view_port : o.view_port + 1);
+    gloves.push_back(std::make_unique<ServedGlove>(o, source, hand_name, several, model, shared, view_port));
+  }
   stop_on_signals(serve_on_signal);
   if (shared.engine) std::fprintf(stderr, "glovepose serve: engine stream on 127.0.0.1:%u\n", shared.engine->port());
   const bool live = std::any_of(gloves.begin(), gloves.end(), [](const auto& g) { return g->live(); });
@@ -380,7 +403,8 @@ Command add_serve(CLI::App& tool) {
       "serve",
       "Reads a glove's link, or a left and a right glove's (reopened when they go away), turns the readings into poses and publishes each "
       "at once: the engine stream "
-      "(TCP on 127.0.0.1, any number of clients), OSC over UDP, VRChat avatar parameters and OpenGloves lines (docs/pose_stream.md). With --profiles, a glove's and user's "
+      "(TCP on 127.0.0.1, any number of clients), OSC over UDP, VRChat avatar parameters, OpenGloves lines and the viewer's page "
+      "(docs/pose_stream.md). With --profiles, a glove's and user's "
       "calibration is loaded when that glove says its Hello, or made on the fly and saved.");
   // No default link: a service reads a glove (serve() says so when none is given).
   CLI::Option* in = command->add_option("--in", o->in, kLinkHelp)->type_name("SOURCE");
@@ -415,6 +439,10 @@ Command add_serve(CLI::App& tool) {
   command->add_flag("--opengloves-joints", o->opengloves_joints,
                     "also each joint's curl in OpenGloves lines (SteamVR's driver only: the lines grow past Monado's 150 bytes)")
       ->needs(opengloves);
+  add_number(*command, "--view", "PORT", o->view_port,
+             "show the glove's hand in the browser, as glovepose view does, on 127.0.0.1:PORT (0: a free port, printed); with two gloves "
+             "the left's page is on PORT + 1; during the calibration it shows each step's target pose")
+      ->check(CLI::Range(0, 65534));
   add_number(*command, "--seconds", "S", o->seconds, "stop after S seconds (default: at SIGINT or SIGTERM, or when a file ends)")
       ->check(above(0.0));
   command->add_flag("--no-real-time", o->normal_scheduling, "keep normal scheduling (by default a live link's thread asks for real-time)");
