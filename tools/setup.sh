@@ -46,6 +46,7 @@ test_packages=(
   ccache              # tools/test.sh and tools/cross.sh compile through it (objects kept between runs)
   liblo-tools         # oscdump, the independent OSC receiver of glovepose serve's test (tests/python/test_serve.py)
   chromium            # the browser test opens glovepose view's page headless (tests/python/test_view.py)
+  strace              # record's flush bound, read from its system calls (tests/python/test_wire_stream.py)
 )
 packages=("${tool_packages[@]}")
 [ "$purpose" = all ] && packages+=("${test_packages[@]}")

@@ -7,6 +7,7 @@ encoder or parser:
   same readings as text lines made by this decoder, for raw rows and for cells;
 - with one byte in 10,000 flipped, predict drops exactly the frames this decoder finds damaged and
   counts them as lost, and every frame it did not drop is used;
+- record flushes every frame to the disk within 1 s of writing it (its system calls, seen by strace);
 - through a pty pair the bytes arrive unchanged (the target is put in raw mode), and --speed paces
   the stream in real time.
 
@@ -18,6 +19,7 @@ import json
 import os
 import random
 import re
+import shutil
 import struct
 import subprocess
 import sys
@@ -246,6 +248,57 @@ def record_killed_at_twenty_moments_keeps_a_recording_that_imports():
                                 capture_output=True, text=True)
         assert result.returncode == 0, f"kill {k}: {result.stderr}"
     print(f"  record: 20 kills, every recording imports; at most {worst_loss:.3f} s of what was handed to it missing")
+
+
+@suite.test
+def record_flushes_every_frame_to_the_disk_within_a_second():
+    """The power-cut bound, read from the system calls record makes (strace, not record's own
+    account): every write to the recording is followed by an fsync of it within 1 s, also when the
+    stream pauses for 3 s after a frame."""
+    setup_checks()
+    if shutil.which("strace") is None:
+        raise Skip("strace (Debian's strace, tools/setup.sh) is not installed")
+    take = suite.tmp / "flush-take.gpw"
+    subprocess.run([CLI, "simulate", "--subjects", "1", "--sessions", "1", "--minutes", "0.05", "--gloves", "1", "--calibration-seconds", "0",
+                    "--seed", "6", "--threads", "1", "--stream", str(take), "--stream-payload", "cells", "--speed", "0"], check=True,
+                   capture_output=True)
+    frames = decode(take.read_bytes())
+    recording = suite.tmp / "flushed.gpw"
+    trace = suite.tmp / "record.strace"
+    rec = subprocess.Popen(["strace", "-f", "-ttt", "-y", "-s", "0", "-e", "trace=write,fsync,fdatasync", "-e", "signal=none",
+                            "-o", str(trace), CLI, "record", "--quiet", "--out", str(recording)], stdin=subprocess.PIPE,
+                           stderr=subprocess.PIPE)
+    start = time.monotonic()
+    first_us = frames[1].device_us
+    for k, f in enumerate(frames):
+        if k == 120:
+            time.sleep(3.0)  # the glove pauses: what came before must reach the disk meanwhile
+            start += 3.0
+        due = start + (f.device_us - first_us) * 1e-6
+        if due > time.monotonic():
+            time.sleep(due - time.monotonic())
+        rec.stdin.write(encode(f.kind, f.sequence, f.device_us, f.payload))
+        rec.stdin.flush()
+    rec.stdin.close()
+    err = rec.stderr.read()
+    assert rec.wait(timeout=30) == 0, err.decode()
+    name = re.escape(str(recording.resolve()))
+    writes, syncs = [], []
+    for line in trace.read_text().splitlines():
+        found = re.match(rf"\d+ +([0-9.]+) (write|fsync|fdatasync)\(\d+<{name}>", line)
+        if found:
+            (writes if found.group(2) == "write" else syncs).append(float(found.group(1)))
+    if not writes:
+        raise Skip(f"strace saw no write to the recording (ptrace not allowed here?): {trace.read_text()[:300]}")
+    assert syncs, "record never flushed the recording"
+    waits = []
+    for w in writes:
+        later = [t for t in syncs if t >= w]
+        assert later, f"a write at {w:.3f} was never flushed"
+        waits.append(later[0] - w)
+    assert max(waits) <= 1.0, f"a frame waited {max(waits):.3f} s for the disk"
+    print(f"  record: {len(writes)} writes, {len(syncs)} fsyncs; every frame on the disk within {max(waits) * 1e3:.0f} ms of its write"
+          f" (a 3 s pause included)")
 
 
 @suite.test

@@ -6,6 +6,7 @@
 #include <glovepose/config.hpp>
 
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +16,7 @@
 #ifdef _WIN32
 #  include <io.h>
 #else
+#  include <poll.h>
 #  include <termios.h>
 #  include <unistd.h>
 #endif
@@ -134,8 +136,25 @@ class ByteSource {
     if (owned_) close_fd(fd_);
   }
 
+  /// read()'s answer when `wait` passed with no byte.
+  static constexpr long kNothingYet = -2;
+
   /// Up to `size` bytes as soon as any arrive: the count, 0 at the end, -1 when interrupted by a
-  /// signal (EINTR); throws Error for another failure.
+  /// signal (EINTR), kNothingYet when none came within `wait` (a pipe or terminal that pauses; on
+  /// POSIX only: Windows waits for bytes); throws Error for another failure.
+  long read(std::uint8_t* data, std::size_t size, std::chrono::milliseconds wait) {
+#ifndef _WIN32
+    pollfd ready{fd_, POLLIN, 0};
+    const int polled = ::poll(&ready, 1, static_cast<int>(wait.count()));
+    if (polled < 0 && errno == EINTR) return -1;
+    if (polled == 0) return kNothingYet;
+#else
+    (void)wait;
+#endif
+    return read(data, size);
+  }
+
+  /// Up to `size` bytes, waiting for them: as read() above, without kNothingYet.
   long read(std::uint8_t* data, std::size_t size) {
 #ifdef _WIN32
     const int n = ::_read(fd_, data, static_cast<unsigned>(size));

@@ -157,8 +157,8 @@ class DeviceLink {
   /// at the end of a file or stdin (a reconnecting link never ends).
   long read(std::uint8_t* data, std::size_t size, std::chrono::milliseconds wait) {
     if (file_) {
-      const long n = file_->read(data, size);
-      return n == 0 ? -1 : std::max(n, 0L);
+      const long n = file_->read(data, size, wait);
+      return n == 0 ? -1 : std::max(n, 0L);  // the end; else the bytes, or none yet
     }
     const auto now = Clock::now();
     if (!connected()) {

@@ -1,9 +1,9 @@
 // glovepose record: a glove's wire stream (docs/wire_protocol.md) kept in a recording file as it
 // arrives, with the link's and the readings' health per second of device time. The recording is the
 // stream's checked frames, in order, in the wire format itself: predict --raw, view --stdin and
-// import read it. It never replaces a file; each frame is written when it arrives and the file is
-// flushed to the disk at least once a second, so a kill loses nothing written and a power cut at most
-// the last second, and what is left is a valid recording (a frame cut off at the end is ignored). A
+// import read it. It never replaces a file; each frame is written when it arrives and flushed to
+// the disk within a second of that, so a kill loses nothing written and a power cut at most the last
+// second, and what is left is a valid recording (a frame cut off at the end is ignored). A
 // serial port, pty or socket that goes away is reopened (glove_link.hpp) and the recording goes on,
 // with what was lost meanwhile counted.
 #include <glovepose/device/frame_parser.hpp>
@@ -14,6 +14,7 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -101,10 +102,14 @@ int record(const RecordOptions& o) {
   HealthSecond health;
   double first_time = std::nan(""), last_time = std::nan("");
   long kept = 0;
+  // A frame reaches the disk within a second of its write: the oldest one not yet flushed waits at
+  // most kFlushAge, plus one poll's wait (kPollWait), plus the flush.
   using Clock = std::chrono::steady_clock;
-  Clock::time_point flushed = Clock::now();
+  constexpr std::chrono::milliseconds kFlushAge{750}, kPollWait{150};
+  std::optional<Clock::time_point> unflushed;  // when the oldest frame not yet flushed was written
   const auto on_frame = [&](const device::Frame& f, double, double) {
     file.write(f.bytes);
+    if (!unflushed) unflushed = Clock::now();
     ++kept;
     const double t = static_cast<double>(f.header.device_time_us) * 1e-6;
     if (std::isnan(first_time)) first_time = t;
@@ -129,10 +134,10 @@ int record(const RecordOptions& o) {
   };
   LinkEvents told = link.events();
   while (!record_stop) {
-    if (!link.poll(std::chrono::milliseconds(200), on_frame)) break;
-    if (Clock::now() - flushed >= std::chrono::seconds(1)) {
+    if (!link.poll(kPollWait, on_frame)) break;
+    if (unflushed && Clock::now() - *unflushed >= kFlushAge) {
       file.flush();
-      flushed = Clock::now();
+      unflushed.reset();
     }
     const LinkEvents& now = link.events();
     if (now.losses != told.losses && !o.quiet)
@@ -161,7 +166,7 @@ Command add_record(CLI::App& tool) {
   auto o = std::make_shared<RecordOptions>();
   CLI::App* command = tool.add_subcommand(
       "record",
-      "Records a glove's wire stream (docs/wire_protocol.md) into a new file as it arrives, flushed to the disk every second, with the "
+      "Records a glove's wire stream (docs/wire_protocol.md) into a new file as it arrives, each frame flushed to the disk within a second, with the "
       "link's health per second on stderr; predict --raw, view --stdin and import read the recording.");
   command->add_option("--in", o->in, std::string(kLinkHelp) + " (default: stdin)")->type_name("SOURCE");
   command->add_option("--out", o->out, "the recording, a new file (never replaces one)")->type_name("FILE")->required();
