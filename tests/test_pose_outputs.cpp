@@ -137,22 +137,46 @@ TEST_CASE("serve's OpenGloves line: the documented example, keys in order, and t
   cli::OpenGlovesLine line(4095, false);
   line.encode(hand::finger_curls(angles));
   // docs/pose_stream.md, "OpenGloves": the example line.
-  CHECK(std::string(line.data(), line.size()) == "A0B2048C0D0E0(AB)2048(BB)2048(CB)2048(DB)2048(EB)2048\n");
+  CHECK(std::string(line.data(), line.size()) == "A0B2048C0D0E0(AB)2048(BB)2048(CB)2048(DB)2048(EB)2048P0\n");
 
   cli::OpenGlovesLine joints(1023, true);
   joints.encode(hand::finger_curls(angles));
   CHECK(std::string(joints.data(), joints.size()) ==
-        "A0B512C0D0E0(AB)512(BB)512(CB)512(DB)512(EB)512(AAA)0(AAB)0(AAC)0(BAA)0(BAB)512(BAC)512(BAD)512(CAA)0(CAB)0(CAC)0(CAD)0"
+        "A0B512C0D0E0(AB)512(BB)512(CB)512(DB)512(EB)512P0(AAA)0(AAB)0(AAC)0(BAA)0(BAB)512(BAC)512(BAD)512(CAA)0(CAB)0(CAC)0(CAD)0"
         "(DAA)0(DAB)0(DAC)0(DAD)0(EAA)0(EAB)0(EAC)0(EAD)0\n");
 
-  // The longest lines are the documented 66 and 225 bytes: every value at 4 digits (a metacarpal's at 1: it is 0).
+  // The longest lines are the documented 74 and 233 bytes: every value at 4 digits (a metacarpal's at 1: it is 0),
+  // every gesture on.
   hand::Angles bent{};
   for (std::size_t d = 0; d < hand::kDofCount; ++d) bent[d] = hand::kDofs[d].max;
   cli::OpenGlovesLine full(4095, true), short_form(4095, false);
   full.encode(hand::finger_curls(bent));
   short_form.encode(hand::finger_curls(bent));
-  CHECK(short_form.size() == 66);
-  CHECK(full.size() == 225);
+  // (DB): the ring's abduction limit, 0.30 rad, is 17.2 of the 20 degrees of a full splay: round((0.859 + 1) / 2 x 4095).
+  CHECK(std::string(short_form.data(), short_form.size()) ==
+        "A4095B4095C4095D4095E4095(AB)4095(BB)4095(CB)4095(DB)3807(EB)4095P4095ILM\n");
+  CHECK(short_form.size() == 74);
+  CHECK(full.size() == 233);
+
+  // The gestures' documented rules at their edges: grab past a mean curl of half of the four
+  // fingers, pinch past half of the thumb's and index's, the trigger past half of the index's, its
+  // value (curl - 0.5) x 2.
+  const auto line_for = [](std::initializer_list<std::pair<const char*, double>> shares) {
+    hand::Angles a{};
+    for (const auto& [name, share] : shares) a[hand::dof_from_name(name)] = share * hand::kDofs[hand::dof_from_name(name)].max;
+    cli::OpenGlovesLine l(1000, false);
+    l.encode(hand::finger_curls(a));
+    return std::string(l.data(), l.size());
+  };
+  CHECK(line_for({{"index_base_flexion", 0.75}, {"index_middle_flexion", 0.75}, {"index_tip_flexion", 0.75}}) ==
+        "A0B750C0D0E0(AB)500(BB)500(CB)500(DB)500(EB)500P500I\n");
+  CHECK(line_for({{"thumb_base_flexion", 0.6}, {"thumb_middle_flexion", 0.6}, {"thumb_tip_flexion", 0.6}, {"index_base_flexion", 0.45},
+                  {"index_middle_flexion", 0.45}, {"index_tip_flexion", 0.45}}) == "A600B450C0D0E0(AB)500(BB)500(CB)500(DB)500(EB)500P0M\n");
+  std::initializer_list<std::pair<const char*, double>> fingers = {
+      {"index_base_flexion", 0.6}, {"index_middle_flexion", 0.6}, {"index_tip_flexion", 0.6},  {"middle_base_flexion", 0.6},
+      {"middle_middle_flexion", 0.6}, {"middle_tip_flexion", 0.6}, {"ring_base_flexion", 0.6}, {"ring_middle_flexion", 0.6},
+      {"ring_tip_flexion", 0.6},   {"pinky_base_flexion", 0.6},   {"pinky_middle_flexion", 0.6}, {"pinky_tip_flexion", 0.6}};
+  CHECK(line_for(fingers) == "A0B600C600D600E600(AB)500(BB)500(CB)500(DB)500(EB)500P200IL\n");
   CHECK_THROWS_AS(cli::OpenGlovesLine(0, false), Error);
 }
 
@@ -176,8 +200,15 @@ void check_pipe_message(const std::uint8_t* message, const hand::FingerCurls& cu
   }
   CHECK(pipe_float(message, 100) == 0.0f);
   CHECK(pipe_float(message, 104) == 0.0f);
-  for (std::size_t b = 108; b < 116; ++b) CHECK(message[b] == 0);
-  CHECK(pipe_float(message, 116) == 0.0f);
+  // The booleans: joystick button, trigger button, A, B, grab, pinch, menu, calibrate; the gestures'
+  // documented rules (docs/pose_stream.md) computed here.
+  const double index = curls.curl[1];
+  const bool trigger = index > 0.5;
+  const bool grab = (curls.curl[1] + curls.curl[2] + curls.curl[3] + curls.curl[4]) / 4.0 > 0.5;
+  const bool pinch = (curls.curl[0] + curls.curl[1]) / 2.0 > 0.5;
+  const std::uint8_t expected[8] = {0, trigger, 0, 0, grab, pinch, 0, 0};
+  for (std::size_t b = 0; b < 8; ++b) CHECK(message[108 + b] == expected[b]);
+  CHECK(pipe_float(message, 116) == static_cast<float>(trigger ? 2.0 * index - 1.0 : 0.0));
 }
 
 // A pose whose index and middle bend by `k` thousandths of their limits and whose index splays by
@@ -199,11 +230,16 @@ hand::FingerCurls numbered_curls(long k) {
 TEST_CASE("serve's OpenGloves pipe message: the SteamVR driver's 120 bytes, decoded as documented") {
   cli::OpenGlovesPipeMessage message;
   static_assert(cli::OpenGlovesPipeMessage::size() == 120, "NamedPipeInputDataVersion::v2 is 120 bytes");
-  for (const long k : {0L, 1L, 500L, 999L}) {
+  for (const long k : {0L, 1L, 500L, 900L, 999L}) {  // 900 and 999: the trigger on
     const hand::FingerCurls curls = numbered_curls(k);
     message.encode(curls);
     check_pipe_message(reinterpret_cast<const std::uint8_t*>(message.data()), curls);
   }
+  hand::Angles bent{};  // every gesture on
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) bent[d] = hand::kDofs[d].max;
+  message.encode(hand::finger_curls(bent));
+  check_pipe_message(reinterpret_cast<const std::uint8_t*>(message.data()), hand::finger_curls(bent));
+  CHECK(message.data()[112] == 1);
   // The thumb's unused 4th joint repeats its tip, as in the long OpenGloves line.
   message.encode(numbered_curls(3));
   CHECK(pipe_float(reinterpret_cast<const std::uint8_t*>(message.data()), 12) == doctest::Approx(0.7).epsilon(1e-6));

@@ -288,14 +288,29 @@ def documented_curls(angles: List[float]):
 
 def decode_opengloves(line: str, most: int):
     """An OpenGloves line as the wiki documents it: keys (a letter, or letters in brackets) each
-    followed by digits. Returns {key: value / most}, splays mapped back to -1..1."""
+    followed by digits, or alone for a button that is pressed. Returns {key: value / most}, splays
+    mapped back to -1..1, a pressed button as True."""
     found = re.findall(r"(\([A-Z]+\)|[A-Z])(\d*)", line)
     assert "".join(k + v for k, v in found) == line, f"not keys and numbers: {line!r}"
     values = {}
     for key, digits in found:
+        if not digits:
+            values[key] = True
+            continue
         fraction = int(digits) / most
         values[key] = (2.0 * fraction - 1.0) if re.fullmatch(r"\([A-E]B\)", key) else fraction
     return values
+
+
+def documented_gestures(expected):
+    """docs/pose_stream.md, "OpenGloves" (LucidGloves' firmware rules): from the fingers' curls, the
+    trigger button I and its value P, grab L and pinch M; None where a mean is too near its edge for
+    9 printed digits to decide."""
+    curl = [c for _, c, _ in expected]
+    means = {"I": curl[1], "L": sum(curl[1:]) / 4.0, "M": (curl[0] + curl[1]) / 2.0}
+    if any(abs(m - 0.5) < 1e-6 for m in means.values()):
+        return None
+    return {key: m > 0.5 for key, m in means.items()}, (2.0 * curl[1] - 1.0 if curl[1] > 0.5 else 0.0)
 
 
 @suite.test
@@ -367,10 +382,13 @@ def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays
     joint_keys = [[f"({chr(65 + f)}A{chr(65 + j)})" for j in range(3 if f == 0 else 4)] for f in range(5)]
     worst = 0.0
     at = 0
+    pressed_seen = {"I": 0, "L": 0, "M": 0}
     for line in lines:
+        for key in pressed_seen:
+            pressed_seen[key] += key in re.sub(r"\([A-Z]+\)", "", line)
         values = decode_opengloves(line, most)
-        assert len(values) == 10 + 3 + 16, f"{len(values)} keys in {line!r}"
-        assert len(line) + 1 <= 225, f"a line of {len(line) + 1} bytes, documented at most 225"
+        assert 10 + 1 + 3 + 16 <= len(values) <= 10 + 1 + 3 + 16 + 3, f"{len(values)} keys in {line!r}"
+        assert len(line) + 1 <= 233, f"a line of {len(line) + 1} bytes, documented at most 233"
         best = None
         while at < len(reference):  # the next pose this line can be
             expected = documented_curls(reference[at])
@@ -379,6 +397,12 @@ def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays
             for f, (joints, curl, splay) in enumerate(expected):
                 error = max(error, abs(values[chr(65 + f)] - curl) * most, abs(values[f"({chr(65 + f)}B)"] - splay) * most / 2)
                 error = max([error] + [abs(values[k] - j) * most for k, j in zip(joint_keys[f], joints)])
+            gestures = documented_gestures(expected)
+            if gestures is not None:
+                pressed, trigger = gestures
+                error = max(error, abs(values["P"] - trigger) * most)
+                if any(values.get(key, False) != on for key, on in pressed.items()):
+                    error = math.inf
             if error <= 0.5 + 1e-4:  # rounded to the nearest step (predict prints 9 digits, not the doubles)
                 best = error
                 break
@@ -407,8 +431,10 @@ def opengloves_lines_and_vrchat_parameters_carry_the_documented_curls_and_splays
             at += 1
             if all(abs(got[names[2 * f]] - curl) <= 1e-6 and abs(got[names[2 * f + 1]] - splay) <= 1e-6 for f, (_, curl, splay) in enumerate(expected)):
                 break
+    assert pressed_seen["I"] and pressed_seen["L"], f"the gestures were never on: {pressed_seen}"
     print(f"  {len(lines)} OpenGloves lines of {len(reference)} poses decoded ({skipped} skipped), each within {worst:.3f} steps of the"
-          f" documented mapping; {len(sets)} VRChat parameter sets, at least {min(gaps) * 1e3:.0f} ms apart")
+          f" documented mapping, gestures included (trigger in {pressed_seen['I']}, grab in {pressed_seen['L']}, pinch in"
+          f" {pressed_seen['M']}); {len(sets)} VRChat parameter sets, at least {min(gaps) * 1e3:.0f} ms apart")
 
 
 @suite.test

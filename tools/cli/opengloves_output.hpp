@@ -48,12 +48,33 @@
 
 namespace glovepose::cli {
 
+/// The buttons a LucidGloves glove without buttons derives from its curls, by its firmware's default
+/// rules (LucidVR/lucidgloves, firmware src/Controller/Gesture.cpp and src/Encoding/AlphaEncoding.cpp,
+/// MIT; on by default in its Config.h): grab when the mean curl of the four fingers passes half,
+/// pinch when the mean of the thumb's and the index's does, the trigger button when the index's
+/// does, and the trigger's value the index's curl beyond half, stretched to 0..1. SteamVR bindings
+/// take grip and trigger from them.
+struct OpenGlovesGestures {
+  bool grab = false, pinch = false, trigger = false;
+  double trigger_value = 0.0;
+};
+
+inline OpenGlovesGestures opengloves_gestures(const hand::FingerCurls& c) noexcept {
+  OpenGlovesGestures g;
+  g.grab = (c.curl[1] + c.curl[2] + c.curl[3] + c.curl[4]) / 4.0 > 0.5;
+  g.pinch = (c.curl[0] + c.curl[1]) / 2.0 > 0.5;
+  g.trigger = c.curl[1] > 0.5;
+  g.trigger_value = g.trigger ? 2.0 * c.curl[1] - 1.0 : 0.0;
+  return g;
+}
+
 /// One pose as a line of OpenGloves' alpha encoding: each key followed by its value as a whole
 /// number from 0 to `most` (the driver's max_analog_value: 4095 in LucidVR's SteamVR driver by
-/// default, 1023 in Monado's), the line ended by '\n'. Always the five finger curls A-E and the
-/// five splays (AB)-(EB), at most 66 bytes; with `joints`, also each joint's curl ((AAA) to
-/// (EAD), the thumb's unused 4th left out), up to 225 bytes: more than Monado's driver reads as one
-/// packet (150 bytes), so for the SteamVR driver only.
+/// default, 1023 in Monado's), the line ended by '\n'. Always the five finger curls A-E, the
+/// five splays (AB)-(EB), the trigger's value P and the gestures I (trigger), L (grab) and M
+/// (pinch) when on (OpenGlovesGestures), at most 74 bytes; with `joints`, also each joint's curl
+/// ((AAA) to (EAD), the thumb's unused 4th left out), up to 233 bytes: more than Monado's driver
+/// reads as one packet (150 bytes), so for the SteamVR driver only.
 class OpenGlovesLine {
  public:
   OpenGlovesLine(unsigned most, bool joints) : most_(most), joints_(joints) {
@@ -66,6 +87,11 @@ class OpenGlovesLine {
     static constexpr char kFinger[hand::kFingerCount] = {'A', 'B', 'C', 'D', 'E'};
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) put(kFinger[f], nullptr, curls.curl[f]);
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) put(kFinger[f], "B", 0.5 * (curls.splay[f] + 1.0));  // splay -1..1 as 0..most
+    const OpenGlovesGestures g = opengloves_gestures(curls);
+    put('P', nullptr, g.trigger_value);
+    if (g.trigger) line_[size_++] = 'I';
+    if (g.grab) line_[size_++] = 'L';
+    if (g.pinch) line_[size_++] = 'M';
     if (joints_) {
       static constexpr const char* kJoint[hand::kCurlJoints] = {"AA", "AB", "AC", "AD"};
       for (std::size_t f = 0; f < hand::kFingerCount; ++f)
@@ -96,7 +122,8 @@ class OpenGlovesLine {
 /// its NamedPipeInputDataVersion::v2). Little-endian, no padding (docs/pose_stream.md, "OpenGloves"):
 /// each joint's curl as float32 (flexion[5][4], fingers thumb to pinky, joints base to tip), each
 /// finger's splay in -1..1 (float32 x 5), the joystick x and y (float32, 0), eight one-byte
-/// buttons and gestures (0) and the trigger's value (float32, 0).
+/// buttons and gestures (the trigger button, grab and pinch from OpenGlovesGestures, the others 0)
+/// and the trigger's value (float32).
 /// The pipe LucidVR's SteamVR driver serves for a hand's messages, "{hand}" standing for left or
 /// right (`--opengloves pipe:` names it).
 inline constexpr const char* kDriverPipe = R"(\\.\pipe\vrapplication\input\glove\v2\{hand})";
@@ -112,7 +139,12 @@ class OpenGlovesPipeMessage {
     for (std::size_t f = 0; f < hand::kFingerCount; ++f)
       for (std::size_t j = 0; j < hand::kCurlJoints; ++j) at = put(at, curls.joints[f][j]);
     for (std::size_t f = 0; f < hand::kFingerCount; ++f) at = put(at, curls.splay[f]);
-    // The joystick, the buttons and gestures and the trigger stay 0: a glove of stretch sensors has none.
+    // The joystick (100-107) and the real buttons stay 0: a glove of stretch sensors has none.
+    const OpenGlovesGestures g = opengloves_gestures(curls);
+    bytes_[109] = g.trigger;
+    bytes_[112] = g.grab;
+    bytes_[113] = g.pinch;
+    (void)put(116, g.trigger_value);
   }
   const char* data() const noexcept { return reinterpret_cast<const char*>(bytes_.data()); }
   static constexpr std::size_t size() noexcept { return kSize; }
