@@ -142,6 +142,35 @@ TEST_CASE("link: a TCP device that reconnects as another glove is an error") {
   device.join();
 }
 
+TEST_CASE("link: for a service, another glove's frames are dropped and the glove's resume when it is back") {
+  boost::asio::io_context io;
+  tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
+  const unsigned port = acceptor.local_endpoint().port();
+  Device dev;
+  std::vector<std::uint32_t> sent_by_77;
+  std::thread device([&] {
+    for (int connection = 0; connection < 3; ++connection) {  // the glove, another glove, the glove again
+      tcp::socket s(io);
+      acceptor.accept(s);
+      dev.serial = connection == 1 ? 78 : 77;
+      boost::system::error_code e;
+      boost::asio::write(s, boost::asio::buffer(dev.hello(1000000 + kCycleUs * dev.next)), e);
+      for (int i = 0; i < 10 && !e; ++i) {
+        if (dev.serial == 77) sent_by_77.push_back(dev.next);
+        boost::asio::write(s, boost::asio::buffer(dev.reading()), e);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(connection == 2 ? 1500 : 100));
+    }
+  });
+  cli::GloveLink link("tcp:127.0.0.1:" + std::to_string(port), quick(), std::nullopt, cli::GloveLink::OtherGlove::Refuse);
+  const std::vector<std::uint32_t> got = read_until(link, 20);
+  device.join();
+  CHECK(got == sent_by_77);  // every reading of glove 77, none of 78's
+  CHECK(link.refused() == 1);
+  CHECK(link.last_refused().find("serial 78") != std::string::npos);
+  CHECK(link.unidentified() == 11);  // 78's Hello and readings
+}
+
 TEST_CASE("link: a connection that goes silent is taken as lost and reopened") {
   boost::asio::io_context io;
   tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));

@@ -39,11 +39,15 @@ inline double host_seconds() {
 /// A glove's frames from a link, with the link reopened when it goes away. On a link that
 /// reconnects, each connection's frames count only after its Hello: those before it (the device
 /// may have been replaced) are dropped and counted as unidentified. A Hello naming another glove than
-/// the first one, or than `expected`, is an Error.
+/// the first one, or than `expected`, is an Error; or with OtherGlove::Refuse (a service that must
+/// go on), that connection's frames are dropped (unidentified) until a Hello names the glove again.
 class GloveLink {
  public:
-  explicit GloveLink(const std::string& source, LinkTiming timing = {}, std::optional<GloveIdentity> expected = std::nullopt)
-      : link_(LinkAddress::parse(source), timing), identity_(std::move(expected)), buffer_(1 << 16) {}
+  enum class OtherGlove { Error, Refuse };
+
+  explicit GloveLink(const std::string& source, LinkTiming timing = {}, std::optional<GloveIdentity> expected = std::nullopt,
+                     OtherGlove other = OtherGlove::Error)
+      : link_(LinkAddress::parse(source), timing), identity_(std::move(expected)), other_(other), buffer_(1 << 16) {}
 
   /// Reads for at most `wait` (a file or stdin: until bytes come) and calls
   /// `use(const device::Frame&, double mapped, double arrived)` for each frame passed on, Hellos
@@ -81,6 +85,9 @@ class GloveLink {
   const device::DeviceClock& clock() const { return clock_; }
   /// Frames dropped because no Hello had yet named the glove on their connection.
   std::uint64_t unidentified() const { return unidentified_; }
+  /// Hellos of another glove refused (OtherGlove::Refuse), and what the last one said.
+  std::uint64_t refused() const { return refused_; }
+  const std::string& last_refused() const { return last_refused_; }
   const LinkAddress& address() const { return link_.address(); }
 
  private:
@@ -88,15 +95,25 @@ class GloveLink {
     device::Hello hello;
     if (device::read_hello(f, hello) != Status::Ok) return;  // not identified: its frames stay dropped
     GloveIdentity said{std::string(hello.glove_id), hello.serial, hello.rows, hello.cells};
-    if (identity_ && *identity_ != said)
-      throw Error("link '" + link_.address().text + "': the device says it is " + said.describe() + ", but the link carried " +
-                  identity_->describe() + (connection_ > 1 ? " before it reconnected" : "") + "; another glove needs its own link");
+    if (identity_ && *identity_ != said) {
+      const std::string problem = "link '" + link_.address().text + "': the device says it is " + said.describe() + ", but the link carried " +
+                                  identity_->describe() + (connection_ > 1 ? " before it reconnected" : "") +
+                                  "; another glove needs its own link";
+      if (other_ == OtherGlove::Error) throw Error(problem);
+      ++refused_;
+      last_refused_ = problem;
+      identified_ = false;  // this connection's frames are dropped, until the glove says its Hello again
+      return;
+    }
     identity_ = said;
     identified_ = true;
   }
 
   DeviceLink link_;
   std::optional<GloveIdentity> identity_;
+  OtherGlove other_;
+  std::string last_refused_;
+  std::uint64_t refused_ = 0;
   device::FrameParser parser_;
   device::DeviceClock clock_;
   std::vector<std::uint8_t> buffer_;

@@ -126,7 +126,7 @@ class ServedGlove {
         estimator_(model),
         calibration_(choose_glove_calibration(*model, o.calibration_seconds, o.calibration_seconds_given, o.calibration)),
         shared_(shared),
-        link_(source),
+        link_(source, {}, std::nullopt, GloveLink::OtherGlove::Refuse),  // a service goes on: another glove's frames are dropped
         source_{no_lines_, "link '" + source + "'", "glovepose serve"},
         format_(*model, false),
         opengloves_line_(o.opengloves_max, o.opengloves_joints),
@@ -172,6 +172,10 @@ class ServedGlove {
     if (now.losses != link_told_.losses)
       std::fprintf(stderr, "%slink '%s' lost (%s); reopening it\n", told_.c_str(), link_.address().text.c_str(), now.last_problem.c_str());
     if (now.connections != link_told_.connections) std::fprintf(stderr, "%slink '%s' open again\n", told_.c_str(), link_.address().text.c_str());
+    if (link_.refused() != refused_told_) {
+      std::fprintf(stderr, "%s%s: its frames are dropped until the glove says its Hello again\n", told_.c_str(), link_.last_refused().c_str());
+      refused_told_ = link_.refused();
+    }
     link_told_ = now;
     if (opengloves_) {
       const LinkEvents& port = opengloves_->events();
@@ -331,7 +335,7 @@ class ServedGlove {
   double arrived_ = 0.0, handling_ = 0.0, mapped_ = 0.0, device_time_ = 0.0;
   std::unique_ptr<ViewServer> view_;  // declared after the estimator and counts it reads: destroyed first
   double view_started_ = 0.0;         // host_seconds() when the viewer started
-  std::uint64_t published_ = 0, told_published_ = 0, restarts_ = 0;
+  std::uint64_t published_ = 0, told_published_ = 0, restarts_ = 0, refused_told_ = 0;
   LinkEvents link_told_, port_told_;
   bool ended_ = false;
 };
