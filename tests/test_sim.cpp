@@ -267,6 +267,62 @@ TEST_CASE("sim recorder: 60 Hz frames, the paper's 45-90 ms oldest-row age, glit
   CHECK(worst < 0.01);  // against a per-cell noise of several hundredths of a pF at the default noise
 }
 
+TEST_CASE("sim recorder: a torn trace's cells beyond the break leave every row from the tear on") {
+  const Subject s = make_subjects(1, 3)[0];
+  const GlovePhysics p = physics_of(s);
+  const MotionSequence m(s, pose_gallery(), 4.0, 4);
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  RecordingConfig config;
+  config.raw_rows = true;
+  config.noise.spike_probability = config.noise.drop_probability = 0.0;
+  const Recording intact = record(p, m, s.distal_radius(), 5, config);
+  config.tear = {layout.bottom_traces() + 4, 1, 2.0};  // top trace 4, torn after its first cell
+  const std::vector<int> floating = cells_beyond_tear(layout, glauser2019_sites(), config.tear);
+  const Recording torn = record(p, m, s.distal_radius(), 5, config);
+  // The cells of top trace 4 from the wrist out; all but the first float.
+  std::vector<int> on_trace;
+  for (int c = 0; c < layout.cell_count(); ++c)
+    if (layout.cells()[static_cast<std::size_t>(c)].top == 4) on_trace.push_back(c);
+  REQUIRE(on_trace.size() >= 2);
+  CHECK(floating.size() == on_trace.size() - 1);
+  for (int c : floating) CHECK(std::find(on_trace.begin(), on_trace.end(), c) != on_trace.end());
+
+  // Before the tear the rows are the intact glove's, bit for bit; after it, so are the rows of no
+  // floating cell, and the difference of the others lies in the span of the floating cells' columns
+  // of M: a least-squares fit of it leaves only the cells' motion within the cycle (each row is read
+  // at its own instant), and the fitted capacitances are those cells' (the intact solve's, within
+  // its 5-frame mean and noise).
+  Eigen::MatrixXd m_floating(kRows, static_cast<Eigen::Index>(floating.size()));
+  for (std::size_t k = 0; k < floating.size(); ++k) m_floating.col(static_cast<Eigen::Index>(k)) = layout.measurement_matrix().col(floating[k]);
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(m_floating);
+  double worst_residual = 0.0, worst_cell = 0.0;
+  for (int f = 0; f < intact.frames; ++f) {
+    Eigen::VectorXd difference(kRows);
+    for (int r = 0; r < kRows; ++r)
+      difference(r) = static_cast<double>(intact.raw_rows[static_cast<std::size_t>(f * kRows + r)]) -
+                      static_cast<double>(torn.raw_rows[static_cast<std::size_t>(f * kRows + r)]);
+    if (intact.timestamps[static_cast<std::size_t>(f)] <= 2.0) {
+      REQUIRE(difference.cwiseAbs().maxCoeff() == 0.0);
+      continue;
+    }
+    if (intact.timestamps[static_cast<std::size_t>(f)] < 2.0 + 1.0 / 60.0) continue;  // the cycle the tear falls in
+    for (int r = 0; r < kRows; ++r)
+      if (m_floating.row(r).sum() == 0.0) REQUIRE(difference(r) == 0.0);
+    const Eigen::VectorXd fitted = qr.solve(difference);
+    worst_residual = std::max(worst_residual, (m_floating * fitted - difference).cwiseAbs().maxCoeff());
+    for (std::size_t k = 0; k < floating.size(); ++k)
+      worst_cell = std::max(worst_cell, std::abs(fitted(static_cast<Eigen::Index>(k)) -
+                                                 intact.cells[static_cast<std::size_t>(f * kCells + floating[k])]));
+  }
+  MESSAGE("torn after 2 s: " << floating.size() << " cells float; rows' difference off their span by at most " << worst_residual
+                             << " pF; fitted against the intact cells within " << worst_cell << " pF");
+  CHECK(worst_residual < 1.0);  // measured 0.36 pF
+  CHECK(worst_cell < 1.5);      // measured 0.73 pF
+  // The readout's full-M solve reads the floating cells as about 0 once its 5-frame mean holds only torn rows.
+  for (int c : floating) CHECK(std::abs(torn.cells[static_cast<std::size_t>((torn.frames - 1) * kCells + c)]) < 0.5);
+  CHECK_THROWS_AS(cells_beyond_tear(layout, glauser2019_sites(), {27, 0, 0.0}), Error);
+}
+
 TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {
   CorpusConfig config;
   config.subjects = 2;

@@ -21,6 +21,8 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "../hand/collision.hpp"
@@ -127,6 +129,44 @@ struct ReadoutNoise {
   double session_gain_sd = 0.005;   ///< Relative SD of the session's common gain.
 };
 
+/// @brief A trace of the glove torn during the recording. The physics (an assumption; the paper
+/// reports no tear): a trace is a conductive strip from the glove's connector at the wrist out to
+/// its farthest cell; torn, the part beyond the break is connected to nothing, so the cells it
+/// forms float: each is in series with a floating electrode and leaves every compound measurement
+/// (its column of M is 0 from then on). The cells before the break, and the rows that drive the
+/// trace, measure as before. Which cells lie beyond: cells_beyond_tear().
+struct TraceTear {
+  int trace = -1;            ///< The torn trace: bottom traces 0 .. B-1, then top traces B .. B+T-1; -1: none.
+  int cells_kept = 0;        ///< Cells of the trace still connected, nearest the connector first.
+  double at_seconds = 0.0;   ///< Recording time at which it tears.
+};
+
+/// @brief The cells a tear leaves floating, in the layout's order. A trace's cells are ordered by
+/// their distance from the connector at the wrist along the digit (an assumption, our reading of
+/// Fig. 4: back of the hand wrist side, knuckle side, web, proximal, middle, distal; then thumb
+/// first); the first `cells_kept` stay connected. Throws glovepose::Error for a trace that does
+/// not exist.
+inline std::vector<int> cells_beyond_tear(const sensor::TraceLayout& layout, const std::array<CellSite, kCells>& sites, const TraceTear& tear) {
+  const int traces = layout.bottom_traces() + layout.top_traces();
+  if (tear.trace < 0 || tear.trace >= traces)
+    throw Error("TraceTear: trace " + std::to_string(tear.trace) + ", expected 0.." + std::to_string(traces - 1) + " (bottom traces, then top)");
+  std::vector<int> on_trace;
+  for (int c = 0; c < layout.cell_count(); ++c) {
+    const sensor::Cell& cell = layout.cells()[static_cast<std::size_t>(c)];
+    if (cell.bottom == tear.trace || layout.bottom_traces() + cell.top == tear.trace) on_trace.push_back(c);
+  }
+  const auto from_wrist = [&](int c) {
+    const CellSite& s = sites[static_cast<std::size_t>(c)];
+    const double along = s.segment == sensor::Segment::Metacarpal ? (s.knuckle_distance > 20.0 ? 0.0 : 1.0) : 1.0 + static_cast<double>(s.segment);
+    return std::make_pair(along, s.thumb_distance);
+  };
+  std::stable_sort(on_trace.begin(), on_trace.end(), [&](int a, int b) { return from_wrist(a) < from_wrist(b); });
+  const auto kept = static_cast<std::size_t>(std::clamp(tear.cells_kept, 0, static_cast<int>(on_trace.size())));
+  std::vector<int> beyond(on_trace.begin() + static_cast<std::ptrdiff_t>(kept), on_trace.end());
+  std::sort(beyond.begin(), beyond.end());
+  return beyond;
+}
+
 /// @brief What to record.
 struct RecordingConfig {
   double cycle_rate = 60.0;         ///< Full 180-row cycles per second (paper: about 60 Hz).
@@ -139,6 +179,7 @@ struct RecordingConfig {
   /// the readout noise; tests/test_sim.cpp bounds the difference to the exact evaluation). kRows
   /// evaluates at every row's own instant.
   int physics_steps = 12;
+  TraceTear tear{};  ///< A trace that tears during the recording (none by default; a corpus tears its sessions only).
 };
 
 /// @brief One recording, frames at the ends of the readout cycles.
@@ -170,6 +211,9 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
         if (m(r, c) != 0.0) rows[static_cast<std::size_t>(r)].push_back(c);
     return rows;
   }();
+  std::array<bool, kCells> floating{};  // beyond the tear: out of every row once it tore
+  if (config.tear.trace >= 0)
+    for (int c : cells_beyond_tear(solver->layout(), glauser2019_sites(), config.tear)) floating[static_cast<std::size_t>(c)] = true;
   core::Rng rng(seed);
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
@@ -218,8 +262,10 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
       const CellArray& lo = knots[static_cast<std::size_t>(j)];
       const CellArray& hi = knots[static_cast<std::size_t>(j) + 1];
       double value = 0.0;
+      const bool torn = config.tear.trace >= 0 && t >= config.tear.at_seconds;
       for (int c : row_cells[static_cast<std::size_t>(r)]) {
         const auto i = static_cast<std::size_t>(c);
+        if (torn && floating[i]) continue;
         value += lo[i] + w * (hi[i] - lo[i]);
       }
       value = value * gain + rng.normal(0.0, noise.row_sd);
