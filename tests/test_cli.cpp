@@ -272,6 +272,47 @@ TEST_CASE("cli: glovepose simulate writes the protocol as one dataset file, byte
   CHECK(run("simulate --subjects x --out y").status == 2);
 }
 
+TEST_CASE("cli: glovepose simulate --tear tears a trace mid-session: the cells it names read about 0 pF from then on") {
+  const Run torn = run("simulate --seed 5 --subjects 1 --sessions 1 --gloves 1 --minutes 0.1 --calibration-seconds 2 --tear 19 1 3 --out " +
+                       temp("sim_torn.safetensors"));
+  INFO(torn.out);
+  REQUIRE(torn.status == 0);
+  // Top trace 4 (trace 19) keeps its first cell from the wrist; the message names the others.
+  const std::size_t at = torn.out.find("float: cells ");
+  REQUIRE(at != std::string::npos);
+  std::vector<int> floating;
+  for (std::istringstream names(torn.out.substr(at + 13, torn.out.find(')', at) - at - 13)); names;) {
+    int c = -1;
+    char comma = 0;
+    if (names >> c) floating.push_back(c);
+    names >> comma;
+  }
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  int on_trace = 0;
+  for (const sensor::Cell& cell : layout.cells()) on_trace += cell.top == 4 ? 1 : 0;
+  CHECK(static_cast<int>(floating.size()) == on_trace - 1);
+  const io::Dataset d = io::Dataset::read(temp("sim_torn.safetensors"));
+  const std::size_t first = d.first_session_frame();
+  double before = 0.0, after = 0.0;  // the floating cells' mean reading, pF
+  std::size_t n_before = 0, n_after = 0;
+  for (std::size_t f = first; f < d.frames(); ++f) {
+    const double t = d.timestamps[f] - d.timestamps[first];
+    for (int c : floating) {
+      const double v = d.cells[f * 44 + static_cast<std::size_t>(c)];
+      if (t < 2.9) before += v, ++n_before;
+      if (t > 3.2) after += v, ++n_after;
+    }
+  }
+  REQUIRE(n_before > 0);
+  REQUIRE(n_after > 0);
+  CHECK(before / static_cast<double>(n_before) > 3.0);  // a cell's base capacitance is 4.6-7.1 pF
+  CHECK(std::abs(after / static_cast<double>(n_after)) < 0.3);
+  CHECK(run("simulate --tear 27 0 1 --out " + temp("sim_bad_tear.safetensors")).status == 1);  // no trace 27
+  const Run two = run("simulate --tear 19 1 --out " + temp("sim_bad_tear.safetensors"));  // three numbers
+  CHECK(two.status == 1);
+  CHECK(two.out.find("expected TRACE KEPT SECONDS") != std::string::npos);
+}
+
 TEST_CASE("cli: glovepose simulate --report prints every section of the realism report") {
   const Run r = run("simulate --report --seed 2 --subjects 3 --sessions 2 --minutes 0.3");
   INFO(r.out);

@@ -7,6 +7,7 @@
 #include <glovepose/sim/report.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -23,6 +24,7 @@ struct SimulateOptions {
   std::string out, csv, sequence_file, world = sim::default_world().name, stream, payload = "measurements";
   DeviceStreamSettings device;
   std::vector<std::string> without, settings;
+  std::vector<double> tear;  // --tear: trace, cells kept, seconds
   bool report = false, print_sequence = false;
 };
 
@@ -40,6 +42,21 @@ int simulate(SimulateOptions o) {
     throw CLI::RequiredError("--out FILE (or --stream TARGET, --report, or --print-calibration-sequence)");
   o.device.payload = o.payload == "rows" ? StreamPayload::Rows : o.payload == "cells" ? StreamPayload::Cells : StreamPayload::Measurements;
   if (!o.stream.empty() && o.device.payload != StreamPayload::Cells) config.recording.raw_rows = true;
+  if (!o.tear.empty()) {
+    const auto whole = [](double v) { return std::isfinite(v) && v >= 0.0 && v == std::floor(v); };
+    if (o.tear.size() != 3 || !whole(o.tear[0]) || !whole(o.tear[1]) || !(o.tear[2] >= 0.0 && std::isfinite(o.tear[2])))
+      throw Error("--tear: expected TRACE KEPT SECONDS (a trace 0-26: bottom 0-14, top 15-26; the cells it keeps from the wrist; "
+                  "seconds into each session), three numbers");
+    config.recording.tear = {static_cast<int>(o.tear[0]), static_cast<int>(o.tear[1]), o.tear[2]};
+    const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+    const std::vector<int> floating = sim::cells_beyond_tear(layout, sim::glauser2019_sites(), config.recording.tear);
+    std::string cells;
+    for (int c : floating) cells += (cells.empty() ? "" : ", ") + std::to_string(c);
+    const int trace = config.recording.tear.trace;
+    std::fprintf(stderr, "--tear: %s trace %d torn %g s into each session, %d cell(s) kept (%zu float: cells %s)\n",
+                 trace < layout.bottom_traces() ? "bottom" : "top", trace < layout.bottom_traces() ? trace : trace - layout.bottom_traces(),
+                 o.tear[2], config.recording.tear.cells_kept, floating.size(), cells.empty() ? "none" : cells.c_str());
+  }
   if (!o.sequence_file.empty()) {
     config.guided_calibration = calibration::Sequence::read(o.sequence_file);
     config.calibration_seconds = config.guided_calibration->total_seconds();
@@ -102,6 +119,12 @@ Command add_simulate(CLI::App& tool) {
   add_number(*command, "--mean-window", "N", config.recording.readout.mean_window, "readings per row averaged before solving (default 5)")
       ->check(at_least(1));
   add_number(*command, "--threads", "T", config.threads, "threads (default 0: all cores)");
+  command->add_option("--tear", o->tear,
+                      "a trace that tears in every session: TRACE KEPT SECONDS (trace 0-26: the bottom traces 0-14, then the top 15-26; "
+                      "the cells it keeps connected, nearest the wrist first; seconds into the session): the cells beyond the break "
+                      "float (docs/simulator.md, \"Readout\")")
+      ->expected(3)
+      ->type_name("TRACE KEPT SECONDS");
   std::string worlds;
   for (const sim::World& w : sim::worlds()) worlds += std::string(worlds.empty() ? "" : "; ") + w.name + ": " + w.summary;
   std::vector<std::string> names;
