@@ -4,6 +4,7 @@
 #pragma once
 
 #include <glovepose/config.hpp>
+#include <glovepose/io/atomic_file.hpp>
 
 #include <cerrno>
 #include <chrono>
@@ -38,17 +39,7 @@ inline void raw_if_terminal(int fd) noexcept {
 
 /// Writes all `size` bytes to `fd`; throws Error "<what>: cannot write: <cause>" when refused.
 inline void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& what) {
-  while (size > 0) {
-#ifdef _WIN32
-    const int n = ::_write(fd, data, static_cast<unsigned>(size));
-#else
-    const ssize_t n = ::write(fd, data, size);
-#endif
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw Error(what + ": cannot write: " + std::strerror(n < 0 ? errno : EIO));
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
+  if (const int cause = io::write_fully(fd, data, size)) throw Error(what + ": cannot write: " + std::strerror(cause));
 }
 
 inline void close_fd(int fd) noexcept {

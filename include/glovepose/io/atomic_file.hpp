@@ -38,6 +38,25 @@
 
 namespace glovepose::io {
 
+/// @brief Writes all `size` bytes to the file descriptor `fd`, again after an interrupted call
+/// (EINTR). Returns 0, or the cause it stopped at (an errno value; EIO when a write took nothing).
+inline int write_fully(int fd, const void* data, std::size_t size) noexcept {
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+#ifdef _WIN32
+    const int n = ::_write(fd, p, static_cast<unsigned>(size));
+#else
+    const ssize_t n = ::write(fd, p, size);
+#endif
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return errno;
+    if (n == 0) return EIO;
+    p += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
 /// @brief A file written whole or not at all (see the file's comment). Write through stream() or
 /// write(), then commit(); destroyed without commit(), it leaves the target untouched.
 class AtomicFile : private std::streambuf {
@@ -125,22 +144,7 @@ class AtomicFile : private std::streambuf {
 
   // Writes the buffered bytes; false (with error_ set) when the system refuses them.
   bool flush_buffer() noexcept {
-    const char* p = pbase();
-    std::size_t left = static_cast<std::size_t>(pptr() - pbase());
-    while (left > 0 && error_ == 0) {
-#ifdef _WIN32
-      const int n = ::_write(fd_, p, static_cast<unsigned>(left));
-#else
-      const ssize_t n = ::write(fd_, p, left);
-#endif
-      if (n < 0) {
-        if (errno != EINTR) error_ = errno;
-        continue;
-      }
-      if (n == 0) error_ = EIO;
-      p += n;
-      left -= static_cast<std::size_t>(n);
-    }
+    if (error_ == 0) error_ = write_fully(fd_, pbase(), static_cast<std::size_t>(pptr() - pbase()));
     setp(buffer_.data(), buffer_.data() + buffer_.size());
     return error_ == 0;
   }
