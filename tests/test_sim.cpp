@@ -65,6 +65,23 @@ double rise(const GlovePhysics& p, std::size_t d, double angle, std::size_t c) {
   return cells_at(p, bent)[c] / cells_at(p, hand::Angles{})[c] - 1.0;
 }
 
+// The strain along cell `c` before the textile (pre-stretch, slack, saturation) shaped it, from its
+// stretch ratio along: the inverse of the physics' softplus and tanh, for an along-cut cell.
+double strain_before_textile(double along, const GloveFit& fit, std::size_t c) {
+  const double taut = kSaturation * std::atanh((along - 1.0) / kSaturation);
+  const double strain = kSlackWidth * std::log(std::expm1(taut / kSlackWidth));
+  return (strain + 1.0) / fit.pre_along[c] - 1.0;
+}
+
+// Along-cut cells of digit `digit` on `segment`.
+std::vector<std::size_t> along_cells(int digit, sensor::Segment segment) {
+  std::vector<std::size_t> cells;
+  const auto sites = glauser2019_sites();
+  for (std::size_t c = 0; c < kCells; ++c)
+    if (sites[c].digit == digit && sites[c].segment == segment && sites[c].along) cells.push_back(c);
+  return cells;
+}
+
 }  // namespace
 
 TEST_CASE("sim random: streams are reproducible, independent of use order, and distributed as stated") {
@@ -491,6 +508,47 @@ TEST_CASE("sim tracker: a perfect tracker copies the truth, the wandering error 
   CHECK(worst < 1.0);  // float labels
 }
 
+TEST_CASE("sim tracker: a person's wandering error grows as their hand is shorter, times their own factor") {
+  TrackerConfig c;
+  c.flexion_sd = 4.0;
+  c.size_power = 1.0;
+  // The geometry: a millimetre of the camera's error turns a phalanx 0.9 times as long 1 / 0.9 times as far.
+  CHECK(tracker_person_factor(c, 0.9, 7) == doctest::Approx(1.0 / 0.9).epsilon(1e-12));
+  c.size_power = 0.0;
+  c.subject_noise_spread = 0.3;
+  double sum = 0.0, sq = 0.0;
+  const int people = 400;
+  for (int k = 0; k < people; ++k) {
+    const double log_factor = std::log(tracker_person_factor(c, 1.0, 1000 + static_cast<std::uint64_t>(k)));
+    sum += log_factor;
+    sq += log_factor * log_factor;
+  }
+  const double mean = sum / people, sd = std::sqrt(sq / people - mean * mean);
+  MESSAGE("log-SD of the person factors " << sd << " (stated 0.3), mean " << mean);
+  CHECK(sd == doctest::Approx(0.3).epsilon(0.1));  // sampling error of an SD over 400: 3.5%
+  CHECK(std::abs(mean) < 0.05);                    // 3.3 standard errors
+  // The labels carry it: one person's flexion errors over 4 minutes have the SD 4 x their factor.
+  const Subject s = make_subjects(1, 3)[0];
+  const hand::Kinematics fk(s.hand_model());
+  const MotionSequence m(s, pose_gallery(), 240.0, 4);
+  Recording r = true_motion(m, 240.0);
+  c.size_power = 1.0;
+  const double scale = 0.92, expected = 4.0 * tracker_person_factor(c, scale, 55);
+  label_recording(r, m, fk, s.distal_radius(), c, {55, 2, 3}, scale);
+  double err_sq = 0.0, frames = 0.0;
+  for (std::size_t d = 0; d < hand::kDofCount; ++d) {
+    const hand::Dof& dof = hand::kDofs[d];
+    if (dof.finger == hand::Finger::Thumb || dof.motion == hand::Motion::Abduction || dof.motion == hand::Motion::Twist) continue;
+    for (std::size_t f = 0; f < static_cast<std::size_t>(r.frames); ++f) {
+      if (!inside(r, f, d, 4.0 * expected)) continue;
+      err_sq += std::pow(label_error(r, f, d), 2);
+      frames += 1.0;
+    }
+  }
+  MESSAGE("flexion error SD " << std::sqrt(err_sq / frames) << " deg, stated " << expected);
+  CHECK(std::sqrt(err_sq / frames) == doctest::Approx(expected).epsilon(0.08));
+}
+
 TEST_CASE("sim tracker: biases per person and per session, latency as motion lag, failures as stated") {
   const Subject s = make_subjects(1, 3)[0];
   const hand::Kinematics fk(s.hand_model());
@@ -746,6 +804,103 @@ TEST_CASE("sim wear: a glove too big leaves all of the shortfall as slack, which
     CHECK(all < 0.5 * part);
     CHECK(rise(slack, pip, 1.2, c) > 0.5);  // taut once the slack is taken up: the large flexion still reads
   }
+}
+
+TEST_CASE("sim wear: straighter neighbours hold back part of a finger's knuckle lengthening through the sheet") {
+  const Subject s = make_subjects(1, 1)[0];
+  const Glove glove = make_glove(0, 1);
+  WearConfig wear;
+  wear.donning_shift = wear.cell_shift = wear.pre_stretch_spread = 0.0;
+  const auto fit_with = [&](double hold) {
+    WearConfig w = wear;
+    w.neighbour_hold = hold;
+    core::Rng rng(3);
+    return don_glove(s, glove, rng, w);
+  };
+  // The person's sheet-tension multiplier scales the hold: these give holds of 0, 1/2 and 1.
+  const GloveFit free_fit = fit_with(0.0), half_fit = fit_with(0.5 / s.skin.sheet_tension), full_fit = fit_with(10.0);
+  const GlovePhysics free(s, glove, free_fit), half(s, glove, half_fit), full(s, glove, full_fit);
+  const auto base = [](hand::Finger f) { return hand::dof_of(f, hand::Motion::BaseFlexion); };
+  const auto along = [](const GlovePhysics& p, const hand::Angles& a) {
+    CellArray al{}, ac{};
+    p.stretch(a, al, ac);
+    return std::pair{al, ac};
+  };
+  // A fist's knuckles flex together: nothing is held back.
+  hand::Angles fist{};
+  for (hand::Finger f : {hand::Finger::Index, hand::Finger::Middle, hand::Finger::Ring, hand::Finger::Pinky}) fist[base(f)] = 1.0;
+  CHECK(cells_at(full, fist) == cells_at(free, fist));
+  // The index alone: a full hold leaves its knuckle cells and the back of the hand behind its
+  // knuckle at rest along (nothing else moved), half of it halves their strain; the girth across is
+  // not the sheet's to hold.
+  hand::Angles alone{};
+  alone[base(hand::Finger::Index)] = 0.6;
+  const auto [rest_along, rest_across] = along(full, hand::Angles{});
+  const auto [free_along, free_across] = along(free, alone);
+  const auto [half_along, half_across] = along(half, alone);
+  const auto [full_along, full_across] = along(full, alone);
+  const std::vector<std::size_t> index_cells = along_cells(1, sensor::Segment::Proximal);
+  REQUIRE(!index_cells.empty());
+  for (std::size_t c : index_cells) {
+    CHECK(full_along[c] == rest_along[c]);
+    CHECK(full_across[c] == free_across[c]);
+    const double strain = strain_before_textile(free_along[c], free_fit, c);
+    CHECK(strain > 0.05);
+    CHECK(strain_before_textile(half_along[c], half_fit, c) == doctest::Approx(0.5 * strain).epsilon(1e-6));
+  }
+  for (std::size_t c : along_cells(1, sensor::Segment::Metacarpal)) {
+    CHECK(full_along[c] == rest_along[c]);
+    CHECK(free_along[c] > rest_along[c] + 1e-3);
+  }
+}
+
+TEST_CASE("sim wear: past the stick angle the sheet slides off a joint's cell, half to each neighbouring joint's") {
+  const Subject s = make_subjects(1, 1)[0];
+  const Glove glove = make_glove(0, 1);
+  WearConfig wear;
+  wear.donning_shift = wear.cell_shift = wear.pre_stretch_spread = 0.0;
+  wear.stick_angle = 20.0;
+  const auto fit_with = [&](double share) {
+    WearConfig w = wear;
+    w.slide_share = share;
+    core::Rng rng(3);
+    return don_glove(s, glove, rng, w);
+  };
+  const double share = 0.5, stick = 20.0 * core::kRadiansPerDegree / s.skin.slide;
+  const GloveFit stuck_fit = fit_with(0.0), sliding_fit = fit_with(share);
+  const GlovePhysics stuck(s, glove, stuck_fit), sliding(s, glove, sliding_fit);
+  const std::size_t pip = hand::dof_of(hand::Finger::Index, hand::Motion::MiddleFlexion);
+  const auto strain = [&](const GlovePhysics& p, const GloveFit& fit, double angle, std::size_t c) {
+    hand::Angles a{};
+    a[pip] = angle;
+    CellArray al{}, ac{};
+    p.stretch(a, al, ac);
+    return strain_before_textile(al[c], fit, c);
+  };
+  const std::vector<std::size_t> joint = along_cells(1, sensor::Segment::Middle);
+  const std::vector<std::size_t> before = along_cells(1, sensor::Segment::Proximal), after = along_cells(1, sensor::Segment::Distal);
+  REQUIRE(!joint.empty());
+  REQUIRE(!before.empty());
+  REQUIRE(!after.empty());
+  const double low = stick + 0.5, high = stick + 0.9;  // well past the grip's smooth give (a tenth of the stick angle)
+  for (std::size_t c : joint) {
+    // Held below the stick angle; past it, the cell's strain grows by 1 - share per radian.
+    CHECK(strain(sliding, sliding_fit, 0.25 * stick, c) == doctest::Approx(strain(stuck, stuck_fit, 0.25 * stick, c)).epsilon(0.01));
+    const double slope_stuck = strain(stuck, stuck_fit, high, c) - strain(stuck, stuck_fit, low, c);
+    const double slope_sliding = strain(sliding, sliding_fit, high, c) - strain(sliding, sliding_fit, low, c);
+    CHECK(slope_stuck > 0.05);
+    CHECK(slope_sliding / slope_stuck == doctest::Approx(1.0 - share).epsilon(0.005));
+  }
+  // What slides reaches the cells over the MCP and the DIP alike: the same length (mm) on each.
+  const auto gained = [&](std::size_t c) {
+    const double length = glauser2019_sites()[c].length;
+    return length * (strain(sliding, sliding_fit, high, c) - strain(stuck, stuck_fit, high, c));
+  };
+  for (std::size_t b : before)
+    for (std::size_t d : after) {
+      CHECK(gained(b) > 0.5);  // mm
+      CHECK(gained(d) == doctest::Approx(gained(b)).epsilon(1e-6));
+    }
 }
 
 TEST_CASE("sim wear: slip and gain drift follow their processes, continuous across a donning's recordings") {

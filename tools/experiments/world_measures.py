@@ -24,6 +24,9 @@ B. Per-person spread after calibration (``spread``). Column (4)'s proxy: a linea
    error over its frames and the 25 DoFs in degrees (``train/metrics.hpp``), against the labels and
    against the truth (``true_angles``). Per world: mean, SD over subjects (ddof 1), worst subject,
    correlation with the paper's column (4) and the smallest hand's (subject 9) rank (1 = worst).
+   The same for columns (1) and (2)'s proxies: a linear map of the same kind per person, trained on
+   its sessions 0, 1 and scored on session 2 (one donning, as Table 1's (1)), or trained on 0-3 and
+   scored on 4 (a fresh donning, as (2)).
 
 Commands (one seed per comparison, the same for every world; G=build/tools/glovepose):
 
@@ -171,6 +174,31 @@ def leave_one_subject_out(parts):
     return result
 
 
+def personal(parts, train, test):
+    """Per subject: (mean abs error vs labels, vs truth), degrees, of a linear map trained on the
+    subject's own sessions `train` and scored on its session `test` (Table 1's (1): 0, 1 -> 2; (2):
+    0-3 -> 4). Subjects without those sessions are left out."""
+    result = {}
+    for subject in sorted({p["subject"] for p in parts}):
+        mine = {p["session"]: p for p in parts if p["subject"] == subject}
+        if test not in mine or any(t not in mine for t in train):
+            continue
+        x = np.vstack([with_bias(mine[t]["cal"]) for t in train])
+        y = np.vstack([mine[t]["labels"] for t in train])
+        w = np.linalg.solve(x.T @ x + 1e-6 * np.eye(x.shape[1]), x.T @ y)
+        pred = with_bias(mine[test]["cal"]) @ w
+        result[subject] = (np.abs(pred - mine[test]["labels"]).mean() * DEG, np.abs(pred - mine[test]["truth"]).mean() * DEG)
+    return result
+
+
+# Table 1's columns the spread measures, with the proxy of each: name, the paper's key, the errors.
+SPREAD_COLUMNS = [
+    ("(4) generic, leave one subject out", "cal", leave_one_subject_out),
+    ("(1) personal intra, sessions 0, 1 -> 2", "intra", lambda parts: personal(parts, [0, 1], 2)),
+    ("(2) personal inter, sessions 0-3 -> 4", "inter", lambda parts: personal(parts, [0, 1, 2, 3], 4)),
+]
+
+
 def paper_column(column="cal"):
     """The paper's Table 1 column per subject (report.py's PAPER_TABLE1_SUBJECTS; default (4))."""
     return np.array([row[column] for row in PAPER_TABLE1_SUBJECTS])
@@ -180,39 +208,43 @@ def spread(args):
     absent = [p for p in args.datasets if not os.path.isfile(p)]
     if absent:
         die(f"no such file: {', '.join(absent)}")
-    paper = paper_column()
-    print(f"paper column (4): mean {paper.mean():.2f}, SD {paper.std(ddof=1):.2f} (ddof 0: {paper.std():.2f}), "
-          f"worst subject {int(paper.argmax())} ({paper.max():.1f})")
-    print("| world | mean (labels) | SD | SD / paper | worst | r with paper | subject 9 rank | mean (truth) | SD (truth) | worst (truth) |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    rows = {}
-    tens = []  # per ten-subject corpus: SD / paper's, r, subject 9's rank, its and subject 5's excess over the mean
+    corpora = []
     for path in args.datasets:
         data, meta = read_dataset(path)
-        res = leave_one_subject_out(sessions(data, meta))
-        if len(res) < 3:
-            die(f"'{path}' has {len(res)} subject(s) on glove 0; leaving one out and an SD over subjects need at least 3")
-        subj = sorted(res)
-        lab = np.array([res[s][0] for s in subj])
-        tru = np.array([res[s][1] for s in subj])
-        name = os.path.basename(path).replace(".safetensors", "").removeprefix("w_")
-        rows[name] = dict(labels=lab.tolist(), truth=tru.tolist(), world=meta.get("world"), without=meta.get("world_without", ""),
-                          set=meta.get("world_set", ""))
-        ratio = r = rank = ""
-        if len(lab) == len(paper):
-            ratio = f"{lab.std(ddof=1) / paper.std(ddof=1):.2f}"
-            r = f"{np.corrcoef(lab, paper)[0, 1]:+.2f}"
-            rank = str(int((lab > lab[9]).sum()) + 1) if len(lab) > 9 else ""  # 1 = worst
-            tens.append((lab.std(ddof=1) / paper.std(ddof=1), np.corrcoef(lab, paper)[0, 1], int(rank), lab[9] - lab.mean(),
-                         lab[5] - lab.mean()))
-        print(f"| {name} | {lab.mean():.2f} | {lab.std(ddof=1):.2f} | {ratio} | {subj[int(lab.argmax())]} ({lab.max():.2f}) | {r} | {rank} | "
-              f"{tru.mean():.2f} | {tru.std(ddof=1):.2f} | {subj[int(tru.argmax())]} ({tru.max():.2f}) |", flush=True)
-    if len(tens) > 1:  # one ten-person SD varies by a factor of two between seeds: say the mean over them
-        t = np.array(tens)
-        print(f"over the {len(tens)} ten-subject corpora: SD / paper mean {t[:, 0].mean():.2f} ({t[:, 0].min():.2f}-{t[:, 0].max():.2f}); "
-              f"r with paper mean {t[:, 1].mean():+.2f}; subject 9's rank {', '.join(str(int(k)) for k in t[:, 2])}, "
-              f"above the mean by {t[:, 3].mean():+.2f} (paper {paper[9] - paper.mean():+.2f}); "
-              f"subject 5 above the mean by {t[:, 4].mean():+.2f} (paper {paper[5] - paper.mean():+.2f})")
+        corpora.append((path, meta, sessions(data, meta)))
+    rows = {}
+    for title, key, errors in SPREAD_COLUMNS:
+        paper = paper_column(key)
+        print(f"\n## {title}\n\npaper: mean {paper.mean():.2f}, SD {paper.std(ddof=1):.2f}, worst subject {int(paper.argmax())} ({paper.max():.1f})\n")
+        print("| world | mean (labels) | SD | SD / paper | worst | r with paper | subject 9 rank | mean (truth) | SD (truth) | worst (truth) |")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        tens = []  # per ten-subject corpus: SD / paper's, r, subject 9's rank, its and subject 5's excess over the mean
+        for path, meta, parts in corpora:
+            res = errors(parts)
+            if len(res) < 3:
+                print(f"| {os.path.basename(path)} | {len(res)} subject(s) with these sessions: at least 3 needed |")
+                continue
+            subj = sorted(res)
+            lab = np.array([res[s][0] for s in subj])
+            tru = np.array([res[s][1] for s in subj])
+            name = os.path.basename(path).replace(".safetensors", "").removeprefix("w_")
+            rows.setdefault(name, dict(world=meta.get("world"), without=meta.get("world_without", ""), set=meta.get("world_set", "")))
+            rows[name][key] = dict(labels=lab.tolist(), truth=tru.tolist())
+            ratio = r = rank = ""
+            if len(lab) == len(paper):
+                ratio = f"{lab.std(ddof=1) / paper.std(ddof=1):.2f}"
+                r = f"{np.corrcoef(lab, paper)[0, 1]:+.2f}"
+                rank = str(int((lab > lab[9]).sum()) + 1)  # 1 = worst
+                tens.append((lab.std(ddof=1) / paper.std(ddof=1), np.corrcoef(lab, paper)[0, 1], int(rank), lab[9] - lab.mean(),
+                             lab[5] - lab.mean()))
+            print(f"| {name} | {lab.mean():.2f} | {lab.std(ddof=1):.2f} | {ratio} | {subj[int(lab.argmax())]} ({lab.max():.2f}) | {r} | {rank} | "
+                  f"{tru.mean():.2f} | {tru.std(ddof=1):.2f} | {subj[int(tru.argmax())]} ({tru.max():.2f}) |", flush=True)
+        if len(tens) > 1:  # one ten-person SD varies by a factor of two between seeds: say the mean over them
+            t = np.array(tens)
+            print(f"over the {len(tens)} ten-subject corpora: SD / paper mean {t[:, 0].mean():.2f} ({t[:, 0].min():.2f}-{t[:, 0].max():.2f}); "
+                  f"r with paper mean {t[:, 1].mean():+.2f}; subject 9's rank {', '.join(str(int(k)) for k in t[:, 2])}, "
+                  f"above the mean by {t[:, 3].mean():+.2f} (paper {paper[9] - paper.mean():+.2f}); "
+                  f"subject 5 above the mean by {t[:, 4].mean():+.2f} (paper {paper[5] - paper.mean():+.2f})")
     if args.json:
         write_json(args.json, rows)
 
@@ -396,7 +428,7 @@ def main():
     a.add_argument("--inverse-target", default="truth", choices=["truth", "labels"], help="angles of the inverse direction")
     a.add_argument("--no-inverse", dest="inverse", action="store_false", help="skip the angles-from-cells direction")
     a.add_argument("--json")
-    b = sub.add_parser("spread", help="measurement B: leave-one-subject-out linear map, per-subject errors")
+    b = sub.add_parser("spread", help="measurement B: per-subject errors of linear maps: leave one subject out (4), personal (1) and (2)")
     b.add_argument("datasets", nargs="+")
     b.add_argument("--json")
     args = ap.parse_args()

@@ -10,6 +10,11 @@
 ///    zone of width 1.2 r centred on the joint: a shifted cell catches less), plus a little from the
 ///    digit's neighbouring joints (the skin slides along the finger). Back-of-hand cells catch the
 ///    knuckles' lengthening with an exponential fall-off over their distance from the knuckle line.
+///  - the sheet between the skin and the cells (WearConfig, off in the named worlds): straighter
+///    neighbours hold back part of a finger's knuckle lengthening (the one-piece sheet joins the
+///    fingers), and past a stick angle friction lets go and part of a joint's lengthening slides to
+///    the cells over the digit's neighbouring joints. Both make a cell's reading depend on the pose
+///    in ways no weighted sum of the angles can follow.
 ///  - strain across: finger cells see the girth grow over a flexed joint and the web pull when the
 ///    finger abducts against its neighbours; web (abduction) cells see the change of the distance
 ///    between the two digits' proximal phalanxes; back-of-hand cells see the spread of the dorsal
@@ -38,6 +43,7 @@
 #include "../hand/kinematics.hpp"
 #include "../sensor/layout.hpp"
 #include "../core/random.hpp"
+#include "../core/units.hpp"
 #include "subject.hpp"
 
 namespace glovepose::sim {
@@ -139,6 +145,21 @@ struct WearConfig {
   /// its joint (k: the finger's length against the glove's, c: size_coupling). 1: the geometry; 0:
   /// cells follow every hand's joints (the worlds fitted before this effect).
   double length_misplacement = 0.0;
+  /// Share of a finger's lengthening over its base joint that straighter neighbours hold back: the
+  /// one-piece sheet joins the fingers across the webs, so a finger that flexes further than its
+  /// neighbours drags sheet anchored over them, and every cell its knuckle reaches (over the
+  /// knuckle, on the back of the hand, in the webs) sees only part of the difference; in a fist
+  /// every knuckle's sheet carries its own. Times the person's sheet-tension multiplier, at most 1.
+  /// 0: each finger's sheet on its own (the worlds fitted before this effect).
+  double neighbour_hold = 0.0;
+  /// Share of a flexion beyond the stick angle that the sheet slides away from the cell over the
+  /// joint, half of it to the cells over each neighbouring joint of the digit: friction holds the
+  /// sheet on the skin until the tension over the flexing joint exceeds it. 0: the sheet sticks
+  /// (the worlds fitted before this effect).
+  double slide_share = 0.0;
+  /// Flexion (degrees) a joint's sheet holds by friction before it slides, for typical skin (divided
+  /// by the person's slide multiplier: skin the glove slides on more easily lets go earlier).
+  double stick_angle = 20.0;
 };
 
 /// @brief The stretch ratio a cell gets from a hand whose size ratio to the glove's relaxed hand is
@@ -256,6 +277,9 @@ struct GloveFit {
   CellArray shift{};       ///< mm along the digit (towards the fingertip positive) of each cell.
   CellArray pre_along{};   ///< Stretch ratio along each cell before any motion.
   CellArray pre_across{};  ///< Stretch ratio across each cell before any motion.
+  double neighbour_hold = 0.0;  ///< WearConfig::neighbour_hold.
+  double slide_share = 0.0;     ///< WearConfig::slide_share.
+  double stick_angle = 0.0;     ///< WearConfig::stick_angle, radians.
 };
 
 /// @brief Puts `glove` on a hand: the pre-stretch follows the hand's size against the glove's
@@ -266,6 +290,9 @@ inline GloveFit don_glove(const Subject& subject, const Glove& glove, core::Rng&
   const auto sites = glauser2019_sites();
   const hand::HandModel hand = subject.hand_model();
   GloveFit fit;
+  fit.neighbour_hold = wear.neighbour_hold;
+  fit.slide_share = wear.slide_share;
+  fit.stick_angle = wear.stick_angle * core::kRadiansPerDegree;
   const double loose = loose_fit_factor(subject, wear);
   const double global_shift = rng.normal(0.0, wear.donning_shift * loose);
   const double global_pre = rng.normal(1.0, wear.pre_stretch_spread / 2.0);
@@ -392,10 +419,17 @@ class GlovePhysics {
     return parent == 0 ? knuckle_radius_[static_cast<std::size_t>(d.finger)] : radius_[static_cast<std::size_t>(parent)];
   }
 
-  // Lengthening (mm) of the dorsal skin over a digit's base joint.
+  // Lengthening (mm) of the sheet over a digit's base joint.
   double knuckle_lengthening(int digit, const hand::Angles& a) const noexcept {
     const int dof = flexion_dof(digit, hand::Motion::BaseFlexion);
-    return joint_radius(dof) * bend(a[static_cast<std::size_t>(dof)]);
+    return joint_radius(dof) * knuckle_flexion(digit, a);
+  }
+
+  // Flexion (rad) of a digit's base joint that the sheet over it carries: the dorsal skin's, less
+  // what straighter neighbouring fingers hold back through the sheet.
+  double knuckle_flexion(int digit, const hand::Angles& a) const noexcept {
+    const double own = bend(a[static_cast<std::size_t>(flexion_dof(digit, hand::Motion::BaseFlexion))]);
+    return fit_.neighbour_hold > 0.0 && digit > 0 ? own - held_back(digit, a) : own;
   }
 
   static int flexion_dof(int digit, hand::Motion motion) noexcept {
@@ -409,16 +443,44 @@ class GlovePhysics {
     const double zone = kBendZone * skin_.bend_zone * r;
     // The cell spans [shift - L/2, shift + L/2] around the joint; the bend zone [-zone/2, zone/2].
     const double overlap = std::max(0.0, std::min(shift + site.length / 2, zone / 2) - std::max(shift - site.length / 2, -zone / 2));
-    double lengthening = overlap / zone * r * bend(a[static_cast<std::size_t>(dof)]);
+    const bool knuckle = site.segment == sensor::Segment::Proximal && site.digit > 0;  // a finger's base joint
+    double flexion = knuckle ? knuckle_flexion(site.digit, a) : bend(a[static_cast<std::size_t>(dof)]);
+    if (fit_.slide_share > 0.0) flexion -= fit_.slide_share * slid(a[static_cast<std::size_t>(dof)]);
+    double lengthening = overlap / zone * r * flexion;
     for (int other = dof - 1; other <= dof + 1; other += 2) {  // the digit's neighbouring flexion joints
       if (other < 0 || other >= static_cast<int>(hand::kDofCount)) continue;
       const auto& o = hand::kDofs[static_cast<std::size_t>(other)];
-      const bool flexion =
+      const bool flexion_joint =
           o.motion == hand::Motion::BaseFlexion || o.motion == hand::Motion::MiddleFlexion || o.motion == hand::Motion::TipFlexion;
-      if (flexion && static_cast<int>(o.finger) == site.digit)
-        lengthening += kNeighbourJointSpill * skin_.joint_spill * joint_radius(other) * bend(a[static_cast<std::size_t>(other)]);
+      if (!flexion_joint || static_cast<int>(o.finger) != site.digit) continue;
+      const double angle = a[static_cast<std::size_t>(other)];
+      lengthening += kNeighbourJointSpill * skin_.joint_spill * joint_radius(other) * bend(angle);
+      if (fit_.slide_share > 0.0) lengthening += 0.5 * fit_.slide_share * joint_radius(other) * slid(angle);
     }
     return lengthening;
+  }
+
+  // Flexion (rad) beyond what friction holds the sheet over a joint at: the part that can slide.
+  // Smoothed over a tenth of the stick angle (the grip gives way gradually).
+  double slid(double angle) const noexcept {
+    const double past = bend(angle), stick = fit_.stick_angle / skin_.slide;
+    if (stick <= 0.0) return std::max(0.0, past);
+    const double width = 0.1 * stick, x = (past - stick) / width;
+    return x > 30.0 ? past - stick : width * std::log1p(std::exp(x));
+  }
+
+  // Flexion (rad) of a finger's base joint that its straighter neighbours hold back through the sheet.
+  double held_back(int digit, const hand::Angles& a) const noexcept {
+    const auto base = [&](int d) { return bend(a[static_cast<std::size_t>(flexion_dof(d, hand::Motion::BaseFlexion))]); };
+    double neighbours = 0.0;
+    int count = 0;
+    for (int n = digit - 1; n <= digit + 1; n += 2)
+      if (n >= 1 && n <= 4) {
+        neighbours += base(n);
+        ++count;
+      }
+    const double hold = std::min(1.0, fit_.neighbour_hold * skin_.sheet_tension);
+    return hold * std::max(0.0, base(digit) - neighbours / count);
   }
 
   // How far the glove has slid towards the fingertip over a cell: the flexion of the joints between

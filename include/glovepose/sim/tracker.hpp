@@ -55,6 +55,13 @@ struct TrackerConfig {
   double collision_allowance = std::numeric_limits<double>::infinity();
   double latency = 0.0;           ///< The labels describe the hand this long before the frame's time.
   double smoothing = 0.0;         ///< Time constant of the tracker's first-order temporal smoothing.
+  /// The wandering error's SDs x (the template hand's length / the person's)^size_power: the depth
+  /// camera's error is in millimetres, and a millimetre turns a short phalanx further than a long
+  /// one (1: that geometry; 0: every hand alike, the worlds fitted before this effect).
+  double size_power = 0.0;
+  /// Log-SD of a person's own factor on the wandering error's SDs: how well the tracker follows that
+  /// person's hand (distance and angle to the camera, the personalised model's fit). 0: none.
+  double subject_noise_spread = 0.0;
 
   /// @brief Whether the labels differ from the truth at all.
   bool perfect() const noexcept {
@@ -90,11 +97,25 @@ inline hand::Finger snap_target(hand::Finger f, int pick) noexcept {
 
 }  // namespace detail
 
+/// @brief The factor on the wandering error's SDs for a person whose hand is `length_scale` times the
+/// template's long, drawn from the person's stream `subject_seed` (its own sub-stream: the person's
+/// bias draws stay as they were): TrackerConfig::size_power and subject_noise_spread.
+inline double tracker_person_factor(const TrackerConfig& config, double length_scale, std::uint64_t subject_seed) {
+  double factor = config.size_power == 0.0 ? 1.0 : std::pow(length_scale, -config.size_power);
+  if (config.subject_noise_spread > 0.0) {
+    core::Rng rng(core::derive_seed(subject_seed, {1}));
+    factor *= std::exp(rng.normal(0.0, config.subject_noise_spread));
+  }
+  return factor;
+}
+
 /// @brief Labels `rec` as the reference tracker would: fills rec.labels (frames x 25, radians, within
 /// the joint limits) from the true motion and sets rec.outlier from the labels' collision energy, as
-/// the paper's filter saw the tracker's poses. A perfect tracker copies the truth. Deterministic in the seeds.
+/// the paper's filter saw the tracker's poses. A perfect tracker copies the truth. `length_scale`:
+/// the person's hand length against the template's (Subject::length_scale()). Deterministic in the seeds.
 inline void label_recording(Recording& rec, const MotionSequence& motion, const hand::Kinematics& kinematics,
-                            const std::array<double, 16>& radii, const TrackerConfig& config, const TrackerSeeds& seeds) {
+                            const std::array<double, 16>& radii, const TrackerConfig& config, const TrackerSeeds& seeds,
+                            double length_scale = 1.0) {
   const std::size_t n = static_cast<std::size_t>(rec.frames);
   constexpr std::size_t D = hand::kDofCount;
   if (config.perfect()) {
@@ -106,6 +127,7 @@ inline void label_recording(Recording& rec, const MotionSequence& motion, const 
   core::Rng subject_rng(seeds.subject), session_rng(seeds.session), rng(seeds.recording);
   for (std::size_t d = 0; d < D; ++d)
     bias[d] = (subject_rng.normal(0.0, config.subject_bias_sd) + session_rng.normal(0.0, config.session_bias_sd)) * core::kRadiansPerDegree;
+  const double person = tracker_person_factor(config, length_scale, seeds.subject);
   std::array<double, D> wander{};  // unit-variance Ornstein-Uhlenbeck state per DoF
   for (double& z : wander) z = rng.normal(0.0, 1.0);
 
@@ -141,7 +163,7 @@ inline void label_recording(Recording& rec, const MotionSequence& motion, const 
       const double flexion =
           truth[hand::dof_of(finger, hand::Motion::BaseFlexion)] + truth[hand::dof_of(finger, hand::Motion::MiddleFlexion)];
       const double occluded = 1.0 + config.occlusion_gain * std::clamp(flexion / (2.0 * 90.0 * core::kRadiansPerDegree), 0.0, 1.0);
-      label[d] = truth[d] + bias[d] + wander[d] * detail::tracker_sd(config, d) * occluded * core::kRadiansPerDegree;
+      label[d] = truth[d] + bias[d] + wander[d] * detail::tracker_sd(config, d) * person * occluded * core::kRadiansPerDegree;
     }
     // The tracker's collision term: the error is shortened (bisection on its length) until the
     // fingers overlap no more than allowed.

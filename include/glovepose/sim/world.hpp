@@ -47,11 +47,11 @@ struct WorldParameter {
 };
 
 /// @brief Every parameter a world's effects have, by name.
-inline const std::array<WorldParameter, 35>& world_parameters() {
+inline const std::array<WorldParameter, 40>& world_parameters() {
 #define GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(group, field, minimum) \
   WorldParameter { #group "." #field, [](World& w) -> double& { return w.group.field; }, minimum }
 #define GLOVEPOSE_WORLD_PARAMETER(group, field) GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(group, field, 0.0)
-  static const std::array<WorldParameter, 35> table{
+  static const std::array<WorldParameter, 40> table{
       GLOVEPOSE_WORLD_PARAMETER(tracker, flexion_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, abduction_sd),
       GLOVEPOSE_WORLD_PARAMETER(tracker, twist_sd),
@@ -67,6 +67,8 @@ inline const std::array<WorldParameter, 35>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER(tracker, collision_allowance),
       GLOVEPOSE_WORLD_PARAMETER(tracker, latency),
       GLOVEPOSE_WORLD_PARAMETER(tracker, smoothing),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, size_power),
+      GLOVEPOSE_WORLD_PARAMETER(tracker, subject_noise_spread),
       GLOVEPOSE_WORLD_PARAMETER(wear, donning_shift),
       GLOVEPOSE_WORLD_PARAMETER(wear, cell_shift),
       GLOVEPOSE_WORLD_PARAMETER(wear, pre_stretch_spread),
@@ -79,6 +81,9 @@ inline const std::array<WorldParameter, 35>& world_parameters() {
       GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(wear, relaxed_length, 100.0),
       GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(wear, relaxed_width, 50.0),
       GLOVEPOSE_WORLD_PARAMETER(wear, length_misplacement),
+      GLOVEPOSE_WORLD_PARAMETER(wear, neighbour_hold),
+      GLOVEPOSE_WORLD_PARAMETER(wear, slide_share),
+      GLOVEPOSE_WORLD_PARAMETER_AT_LEAST(wear, stick_angle, 1.0),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_share),
       GLOVEPOSE_WORLD_PARAMETER(material, hysteresis_width),
       GLOVEPOSE_WORLD_PARAMETER(material, drift_rate),
