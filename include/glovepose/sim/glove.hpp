@@ -469,18 +469,24 @@ class GlovePhysics {
     return x > 30.0 ? past - stick : width * std::log1p(std::exp(x));
   }
 
-  // Flexion (rad) of a finger's base joint that its straighter neighbours hold back through the sheet.
-  double held_back(int digit, const hand::Angles& a) const noexcept {
-    const auto base = [&](int d) { return bend(a[static_cast<std::size_t>(flexion_dof(d, hand::Motion::BaseFlexion))]); };
-    double neighbours = 0.0;
+  // The mean of value(n) over a finger's neighbouring fingers (digits 1-4; the thumb has none here).
+  template <typename Value>
+  static double neighbour_mean(int digit, const Value& value) noexcept {
+    double sum = 0.0;
     int count = 0;
     for (int n = digit - 1; n <= digit + 1; n += 2)
       if (n >= 1 && n <= 4) {
-        neighbours += base(n);
+        sum += value(n);
         ++count;
       }
+    return sum / count;
+  }
+
+  // Flexion (rad) of a finger's base joint that its straighter neighbours hold back through the sheet.
+  double held_back(int digit, const hand::Angles& a) const noexcept {
+    const auto base = [&](int d) { return bend(a[static_cast<std::size_t>(flexion_dof(d, hand::Motion::BaseFlexion))]); };
     const double hold = std::min(1.0, fit_.neighbour_hold * skin_.sheet_tension);
-    return hold * std::max(0.0, base(digit) - neighbours / count);
+    return hold * std::max(0.0, base(digit) - neighbour_mean(digit, base));
   }
 
   // How far the glove has slid towards the fingertip over a cell: the flexion of the joints between
@@ -505,14 +511,7 @@ class GlovePhysics {
     double strain = kGirthPerFlexion * skin_.girth_flexion * std::max(0.0, a[static_cast<std::size_t>(site.flexion_dof)]);
     if (site.segment == sensor::Segment::Proximal && site.digit > 0) {
       const auto abduction = [&](int digit) { return a[static_cast<std::size_t>(flexion_dof(digit, hand::Motion::Abduction))]; };
-      double neighbours = 0.0;
-      int count = 0;
-      for (int n = site.digit - 1; n <= site.digit + 1; n += 2)
-        if (n >= 1 && n <= 4) {
-          neighbours += abduction(n);
-          ++count;
-        }
-      strain += kGirthPerAbduction * skin_.girth_abduction * std::abs(abduction(site.digit) - neighbours / count);
+      strain += kGirthPerAbduction * skin_.girth_abduction * std::abs(abduction(site.digit) - neighbour_mean(site.digit, abduction));
     }
     return strain;
   }
