@@ -9,6 +9,8 @@
 //   joint list). frames/s counts poses.
 // - BM_EstimatorFrameContact/<0|1>: BM_EstimatorFrame/3 on a recording with many pinches, the contact
 //   stage (hand/contact.hpp) off and on.
+// - BM_EstimatorFrameFloating/<0|1>: BM_EstimatorFrame/3 with the floating-cell stand-in
+//   (sensor/floating_cells.hpp) off and on: its cost on an intact glove (the running statistics).
 // - BM_EstimatorFrameXr/3: BM_EstimatorFrame/3 plus joints_at (OpenXR joints, predicted, with velocities).
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
@@ -129,19 +131,26 @@ struct SessionClock {
   }
 };
 
-void BM_EstimatorFrame(benchmark::State& state) {
-  GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
-  const int rows = static_cast<int>(recording().data.row_count);
-  SessionClock clock{recording()};
+// The iterations of the whole-frame benchmarks: one frame of `r`'s rows each, then `after()`.
+template <typename After>
+void push_frames(benchmark::State& state, GlovePoseEstimator& estimator, const Recording& r, After after) {
+  const int rows = static_cast<int>(r.data.row_count);
+  SessionClock clock{r};
   for (auto _ : state) {
     if (estimator.push_measurements(clock.rows(), rows, clock.timestamp()) != Status::Solved) {
       state.SkipWithError("push_measurements did not give a pose");
       break;
     }
+    after();
     benchmark::DoNotOptimize(estimator.joints());
     clock.next();
   }
   state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void BM_EstimatorFrame(benchmark::State& state) {
+  GlovePoseEstimator estimator = calibrated_estimator(storage_of(state));
+  push_frames(state, estimator, recording(), [] {});
   state.SetLabel(nn::storage_name(storage_of(state)));
 }
 
@@ -152,21 +161,20 @@ void BM_EstimatorFrameContact(benchmark::State& state) {
   EstimatorConfig config;
   if (state.range(0) != 0) config.contact = hand::ContactConfig{};
   GlovePoseEstimator estimator = calibrated_estimator(nn::WeightStorage::Fixed16, config, pinch_recording());
-  const int rows = static_cast<int>(pinch_recording().data.row_count);
-  SessionClock clock{pinch_recording()};
   std::size_t adjusted = 0;
-  for (auto _ : state) {
-    if (estimator.push_measurements(clock.rows(), rows, clock.timestamp()) != Status::Solved) {
-      state.SkipWithError("push_measurements did not give a pose");
-      break;
-    }
-    adjusted += estimator.contact().closed >= 0;
-    benchmark::DoNotOptimize(estimator.joints());
-    clock.next();
-  }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  push_frames(state, estimator, pinch_recording(), [&] { adjusted += estimator.contact().closed >= 0; });
   state.counters["adjusted"] = static_cast<double>(adjusted) / static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
   state.SetLabel(state.range(0) != 0 ? "Fixed16, contact stage on" : "Fixed16, contact stage off");
+}
+
+// BM_EstimatorFrame/3 with EstimatorConfig::floating_cells off (0) and on (1, the default): the same
+// frames of an intact glove, so the ratio is what the running statistics cost every frame.
+void BM_EstimatorFrameFloating(benchmark::State& state) {
+  EstimatorConfig config;
+  config.floating_cells.enabled = state.range(0) != 0;
+  GlovePoseEstimator estimator = calibrated_estimator(nn::WeightStorage::Fixed16, config);
+  push_frames(state, estimator, recording(), [] {});
+  state.SetLabel(state.range(0) != 0 ? "Fixed16, floating-cell stand-in on" : "Fixed16, floating-cell stand-in off");
 }
 
 // BM_EstimatorFrame plus the OpenXR joints an engine asks for (joints_at 11 ms past the newest
@@ -325,5 +333,6 @@ const int kCapiBenchmarks = [] {
 
 BENCHMARK(BM_EstimatorFrame)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameContact)->Arg(0)->Arg(1)->UseRealTime();
+BENCHMARK(BM_EstimatorFrameFloating)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameXr)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorRow)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();

@@ -180,6 +180,8 @@ typedef int32_t glovepose_result;
 #define GLOVEPOSE_POSE_DISCONNECTED_ROWS 0x80u
 /** @brief Pose flag (fault): a row disagrees with the least-squares solve: a spike or a failing cell. */
 #define GLOVEPOSE_POSE_OUTLIER_ROWS 0x100u
+/** @brief Pose flag: cells stopped being measured (a torn trace) and were stood in for from the others; not a fault. */
+#define GLOVEPOSE_POSE_MASKED_CELLS 0x200u
 /** @brief The fault flags: a pose with any of them set cannot be trusted. */
 #define GLOVEPOSE_POSE_FAULT_FLAGS 0x1F0u
 

@@ -2,6 +2,7 @@
 #include <glovepose/hand/dofs.hpp>
 #include <glovepose/model/unet_model.hpp>
 #include <glovepose/nn/weights.hpp>
+#include <glovepose/sensor/layout.hpp>
 #include <glovepose/io/dataset.hpp>
 #include <glovepose/sim/wearable_device.hpp>
 

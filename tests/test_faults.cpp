@@ -9,6 +9,7 @@
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 #include <glovepose/sim/faults.hpp>
+#include <glovepose/sim/recorder.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -77,6 +78,7 @@ struct FrameRecord {
 struct FaultRun {
   std::vector<FrameRecord> frames;  // one per session frame: the latest pose at the frame's end
   long rejected_statuses = 0;
+  std::vector<int> masked_cells;  // the estimator's masked_cells() after the last frame
 };
 
 // The estimator's default readout window; the tests that need partial rows (recovering) ask for more.
@@ -84,12 +86,14 @@ const int kDefaultWindow = realtime_readout().mean_window;
 
 // The session streamed row by row through an estimator averaging `mean_window` readings per row;
 // `fault`, when given, turns the readings of frames [kFaultBegin, kFaultEnd) into what the faulty
-// glove delivers.
-FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window) {
-  const io::Dataset& d = faults_session();
+// glove delivers. `d`: the session's dataset (faults_session() or one simulated like it);
+// `floating_cells`: the estimator's stand-in for floating cells on or off.
+FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window, const io::Dataset& d = faults_session(),
+                bool floating_cells = true) {
   const io::RowClock clock = d.row_clock();
   EstimatorConfig config;
   config.readout.mean_window = mean_window;
+  config.floating_cells.enabled = floating_cells;
   GlovePoseEstimator estimator(faults_model(), config);
   estimator.set_calibration(faults_range());
   FaultRun run;
@@ -115,6 +119,7 @@ FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window) {
     for (double a : p.angles) rec.finite = rec.finite && std::isfinite(a);
     run.frames.push_back(rec);
   }
+  run.masked_cells = estimator.masked_cells();
   return run;
 }
 
@@ -125,8 +130,7 @@ const FaultRun& clean_run(int mean_window) {
   return found->second;
 }
 
-double mean_error_degrees(const FaultRun& run, std::size_t begin, std::size_t end) {
-  const io::Dataset& d = faults_session();
+double mean_error_degrees(const FaultRun& run, std::size_t begin, std::size_t end, const io::Dataset& d = faults_session()) {
   const std::size_t first = first_session_frame();
   double sum = 0.0;
   for (std::size_t i = begin; i < end; ++i)
@@ -207,7 +211,8 @@ FaultRun check_fault(const char* name, const sim::FaultInjector& fault, const Ex
 TEST_CASE("faults: every PoseFlag bit has its own name, and only those bits") {
   const PoseFlag flags[] = {kPoseReadingsRejected, kPoseInputClamped,    kPoseTrainingCalibration,
                             kPoseCalibrating,      kPoseStaleReadings,   kPoseRecovering,
-                            kPoseStuckRows,        kPoseDisconnectedRows, kPoseOutlierRows};
+                            kPoseStuckRows,        kPoseDisconnectedRows, kPoseOutlierRows,
+                            kPoseMaskedCells};
   REQUIRE(std::size(flags) == static_cast<std::size_t>(kPoseFlagCount));
   std::set<std::string> names;
   for (int b = 0; b < kPoseFlagCount; ++b) {
@@ -304,6 +309,63 @@ TEST_CASE("faults: clock jumps") {
   // clock restarted; then the readout follows the new clock, and again when it jumps back.
   const FaultRun run = check_fault("clock jumps back by 100 s", inject(sim::FaultKind::ClockJumpBack, jump), {kPoseRecovering, 0.0, 0, 7});
   CHECK(run.rejected_statuses >= 180);
+}
+
+// faults_session() with a glove whose trace `trace` (bottom 0-14, top 15-26) tears `at_seconds` into
+// the session at the connector: all its cells float (the simulator's physics, sim/recorder.hpp).
+io::Dataset torn_session(int trace, double at_seconds) {
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
+  config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
+  config.calibration_seconds = config.guided_calibration->total_seconds();
+  config.recording.raw_rows = true;
+  config.recording.tear = {trace, 0, at_seconds};
+  return sim::to_dataset(sim::simulate_corpus(config), config);
+}
+
+TEST_CASE("faults: a torn trace: its floating cells are stood in for and the poses stay trusted") {
+  constexpr std::size_t kSettled = 240;  // frames: the tear at 3 s, scored from 1 s later on
+  const FaultRun& intact = clean_run(kDefaultWindow);
+  const std::size_t n = intact.frames.size();
+  const double intact_error = mean_error_degrees(intact, kSettled, n);
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  double sum_ratio = 0.0, sum_as_solved = 0.0, worst_ratio = 0.0, worst_as_solved = 0.0, least_trusted = 1.0;
+  int traces = 0;
+  for (int trace = 0; trace < 27; ++trace) {
+    const io::Dataset d = torn_session(trace, 3.0);
+    REQUIRE(d.frames() == faults_session().frames());
+    const std::vector<int> floating = sim::cells_beyond_tear(layout, sim::glauser2019_sites(), {trace, 0, 3.0});
+    const FaultRun run = stream(std::nullopt, kDefaultWindow, d);
+    const FaultRun as_solved = stream(std::nullopt, kDefaultWindow, d, false);
+    std::size_t trusted = 0, masked = 0;
+    for (std::size_t i = kSettled; i < n; ++i) {
+      const FrameRecord& r = run.frames[i];
+      trusted += r.fresh && r.valid && r.finite && (r.flags & kPoseFaultFlags) == 0 ? 1 : 0;
+      masked += (r.flags & kPoseMaskedCells) != 0 ? 1 : 0;
+    }
+    const double share = static_cast<double>(trusted) / static_cast<double>(n - kSettled);
+    const double ratio = mean_error_degrees(run, kSettled, n, d) / intact_error;
+    const double solved_ratio = mean_error_degrees(as_solved, kSettled, n, d) / intact_error;
+    MESSAGE("trace " << trace << ": cells " << floating.size() << " float; " << 100.0 * share << "% trusted; error "
+                     << ratio << "x the intact glove's (" << intact_error << " deg), as solved " << solved_ratio << "x");
+    CHECK(run.masked_cells == floating);
+    CHECK(masked == n - kSettled);
+    CHECK(share >= 0.95);
+    CHECK(ratio <= 1.25);
+    sum_ratio += ratio;
+    sum_as_solved += solved_ratio;
+    worst_ratio = std::max(worst_ratio, ratio);
+    worst_as_solved = std::max(worst_as_solved, solved_ratio);
+    least_trusted = std::min(least_trusted, share);
+    ++traces;
+  }
+  MESSAGE("over " << traces << " traces: " << sum_ratio / traces << "x the intact glove's error (worst " << worst_ratio
+                   << "x), at least " << 100.0 * least_trusted << "% trusted; the cells as solved: " << sum_as_solved / traces
+                   << "x (worst " << worst_as_solved << "x)");
+  CHECK(sum_ratio / traces <= 1.1);
+  CHECK(sum_as_solved / traces > sum_ratio / traces);
+  // Before the tear nothing is masked: the stand-in leaves an intact glove's frames alone.
+  const FaultRun run = stream(std::nullopt, kDefaultWindow, torn_session(0, 3.0));
+  for (std::size_t i = 0; i < 170; ++i) CHECK((run.frames[i].flags & kPoseMaskedCells) == 0);
 }
 
 TEST_CASE("faults: the injector turns each clean reading into what the faulty glove delivers") {

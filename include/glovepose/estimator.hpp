@@ -27,6 +27,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config.hpp"
 #include "core/span.hpp"
@@ -114,6 +115,10 @@ class GlovePoseEstimator {
   /// @brief The locator of this estimator's hand (side, hand model, joint limits), for readers of
   /// LatestHand that locate joints on their own thread (pose_prediction.hpp: predict() and locate()).
   const hand::XrHandLocator& locator() const noexcept;
+  /// @brief The cells of the latest frame that stopped being measured (a torn trace) and were stood
+  /// in for from the others (EstimatorConfig::floating_cells; the pose carries kPoseMaskedCells), in
+  /// index order; empty when every cell is measured.
+  const std::vector<int>& masked_cells() const noexcept;
 
   // ---- calibration -------------------------------------------------------------------------
 

@@ -11,6 +11,7 @@
 #include "hand/contact_config.hpp"
 #include "hand/handedness.hpp"
 #include "sensor/calibration_config.hpp"
+#include "sensor/floating_cells_config.hpp"
 #include "sensor/readout_config.hpp"
 
 namespace glovepose {
@@ -71,6 +72,10 @@ struct EstimatorConfig {
   /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
   /// ReadoutConfig::clock_restart_readings.
   int clock_restart_frames = 10;
+  /// Cells a torn trace left floating (reading below a quarter of their calibrated minimum) stood in
+  /// for by a regression on the connected cells (sensor/floating_cells.hpp); poses carry
+  /// kPoseMaskedCells and stay trusted. Off with a glove whose frames are de-meaned.
+  sensor::FloatingCellsConfig floating_cells;
   std::optional<filter::OneEuroConfig> smoothing;       ///< 1-euro smoothing of the angles; none: the network's output.
   bool joint_transforms = false;                        ///< Compute the joint list with every pose (the skeleton is always posed).
   /// The contact stage (hand/contact.hpp), after the smoothing: when the pose says thumb and a

@@ -43,17 +43,19 @@ enum PoseFlag : std::uint32_t {
   kPoseDisconnectedRows = 1u << 7,  ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
   kPoseOutlierRows =
       1u << 8,  ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
+  kPoseMaskedCells = 1u << 9,  ///< Cells stopped being measured (a torn trace): they were stood in for from the others (not a fault).
 };
 
 /// @brief Number of PoseFlag bits (bits 0 .. kPoseFlagCount - 1).
-inline constexpr int kPoseFlagCount = 9;
-static_assert(kPoseOutlierRows == 1u << (kPoseFlagCount - 1), "kPoseFlagCount: the last PoseFlag is its highest bit");
+inline constexpr int kPoseFlagCount = 10;
+static_assert(kPoseMaskedCells == 1u << (kPoseFlagCount - 1), "kPoseFlagCount: the last PoseFlag is its highest bit");
 
 /// @brief A short, stable name of PoseFlag bit `bit` (for logs and displays).
 constexpr const char* pose_flag_name(int bit) noexcept {
   constexpr const char* names[] = {"readings rejected", "input clamped",     "training calibration",
                                    "calibrating",       "stale readings",    "recovering",
-                                   "stuck rows",        "disconnected rows", "outlier rows"};  // in bit order
+                                   "stuck rows",        "disconnected rows", "outlier rows",
+                                   "masked cells"};  // in bit order
   static_assert(sizeof names / sizeof names[0] == kPoseFlagCount, "one name per PoseFlag bit");
   return name_of(bit, names, "unknown flag");  // a negative bit wraps to a large index: unknown
 }

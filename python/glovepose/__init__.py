@@ -77,6 +77,7 @@ class PoseFlag(enum.IntFlag):
     STUCK_ROWS = 0x40            #: (fault) a row repeats one value: a stuck sensor
     DISCONNECTED_ROWS = 0x80     #: (fault) a row reads (near) zero: a disconnected trace
     OUTLIER_ROWS = 0x100         #: (fault) a row disagrees with the least-squares solve
+    MASKED_CELLS = 0x200         #: cells stopped being measured (a torn trace): stood in for from the others
     FAULT_FLAGS = 0x1F0          #: the fault bits together
 
 

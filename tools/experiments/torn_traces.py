@@ -5,7 +5,7 @@ back (docs/results.md, "A torn trace"). The simulator tears a trace mid-session 
 the library's full-M solve then reads them as about 0 pF. Per trace, the same people and frames:
 
 - ``intact``: the glove as made;
-- ``none``: torn, the cells as solved (what the estimator does today);
+- ``none``: torn, the cells as solved (the estimator with ``EstimatorConfig::floating_cells`` off);
 - ``mid``: torn, each floating cell replaced by the middle of its range in the calibration frames;
 - ``reg_cal``: torn, each floating cell predicted from the connected cells by a ridge regression
   fitted on the person's calibration frames (what the estimator holds before any session);

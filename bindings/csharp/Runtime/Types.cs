@@ -54,6 +54,8 @@ namespace GlovePose
         StuckRows = 0x40,
         DisconnectedRows = 0x80,
         OutlierRows = 0x100,
+        /// <summary>Cells stopped being measured (a torn trace) and were stood in for from the others; not a fault.</summary>
+        MaskedCells = 0x200,
         /// <summary>Any of these: the pose cannot be trusted.</summary>
         FaultFlags = 0x1F0,
     }

@@ -38,6 +38,7 @@
 #include "../pose_model.hpp"
 #include "../pose_prediction.hpp"
 #include "../sensor/calibration.hpp"
+#include "../sensor/floating_cells.hpp"
 #include "../sensor/input_conditioning.hpp"
 #include "../sensor/layout.hpp"
 #include "../sensor/readout.hpp"
@@ -78,6 +79,9 @@ class EstimatorCore {
     cells_ = Eigen::VectorXd::Zero(model_->cell_count());
     normalized_ = Eigen::VectorXd::Zero(model_->cell_count());
     conditioner_ = sensor::InputConditioner(model_->glove().demean_frames());
+    sensor::FloatingCellsConfig floating = config_.floating_cells;
+    floating.enabled = floating.enabled && !conditioner_.active();  // de-meaned cells have no minimum to fall below
+    floating_ = sensor::FloatingCells(model_->cell_count(), floating);
     skeleton_.fill(Eigen::Affine3d::Identity());
     if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
       throw Error(
@@ -156,6 +160,8 @@ class EstimatorCore {
 
   const hand::XrHandAim& aim() const noexcept { return aim_tracker_.aim(); }
 
+  const std::vector<int>& masked_cells() const noexcept { return floating_.floating(); }
+
   const hand::XrHandLocator& locator() const noexcept { return locator_; }
 
   // ---- calibration -------------------------------------------------------------------------
@@ -220,6 +226,7 @@ class EstimatorCore {
     cells_backwards_run_ = 0;
     calibration_session_.restart_clock();
     conditioner_.reset();
+    floating_.reset();
   }
   const PoseModel& model() const noexcept { return *model_; }
   const EstimatorConfig& config() const noexcept { return config_; }
@@ -256,6 +263,7 @@ class EstimatorCore {
 
   void set_range(sensor::CalibrationRange range, CalibrationSource source, const std::optional<hand::Angles>& offsets = std::nullopt) {
     range_.emplace(std::move(range));
+    floating_.set_range(*range_);
     source_ = source;
     guided_ = offsets.has_value();
     offsets_ = offsets.value_or(hand::Angles{});
@@ -338,10 +346,13 @@ class EstimatorCore {
       // Rounded as a dataset stores cells: the network's inputs are training's, bit for bit.
       for (Eigen::Index c = 0; c < cells_.size(); ++c) cells_(c) = static_cast<float>(cells_(c));
     }
+    // Floating cells are stood in for before a calibration takes the frame: a torn trace must not
+    // become the new range's minimum.
+    const int masked = floating_.apply(cells_, timestamp);
     calibration_session_.add(cells_, timestamp);  // takes the frame while a calibration collects
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;
-    std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u);
+    std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u) | (masked > 0 ? kPoseMaskedCells : 0u);
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
     if (calibration_session_.collecting()) flags |= kPoseCalibrating;
@@ -391,6 +402,7 @@ class EstimatorCore {
   Eigen::VectorXd measurements_;
   Eigen::VectorXd cells_;  // the latest cells, conditioned when the glove says (conditioner_)
   sensor::InputConditioner conditioner_;
+  sensor::FloatingCells floating_;  // EstimatorConfig::floating_cells
   Eigen::VectorXd normalized_;
   double last_cells_timestamp_ = -std::numeric_limits<double>::infinity();
   int cells_backwards_run_ = 0;
