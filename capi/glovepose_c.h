@@ -176,7 +176,7 @@ typedef int32_t glovepose_result;
 #define GLOVEPOSE_POSE_RECOVERING 0x20u
 /** @brief Pose flag (fault): a row repeats one value: a stuck sensor. */
 #define GLOVEPOSE_POSE_STUCK_ROWS 0x40u
-/** @brief Pose flag (fault): a row reads (near) zero: a disconnected trace. */
+/** @brief Pose flag (fault): rows read (near) zero (a disconnected trace) and the solve could not leave them out. */
 #define GLOVEPOSE_POSE_DISCONNECTED_ROWS 0x80u
 /** @brief Pose flag (fault): a row disagrees with the least-squares solve: a spike or a failing cell. */
 #define GLOVEPOSE_POSE_OUTLIER_ROWS 0x100u

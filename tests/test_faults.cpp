@@ -87,13 +87,15 @@ const int kDefaultWindow = realtime_readout().mean_window;
 // The session streamed row by row through an estimator averaging `mean_window` readings per row;
 // `fault`, when given, turns the readings of frames [kFaultBegin, kFaultEnd) into what the faulty
 // glove delivers. `d`: the session's dataset (faults_session() or one simulated like it);
-// `floating_cells`: the estimator's stand-in for floating cells on or off.
+// `floating_cells`: the estimator's stand-in for floating cells on or off; `max_excluded_share`: the
+// readout's (0: disconnected rows stay in the solve).
 FaultRun stream(std::optional<sim::FaultInjector> fault, int mean_window, const io::Dataset& d = faults_session(),
-                bool floating_cells = true) {
+                bool floating_cells = true, double max_excluded_share = sensor::ReadoutConfig{}.max_excluded_share) {
   const io::RowClock clock = d.row_clock();
   EstimatorConfig config;
   config.readout.mean_window = mean_window;
   config.floating_cells.enabled = floating_cells;
+  config.readout.max_excluded_share = max_excluded_share;
   GlovePoseEstimator estimator(faults_model(), config);
   estimator.set_calibration(faults_range());
   FaultRun run;
@@ -160,9 +162,10 @@ double frame_error_degrees(const FrameRecord& r, std::size_t frame) {
 // solve every 16 accepted readings) shifts with every lost or extra reading, and a pose depends on
 // the solve's place in the cycle by a few degrees, so trusted poses are compared with the truth
 // (the simulator's angles) as the clean stream is, not pose by pose with the clean stream.
-FaultRun check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect, int mean_window = kDefaultWindow) {
+FaultRun check_fault(const char* name, const sim::FaultInjector& fault, const Expectation& expect, int mean_window = kDefaultWindow,
+                     double max_excluded_share = sensor::ReadoutConfig{}.max_excluded_share) {
   const FaultRun& clean = clean_run(mean_window);
-  FaultRun run = stream(fault, mean_window);
+  FaultRun run = stream(fault, mean_window, faults_session(), true, max_excluded_share);
   REQUIRE(run.frames.size() == clean.frames.size());
   const std::size_t n = run.frames.size();
   const auto trusted = [](const FrameRecord& r) { return r.fresh && r.valid && (r.flags & kPoseFaultFlags) == 0; };
@@ -262,8 +265,16 @@ TEST_CASE("faults: a disconnected trace") {
   sim::FaultSettings trace_4;
   trace_4.disconnected_top_trace = 4;
   trace_4.disconnected_pf = 0.05;  // stray capacitance only
-  check_fault("top trace 4 disconnected", inject(sim::FaultKind::DisconnectedTrace, trace_4),
-              {kPoseDisconnectedRows | kPoseOutlierRows, 1.0, 0, 6});
+  // Its rows are left out of the solve: the other 165 rows still determine every cell, so the
+  // poses stay trusted and as accurate (check_fault compares the trusted ones with the clean stream).
+  const FaultRun run = check_fault("top trace 4 disconnected", inject(sim::FaultKind::DisconnectedTrace, trace_4), {0, 0.0, 0, 6});
+  std::size_t trusted = 0;
+  for (std::size_t i = kFaultBegin; i < kFaultEnd; ++i)
+    trusted += run.frames[i].fresh && run.frames[i].valid && (run.frames[i].flags & kPoseFaultFlags) == 0 ? 1 : 0;
+  CHECK(trusted >= 95 * (kFaultEnd - kFaultBegin) / 100);
+  // With leaving out switched off, the rows stay in the solve and every pose is flagged.
+  check_fault("top trace 4 disconnected, rows kept in the solve", inject(sim::FaultKind::DisconnectedTrace, trace_4),
+              {kPoseDisconnectedRows | kPoseOutlierRows, 1.0, 0, 6}, kDefaultWindow, 0.0);
 }
 
 TEST_CASE("faults: spikes") {

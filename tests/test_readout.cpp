@@ -270,3 +270,64 @@ TEST_CASE("readout: per-reading calls allocate nothing") {
   });
   CHECK(allocations == 0);
 }
+
+TEST_CASE("readout: disconnected rows are left out, and the solve is least squares over the rest") {
+  const Eigen::MatrixXd& m = glove_solver()->measurement_matrix();
+  const TraceLayout& layout = glove_solver()->layout();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  CapacitanceSolver::Measurements cm = frame_measurements(0);
+  for (int r = 0; r < 180; ++r) cm(r) += noise(rng);
+  // Top trace 4's 15 rows read stray capacitance only (a channel that no longer drives it).
+  std::vector<int> kept;
+  for (int r = 0; r < 180; ++r) {
+    if (r % layout.top_traces() == 4)
+      cm(r) = 0.05;
+    else
+      kept.push_back(r);
+  }
+  // The reference: a QR least-squares solve of the kept rows alone.
+  Eigen::MatrixXd m_kept(static_cast<Eigen::Index>(kept.size()), 44);
+  Eigen::VectorXd cm_kept(static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    m_kept.row(static_cast<Eigen::Index>(k)) = m.row(kept[k]);
+    cm_kept(static_cast<Eigen::Index>(k)) = cm(kept[k]);
+  }
+  const Eigen::VectorXd reference = m_kept.colPivHouseholderQr().solve(cm_kept);
+
+  Readout readout(glove_solver());
+  std::size_t allocations = 0;
+  allocations += test::allocations_during([&] { REQUIRE(readout.push_frame(cm, 0.0) == Status::Solved); });
+  CHECK((readout.frame().cells - reference).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK(readout.frame().health.disconnected_rows == 15);
+  CHECK(readout.frame().health.excluded_rows == 15);
+  CHECK(readout.frame().health.outlier_rows == 0);  // left out: not counted as disagreeing
+  const CapacitanceSolver::Capacitances truth = CapacitanceSolver::Capacitances::LinSpaced(44, 10.0, 20.0);
+  MESSAGE("without top trace 4: largest cell error " << (readout.frame().cells - truth).cwiseAbs().maxCoeff() << " pF (reading noise 0.3)");
+
+  // Connected again: all rows, the full solve.
+  allocations += test::allocations_during([&] { REQUIRE(readout.push_frame(frame_measurements(0), 1.0) == Status::Solved); });
+  CHECK(readout.frame().health.excluded_rows == 0);
+  CHECK((readout.frame().cells - truth).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK(allocations == 0);
+
+  // Rows whose loss leaves a cell undetermined stay in (flagged by the estimator): every row that
+  // sees cell 0 (its bottom trace as source with another top, or its top with another bottom).
+  const Cell& cell = layout.cells()[0];
+  CapacitanceSolver::Measurements blind = frame_measurements(0);
+  int lost = 0;
+  for (int r = 0; r < 180; ++r)
+    if ((r / layout.top_traces() == cell.bottom) != (r % layout.top_traces() == cell.top)) blind(r) = 0.05, ++lost;
+  Readout guarded(glove_solver());
+  REQUIRE(guarded.push_frame(blind, 0.0) == Status::Solved);
+  CHECK(guarded.frame().health.disconnected_rows == lost);
+  CHECK(guarded.frame().health.excluded_rows == 0);
+
+  // More than max_excluded_share of the rows: they stay in.
+  ReadoutConfig strict;
+  strict.max_excluded_share = 0.05;  // 9 rows
+  Readout capped(glove_solver(), strict);
+  REQUIRE(capped.push_frame(cm, 0.0) == Status::Solved);
+  CHECK(capped.frame().health.disconnected_rows == 15);
+  CHECK(capped.frame().health.excluded_rows == 0);
+}

@@ -40,7 +40,8 @@ enum PoseFlag : std::uint32_t {
       1u << 4,  ///< Some rows stopped arriving (lost on the link): their newest reading is older than ReadoutConfig::stale_cycles cycles.
   kPoseRecovering = 1u << 5,        ///< Some rows hold fewer readings than the mean window: just after the start, a gap or a clock restart.
   kPoseStuckRows = 1u << 6,         ///< A row repeats one value (ReadoutConfig::stuck_readings): a stuck sensor.
-  kPoseDisconnectedRows = 1u << 7,  ///< A row reads (near) zero (ReadoutConfig::disconnected_below): a disconnected trace.
+  kPoseDisconnectedRows =
+      1u << 7,  ///< Rows read (near) zero (ReadoutConfig::disconnected_below) and the solve could not leave them out (max_excluded_share).
   kPoseOutlierRows =
       1u << 8,  ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
   kPoseMaskedCells = 1u << 9,  ///< Cells stopped being measured (a torn trace): they were stood in for from the others (not a fault).

@@ -331,7 +331,7 @@ class EstimatorCore {
     if (health.filling_rows > 0) flags |= kPoseRecovering;
     if (health.stale_rows > 0) flags |= kPoseStaleReadings;
     if (health.stuck_rows > 0) flags |= kPoseStuckRows;
-    if (health.disconnected_rows > 0) flags |= kPoseDisconnectedRows;
+    if (health.disconnected_rows > health.excluded_rows) flags |= kPoseDisconnectedRows;  // in the solve: it needed them
     if (health.outlier_rows > 0) flags |= kPoseOutlierRows;
     return flags;
   }

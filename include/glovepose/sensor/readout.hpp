@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "../config.hpp"
 #include "../status.hpp"
 #include "readout_config.hpp"
@@ -53,13 +55,15 @@ class Readout {
     if (config_.mean_window < 1) throw Error("Readout: mean_window " + std::to_string(config_.mean_window) + ", expected at least 1");
     if (config_.solve_every < 1) throw Error("Readout: solve_every " + std::to_string(config_.solve_every) + ", expected at least 1");
     if (!(config_.gap_seconds > 0.0) || config_.clock_restart_readings < 0 || config_.stuck_readings < 2 ||
-        !(config_.max_reading_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below))
+        !(config_.max_reading_residual > 0.0) || !(config_.stale_cycles > 1.0) || std::isnan(config_.disconnected_below) ||
+        !(config_.max_excluded_share >= 0.0 && config_.max_excluded_share <= 1.0))
       throw Error(
           "Readout: gap_seconds " + std::to_string(config_.gap_seconds) + ", clock_restart_readings " +
           std::to_string(config_.clock_restart_readings) + ", stuck_readings " + std::to_string(config_.stuck_readings) +
           ", max_reading_residual " + std::to_string(config_.max_reading_residual) + ", stale_cycles " +
-          std::to_string(config_.stale_cycles) +
-          ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_reading_residual > 0, stale_cycles > 1");
+          std::to_string(config_.stale_cycles) + ", max_excluded_share " + std::to_string(config_.max_excluded_share) +
+          ", expected gap_seconds > 0, clock_restart_readings >= 0, stuck_readings >= 2, max_reading_residual > 0, stale_cycles > 1, "
+          "max_excluded_share in [0, 1]");
     rows_ = solver_->layout().row_count();
     if (config_.clock_restart_readings == 0) config_.clock_restart_readings = rows_;
     const auto slots = static_cast<std::size_t>(rows_) * static_cast<std::size_t>(config_.mean_window);
@@ -73,6 +77,14 @@ class Readout {
     mean_ = Measurements::Zero(rows_);
     residual_ = Measurements::Zero(rows_);
     frame_.cells = Solver::Capacitances::Zero(solver_->layout().cell_count());
+    const Eigen::MatrixXd& m = solver_->measurement_matrix();
+    full_normal_ = m.transpose() * m;
+    normal_ = full_normal_;
+    kept_rhs_ = Solver::Capacitances::Zero(m.cols());
+    kept_mean_ = Measurements::Zero(rows_);
+    kept_factor_ = Eigen::LDLT<Eigen::MatrixXd>(m.cols());
+    excluded_.assign(static_cast<std::size_t>(rows_), 0);
+    candidate_.assign(static_cast<std::size_t>(rows_), 0);
     reset();
   }
 
@@ -200,10 +212,23 @@ class Readout {
       mean_(row) = sum / static_cast<double>(n);
       newest_age_[r] = last_timestamp_ - newest;
     }
-    const Status status = solver_->solve(mean_, frame_.cells);
-    if (status != Status::Ok) return status;
+    if (!mean_.allFinite()) return Status::NonFinite;
+    const int excluded = exclude_disconnected_rows();
+    if (excluded == 0) {
+      const Status status = solver_->solve(mean_, frame_.cells);
+      if (status != Status::Ok) return status;
+    } else {
+      // Least squares over the rows kept: (M_k^T M_k) C_c = M_k^T C_m,k.
+      kept_mean_ = mean_;
+      for (int row = 0; row < rows_; ++row)
+        if (excluded_[static_cast<std::size_t>(row)]) kept_mean_(row) = 0.0;
+      kept_rhs_.noalias() = solver_->measurement_matrix().transpose() * kept_mean_;
+      frame_.cells = kept_factor_.solve(kept_rhs_);
+    }
     residual_.noalias() = solver_->measurement_matrix() * frame_.cells;
     residual_ -= mean_;
+    for (int row = 0; row < rows_ && excluded > 0; ++row)
+      if (excluded_[static_cast<std::size_t>(row)]) residual_(row) = 0.0;  // left out: no disagreement to count
     // Finite readings can still be large enough (~1e308 pF) for the solve or its residual to
     // overflow: no frame then, rather than one whose residual is infinite or NaN (a NaN row escapes
     // the outlier count below).
@@ -211,6 +236,7 @@ class Readout {
     ReadoutHealth& health = frame_.health;
     health = ReadoutHealth{};
     health.restarts = restarts_;
+    health.excluded_rows = static_cast<std::uint16_t>(excluded);
     health.max_residual = residual_.cwiseAbs().maxCoeff();
     // Rows are read one after another, so their newest readings' ages spread evenly over one cycle.
     std::copy(newest_age_.begin(), newest_age_.end(), age_scratch_.begin());
@@ -223,7 +249,8 @@ class Readout {
       const auto r = static_cast<std::size_t>(row);
       health.filling_rows += count_[r] < config_.mean_window ? 1 : 0;
       health.stale_rows += newest_age_[r] > stale_age ? 1 : 0;
-      health.stuck_rows += repeats_[r] >= config_.stuck_readings ? 1 : 0;
+      // A row left out repeats its stray reading without harm: not stuck for this frame.
+      health.stuck_rows += repeats_[r] >= config_.stuck_readings && !(excluded > 0 && excluded_[r]) ? 1 : 0;
       health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
       health.outlier_rows += residual_(row) * residual_(row) * count_[r] > bound_squared ? 1 : 0;
     }
@@ -234,6 +261,35 @@ class Readout {
     updates_since_solve_ = 0;  // a whole frame restarts the cadence too
     rejected_since_solve_ = 0;
     return Status::Solved;
+  }
+
+  // The disconnected rows left out of this solve (their count), re-factoring the kept rows' normal
+  // equations when the set changed: in preallocated storage, at most once per change. None when
+  // too many are disconnected or the rest would not determine every cell (then they stay in).
+  int exclude_disconnected_rows() noexcept {
+    int disconnected = 0;
+    bool changed = false;
+    for (int row = 0; row < rows_; ++row) {
+      const auto r = static_cast<std::size_t>(row);
+      candidate_[r] = mean_(row) < config_.disconnected_below ? 1 : 0;
+      disconnected += candidate_[r];
+      changed = changed || candidate_[r] != excluded_[r];
+    }
+    if (disconnected > config_.max_excluded_share * rows_) disconnected = 0;  // too many: keep them all in
+    if (!changed) return kept_factor_valid_ ? disconnected : 0;
+    std::copy(candidate_.begin(), candidate_.end(), excluded_.begin());
+    kept_factor_valid_ = false;
+    if (disconnected == 0) return 0;
+    const Eigen::MatrixXd& m = solver_->measurement_matrix();
+    normal_ = full_normal_;
+    for (int row = 0; row < rows_; ++row)
+      if (excluded_[static_cast<std::size_t>(row)]) normal_.noalias() -= m.row(row).transpose() * m.row(row);
+    kept_factor_.compute(normal_);
+    // The kept rows determine every cell when the normal matrix stays positive definite: its
+    // smallest pivot against its largest (the full M's is 1 / cond^2, about 0.025 for the paper's glove).
+    const auto pivots = kept_factor_.vectorD();
+    kept_factor_valid_ = kept_factor_.info() == Eigen::Success && pivots.minCoeff() > 1e-8 * pivots.maxCoeff();
+    return kept_factor_valid_ ? disconnected : 0;
   }
 
   std::shared_ptr<const Solver> solver_;
@@ -255,6 +311,14 @@ class Readout {
   Measurements mean_;
   Measurements residual_;
   Frame frame_;
+  Eigen::MatrixXd full_normal_;              // M^T M
+  Eigen::MatrixXd normal_;                   // M_k^T M_k over the kept rows
+  Eigen::LDLT<Eigen::MatrixXd> kept_factor_;  // its factors
+  bool kept_factor_valid_ = false;           // the kept rows determine every cell
+  Solver::Capacitances kept_rhs_;            // M_k^T C_m,k
+  Measurements kept_mean_;                   // mean_ with the excluded rows at 0
+  std::vector<unsigned char> excluded_;      // rows left out of the latest solve
+  std::vector<unsigned char> candidate_;     // rows reading disconnected in this solve
 };
 
 }  // namespace glovepose::sensor

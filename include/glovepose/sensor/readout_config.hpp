@@ -28,6 +28,12 @@ struct ReadoutConfig {
   /// A row whose mean reading is below this (pF) reads through a disconnected trace: the paper's
   /// compound capacitances are tens of pF, an open trace leaves only stray capacitance.
   double disconnected_below = 1.0;
+  /// Disconnected rows are left out of the solve, which the rest of the rows then solve alone
+  /// (least squares without them), when they are at most this share of the rows and the rest still
+  /// determine every cell: the frame stays trustworthy (the paper's readout is overdetermined "for
+  /// better robustness", Sec. 3.1: without any one trace's rows the paper glove's M keeps full rank).
+  /// Otherwise they stay in and the frame is flagged. 0: never left out.
+  double max_excluded_share = 0.25;
   /// A row whose least-squares residual |M C_c - C_m| exceeds this (pF) divided by the square root
   /// of the readings it holds disagrees with the others: a spike or a failing cell. Averaging n
   /// readings divides the noise by sqrt(n), so the bound keeps the same distance from the noise at
@@ -43,6 +49,7 @@ struct ReadoutHealth {
   std::uint16_t stale_rows = 0;         ///< Rows whose newest reading is older than ReadoutConfig::stale_cycles cycles.
   std::uint16_t stuck_rows = 0;         ///< Rows repeating one value (ReadoutConfig::stuck_readings).
   std::uint16_t disconnected_rows = 0;  ///< Rows reading below ReadoutConfig::disconnected_below.
+  std::uint16_t excluded_rows = 0;      ///< Of those, rows left out of the solve (ReadoutConfig::max_excluded_share).
   std::uint16_t outlier_rows = 0;       ///< Rows whose residual exceeds ReadoutConfig::max_reading_residual / sqrt(readings held).
   double max_residual = 0.0;            ///< Largest |M C_c - C_m| over the rows, pF.
   std::uint64_t restarts = 0;           ///< Times the readout started over (gaps, clock restarts) since construction.
