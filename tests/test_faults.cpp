@@ -26,13 +26,19 @@ namespace {
 
 constexpr std::size_t kFaultBegin = 120, kFaultEnd = 240;  // frames of the session (60 per second)
 
+// The fault tests' session: the default protocol (the guided calibration sequence, 30 s, then 9 s of
+// session) with its raw rows (default noise: readout jitter, rare spikes and drops).
+sim::CorpusConfig faults_session_config() {
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
+  config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
+  config.calibration_seconds = config.guided_calibration->total_seconds();
+  config.recording.raw_rows = true;
+  return config;
+}
+
 const io::Dataset& faults_session() {
   static const io::Dataset d = [] {
-    sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
-    // The default protocol: the guided calibration sequence (30 s), then the session.
-    config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
-    config.calibration_seconds = config.guided_calibration->total_seconds();
-    config.recording.raw_rows = true;  // default noise: readout jitter, rare spikes and drops
+    const sim::CorpusConfig config = faults_session_config();
     return sim::to_dataset(sim::simulate_corpus(config), config);
   }();
   return d;
@@ -325,10 +331,7 @@ TEST_CASE("faults: clock jumps") {
 // faults_session() with a glove whose trace `trace` (bottom 0-14, top 15-26) tears `at_seconds` into
 // the session at the connector: all its cells float (the simulator's physics, sim/recorder.hpp).
 io::Dataset torn_session(int trace, double at_seconds) {
-  sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
-  config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
-  config.calibration_seconds = config.guided_calibration->total_seconds();
-  config.recording.raw_rows = true;
+  sim::CorpusConfig config = faults_session_config();
   config.recording.tear = {trace, 0, at_seconds};
   return sim::to_dataset(sim::simulate_corpus(config), config);
 }
