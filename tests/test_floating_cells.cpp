@@ -141,3 +141,35 @@ TEST_CASE("floating cells: before enough frames the middle of the range, rejoins
   config.below_share = 1.5;
   CHECK_THROWS_WITH_AS(sensor::FloatingCells(kCells, config), doctest::Contains("below_share 1.5"), Error);
 }
+
+TEST_CASE("floating cells: a frame the solve did not fit floats no cell and teaches nothing") {
+  const Eigen::MatrixXd x = sheet_frames(300, 9);
+  sensor::FloatingCells stand_in(kCells, {});
+  stand_in.set_range(range_of(x));
+  Eigen::VectorXd cells(kCells);
+  for (int f = 0; f < 200; ++f) {
+    cells = x.row(f).transpose();
+    REQUIRE(stand_in.apply(cells, f / kRate) == 0);
+  }
+  const long frames = stand_in.frames_seen();
+  const Eigen::VectorXd mean = stand_in.mean();
+  // A spike's frame (outlier rows): the low cell passes through as solved, the statistics stay.
+  cells = x.row(200).transpose();
+  cells(2) = 0.0;
+  CHECK(stand_in.apply(cells, 200 / kRate, false) == 0);
+  CHECK(cells(2) == 0.0);
+  CHECK(stand_in.floating().empty());
+  CHECK(stand_in.frames_seen() == frames);
+  CHECK(stand_in.mean() == mean);
+  // Still low on the next consistent frame: now it floats (a torn trace, its rows all read since).
+  cells = x.row(201).transpose();
+  cells(2) = 0.0;
+  CHECK(stand_in.apply(cells, 201 / kRate, true) == 1);
+  CHECK(stand_in.floating() == std::vector<int>{2});
+  CHECK(cells(2) > 0.25 * range_of(x).min()(2));
+  // Once floating, an inconsistent frame keeps standing in for it.
+  cells = x.row(202).transpose();
+  cells(2) = 0.0;
+  CHECK(stand_in.apply(cells, 202 / kRate, false) == 1);
+  CHECK(stand_in.frames_seen() == frames);
+}

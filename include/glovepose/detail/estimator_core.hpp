@@ -348,7 +348,7 @@ class EstimatorCore {
     }
     // Floating cells are stood in for before a calibration takes the frame: a torn trace must not
     // become the new range's minimum.
-    const int masked = floating_.apply(cells_, timestamp);
+    const int masked = floating_.apply(cells_, timestamp, health.outlier_rows == 0);
     calibration_session_.add(cells_, timestamp);  // takes the frame while a calibration collects
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;

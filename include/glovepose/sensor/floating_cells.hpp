@@ -81,14 +81,17 @@ class FloatingCells {
 
   /// @brief One frame of cells (solved capacitances) at `timestamp` (s): floating cells replaced in
   /// place; an intact frame updates the statistics. Returns the number of cells stood in for.
-  GLOVEPOSE_REALTIME int apply(Eigen::VectorXd& cells, double timestamp) noexcept {
+  /// `consistent` says the solve fitted every row (no outlier rows): a cell starts floating, and the
+  /// statistics learn, only on such frames. A row spike drags the cells it touches below the bound
+  /// for that frame; a torn trace keeps them there once its rows are all read after the tear.
+  GLOVEPOSE_REALTIME int apply(Eigen::VectorXd& cells, double timestamp, bool consistent = true) noexcept {
     if (!config_.enabled || cells.size() != bound_.size() || !cells.allFinite()) return 0;
     bool changed = false;
     for (Eigen::Index c = 0; c < cells.size(); ++c) {
       const auto i = static_cast<std::size_t>(c);
       if (cells(c) < bound_(c)) {
         above_since_[i] = kNever;
-        if (!floating_[i]) floating_[i] = 1, changed = true;
+        if (!floating_[i] && consistent) floating_[i] = 1, changed = true;
       } else if (floating_[i]) {
         if (above_since_[i] == kNever) above_since_[i] = timestamp;
         if (timestamp - above_since_[i] >= config_.hold_seconds) floating_[i] = 0, above_since_[i] = kNever, changed = true;
@@ -98,8 +101,10 @@ class FloatingCells {
     const double dt = std::isfinite(last_time_) ? std::clamp(timestamp - last_time_, 0.0, 1.0) : 0.0;
     last_time_ = timestamp;
     if (list_.empty()) {
-      seconds_ += dt;
-      learn(cells, dt);
+      if (consistent) {
+        seconds_ += dt;
+        learn(cells, dt);
+      }
       return 0;
     }
     if (!regressed_) {
