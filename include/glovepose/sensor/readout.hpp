@@ -227,8 +227,11 @@ class Readout {
     }
     residual_.noalias() = solver_->measurement_matrix() * frame_.cells;
     residual_ -= mean_;
-    for (int row = 0; row < rows_ && excluded > 0; ++row)
-      if (excluded_[static_cast<std::size_t>(row)]) residual_(row) = 0.0;  // left out: no disagreement to count
+    // A row left out of this solve: no disagreement to count, and its stray reading may repeat or
+    // age (near 0 pF, half its readings are negative and rejected) without harm.
+    const auto left_out = [&](std::size_t r) { return excluded > 0 && excluded_[r] != 0; };
+    for (int row = 0; row < rows_; ++row)
+      if (left_out(static_cast<std::size_t>(row))) residual_(row) = 0.0;
     // Finite readings can still be large enough (~1e308 pF) for the solve or its residual to
     // overflow: no frame then, rather than one whose residual is infinite or NaN (a NaN row escapes
     // the outlier count below).
@@ -248,9 +251,8 @@ class Readout {
     for (int row = 0; row < rows_; ++row) {
       const auto r = static_cast<std::size_t>(row);
       health.filling_rows += count_[r] < config_.mean_window ? 1 : 0;
-      health.stale_rows += newest_age_[r] > stale_age ? 1 : 0;
-      // A row left out repeats its stray reading without harm: not stuck for this frame.
-      health.stuck_rows += repeats_[r] >= config_.stuck_readings && !(excluded > 0 && excluded_[r]) ? 1 : 0;
+      health.stale_rows += newest_age_[r] > stale_age && !left_out(r) ? 1 : 0;
+      health.stuck_rows += repeats_[r] >= config_.stuck_readings && !left_out(r) ? 1 : 0;
       health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
       health.outlier_rows += residual_(row) * residual_(row) * count_[r] > bound_squared ? 1 : 0;
     }

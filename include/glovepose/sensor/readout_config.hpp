@@ -46,7 +46,7 @@ struct ReadoutConfig {
 /// @brief Health of a solved frame: what the readout saw that makes it less trustworthy.
 struct ReadoutHealth {
   std::uint16_t filling_rows = 0;       ///< Rows holding fewer readings than the mean window (after a start or restart).
-  std::uint16_t stale_rows = 0;         ///< Rows whose newest reading is older than ReadoutConfig::stale_cycles cycles.
+  std::uint16_t stale_rows = 0;         ///< Rows in the solve whose newest reading is older than ReadoutConfig::stale_cycles cycles.
   std::uint16_t stuck_rows = 0;         ///< Rows repeating one value (ReadoutConfig::stuck_readings).
   std::uint16_t disconnected_rows = 0;  ///< Rows reading below ReadoutConfig::disconnected_below.
   std::uint16_t excluded_rows = 0;      ///< Of those, rows left out of the solve (ReadoutConfig::max_excluded_share).
