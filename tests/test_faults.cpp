@@ -12,6 +12,7 @@
 #include <glovepose/sim/recorder.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -330,11 +331,11 @@ TEST_CASE("faults: clock jumps") {
   CHECK(run.rejected_statuses >= 180);
 }
 
-// faults_session() with a glove whose trace `trace` (bottom 0-14, top 15-26) tears `at_seconds` into
-// the session at the connector: all its cells float (the simulator's physics, sim/recorder.hpp).
-io::Dataset torn_session(int trace, double at_seconds) {
+// faults_session() with a glove whose traces `traces` (bottom 0-14, top 15-26) tear `at_seconds` into
+// the session at the connector: all their cells float (the simulator's physics, sim/recorder.hpp).
+io::Dataset torn_session(const std::vector<int>& traces, double at_seconds) {
   sim::CorpusConfig config = faults_session_config();
-  config.recording.tear = {trace, 0, at_seconds};
+  for (int trace : traces) config.recording.tears.push_back({trace, 0, at_seconds});
   return sim::to_dataset(sim::simulate_corpus(config), config);
 }
 
@@ -347,7 +348,7 @@ TEST_CASE("faults: a torn trace: its floating cells are stood in for and the pos
   double sum_ratio = 0.0, sum_as_solved = 0.0, worst_ratio = 0.0, worst_as_solved = 0.0, least_trusted = 1.0;
   int traces = 0;
   for (int trace = 0; trace < 27; ++trace) {
-    const io::Dataset d = torn_session(trace, 3.0);
+    const io::Dataset d = torn_session({trace}, 3.0);
     REQUIRE(d.frames() == faults_session().frames());
     const std::vector<int> floating = sim::cells_beyond_tear(layout, sim::glauser2019_sites(), {trace, 0, 3.0});
     const FaultRun run = stream(std::nullopt, kDefaultWindow, d);
@@ -380,7 +381,7 @@ TEST_CASE("faults: a torn trace: its floating cells are stood in for and the pos
   CHECK(sum_ratio / traces <= 1.1);
   CHECK(sum_as_solved / traces > sum_ratio / traces);
   // Before the tear nothing is masked: the stand-in leaves an intact glove's frames alone.
-  const FaultRun run = stream(std::nullopt, kDefaultWindow, torn_session(0, 3.0));
+  const FaultRun run = stream(std::nullopt, kDefaultWindow, torn_session({0}, 3.0));
   for (std::size_t i = 0; i < 170; ++i) CHECK((run.frames[i].flags & kPoseMaskedCells) == 0);
 }
 
@@ -414,6 +415,49 @@ TEST_CASE("faults: an intact glove's cells are never stood in for") {
   }
   MESSAGE("intact gloves: " << masked << " of " << poses << " poses with cells stood in for");
   CHECK(masked == 0);
+}
+
+TEST_CASE("faults: two traces torn at once: stood in for, reported") {
+  constexpr std::size_t kSettled = 240;
+  const FaultRun& intact = clean_run(kDefaultWindow);
+  const std::size_t n = intact.frames.size();
+  const double intact_error = mean_error_degrees(intact, kSettled, n);
+  const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
+  double sum_ratio = 0.0, worst_ratio = 0.0, sum_as_solved = 0.0;
+  int pairs = 0;
+  for (int first = 0; first < 27; first += 3) {
+    const std::vector<int> traces{first, (first + 13) % 27};  // a bottom and a top trace, or two of one layer
+    const io::Dataset d = torn_session(traces, 3.0);
+    std::vector<int> floating;
+    for (int trace : traces)
+      for (int c : sim::cells_beyond_tear(layout, sim::glauser2019_sites(), {trace, 0, 3.0})) floating.push_back(c);
+    std::sort(floating.begin(), floating.end());
+    floating.erase(std::unique(floating.begin(), floating.end()), floating.end());
+    const FaultRun run = stream(std::nullopt, kDefaultWindow, d);
+    std::size_t trusted = 0;
+    std::array<int, kPoseFlagCount> flagged{};  // per fault flag, the settled frames carrying it
+    for (std::size_t i = kSettled; i < n; ++i) {
+      trusted += run.frames[i].fresh && run.frames[i].valid && run.frames[i].finite && (run.frames[i].flags & kPoseFaultFlags) == 0 ? 1 : 0;
+      for (int bit = 0; bit < kPoseFlagCount; ++bit) flagged[static_cast<std::size_t>(bit)] += (run.frames[i].flags & kPoseFaultFlags & (1u << bit)) != 0;
+    }
+    std::string flags;
+    for (int bit = 0; bit < kPoseFlagCount; ++bit)
+      if (flagged[static_cast<std::size_t>(bit)] > 0) flags += std::string(" ") + pose_flag_name(bit) + " " + std::to_string(flagged[static_cast<std::size_t>(bit)]);
+    const double ratio = mean_error_degrees(run, kSettled, n, d) / intact_error;
+    const double solved_ratio = mean_error_degrees(stream(std::nullopt, kDefaultWindow, d, false), kSettled, n, d) / intact_error;
+    MESSAGE("traces " << traces[0] << " and " << traces[1] << ": " << floating.size() << " cells float; "
+                      << 100.0 * static_cast<double>(trusted) / static_cast<double>(n - kSettled) << "% trusted; error " << ratio
+                      << "x the intact glove's, as solved " << solved_ratio << "x; untrusted frames' flags:" << flags);
+    CHECK(run.masked_cells == floating);
+    CHECK(trusted >= 95 * (n - kSettled) / 100);
+    sum_ratio += ratio;
+    sum_as_solved += solved_ratio;
+    worst_ratio = std::max(worst_ratio, ratio);
+    ++pairs;
+  }
+  MESSAGE("two traces torn, over " << pairs << " pairs: " << sum_ratio / pairs << "x the intact glove's error (worst " << worst_ratio
+                                   << "x); the cells as solved " << sum_as_solved / pairs << "x");
+  CHECK(sum_ratio / pairs <= 1.25);
 }
 
 TEST_CASE("faults: the injector turns each clean reading into what the faulty glove delivers") {

@@ -293,8 +293,9 @@ TEST_CASE("sim recorder: a torn trace's cells beyond the break leave every row f
   config.raw_rows = true;
   config.noise.spike_probability = config.noise.drop_probability = 0.0;
   const Recording intact = record(p, m, s.distal_radius(), 5, config);
-  config.tear = {layout.bottom_traces() + 4, 1, 2.0};  // top trace 4, torn after its first cell
-  const std::vector<int> floating = cells_beyond_tear(layout, glauser2019_sites(), config.tear);
+  const TraceTear tear{layout.bottom_traces() + 4, 1, 2.0};  // top trace 4, torn after its first cell
+  config.tears = {tear};
+  const std::vector<int> floating = cells_beyond_tear(layout, glauser2019_sites(), tear);
   const Recording torn = record(p, m, s.distal_radius(), 5, config);
   // The cells of top trace 4 from the wrist out; all but the first float.
   std::vector<int> on_trace;
@@ -338,6 +339,20 @@ TEST_CASE("sim recorder: a torn trace's cells beyond the break leave every row f
   // The readout's full-M solve reads the floating cells as about 0 once its 5-frame mean holds only torn rows.
   for (int c : floating) CHECK(std::abs(torn.cells[static_cast<std::size_t>((torn.frames - 1) * kCells + c)]) < 0.5);
   CHECK_THROWS_AS(cells_beyond_tear(layout, glauser2019_sites(), {27, 0, 0.0}), Error);
+
+  // A second trace (bottom trace 7, whole) tearing at 3 s: until then the rows are the first tear's
+  // alone, bit for bit; at the end the cells of both read about 0.
+  const TraceTear second{7, 0, 3.0};
+  config.tears = {tear, second};
+  const Recording both = record(p, m, s.distal_radius(), 5, config);
+  REQUIRE(both.frames == torn.frames);
+  for (int f = 0; f < both.frames && both.timestamps[static_cast<std::size_t>(f)] < 3.0; ++f)  // the frame ending at 3 s holds a row read at the tear
+    for (int r = 0; r < kRows; ++r)
+      REQUIRE(both.raw_rows[static_cast<std::size_t>(f * kRows + r)] == torn.raw_rows[static_cast<std::size_t>(f * kRows + r)]);
+  std::vector<int> all_floating = cells_beyond_tear(layout, glauser2019_sites(), second);
+  REQUIRE(!all_floating.empty());
+  all_floating.insert(all_floating.end(), floating.begin(), floating.end());
+  for (int c : all_floating) CHECK(std::abs(both.cells[static_cast<std::size_t>((both.frames - 1) * kCells + c)]) < 0.5);
 }
 
 TEST_CASE("sim corpus: the paper's protocol, identical for any thread count") {

@@ -47,15 +47,16 @@ int simulate(SimulateOptions o) {
     if (o.tear.size() != 3 || !whole(o.tear[0]) || !whole(o.tear[1]) || !(o.tear[2] >= 0.0 && std::isfinite(o.tear[2])))
       throw Error("--tear: expected TRACE KEPT SECONDS (a trace 0-26: bottom 0-14, top 15-26; the cells it keeps from the wrist; "
                   "seconds into each session), three numbers");
-    config.recording.tear = {static_cast<int>(o.tear[0]), static_cast<int>(o.tear[1]), o.tear[2]};
+    const sim::TraceTear tear{static_cast<int>(o.tear[0]), static_cast<int>(o.tear[1]), o.tear[2]};
+    config.recording.tears = {tear};
     const sensor::TraceLayout layout = sensor::TraceLayout::glauser2019();
-    const std::vector<int> floating = sim::cells_beyond_tear(layout, sim::glauser2019_sites(), config.recording.tear);
+    const std::vector<int> floating = sim::cells_beyond_tear(layout, sim::glauser2019_sites(), tear);
     std::string cells;
     for (int c : floating) cells += (cells.empty() ? "" : ", ") + std::to_string(c);
-    const int trace = config.recording.tear.trace;
+    const int trace = tear.trace;
     std::fprintf(stderr, "--tear: %s trace %d torn %g s into each session, %d cell(s) kept (%zu float: cells %s)\n",
                  trace < layout.bottom_traces() ? "bottom" : "top", trace < layout.bottom_traces() ? trace : trace - layout.bottom_traces(),
-                 o.tear[2], config.recording.tear.cells_kept, floating.size(), cells.empty() ? "none" : cells.c_str());
+                 o.tear[2], tear.cells_kept, floating.size(), cells.empty() ? "none" : cells.c_str());
   }
   if (!o.sequence_file.empty()) {
     config.guided_calibration = calibration::Sequence::read(o.sequence_file);

@@ -279,7 +279,7 @@ inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config)
     const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
     const std::array<double, 16> radii = subject.distal_radius();
     RecordingConfig recording = config.recording;
-    if (job.kind == RecordingKind::Calibration) recording.tear = {};  // a glove tears mid-session, after its calibration
+    if (job.kind == RecordingKind::Calibration) recording.tears.clear();  // a glove tears mid-session, after its calibration
     job.recording = setup.record(radii, config, recording);
     label_recording(job.recording, setup.motion, setup.physics.kinematics(), radii, config.world.tracker, tracker_seeds(config, job),
                     subject.length_scale());

@@ -179,7 +179,7 @@ struct RecordingConfig {
   /// the readout noise; tests/test_sim.cpp bounds the difference to the exact evaluation). kRows
   /// evaluates at every row's own instant.
   int physics_steps = 12;
-  TraceTear tear{};  ///< A trace that tears during the recording (none by default; a corpus tears its sessions only).
+  std::vector<TraceTear> tears;  ///< Traces that tear during the recording (none by default; a corpus tears its sessions only).
 };
 
 /// @brief One recording, frames at the ends of the readout cycles.
@@ -211,9 +211,12 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
         if (m(r, c) != 0.0) rows[static_cast<std::size_t>(r)].push_back(c);
     return rows;
   }();
-  std::array<bool, kCells> floating{};  // beyond the tear: out of every row once it tore
-  if (config.tear.trace >= 0)
-    for (int c : cells_beyond_tear(solver->layout(), glauser2019_sites(), config.tear)) floating[static_cast<std::size_t>(c)] = true;
+  // When each cell starts to float (beyond a tear: out of every row from then on); never: infinity.
+  std::array<double, kCells> floating_from;
+  floating_from.fill(std::numeric_limits<double>::infinity());
+  for (const TraceTear& tear : config.tears)
+    for (int c : cells_beyond_tear(solver->layout(), glauser2019_sites(), tear))
+      floating_from[static_cast<std::size_t>(c)] = std::min(floating_from[static_cast<std::size_t>(c)], tear.at_seconds);
   core::Rng rng(seed);
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
@@ -262,10 +265,9 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
       const CellArray& lo = knots[static_cast<std::size_t>(j)];
       const CellArray& hi = knots[static_cast<std::size_t>(j) + 1];
       double value = 0.0;
-      const bool torn = config.tear.trace >= 0 && t >= config.tear.at_seconds;
       for (int c : row_cells[static_cast<std::size_t>(r)]) {
         const auto i = static_cast<std::size_t>(c);
-        if (torn && floating[i]) continue;
+        if (t >= floating_from[i]) continue;
         value += lo[i] + w * (hi[i] - lo[i]);
       }
       value = value * gain + rng.normal(0.0, noise.row_sd);
