@@ -174,8 +174,11 @@ class FloatingCells {
     for (int f : list_) system_(f, f) = 1.0;
     factor_.compute(system_);
     if (factor_.info() != Eigen::Success) return;
-    weights_ = factor_.solve(targets_);
-    regressed_ = weights_.allFinite();
+    regressed_ = true;
+    for (int f : list_) {  // only the floating cells' columns: the others are never read
+      weights_.col(f) = factor_.solve(targets_.col(f));
+      regressed_ = regressed_ && weights_.col(f).allFinite();
+    }
   }
 
   FloatingCellsConfig config_;
