@@ -70,6 +70,13 @@ cli::LinkTiming quick() {
   return t;
 }
 
+// A TCP device's listening end on a free loopback port; address() is what a link opens.
+struct LoopbackListener {
+  boost::asio::io_context io;
+  tcp::acceptor acceptor{io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0)};
+  std::string address() const { return "tcp:127.0.0.1:" + std::to_string(acceptor.local_endpoint().port()); }
+};
+
 }  // namespace
 
 TEST_CASE("link: names of links are parsed, wrong ones refused with what was expected") {
@@ -90,9 +97,9 @@ TEST_CASE("link: names of links are parsed, wrong ones refused with what was exp
 }
 
 TEST_CASE("link: a TCP device that drops its connection is reconnected, the frames sent meanwhile counted lost") {
-  boost::asio::io_context io;
-  tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
-  const unsigned port = acceptor.local_endpoint().port();
+  LoopbackListener listener;
+  tcp::acceptor& acceptor = listener.acceptor;
+  boost::asio::io_context& io = listener.io;
   Device dev;
   std::set<std::uint32_t> sent;
   std::thread device([&] {
@@ -109,7 +116,7 @@ TEST_CASE("link: a TCP device that drops its connection is reconnected, the fram
       std::this_thread::sleep_for(std::chrono::milliseconds(30));
     }
   });
-  cli::GloveLink link("tcp:127.0.0.1:" + std::to_string(port), quick());
+  cli::GloveLink link(listener.address(), quick());
   const std::vector<std::uint32_t> got = read_until(link, 120);
   device.join();
   CHECK(got == std::vector<std::uint32_t>(sent.begin(), sent.end()));
@@ -122,9 +129,9 @@ TEST_CASE("link: a TCP device that drops its connection is reconnected, the fram
 }
 
 TEST_CASE("link: a TCP device that reconnects as another glove is an error") {
-  boost::asio::io_context io;
-  tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
-  const unsigned port = acceptor.local_endpoint().port();
+  LoopbackListener listener;
+  tcp::acceptor& acceptor = listener.acceptor;
+  boost::asio::io_context& io = listener.io;
   Device dev;
   std::thread device([&] {
     for (int connection = 0; connection < 2; ++connection) {
@@ -137,15 +144,15 @@ TEST_CASE("link: a TCP device that reconnects as another glove is an error") {
       if (connection == 1) std::this_thread::sleep_for(std::chrono::milliseconds(300));
     }
   });
-  cli::GloveLink link("tcp:127.0.0.1:" + std::to_string(port), quick());
+  cli::GloveLink link(listener.address(), quick());
   CHECK_THROWS_WITH_AS(read_until(link, 100), doctest::Contains("serial 78"), Error);
   device.join();
 }
 
 TEST_CASE("link: for a service, another glove's frames are dropped and the glove's resume when it is back") {
-  boost::asio::io_context io;
-  tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
-  const unsigned port = acceptor.local_endpoint().port();
+  LoopbackListener listener;
+  tcp::acceptor& acceptor = listener.acceptor;
+  boost::asio::io_context& io = listener.io;
   Device dev;
   std::vector<std::uint32_t> sent_by_77;
   std::thread device([&] {
@@ -162,7 +169,7 @@ TEST_CASE("link: for a service, another glove's frames are dropped and the glove
       std::this_thread::sleep_for(std::chrono::milliseconds(connection == 2 ? 1500 : 100));
     }
   });
-  cli::GloveLink link("tcp:127.0.0.1:" + std::to_string(port), quick(), std::nullopt, cli::GloveLink::OtherGlove::Refuse);
+  cli::GloveLink link(listener.address(), quick(), std::nullopt, cli::GloveLink::OtherGlove::Refuse);
   const std::vector<std::uint32_t> got = read_until(link, 20);
   device.join();
   CHECK(got == sent_by_77);  // every reading of glove 77, none of 78's
@@ -172,9 +179,9 @@ TEST_CASE("link: for a service, another glove's frames are dropped and the glove
 }
 
 TEST_CASE("link: a connection that goes silent is taken as lost and reopened") {
-  boost::asio::io_context io;
-  tcp::acceptor acceptor(io, tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));
-  const unsigned port = acceptor.local_endpoint().port();
+  LoopbackListener listener;
+  tcp::acceptor& acceptor = listener.acceptor;
+  boost::asio::io_context& io = listener.io;
   Device dev;
   std::thread device([&] {
     tcp::socket hung(io);
@@ -187,7 +194,7 @@ TEST_CASE("link: a connection that goes silent is taken as lost and reopened") {
     for (int i = 0; i < 10; ++i) boost::asio::write(fresh, boost::asio::buffer(dev.reading()));
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   });
-  cli::GloveLink link("tcp:127.0.0.1:" + std::to_string(port), quick());
+  cli::GloveLink link(listener.address(), quick());
   const std::vector<std::uint32_t> got = read_until(link, 20);
   device.join();
   CHECK(got.size() == 20);
