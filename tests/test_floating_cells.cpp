@@ -153,6 +153,11 @@ TEST_CASE("floating cells: a frame the solve did not fit floats no cell and teac
   }
   const long frames = stand_in.frames_seen();
   const Eigen::VectorXd mean = stand_in.mean();
+  // A frame the solve did not fit, every cell in range: passed on, and not learnt from.
+  cells = x.row(199).transpose();
+  CHECK(stand_in.apply(cells, 199.5 / kRate, false) == 0);
+  CHECK(stand_in.frames_seen() == frames);
+  CHECK(stand_in.mean() == mean);
   // A spike's frame (outlier rows): the low cell passes through as solved, the statistics stay.
   cells = x.row(200).transpose();
   cells(2) = 0.0;
@@ -171,5 +176,21 @@ TEST_CASE("floating cells: a frame the solve did not fit floats no cell and teac
   cells = x.row(202).transpose();
   cells(2) = 0.0;
   CHECK(stand_in.apply(cells, 202 / kRate, false) == 1);
-  CHECK(stand_in.frames_seen() == frames);
+
+  // A cell low on frames that never fit again (a row that stays an outlier) floats once it has
+  // read low for confirm_seconds (0.25 s): not at 0.2 s, at 0.25 s.
+  sensor::FloatingCells persistent(kCells, {});
+  persistent.set_range(range_of(x));
+  for (int f = 0; f < 200; ++f) {
+    cells = x.row(f).transpose();
+    REQUIRE(persistent.apply(cells, f / kRate) == 0);
+  }
+  for (int f = 200; f <= 215; ++f) {
+    cells = x.row(f).transpose();
+    cells(5) = 0.0;
+    const int stood_in = persistent.apply(cells, f / kRate, false);
+    CAPTURE(f);
+    CHECK(stood_in == (f - 200 >= 15 ? 1 : 0));  // 15 frames at 60 Hz: 0.25 s
+  }
+  CHECK(persistent.floating() == std::vector<int>{5});
 }

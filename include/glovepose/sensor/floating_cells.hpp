@@ -38,12 +38,14 @@ class FloatingCells {
   /// @brief A stand-in for `cells` cells. Throws glovepose::Error for a bad setting.
   FloatingCells(Eigen::Index cells, FloatingCellsConfig config) : config_(config) {
     if (cells < 1 || !(config_.below_share > 0.0 && config_.below_share < 1.0) || !(config_.hold_seconds >= 0.0) ||
-        !std::isfinite(config_.hold_seconds) || !(config_.memory_seconds > 0.0) || !(config_.min_seconds >= 0.0) || !(config_.ridge > 0.0) ||
-        !std::isfinite(config_.ridge))
+        !std::isfinite(config_.hold_seconds) || !(config_.confirm_seconds >= 0.0) || !std::isfinite(config_.confirm_seconds) ||
+        !(config_.memory_seconds > 0.0) || !(config_.min_seconds >= 0.0) || !(config_.ridge > 0.0) || !std::isfinite(config_.ridge))
       throw Error("FloatingCells: cells " + std::to_string(cells) + ", below_share " + std::to_string(config_.below_share) +
-                  ", hold_seconds " + std::to_string(config_.hold_seconds) + ", memory_seconds " + std::to_string(config_.memory_seconds) +
-                  ", min_seconds " + std::to_string(config_.min_seconds) + ", ridge " + std::to_string(config_.ridge) +
-                  ", expected at least 1 cell, 0 < below_share < 1, hold_seconds >= 0, memory_seconds > 0, min_seconds >= 0, ridge > 0");
+                  ", hold_seconds " + std::to_string(config_.hold_seconds) + ", confirm_seconds " + std::to_string(config_.confirm_seconds) +
+                  ", memory_seconds " + std::to_string(config_.memory_seconds) + ", min_seconds " + std::to_string(config_.min_seconds) +
+                  ", ridge " + std::to_string(config_.ridge) +
+                  ", expected at least 1 cell, 0 < below_share < 1, hold_seconds >= 0, confirm_seconds >= 0, memory_seconds > 0, "
+                  "min_seconds >= 0, ridge > 0");
     const auto n = static_cast<std::size_t>(cells);
     bound_ = Eigen::VectorXd::Constant(cells, -kInfinity);  // no range yet: nothing floats, the statistics learn
     middle_ = Eigen::VectorXd::Zero(cells);
@@ -56,6 +58,7 @@ class FloatingCells {
     factor_ = Eigen::LDLT<Eigen::MatrixXd>(cells);
     floating_.assign(n, 0);
     above_since_.assign(n, kNever);
+    below_since_.assign(n, kNever);
     list_.reserve(n);
     reset();
   }
@@ -81,9 +84,12 @@ class FloatingCells {
 
   /// @brief One frame of cells (solved capacitances) at `timestamp` (s): floating cells replaced in
   /// place; an intact frame updates the statistics. Returns the number of cells stood in for.
-  /// `consistent` says the solve fitted every row (no outlier rows): a cell starts floating, and the
-  /// statistics learn, only on such frames. A row spike drags the cells it touches below the bound
-  /// for that frame; a torn trace keeps them there once its rows are all read after the tear.
+  /// `consistent` says the solve fitted every row (no outlier rows); the statistics learn only from
+  /// such frames. A row spike drags the cells it touches below the bound while it stays in its
+  /// row's mean, and the solve flags that row: a cell below the bound starts floating at once on a
+  /// consistent frame (a torn trace's cells stay low once its rows are all read after the tear),
+  /// otherwise after reading so for confirm_seconds. Cells given without a readout's judgement
+  /// (pushed cells) are taken as consistent.
   GLOVEPOSE_REALTIME int apply(Eigen::VectorXd& cells, double timestamp, bool consistent = true) noexcept {
     if (!config_.enabled || cells.size() != bound_.size() || !cells.allFinite()) return 0;
     bool changed = false;
@@ -91,8 +97,12 @@ class FloatingCells {
       const auto i = static_cast<std::size_t>(c);
       if (cells(c) < bound_(c)) {
         above_since_[i] = kNever;
-        if (!floating_[i] && consistent) floating_[i] = 1, changed = true;
-      } else if (floating_[i]) {
+        if (below_since_[i] == kNever) below_since_[i] = timestamp;
+        if (!floating_[i] && (consistent || timestamp - below_since_[i] >= config_.confirm_seconds)) floating_[i] = 1, changed = true;
+        continue;
+      }
+      below_since_[i] = kNever;
+      if (floating_[i]) {
         if (above_since_[i] == kNever) above_since_[i] = timestamp;
         if (timestamp - above_since_[i] >= config_.hold_seconds) floating_[i] = 0, above_since_[i] = kNever, changed = true;
       }
@@ -135,6 +145,7 @@ class FloatingCells {
   void clear_floating() noexcept {
     std::fill(floating_.begin(), floating_.end(), 0);
     std::fill(above_since_.begin(), above_since_.end(), kNever);
+    std::fill(below_since_.begin(), below_since_.end(), kNever);
     list_.clear();
     regressed_ = false;
   }
@@ -193,6 +204,7 @@ class FloatingCells {
   Eigen::LDLT<Eigen::MatrixXd> factor_;
   std::vector<unsigned char> floating_;  // per cell
   std::vector<double> above_since_;      // per floating cell: since when it reads above the bound
+  std::vector<double> below_since_;      // per cell: since when it reads below the bound
   std::vector<int> list_;                // the floating cells, in index order
   bool regressed_ = false;
   long frames_ = 0;
