@@ -215,8 +215,9 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   std::array<double, kCells> floating_from;
   floating_from.fill(std::numeric_limits<double>::infinity());
   for (const TraceTear& tear : config.tears)
-    for (int c : cells_beyond_tear(solver->layout(), glauser2019_sites(), tear))
-      floating_from[static_cast<std::size_t>(c)] = std::min(floating_from[static_cast<std::size_t>(c)], tear.at_seconds);
+    if (tear.trace >= 0)  // -1: none
+      for (int c : cells_beyond_tear(solver->layout(), glauser2019_sites(), tear))
+        floating_from[static_cast<std::size_t>(c)] = std::min(floating_from[static_cast<std::size_t>(c)], tear.at_seconds);
   core::Rng rng(seed);
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
