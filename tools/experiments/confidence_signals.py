@@ -8,9 +8,11 @@ signal and the quarter with the highest expected error is compared with the quar
 lowest, as the issue's acceptance figure does:
 
 - ``prior``: the DoF's mean error on the first seed (the same for every frame of a DoF);
-- ``speed``: how fast the predicted angle moves (10-frame mean of |d angle/dt|; the readout's
-  mean window and the network lag behind a moving hand), ranked within each person and DoF;
-- ``offcentre``: how far the predicted angle lies from the DoF's mean, within each person and DoF.
+- ``speed``: how fast the predicted angle moves (mean |d angle/dt| over the 10 frames up to this
+  one: what the estimator knows at the frame; the readout's mean window and the network lag
+  behind a moving hand), ranked within each person and DoF;
+- ``offcentre``: how far the predicted angle lies from the person's mean for the DoF, ranked
+  within each person and DoF.
 
 The prior alone ranks joints across DoFs; the within-DoF rankings say how much a per-frame
 signal adds. Seeds 981 and 982 were used by no model or choice.
@@ -88,11 +90,16 @@ def main() -> None:
     print(f"prior: {quarter_ratio(np.broadcast_to(prior, error.shape).ravel(), error.ravel()):.2f}x "
           f"(all {error.size} joint-frames of seed {seeds[1]})")
     speed = np.zeros_like(p1)
-    speed[1:] = np.abs(np.diff(p1, axis=0)) / np.maximum(np.diff(time)[:, None], 1e-3)
-    speed[np.r_[True, np.diff(subject) != 0]] = 0.0  # no speed across two people's streams
-    kernel = np.ones(10) / 10.0
-    smoothed = np.apply_along_axis(lambda v: np.convolve(v, kernel, "same"), 0, speed)
-    for name, signal in (("speed", smoothed), ("offcentre", np.abs(p1 - p1.mean(0)))):
+    offcentre = np.zeros_like(p1)
+    for s in np.unique(subject):  # each person's stream alone
+        rows = np.flatnonzero(subject == s)
+        rate = np.zeros((len(rows), DOFS))
+        rate[1:] = np.abs(np.diff(p1[rows], axis=0)) / np.maximum(np.diff(time[rows])[:, None], 1e-3)
+        running = np.cumsum(rate, axis=0)
+        trailing = running - np.vstack([np.zeros((10, DOFS)), running[:-10]])[: len(rows)]  # the last 10 frames' sum
+        speed[rows] = trailing / np.minimum(np.arange(1, len(rows) + 1), 10)[:, None]
+        offcentre[rows] = np.abs(p1[rows] - p1[rows].mean(0))
+    for name, signal in (("speed", speed), ("offcentre", offcentre)):
         ratios = [quarter_ratio(signal[subject == s, d], error[subject == s, d]) for s in np.unique(subject) for d in range(DOFS)]
         print(f"{name}: {np.median(ratios):.2f}x median over {len(ratios)} (person, DoF) pairs (range {min(ratios):.2f}-{max(ratios):.2f})")
 
