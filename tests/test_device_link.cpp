@@ -16,7 +16,16 @@
 
 #include <boost/asio/write.hpp>
 
+#include "cli/byte_link.hpp"
 #include "cli/glove_link.hpp"
+
+#ifdef _WIN32
+#  include <windows.h>
+#else
+#  include <fcntl.h>
+#  include <sys/stat.h>
+#  include <unistd.h>
+#endif
 
 namespace {
 
@@ -77,6 +86,62 @@ struct LoopbackListener {
   std::string address() const { return "tcp:127.0.0.1:" + std::to_string(acceptor.local_endpoint().port()); }
 };
 
+// A pipe the test writes to and a ByteSource opens by its path: a FIFO on POSIX, a named pipe on
+// Windows (both a pipe to the reader, as stdin is when a program feeds the tool).
+class WrittenPipe {
+ public:
+  WrittenPipe() {
+#ifdef _WIN32
+    path_ = "\\\\.\\pipe\\glovepose-test-" + std::to_string(::GetCurrentProcessId());
+    handle_ = ::CreateNamedPipeA(path_.c_str(), PIPE_ACCESS_OUTBOUND, PIPE_TYPE_BYTE | PIPE_WAIT, 1, 4096, 4096, 0, nullptr);
+    REQUIRE(handle_ != INVALID_HANDLE_VALUE);
+#else
+    path_ = "glovepose-test-fifo-" + std::to_string(::getpid());
+    (void)::unlink(path_.c_str());
+    REQUIRE(::mkfifo(path_.c_str(), 0600) == 0);
+    fd_ = ::open(path_.c_str(), O_RDWR);  // a writer from the start: the reader's open returns at once
+    REQUIRE(fd_ >= 0);
+#endif
+  }
+  WrittenPipe(const WrittenPipe&) = delete;
+  WrittenPipe& operator=(const WrittenPipe&) = delete;
+  ~WrittenPipe() {
+    close();
+#ifndef _WIN32
+    (void)::unlink(path_.c_str());
+#endif
+  }
+  const std::string& path() const { return path_; }
+  // After the reader opened the path.
+  void write(const std::string& bytes) {
+#ifdef _WIN32
+    (void)::ConnectNamedPipe(handle_, nullptr);  // the reader is connected already (ERROR_PIPE_CONNECTED)
+    DWORD written = 0;
+    REQUIRE(::WriteFile(handle_, bytes.data(), static_cast<DWORD>(bytes.size()), &written, nullptr));
+    REQUIRE(written == bytes.size());
+#else
+    REQUIRE(::write(fd_, bytes.data(), bytes.size()) == static_cast<ssize_t>(bytes.size()));
+#endif
+  }
+  void close() {
+#ifdef _WIN32
+    if (handle_ != INVALID_HANDLE_VALUE) (void)::CloseHandle(handle_);
+    handle_ = INVALID_HANDLE_VALUE;
+#else
+    if (fd_ >= 0) (void)::close(fd_);
+    fd_ = -1;
+#endif
+  }
+
+ private:
+  std::string path_;
+#ifdef _WIN32
+  HANDLE handle_ = INVALID_HANDLE_VALUE;
+#else
+  int fd_ = -1;
+#endif
+};
+
 }  // namespace
 
 TEST_CASE("link: names of links are parsed, wrong ones refused with what was expected") {
@@ -94,6 +159,25 @@ TEST_CASE("link: names of links are parsed, wrong ones refused with what was exp
   CHECK_THROWS_WITH_AS(cli::LinkAddress::parse("tcp:5000"), doctest::Contains("expected tcp:HOST:PORT"), Error);
   CHECK_THROWS_WITH_AS(cli::LinkAddress::parse("serial:COM3@fast"), doctest::Contains("baud rate 'fast'"), Error);
   CHECK_THROWS_WITH_AS(cli::LinkAddress::parse("serial:"), doctest::Contains("no port"), Error);
+}
+
+TEST_CASE("link: a pipe that pauses is waited on for the time asked, then read, then ends") {
+  // glovepose record flushes what it wrote and says its health while the source pauses: a read
+  // must come back within its wait (on Windows too, where a pipe cannot be polled).
+  using std::chrono::milliseconds;
+  WrittenPipe pipe;
+  cli::ByteSource source(pipe.path());
+  std::uint8_t buffer[16];
+  const auto start = std::chrono::steady_clock::now();
+  CHECK(source.read(buffer, sizeof buffer, milliseconds(100)) == cli::ByteSource::kNothingYet);
+  const auto waited = std::chrono::steady_clock::now() - start;
+  CHECK(waited >= milliseconds(90));
+  CHECK(waited < milliseconds(2000));
+  pipe.write("abc");
+  CHECK(source.read(buffer, sizeof buffer, milliseconds(2000)) == 3);
+  CHECK(std::string(buffer, buffer + 3) == "abc");
+  pipe.close();
+  CHECK(source.read(buffer, sizeof buffer, milliseconds(2000)) == 0);  // the writer is gone: the end
 }
 
 TEST_CASE("link: a TCP device that drops its connection is reconnected, the frames sent meanwhile counted lost") {

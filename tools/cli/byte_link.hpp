@@ -16,6 +16,8 @@
 #include <fcntl.h>
 #ifdef _WIN32
 #  include <io.h>
+#  include <windows.h>
+#  include <thread>
 #else
 #  include <poll.h>
 #  include <termios.h>
@@ -132,7 +134,8 @@ class ByteSource {
 
   /// Up to `size` bytes as soon as any arrive: the count, 0 at the end, -1 when interrupted by a
   /// signal (EINTR), kNothingYet when none came within `wait` (a pipe or terminal that pauses; on
-  /// POSIX only: Windows waits for bytes); throws Error for another failure.
+  /// Windows a pipe, whose pauses record must outlast to flush, while a console waits for bytes);
+  /// throws Error for another failure.
   long read(std::uint8_t* data, std::size_t size, std::chrono::milliseconds wait) {
 #ifndef _WIN32
     pollfd ready{fd_, POLLIN, 0};
@@ -140,7 +143,17 @@ class ByteSource {
     if (polled < 0 && errno == EINTR) return -1;
     if (polled == 0) return kNothingYet;
 #else
-    (void)wait;
+    // An anonymous or named pipe cannot be waited on: its unread bytes are peeked every 2 ms.
+    const HANDLE handle = reinterpret_cast<HANDLE>(::_get_osfhandle(fd_));
+    if (handle != INVALID_HANDLE_VALUE && ::GetFileType(handle) == FILE_TYPE_PIPE) {
+      const auto until = std::chrono::steady_clock::now() + wait;
+      DWORD unread = 0;
+      // A failed peek is a closed writer: read() then says 0 (the end) or the error.
+      while (::PeekNamedPipe(handle, nullptr, 0, nullptr, &unread, nullptr) && unread == 0) {
+        if (std::chrono::steady_clock::now() >= until) return kNothingYet;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+    }
 #endif
     return read(data, size);
   }
