@@ -28,9 +28,10 @@ namespace {
 constexpr std::size_t kFaultBegin = 120, kFaultEnd = 240;  // frames of the session (60 per second)
 
 // The fault tests' session: the default protocol (the guided calibration sequence, 30 s, then 9 s of
-// session) with its raw rows (default noise: readout jitter, rare spikes and drops).
-sim::CorpusConfig faults_session_config() {
-  sim::CorpusConfig config = sim::CorpusConfig::one_session(43, 9.0, 0.0);
+// session; another person and length on request) with its raw rows (default noise: readout jitter,
+// rare spikes and drops).
+sim::CorpusConfig faults_session_config(std::uint64_t seed = 43, double seconds = 9.0) {
+  sim::CorpusConfig config = sim::CorpusConfig::one_session(seed, seconds, 0.0);
   config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
   config.calibration_seconds = config.guided_calibration->total_seconds();
   config.recording.raw_rows = true;
@@ -392,10 +393,7 @@ TEST_CASE("faults: an intact glove's cells are never stood in for") {
   // and the stand-in starts only on frames without one (before it did: 1.39% of poses, seeds 971-974).
   long poses = 0, masked = 0;
   for (std::uint64_t seed : {971u, 972u}) {
-    sim::CorpusConfig config = sim::CorpusConfig::one_session(seed, 120.0, 0.0);
-    config.guided_calibration = sim::guided_calibration_sequence(sim::pose_gallery());
-    config.calibration_seconds = config.guided_calibration->total_seconds();
-    config.recording.raw_rows = true;
+    const sim::CorpusConfig config = faults_session_config(seed, 120.0);
     const io::Dataset d = sim::to_dataset(sim::simulate_corpus(config), config);
     const io::RowClock clock = d.row_clock();
     GlovePoseEstimator estimator(faults_model());

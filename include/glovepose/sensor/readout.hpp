@@ -253,7 +253,7 @@ class Readout {
       health.filling_rows += count_[r] < config_.mean_window ? 1 : 0;
       health.stale_rows += newest_age_[r] > stale_age && !left_out(r) ? 1 : 0;
       health.stuck_rows += repeats_[r] >= config_.stuck_readings && !left_out(r) ? 1 : 0;
-      health.disconnected_rows += mean_(row) < config_.disconnected_below ? 1 : 0;
+      health.disconnected_rows += candidate_[r];  // read below disconnected_below: exclude_disconnected_rows() marked it
       health.outlier_rows += residual_(row) * residual_(row) * count_[r] > bound_squared ? 1 : 0;
     }
     frame_.timestamp = last_timestamp_;
