@@ -11,6 +11,9 @@
 //   stage (hand/contact.hpp) off and on.
 // - BM_EstimatorFrameFloating/<0|1>: BM_EstimatorFrame/3 with the floating-cell stand-in
 //   (sensor/floating_cells.hpp) off and on: its cost on an intact glove (the running statistics).
+// - BM_EstimatorFrameContinuous/<0|1>: BM_EstimatorFrame/3 with the calibration fixed (as there) or
+//   continuous (calibration/free_motion.hpp: the motion's histograms fed every frame, the range
+//   re-derived every 0.25 s of stream time); needs a model with a range map (the shipped one).
 // - BM_EstimatorFrameXr/3: BM_EstimatorFrame/3 plus joints_at (OpenXR joints, predicted, with velocities).
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
@@ -20,6 +23,7 @@
 //   GLOVEPOSE_BENCH_CAPI="label=path,label=path" (bench/capi_frame.sh builds the shipped library and
 //   its header-only peers and runs them side by side); each label names the instruction set its
 //   networks run (glovepose_isa, where the library has it). Linux only (dlopen).
+#include <glovepose/calibration/free_motion.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
@@ -175,6 +179,19 @@ void BM_EstimatorFrameFloating(benchmark::State& state) {
   GlovePoseEstimator estimator = calibrated_estimator(nn::WeightStorage::Fixed16, config);
   push_frames(state, estimator, recording(), [] {});
   state.SetLabel(state.range(0) != 0 ? "Fixed16, floating-cell stand-in on" : "Fixed16, floating-cell stand-in off");
+}
+
+void BM_EstimatorFrameContinuous(benchmark::State& state) {
+  GlovePoseEstimator estimator = calibrated_estimator(nn::WeightStorage::Fixed16);
+  if (state.range(0) != 0) {
+    if (!estimator.model().range_map()) {
+      state.SkipWithError("the model carries no range map");
+      return;
+    }
+    estimator.use_continuous_calibration();
+  }
+  push_frames(state, estimator, recording(), [] {});
+  state.SetLabel(state.range(0) != 0 ? "Fixed16, continuous calibration" : "Fixed16, fixed calibration");
 }
 
 // BM_EstimatorFrame plus the OpenXR joints an engine asks for (joints_at 11 ms past the newest
@@ -334,5 +351,6 @@ const int kCapiBenchmarks = [] {
 BENCHMARK(BM_EstimatorFrame)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameContact)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameFloating)->Arg(0)->Arg(1)->UseRealTime();
+BENCHMARK(BM_EstimatorFrameContinuous)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameXr)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorRow)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();

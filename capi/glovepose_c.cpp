@@ -8,6 +8,7 @@
 
 // Loading and the per-frame calls only: no train/ or sim/ header (offline evaluation is
 // glovepose_eval's; the capi_training_isolation test checks the includes and the symbols).
+#include <glovepose/calibration/free_motion.hpp>  // PoseModel::range_map()
 #include <glovepose/estimator.hpp>
 #include <glovepose/hand/contact.hpp>
 #include <glovepose/hand/xr_hand.hpp>
@@ -83,7 +84,8 @@ static_assert(GLOVEPOSE_POSE_CALIBRATING == glovepose::kPoseCalibrating, "pose f
 static_assert(GLOVEPOSE_CALIBRATION_NONE == static_cast<int>(glovepose::CalibrationSource::None) &&
                   GLOVEPOSE_CALIBRATION_ON_THE_FLY == static_cast<int>(glovepose::CalibrationSource::OnTheFly) &&
                   GLOVEPOSE_CALIBRATION_USER == static_cast<int>(glovepose::CalibrationSource::User) &&
-                  GLOVEPOSE_CALIBRATION_TRAINING == static_cast<int>(glovepose::CalibrationSource::Training),
+                  GLOVEPOSE_CALIBRATION_TRAINING == static_cast<int>(glovepose::CalibrationSource::Training) &&
+                  GLOVEPOSE_CALIBRATION_CONTINUOUS == static_cast<int>(glovepose::CalibrationSource::Continuous),
               "calibration sources");
 // The documented ABI-1 sizes: no implicit padding, the same layout in C, C# and ctypes.
 static_assert(sizeof(glovepose_estimator_config) == 80, "ABI 1 layout");
@@ -403,6 +405,15 @@ int32_t glovepose_model_has_training_range(const glovepose_model* model) noexcep
     return -1;
   }
   return m->training_range() ? 1 : 0;
+}
+
+int32_t glovepose_model_has_range_map(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->range_map() ? 1 : 0;
 }
 
 int32_t glovepose_model_calibration_step_count(const glovepose_model* model) noexcept {
@@ -790,6 +801,24 @@ glovepose_result glovepose_calibration_use_training(glovepose_estimator* estimat
   if (e == nullptr) return invalid_estimator();
   try {
     e->use_training_calibration();
+    return GLOVEPOSE_OK;
+  } catch (...) {
+    return fail_from_exception(nullptr, GLOVEPOSE_ERROR_CALIBRATION_STATE);
+  }
+}
+
+glovepose_result glovepose_calibration_clear(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  e->clear_calibration();
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_calibration_use_continuous(glovepose_estimator* estimator) noexcept {
+  glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  try {
+    e->use_continuous_calibration();
     return GLOVEPOSE_OK;
   } catch (...) {
     return fail_from_exception(nullptr, GLOVEPOSE_ERROR_CALIBRATION_STATE);

@@ -161,6 +161,9 @@ typedef int32_t glovepose_result;
 #define GLOVEPOSE_CALIBRATION_USER 2
 /** @brief The model's training-set range (expect larger errors than with the user's own). */
 #define GLOVEPOSE_CALIBRATION_TRAINING 3
+/** @brief Kept from the wearer's free motion by the model's range map: no calibration step (what
+ * a new estimator uses when the model carries a range map, until a range is set or loaded). */
+#define GLOVEPOSE_CALIBRATION_CONTINUOUS 4
 
 /** @brief Pose flag: readings were rejected since the previous pose (their rows kept older values). */
 #define GLOVEPOSE_POSE_READINGS_REJECTED 0x1u
@@ -403,6 +406,10 @@ GLOVEPOSE_C_API const char* glovepose_model_cell_name(const glovepose_model* mod
 /** @brief 1 when the model records its training-set range (glovepose_calibration_use_training
  * works), 0 when not, -1 for an invalid handle. */
 GLOVEPOSE_C_API int32_t glovepose_model_has_training_range(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief 1 when the model carries a range map (calibration without a calibration step:
+ * glovepose_calibration_use_continuous works and new estimators start with it), 0 when not, -1
+ * for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_has_range_map(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Steps of the model's guided calibration sequence (docs/calibration.md): 0 when the model
  * carries no pose-guided calibration (its calibration is min-max only), -1 for an invalid handle. */
 GLOVEPOSE_C_API int32_t glovepose_model_calibration_step_count(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
@@ -547,6 +554,14 @@ GLOVEPOSE_C_API glovepose_result glovepose_calibration_save(const glovepose_esti
 /** @brief Uses the model's training-set range (the paper's "without calibration").
  * @return GLOVEPOSE_OK, _CALIBRATION_STATE (the model records none), _INVALID_HANDLE. */
 GLOVEPOSE_C_API glovepose_result glovepose_calibration_use_training(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Calibrates from the wearer's free motion from now on: the model's prior range at once,
+ * refined as the wearer moves (GLOVEPOSE_CALIBRATION_CONTINUOUS).
+ * @return GLOVEPOSE_OK, _CALIBRATION_STATE (the model carries no range map), _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_use_continuous(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
+/** @brief Forgets the calibration in use: no pose (GLOVEPOSE_UNCALIBRATED) until a calibration
+ * finishes or a range is set or loaded (GLOVEPOSE_CALIBRATION_NONE), for an application that wants
+ * poses only after its own calibration step. @return GLOVEPOSE_OK, _INVALID_HANDLE. */
+GLOVEPOSE_C_API glovepose_result glovepose_calibration_clear(glovepose_estimator* estimator) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Uses the range min[i] .. max[i] of each of the `count` (= cell_count) cells.
  * @return GLOVEPOSE_OK, GLOVEPOSE_SIZE_MISMATCH, _INVALID_ARGUMENT (NULL array, non-finite or
  * min > max, named in the message), _INVALID_HANDLE. */

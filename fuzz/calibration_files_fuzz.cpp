@@ -1,19 +1,21 @@
 /// @file calibration_files_fuzz.cpp
-/// @brief Fuzz target: the bytes through the three text readers of pose-guided calibration:
+/// @brief Fuzz target: the bytes through the four text readers of calibration:
 /// calibration::Sequence::parse (a calibration sequence file), calibration::PoseOffsetModel::parse
-/// (the "pose_offset" metadata of model files) and calibration::UserCalibration::load (a saved user
-/// calibration with its offsets, from a stream).
+/// (the "pose_offset" metadata of model files), calibration::RangeMap::parse (their "range_map")
+/// and calibration::UserCalibration::load (a saved user calibration with its offsets, from a stream).
 ///
 /// Invariants: bad input is refused with glovepose::Error only; an accepted sequence writes text
 /// that parses to the same text and has steps within the joint limits; an accepted offset model
-/// round-trips and maps zero features to its finite bias; an accepted user calibration has finite
-/// offsets and a range that normalises to finite values.
+/// round-trips and maps zero features to its finite bias; an accepted range map round-trips and
+/// keeps a finite range with min <= max through frames at and beyond its prior; an accepted user
+/// calibration has finite offsets and a range that normalises to finite values.
 #include <cmath>
 #include <cstdint>
 #include <optional>
 #include <sstream>
 #include <string>
 
+#include <glovepose/calibration/free_motion.hpp>
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/calibration/sequence.hpp>
 #include <glovepose/calibration/user_calibration.hpp>
@@ -37,6 +39,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     GLOVEPOSE_FUZZ_REQUIRE(again.feature_count() == m.feature_count() && again.cells() == m.cells());
     const hand::Angles zero = m.offsets(Eigen::VectorXd::Zero(m.feature_count()));
     for (std::size_t d = 0; d < hand::kDofCount; ++d) GLOVEPOSE_FUZZ_REQUIRE(zero[d] == m.bias()(static_cast<Eigen::Index>(d)));
+  } catch (const Error&) {
+  }
+  try {
+    const calibration::RangeMap m = calibration::RangeMap::parse(text, "fuzz");
+    const calibration::RangeMap again = calibration::RangeMap::parse(m.to_json(), "again");
+    GLOVEPOSE_FUZZ_REQUIRE(again.cells() == m.cells() && again.stages().size() == m.stages().size());
+    if (m.cells() <= 64 && m.histogram().bins <= 4096) {  // bounded work per input
+      calibration::ContinuousRange follow(m, 0.25);
+      const Eigen::VectorXd span = m.prior_max() - m.prior_min();
+      for (int f = 0; f < 40; ++f) {
+        const Eigen::VectorXd frame = m.prior_min() + span * ((f % 7) * 0.5 - 1.0);
+        (void)follow.add(frame, f * 0.1);
+        GLOVEPOSE_FUZZ_REQUIRE(follow.min().allFinite() && follow.max().allFinite() && (follow.min().array() <= follow.max().array()).all());
+      }
+    }
   } catch (const Error&) {
   }
   try {

@@ -1358,6 +1358,20 @@ TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed
   r = run("eval --model " + guided + " --data " + data + " --json");  // guided by default: the model carries one, the data followed it
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("\"calibration\": \"guided\"") != std::string::npos);
+  const long all_frames = nlohmann::json::parse(r.out)["frames"].get<long>();
+  // The same fit carries a range map: continuous calibration, scored from 2 s into each 6 s session.
+  r = run("info --model " + guided);
+  CHECK(r.out.find("continuous calibration: range map of ") != std::string::npos);
+  r = run("eval --model " + guided + " --data " + data + " --calibration-mode continuous --seconds 2- --json");
+  REQUIRE_MESSAGE(r.status == 0, r.out);
+  CHECK(r.out.find("\"calibration\": \"continuous\"") != std::string::npos);
+  CHECK(nlohmann::json::parse(r.out)["frames"].get<long>() == doctest::Approx(all_frames * 4.0 / 6.0).epsilon(0.02));
+  r = run("eval --model " + guided + " --data " + data + " --seconds 5-2");
+  CHECK(r.status == 2);
+  CHECK(r.out.find("--seconds") != std::string::npos);
+  r = run("eval --model " + kModel + " --data " + data + " --calibration-mode continuous");
+  CHECK(r.status == 1);
+  CHECK(r.out.find("carries no range map") != std::string::npos);
   const std::string plain = temp("plain_people.safetensors");
   r = run("simulate --seed 8 --subjects 10 --sessions 1 --minutes 0.1 --gloves 1 --out " + plain);
   REQUIRE_MESSAGE(r.status == 0, r.out);

@@ -76,6 +76,7 @@ void stream_rows(Estimator& estimator, std::size_t begin, std::size_t end, OnPos
 GlovePoseEstimator calibrated(const std::shared_ptr<const PoseModel>& model, EstimatorConfig config = cycle_config(),
                               const Session& on = session()) {
   GlovePoseEstimator estimator(model, std::move(config));
+  estimator.clear_calibration();  // no pose before the calibration ends (the shipped model's continuous one cleared)
   estimator.start_calibration();
   stream_rows(
       estimator, 0, on.first_session_frame, [](std::size_t) {}, on.data);
@@ -254,6 +255,8 @@ TEST_CASE("estimator: calibration state machine, saved calibrations, training ra
   const auto model = shipped();
   const io::Dataset& d = session().data;
   GlovePoseEstimator estimator(model, cycle_config());
+  CHECK(estimator.calibration_source() == CalibrationSource::Continuous);  // the shipped model carries a range map
+  estimator.clear_calibration();
   CHECK(estimator.calibration_source() == CalibrationSource::None);
   CHECK_THROWS_WITH_AS(estimator.finish_calibration(), doctest::Contains("start_calibration"), Error);
   // Without a range, solved frames give no pose.

@@ -145,7 +145,7 @@ TEST_CASE("evaluate: errors, lag and predictions of a model known in closed form
   for (std::int64_t source : one.source) CHECK(data.subject[static_cast<std::size_t>(source)] == 1);
   // A calibration the data cannot give is refused by name.
   options.calibration = "sideways";
-  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("expected none, training, onthefly or guided"), Error);
+  CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("expected none, training, onthefly, guided or continuous"), Error);
   options.calibration = "onthefly";
   CHECK_THROWS_WITH_AS(train::evaluate(model, data, options), doctest::Contains("has no calibration sequence (kind 1 frames), expected one for on-the-fly calibration: import the session's "
                                          "calibration take with it (glovepose import --calibration FILE, the same subject and session), or choose "

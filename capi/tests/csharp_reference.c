@@ -169,6 +169,7 @@ static void write_constants(void) {
   CONST("CalibrationSource", "OnTheFly", GLOVEPOSE_CALIBRATION_ON_THE_FLY);
   CONST("CalibrationSource", "User", GLOVEPOSE_CALIBRATION_USER);
   CONST("CalibrationSource", "Training", GLOVEPOSE_CALIBRATION_TRAINING);
+  CONST("CalibrationSource", "Continuous", GLOVEPOSE_CALIBRATION_CONTINUOUS);
   CONST("PoseFlags", "ReadingsRejected", GLOVEPOSE_POSE_READINGS_REJECTED);
   CONST("PoseFlags", "InputClamped", GLOVEPOSE_POSE_INPUT_CLAMPED);
   CONST("PoseFlags", "TrainingCalibration", GLOVEPOSE_POSE_TRAINING_CALIBRATION);

@@ -156,6 +156,7 @@ static void test_model_errors(const char* model_path, const char* dir) {
   CHECK(glovepose_model_glove_id(NULL) == NULL);
   CHECK(glovepose_model_cell_name(NULL, 0) == NULL);
   CHECK(glovepose_model_has_training_range(NULL) == -1);
+  CHECK(glovepose_model_has_range_map(NULL) == -1);
   glovepose_model_free(NULL); /* ignored */
 }
 
@@ -212,6 +213,7 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
   CHECK_RESULT(glovepose_model_load(path_in(4, dir, "training_range.safetensors"), GLOVEPOSE_WEIGHTS_F32, NULL, &with_training),
                GLOVEPOSE_OK);
   CHECK(glovepose_model_has_training_range(with_training) == 1);
+  CHECK(glovepose_model_has_range_map(with_training) == 0);
 
   /* 16-bit weights: the pose of F32 up to rounding. The shipped FCN's file holds binary16 weights
    * and an FCN has no batch norm to fold, so F16 keeps them exactly; Fixed16 rounds each weight to
@@ -223,6 +225,10 @@ static void test_model(glovepose_model* model, const char* model_path, const cha
     CHECK_RESULT(glovepose_estimator_create(model, NULL, &a), GLOVEPOSE_OK);
     CHECK_RESULT(glovepose_calibration_use_training(a), GLOVEPOSE_ERROR_CALIBRATION_STATE);
     CHECK(contains(glovepose_last_error(), "no training-set range"));
+    glovepose_estimator_free(a);
+    CHECK_RESULT(glovepose_estimator_create(with_training, NULL, &a), GLOVEPOSE_OK);
+    CHECK_RESULT(glovepose_calibration_use_continuous(a), GLOVEPOSE_ERROR_CALIBRATION_STATE);
+    CHECK(contains(glovepose_last_error(), "no range map"));
     glovepose_estimator_free(a);
     f16_degrees = angle_difference_degrees(model, f16);
     bf16_degrees = angle_difference_degrees(model, bf16);
@@ -340,6 +346,8 @@ static void test_null_estimator(void) {
   CHECK_RESULT(glovepose_calibration_load(NULL, "x"), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_save(NULL, "x"), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_use_training(NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_calibration_use_continuous(NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
+  CHECK_RESULT(glovepose_calibration_clear(NULL), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_set_range(NULL, values, values, 44), GLOVEPOSE_ERROR_INVALID_HANDLE);
   CHECK_RESULT(glovepose_calibration_get_range(NULL, values, values, 44), GLOVEPOSE_ERROR_INVALID_HANDLE);
   glovepose_pose_init(NULL);                 /* ignored */
@@ -361,6 +369,20 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
   CHECK_RESULT(glovepose_estimator_create(model, &config, &e), GLOVEPOSE_OK);
   glovepose_calibration_progress_init(&progress);
   glovepose_pose_init(&pose);
+  /* The shipped model carries a range map: a new estimator calibrates from the wearer's motion,
+   * its prior range in use at once; cleared, it waits for a calibration. */
+  CHECK(glovepose_model_has_range_map(model) == 1);
+  CHECK_RESULT(glovepose_calibration_get_progress(e, &progress), GLOVEPOSE_OK);
+  CHECK(progress.source == GLOVEPOSE_CALIBRATION_CONTINUOUS);
+  CHECK_RESULT(glovepose_calibration_get_range(e, lo, hi, 44), GLOVEPOSE_OK);
+  CHECK(lo[0] < hi[0]);
+  CHECK_RESULT(glovepose_calibration_clear(e), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_get_progress(e, &progress), GLOVEPOSE_OK);
+  CHECK(progress.source == GLOVEPOSE_CALIBRATION_NONE);
+  CHECK_RESULT(glovepose_calibration_use_continuous(e), GLOVEPOSE_OK);
+  CHECK_RESULT(glovepose_calibration_get_progress(e, &progress), GLOVEPOSE_OK);
+  CHECK(progress.source == GLOVEPOSE_CALIBRATION_CONTINUOUS);
+  CHECK_RESULT(glovepose_calibration_clear(e), GLOVEPOSE_OK);
 
   CHECK_RESULT(glovepose_estimator_push_row(e, -1, 30.0, 0.0), GLOVEPOSE_UNKNOWN_INDEX);
   CHECK_RESULT(glovepose_estimator_push_row(e, 180, 30.0, 0.0), GLOVEPOSE_UNKNOWN_INDEX);

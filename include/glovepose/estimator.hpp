@@ -153,7 +153,14 @@ class GlovePoseEstimator {
   void save_calibration(const std::string& path) const;
   /// @brief Uses the model's training-set range. Throws glovepose::Error when the file has none.
   void use_training_calibration();
-  /// @brief The range in use, if any.
+  /// @brief Calibrates from the wearer's free motion from now on (EstimatorConfig::continuous_calibration,
+  /// what a new estimator does when the model carries a range map): the model's prior range at
+  /// once, refined as the wearer moves. Throws glovepose::Error when the model carries no range map.
+  void use_continuous_calibration();
+  /// @brief Forgets the calibration in use (range and offsets): no pose until a range is set
+  /// (Status::Uncalibrated), for an application that wants poses only after its own calibration step.
+  void clear_calibration() noexcept;
+  /// @brief The range in use, if any (while the calibration is continuous, it moves with the wearer).
   const std::optional<sensor::CalibrationRange>& calibration() const noexcept;
   /// @brief Where the range in use came from.
   CalibrationSource calibration_source() const noexcept;

@@ -68,6 +68,12 @@ struct EstimatorConfig {
   /// Min-max, or min-max plus the pose-guided offsets: then the user follows the model's calibration
   /// sequence (PoseModel::pose_offset()->sequence()) from start_calibration() on.
   CalibrationMethod calibration_method = CalibrationMethod::Auto;
+  /// Until a range is set (finish_calibration(), set_calibration(), load_calibration(),
+  /// use_training_calibration()), calibrate from the wearer's free motion where the model carries a
+  /// range map (PoseModel::range_map(); calibration/free_motion.hpp): poses from the first frame,
+  /// the range refined as the wearer moves (CalibrationSource::Continuous). Off: Status::Uncalibrated
+  /// until a range is set.
+  bool continuous_calibration = true;
   /// For C_c frames (push_cells): this many consecutive frames timestamped before the last accepted
   /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
   /// ReadoutConfig::clock_restart_readings.
@@ -117,6 +123,7 @@ enum class CalibrationSource : std::uint8_t {
   OnTheFly,  ///< This user's range, from start_calibration() ... finish_calibration().
   User,      ///< A range set or loaded by the caller (e.g. the user's saved calibration).
   Training,  ///< The model's training-set range (the paper's "without calibration").
+  Continuous,  ///< Kept from the wearer's free motion by the model's range map (EstimatorConfig::continuous_calibration).
 };
 
 }  // namespace glovepose

@@ -22,6 +22,7 @@ namespace glovepose {
 
 namespace calibration {
 class PoseOffsetModel;  // calibration/pose_offset.hpp
+class RangeMap;         // calibration/free_motion.hpp
 }  // namespace calibration
 namespace grid {
 class GloveDescription;  // grid/glove_description.hpp
@@ -86,6 +87,9 @@ class PoseModel {
   const std::optional<sensor::CalibrationRange>& training_range() const noexcept;
   /// @brief The pose-guided calibration fitted for the model (with its calibration sequence), if any.
   const std::optional<calibration::PoseOffsetModel>& pose_offset() const noexcept;
+  /// @brief The map from a wearer's free motion to their calibration range (the continuous
+  /// calibration's; calibration/free_motion.hpp), if the model carries one.
+  const std::optional<calibration::RangeMap>& range_map() const noexcept;
 
   /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
   /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one

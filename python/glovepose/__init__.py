@@ -101,6 +101,7 @@ class CalibrationSource(enum.IntEnum):
     ON_THE_FLY = 1  #: this user's on-the-fly calibration (start_calibration ... finish_calibration)
     USER = 2        #: set or loaded by the caller (load_calibration)
     TRAINING = 3    #: the model's training-set range (expect larger errors than with the user's own)
+    CONTINUOUS = 4  #: kept from the wearer's free motion by the model's range map (no calibration step)
 
 
 #: The 25 DoFs of the hand model, in the order of every angle array.
@@ -220,7 +221,8 @@ class CalibrationStep:
 class PoseModel(_Closing):
     """A model file (weights_format.md) with its glove; shared by any number of estimators.
     cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names,
-    has_training_range (Estimator.use_training_calibration works), and calibration_steps: the
+    has_training_range (Estimator.use_training_calibration works), has_range_map (new estimators
+    calibrate from the wearer's free motion, Estimator.use_continuous_calibration works), and calibration_steps: the
     model's guided calibration sequence, a tuple of CalibrationStep (empty when the model's
     calibration is min-max only). weights: how the network holds them, "f32" (exact), "f16",
     "bf16", "fixed16", or "realtime": the fastest within 0.1 degree of F32 for `isa`."""
@@ -236,6 +238,7 @@ class PoseModel(_Closing):
         self.glove_id = _lib.glovepose_model_glove_id(self._handle).decode()
         self.cell_names = tuple(_lib.glovepose_model_cell_name(self._handle, c).decode() for c in range(self.cell_count))
         self.has_training_range = _lib.glovepose_model_has_training_range(self._handle) == 1
+        self.has_range_map = _lib.glovepose_model_has_range_map(self._handle) == 1
         steps = []
         for k in range(_lib.glovepose_model_calibration_step_count(self._handle)):
             step = _new(_library.CalibrationStep)
@@ -520,6 +523,17 @@ class Estimator(_Closing):
         (PoseModel.has_training_range)."""
         _check(_lib.glovepose_calibration_use_training(self._handle))
 
+    def use_continuous_calibration(self) -> None:
+        """Calibrates from the wearer's free motion from now on (CalibrationSource.CONTINUOUS: the
+        model's prior range at once, refined as the wearer moves), what a new estimator does when
+        the model carries a range map. GloveposeError when it carries none (PoseModel.has_range_map)."""
+        _check(_lib.glovepose_calibration_use_continuous(self._handle))
+
+    def clear_calibration(self) -> None:
+        """Forgets the calibration in use: no pose (Status.UNCALIBRATED) until a calibration
+        finishes or a range is set or loaded (CalibrationSource.NONE)."""
+        _check(_lib.glovepose_calibration_clear(self._handle))
+
     def set_calibration_range(self, minimum, maximum) -> None:
         """Uses the range minimum[c] .. maximum[c] of each cell (pF, cell_names order); source
         USER. Arrays whose shape is not (cell_count,) raise InputError naming cell_count;
@@ -624,7 +638,7 @@ def evaluate(model, data, *, subjects=None, exclude_subjects=None, sessions=None
     `glovepose eval --json` prints, as a dict (the library's train::evaluate through
     glovepose_evaluate, in libglovepose_eval). The options are eval's: subjects, exclude_subjects,
     sessions, gloves (lists of ids; None: all), stride, calibration_mode ("none", "training",
-    "onthefly", "guided"; None: the model's), replay_rows with mean_window, contact, threads (0: all
+    "onthefly", "guided", "continuous"; None: the model's), replay_rows with mean_window, contact, threads (0: all
     cores), weights (how the network holds them, as PoseModel's: "f32", "f16", "bf16" or "fixed16";
     the report's "weights") and glove (a glove description file the data was recorded with: refused
     unless it is the model's). Raises GloveposeError with the library's message, OSError when

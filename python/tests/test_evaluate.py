@@ -143,7 +143,7 @@ class Evaluate(unittest.TestCase):
         self.assertEqual(len(functions), 2)
 
     def test_bad_options_and_files_raise_with_the_librarys_message(self):
-        with self.assertRaisesRegex(glovepose.GloveposeError, "calibration 'sideways', expected none, training, onthefly or guided"):
+        with self.assertRaisesRegex(glovepose.GloveposeError, "calibration 'sideways', expected none, training, onthefly, guided or continuous"):
             glovepose.evaluate(MODEL, self.data, calibration_mode="sideways")
         with self.assertRaisesRegex(glovepose.GloveposeError, "mean_window.*needs.*replay_rows"):
             glovepose.evaluate(MODEL, self.data, mean_window=3)

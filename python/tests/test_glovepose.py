@@ -437,10 +437,13 @@ class GuidedCalibration(unittest.TestCase):
         expected = self.sequence()
         ends = np.cumsum([e["seconds"] for e in expected])
         with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            self.assertTrue(model.has_range_map)
             progress = estimator.calibration_progress()
             self.assertEqual((progress.collecting, progress.frames, progress.ready, progress.step, progress.sequence_seconds),
                              (False, 0, False, None, 0.0))
-            self.assertIs(progress.source, glovepose.CalibrationSource.NONE)
+            self.assertIs(progress.source, glovepose.CalibrationSource.CONTINUOUS)  # the shipped model carries a range map
+            estimator.clear_calibration()  # poses only once calibrated
+            self.assertIs(estimator.calibration_progress().source, glovepose.CalibrationSource.NONE)
             estimator.start_calibration()
             progress = estimator.calibration_progress()
             self.assertTrue(progress.collecting)
@@ -500,8 +503,11 @@ class Ranges(unittest.TestCase):
 
     def test_a_range_set_is_the_range_used_saved_and_loaded(self):
         with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator, glovepose.Estimator(model) as other:
+            self.assertEqual(np.shape(estimator.calibration_range()[0]), (44,))  # the continuous calibration's prior
+            estimator.clear_calibration()
+            other.clear_calibration()
             with self.assertRaises(glovepose.GloveposeError) as caught:
-                estimator.calibration_range()  # none yet
+                estimator.calibration_range()  # none now
             self.assertEqual(caught.exception.code, glovepose.UNCALIBRATED)
             np.testing.assert_array_equal(estimator.cells(), np.zeros(44))  # no frame yet
             low, high = 15.0 + np.arange(44) / 7.0, 25.0 + np.arange(44) / 3.0
@@ -603,6 +609,7 @@ class Abi(unittest.TestCase):
 class Errors(unittest.TestCase):
     def test_arrays_of_the_wrong_length_raise_naming_the_expected_length(self):
         with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
+            estimator.clear_calibration()  # no range: frames are refused or give no pose
             self.assertEqual((model.cell_count, model.row_count), (44, 180))
             calls = [(lambda a: estimator.push_cells(a, 0.0), model.cell_count),
                      (lambda a: estimator.push_measurements(a, 0.0), model.row_count)]

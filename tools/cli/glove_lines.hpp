@@ -286,8 +286,13 @@ struct GloveCalibrationChoice {
   std::string text;                  ///< The choice in words, for the user.
 
   /// Sets `estimator` up for it (a saved `file` is loaded by the caller, who may first look for one).
+  /// On the fly, no pose comes before the calibration ends (the tools' documented behaviour), so the
+  /// continuous calibration a model with a range map starts with is cleared.
   void apply(GlovePoseEstimator& estimator) const {
-    if (training_range) estimator.use_training_calibration();
+    if (training_range)
+      estimator.use_training_calibration();
+    else if (on_the_fly)
+      estimator.clear_calibration();
   }
 };
 

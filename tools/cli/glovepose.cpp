@@ -29,6 +29,7 @@
 //       a glove's wire stream kept in a new file as it arrives (record.cpp).
 //   glovepose serve --in SOURCE [--engine PORT] [--osc HOST:PORT] [--profiles DIR --user NAME] [--stats]
 //       a glove's poses published to engines and OSC as they come (serve.cpp).
+#include <glovepose/calibration/free_motion.hpp>
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/estimator.hpp>
 #include <glovepose/grid/glove_description.hpp>
@@ -214,6 +215,13 @@ int info(const std::string& model_path) {
     std::printf("pose-guided calibration: sequence '%s' (%zu steps, %.1f s), %td features\n", offsets.sequence().id().c_str(),
                 offsets.sequence().steps().size(), offsets.sequence().total_seconds(),
                 static_cast<std::ptrdiff_t>(offsets.feature_count()));
+  }
+  if (!model.range_map()) {
+    std::printf("continuous calibration: no (no range map)\n");
+  } else {
+    const calibration::RangeMap& map = *model.range_map();
+    std::printf("continuous calibration: range map of %zu stages (from %g to %g frames of free motion)\n", map.stages().size(),
+                map.stages().empty() ? 0.0 : map.stages().front().frames, map.stages().empty() ? 0.0 : map.stages().back().frames);
   }
   // Provenance: the file's metadata beyond the model's own fields (those ModelInfo writes), such as
   // training_command, training_data and training_seed; pose_offset is shown above.

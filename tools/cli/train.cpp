@@ -8,6 +8,7 @@
 #include <glovepose/train/evaluate.hpp>
 #include <glovepose/train/guided_calibration.hpp>
 #include <glovepose/train/model_file.hpp>
+#include <glovepose/train/range_map_fit.hpp>
 #include <glovepose/train/training_setup.hpp>
 
 #include <algorithm>
@@ -231,14 +232,20 @@ int fit_guided_command(Options o) {
   const calibration::Sequence sequence = calibration::Sequence::read(sequence_file);
   core::ThreadPool pool(o.threads);
   const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);
+  std::optional<io::Dataset> conditioned;
+  const train::RangeMapFit ranges =
+      train::fit_range_map(train::conditioned_for(data, model.glove, conditioned), o.filter, model.glove.calibration());
   io::TensorFile file = io::TensorFile::read(o.model, "model file");
   file.metadata["pose_offset"] = fit.model.to_json();
+  file.metadata["range_map"] = ranges.map.to_json();
   file.metadata["pose_offset_command"] = o.command_line;
   file.write(o.out, "model file");
   std::printf(
-      "fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated); wrote "
-      "%s\n",
-      fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg, o.out.c_str());
+      "fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated)\n",
+      fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg);
+  std::printf("fit-guided: range map from free motion, %ld runs; mean limit error in prior ranges (cross-validated), map / prior:", ranges.runs);
+  for (const train::RangeMapFit::StageFigures& s : ranges.stages) std::printf(" %g frames %.3f/%.3f", s.frames, s.map_error, s.prior_error);
+  std::printf("; wrote %s\n", o.out.c_str());
   return 0;
 }
 
@@ -313,8 +320,8 @@ std::vector<Command> add_training_commands(CLI::App& tool, const std::string& co
   }
   {
     auto [command, o] = add("fit-guided",
-                            "Fits the model's pose-guided calibration on people it was not trained on and writes the model "
-                            "with it.",
+                            "Fits the model's pose-guided calibration and its range map (calibration without a calibration "
+                            "step) on people it was not trained on and writes the model with them.",
                             "the model", true);
     training::add_data_options(*command, *o, false);
     command->add_option("--sequence", o->sequence_file, "the calibration sequence (default: the shipped calibration_glauser2019.json)")

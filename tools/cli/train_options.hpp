@@ -44,6 +44,17 @@ inline std::optional<std::vector<int>> id_list(const std::string& text) {
   return ids;
 }
 
+// Session seconds "A-B" (A <= B) or "A-" (to the end), or nullopt when `text` is not such a window.
+inline std::optional<std::pair<double, double>> seconds_window(const std::string& text) {
+  const std::size_t dash = text.find('-');
+  if (dash == std::string::npos) return std::nullopt;
+  const std::optional<double> from = number_from_text<double>(text.substr(0, dash));
+  const std::string rest = text.substr(dash + 1);
+  const std::optional<double> to = rest.empty() ? std::optional<double>(std::numeric_limits<double>::infinity()) : number_from_text<double>(rest);
+  if (!from || !to || !(*from >= 0.0) || !std::isfinite(*from) || !(*to > *from)) return std::nullopt;
+  return std::pair<double, double>{*from, *to};
+}
+
 // A network to train: "unet:W", "fcn[:H]" or "linear" (W default 64, H default 2048).
 struct Architecture {
   std::string name;  // as model files spell `kind`
@@ -221,9 +232,15 @@ inline void add_training_options(CLI::App& command, const std::shared_ptr<Option
 
 // The options of eval beyond the data's.
 inline void add_eval_options(CLI::App& command, Options& o) {
-  add_calibration_mode(command, o, {"none", "training", "onthefly", "guided"},
+  add_calibration_mode(command, o, {"none", "training", "onthefly", "guided", "continuous"},
                        "how the inputs are calibrated (default: the model's; guided when the model carries a pose-guided "
-                       "calibration and the data followed its sequence)");
+                       "calibration and the data followed its sequence; continuous: no calibration step, the range kept from "
+                       "each session's free motion by the model's range map)");
+  add_parsed_option<std::pair<double, double>>(
+      command, "--seconds", "A-B", seconds_window,
+      [&o](std::pair<double, double> w) { o.filter.from_seconds = w.first, o.filter.to_seconds = w.second; }, "seconds like 60-120 or 60-",
+      "score only the frames this many seconds into each session (since its first recording frame): from A up to B (default: all)")
+      ->group("Selection");
   add_weight_storage(command, o.storage, false);
   add_glove_file(command, o.glove_file, "the glove description the data was recorded with: refused unless it is the model's");
   command.add_flag("--json", o.json, "print the report as JSON");

@@ -124,6 +124,8 @@ namespace GlovePose
         public string GloveId { get { return Library.Utf8(Native.glovepose_model_glove_id(Handle)); } }
         public string CellName(int cell) { return Library.Utf8(Native.glovepose_model_cell_name(Handle, cell)); }
         public bool HasTrainingRange { get { return Native.glovepose_model_has_training_range(Handle) == 1; } }
+        /// <summary>Whether the model carries a range map: new estimators then calibrate from the wearer's free motion (no calibration step).</summary>
+        public bool HasRangeMap { get { return Native.glovepose_model_has_range_map(Handle) == 1; } }
         public int CalibrationStepCount { get { return Native.glovepose_model_calibration_step_count(Handle); } }
 
         /// <summary>Step `step` of the guided calibration sequence (what to show the user).</summary>
@@ -203,6 +205,11 @@ namespace GlovePose
         public void LoadCalibration(string path) { GlovePoseException.ThrowOnError(Native.glovepose_calibration_load(Handle, path)); }
         public void SaveCalibration(string path) { GlovePoseException.ThrowOnError(Native.glovepose_calibration_save(Handle, path)); }
         public void UseTrainingCalibration() { GlovePoseException.ThrowOnError(Native.glovepose_calibration_use_training(Handle)); }
+        /// <summary>Calibrates from the wearer's free motion from now on (CalibrationSource.Continuous).</summary>
+        /// <exception cref="GlovePoseException">the model carries no range map (ErrorCalibrationState).</exception>
+        public void UseContinuousCalibration() { GlovePoseException.ThrowOnError(Native.glovepose_calibration_use_continuous(Handle)); }
+        /// <summary>Forgets the calibration in use: no pose (Status.Uncalibrated) until a calibration finishes or a range is set or loaded.</summary>
+        public void ClearCalibration() { GlovePoseException.ThrowOnError(Native.glovepose_calibration_clear(Handle)); }
         public void SetCalibrationRange(double[] min, double[] max)
         {
             if (min == null || max == null || min.Length != max.Length) throw new ArgumentException("min and max need one value per cell each");

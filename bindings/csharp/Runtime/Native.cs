@@ -37,6 +37,7 @@ namespace GlovePose
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_model_glove_id(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_model_cell_name(ModelHandle model, int cell);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_has_training_range(ModelHandle model);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_has_range_map(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_calibration_step_count(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_get_calibration_step(ModelHandle model, int step, ref CalibrationStep output);
 
@@ -72,6 +73,8 @@ namespace GlovePose
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_load(EstimatorHandle estimator, string path);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_save(EstimatorHandle estimator, string path);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_use_training(EstimatorHandle estimator);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_use_continuous(EstimatorHandle estimator);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_clear(EstimatorHandle estimator);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_set_range(EstimatorHandle estimator, double[] min, double[] max, int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_calibration_get_range(EstimatorHandle estimator, [Out] double[] min, [Out] double[] max, int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_latest_get_xr_joints(LatestHandle latest, EstimatorHandle estimator, double time, ref XrHand output);

@@ -39,7 +39,7 @@ namespace GlovePose
     public enum Hand : int { Right = 0, Left = 1 }
 
     /// <summary>Where the calibration range in use comes from (GLOVEPOSE_CALIBRATION_*).</summary>
-    public enum CalibrationSource : int { None = 0, OnTheFly = 1, User = 2, Training = 3 }
+    public enum CalibrationSource : int { None = 0, OnTheFly = 1, User = 2, Training = 3, Continuous = 4 }
 
     /// <summary>GLOVEPOSE_POSE_* bits. New bits may appear: test bits, do not compare the value.</summary>
     [Flags]

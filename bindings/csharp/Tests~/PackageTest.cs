@@ -181,6 +181,14 @@ static class PackageTest
                   "bad settings: ErrorInvalidArgument naming the field (" + (e == null ? "none" : e.Message) + ")");
             using (var estimator = new Estimator(model))
             {
+                var progress = CalibrationProgress.Create();
+                Check(model.HasRangeMap && estimator.GetCalibrationProgress(ref progress) == Status.Ok && progress.Source == CalibrationSource.Continuous,
+                      "the shipped model carries a range map: a new estimator calibrates from the wearer's motion");
+                estimator.ClearCalibration();
+                Check(estimator.GetCalibrationProgress(ref progress) == Status.Ok && progress.Source == CalibrationSource.None, "cleared: no range");
+                estimator.UseContinuousCalibration();
+                Check(estimator.GetCalibrationProgress(ref progress) == Status.Ok && progress.Source == CalibrationSource.Continuous, "continuous again");
+                estimator.ClearCalibration();
                 e = Catch(() => estimator.FinishCalibration());
                 Check(e != null && e.Status == Status.ErrorCalibrationState, "finish before start: ErrorCalibrationState");
                 e = Catch(() => estimator.UseTrainingCalibration());

@@ -212,13 +212,8 @@ class PoseOffsetModel {
     if (cells < 1) throw f.fail("'cells' is 0, expected a count of cells 1.." + std::to_string(kMaxCells));
     Sequence sequence = Sequence::from_json(f.object(root, "sequence", "the top level"), source);
     const auto vector = [&](const Value& v, const std::string& what) {
-      if (!v.is_array()) throw f.fail(what + " is " + io::json::describe(v) + ", expected an array of numbers");
-      Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        if (!v[i].is_number()) throw f.fail(what + " holds " + io::json::describe(v[i]) + ", expected numbers");
-        out(static_cast<Eigen::Index>(i)) = v[i].get<double>();
-      }
-      return out;
+      const std::vector<double> numbers = f.numbers(v, what);
+      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(numbers.data(), static_cast<Eigen::Index>(numbers.size())));
     };
     const Eigen::VectorXd bias = vector(f.array(root, "bias", "the top level"), "'bias'");
     const Value& rows = f.array(root, "weight", "the top level");

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/free_motion.hpp"
 #include "../calibration/pose_offset.hpp"
 #include "../calibration/user_calibration.hpp"
 #include "../calibration_session.hpp"
@@ -83,6 +84,7 @@ class EstimatorCore {
     floating.enabled = floating.enabled && !conditioner_.active();  // de-meaned cells have no minimum to fall below
     floating_ = sensor::FloatingCells(model_->cell_count(), floating);
     skeleton_.fill(Eigen::Affine3d::Identity());
+    if (config_.continuous_calibration && model_->range_map()) use_continuous_calibration();
     if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
       throw Error(
           "GlovePoseEstimator: calibration_method PoseGuided, but the model carries no pose-guided calibration, expected a model fitted by "
@@ -208,6 +210,20 @@ class EstimatorCore {
           "GlovePoseEstimator::use_training_calibration: the model records no training-set range, expected a model trained with "
           "--calibration-mode training");
     set_range(*model_->training_range(), CalibrationSource::Training);
+  }
+  void use_continuous_calibration() {
+    if (!model_->range_map())
+      throw Error("GlovePoseEstimator::use_continuous_calibration: the model carries no range map, expected a model fitted by glovepose fit-guided");
+    if (!continuous_) continuous_.emplace(*model_->range_map());
+    continuous_->reset();
+    set_range(sensor::CalibrationRange(continuous_->min(), continuous_->max(), model_->glove().cell_names(), config_.calibration),
+              CalibrationSource::Continuous);
+  }
+  void clear_calibration() noexcept {
+    range_.reset();
+    source_ = CalibrationSource::None;
+    guided_ = false;
+    offsets_ = hand::Angles{};
   }
   const std::optional<sensor::CalibrationRange>& calibration() const noexcept { return range_; }
   CalibrationSource calibration_source() const noexcept { return source_; }
@@ -350,6 +366,10 @@ class EstimatorCore {
     // become the new range's minimum.
     const int masked = floating_.apply(cells_, timestamp, health.outlier_rows == 0);
     calibration_session_.add(cells_, timestamp);  // takes the frame while a calibration collects
+    if (source_ == CalibrationSource::Continuous && cells_.allFinite() && continuous_->add(cells_, timestamp)) {
+      (void)range_->move_limits(continuous_->min(), continuous_->max());
+      floating_.follow_range(*range_);
+    }
     if (!range_) return Status::Uncalibrated;
     if (range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;
     std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u) | (masked > 0 ? kPoseMaskedCells : 0u);
@@ -387,6 +407,7 @@ class EstimatorCore {
   std::optional<sensor::Readout> readout_;
   CalibrationSession calibration_session_;  // an on-the-fly calibration while it runs
   std::optional<sensor::CalibrationRange> range_;
+  std::optional<calibration::ContinuousRange> continuous_;  // the wearer's free motion, while source_ is Continuous
   CalibrationSource source_ = CalibrationSource::None;
   bool guided_ = false;               // offsets_ apply (pose-guided calibration in use)
   hand::Angles offsets_{};            // per-user angle offsets, radians

@@ -56,6 +56,8 @@ GLOVEPOSE_INLINE void GlovePoseEstimator::set_calibration(const sensor::Calibrat
 GLOVEPOSE_INLINE void GlovePoseEstimator::load_calibration(const std::string& path) { core_->load_calibration(path); }
 GLOVEPOSE_INLINE void GlovePoseEstimator::save_calibration(const std::string& path) const { core_->save_calibration(path); }
 GLOVEPOSE_INLINE void GlovePoseEstimator::use_training_calibration() { core_->use_training_calibration(); }
+GLOVEPOSE_INLINE void GlovePoseEstimator::use_continuous_calibration() { core_->use_continuous_calibration(); }
+GLOVEPOSE_INLINE void GlovePoseEstimator::clear_calibration() noexcept { core_->clear_calibration(); }
 GLOVEPOSE_INLINE const std::optional<sensor::CalibrationRange>& GlovePoseEstimator::calibration() const noexcept {
   return core_->calibration();
 }

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/free_motion.hpp"
 #include "../calibration/pose_offset.hpp"
 #include "../config.hpp"
 #include "../grid/glove_description.hpp"
@@ -54,6 +55,9 @@ struct PoseModel::Parts {
     rest_normalized_ = limits_.normalize(limits_.rest());
     if (info_.pose_offset && info_.pose_offset->cells() != glove_.cell_count())
       throw Error("metadata 'pose_offset' reads " + std::to_string(info_.pose_offset->cells()) + " cells, expected " +
+                  std::to_string(glove_.cell_count()) + " (the glove's)");
+    if (info_.range_map && info_.range_map->cells() != glove_.cell_count())
+      throw Error("metadata 'range_map' reads " + std::to_string(info_.range_map->cells()) + " cells, expected " +
                   std::to_string(glove_.cell_count()) + " (the glove's)");
     training_range_ = info_.training_range(glove_.cell_names(), glove_.calibration().config());
   }
@@ -103,6 +107,7 @@ GLOVEPOSE_INLINE const std::optional<sensor::CalibrationRange>& PoseModel::train
 GLOVEPOSE_INLINE const std::optional<calibration::PoseOffsetModel>& PoseModel::pose_offset() const noexcept {
   return parts_->info_.pose_offset;
 }
+GLOVEPOSE_INLINE const std::optional<calibration::RangeMap>& PoseModel::range_map() const noexcept { return parts_->info_.range_map; }
 
 GLOVEPOSE_INLINE hand::Angles PoseModel::model_outputs(const hand::Angles& normalized) const noexcept {
   if (parts_->all_labelled_) return normalized;

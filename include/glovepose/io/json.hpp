@@ -122,6 +122,17 @@ class Fields {
   const Value& object(const Value& object, const char* key, const std::string& where) const {
     return typed(object, key, where, &Value::is_object, "an object");
   }
+  /// @brief The numbers of an array value `v` (`what` names it in the error for another value).
+  std::vector<double> numbers(const Value& v, const std::string& what) const {
+    if (!v.is_array()) throw fail(what + " is " + describe(v) + ", expected an array of numbers");
+    std::vector<double> out;
+    out.reserve(v.size());
+    for (const Value& item : v) {
+      if (!item.is_number()) throw fail(what + " holds " + describe(item) + ", expected numbers");
+      out.push_back(item.get<double>());
+    }
+    return out;
+  }
   /// @brief An integer member in 0..limit-1 (limit > 0), written without fraction or exponent.
   int index(const Value& object, const char* key, int limit, const std::string& where) const {
     const Value& v = at(object, key, where);

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/free_motion.hpp"
 #include "../calibration/pose_offset.hpp"
 #include "../config.hpp"
 #include "../grid/glove_description.hpp"
@@ -27,19 +28,32 @@
 namespace glovepose::model {
 
 /// @brief How cell values are normalised before the network.
-enum class CalibrationMode : unsigned char { None, Training, OnTheFly };
+/// Continuous (the wearer's free motion through the model's range map, calibration/free_motion.hpp)
+/// is a way to evaluate a model, never one to train it.
+enum class CalibrationMode : unsigned char { None, Training, OnTheFly, Continuous };
 
-/// @brief "none", "training" or "onthefly".
+/// @brief "none", "training", "onthefly" or "continuous".
 constexpr const char* to_string(CalibrationMode mode) noexcept {
-  return mode == CalibrationMode::None ? "none" : (mode == CalibrationMode::Training ? "training" : "onthefly");
+  switch (mode) {
+    case CalibrationMode::None: return "none";
+    case CalibrationMode::Training: return "training";
+    case CalibrationMode::OnTheFly: return "onthefly";
+    case CalibrationMode::Continuous: return "continuous";
+  }
+  return "none";
 }
 
-/// @brief Parses "none", "training" or "onthefly"; throws glovepose::Error otherwise.
+/// @brief Parses a way to train: "none", "training" or "onthefly"; throws glovepose::Error otherwise.
 inline CalibrationMode calibration_mode(const std::string& text) {
   if (text == "none") return CalibrationMode::None;
   if (text == "training") return CalibrationMode::Training;
   if (text == "onthefly") return CalibrationMode::OnTheFly;
   throw Error("calibration mode '" + text + "', expected none, training or onthefly");
+}
+
+/// @brief Parses a way to evaluate: calibration_mode()'s or "continuous".
+inline CalibrationMode evaluation_calibration_mode(const std::string& text) {
+  return text == "continuous" ? CalibrationMode::Continuous : calibration_mode(text);
 }
 
 /// @brief The metadata of a model file.
@@ -59,6 +73,9 @@ struct ModelInfo {
   /// The pose-guided calibration fitted for this model, with its calibration sequence (metadata
   /// 'pose_offset'); none: min-max calibration only.
   std::optional<calibration::PoseOffsetModel> pose_offset;
+  /// The map from a wearer's free motion to their calibration range, fitted for this model
+  /// (metadata 'range_map'); none: no calibration without a calibration step.
+  std::optional<calibration::RangeMap> range_map;
   /// The DoFs the model was trained on reference angles for (metadata 'labelled_dofs', absent when
   /// all 25). The others were trained toward the rest pose and read it (PoseModel).
   hand::DofSet labelled_dofs = hand::all_dofs();
@@ -142,6 +159,7 @@ struct ModelInfo {
     }
     if (file.metadata.count("pose_offset"))  // the one parse of the pose offset's JSON
       info.pose_offset = calibration::PoseOffsetModel::parse(file.meta("pose_offset"), "metadata 'pose_offset'");
+    if (file.metadata.count("range_map")) info.range_map = calibration::RangeMap::parse(file.meta("range_map"), "metadata 'range_map'");
     if (file.metadata.count("labelled_dofs")) info.labelled_dofs = hand::parse_dof_set(file.meta("labelled_dofs"), "metadata 'labelled_dofs'");
     return info;
   }
@@ -166,6 +184,7 @@ struct ModelInfo {
     if (calibration_min) file.metadata["calibration_min"] = nn::WeightFile::format_numbers(*calibration_min);
     if (calibration_max) file.metadata["calibration_max"] = nn::WeightFile::format_numbers(*calibration_max);
     if (pose_offset) file.metadata["pose_offset"] = pose_offset->to_json();
+    if (range_map) file.metadata["range_map"] = range_map->to_json();
     if (labelled_dofs != hand::all_dofs()) file.metadata["labelled_dofs"] = hand::dof_set_text(labelled_dofs);
   }
 

@@ -151,12 +151,8 @@ class CalibrationRange {
                     ", whose difference overflows, expected a range max - min that is a finite number");
       if (!(noise_(i) >= 0.0) || !std::isfinite(noise_(i)))
         throw Error("CalibrationRange: " + name + " has noise SD " + std::to_string(noise_(i)) + ", expected a finite value >= 0");
-      Flatness& flatness = flatness_[static_cast<std::size_t>(i)];
-      if (is_flat_range(min_(i), max_(i), config_))
-        flatness = Flatness::FlatRange;
-      else if (is_noise_only(min_(i), max_(i), noise_(i), config_))
-        flatness = Flatness::NoiseOnly;
-      if (flatness != Flatness::Moving) flat_names_.push_back(name);
+      flatness_[static_cast<std::size_t>(i)] = flatness_of(i);
+      if (flatness_[static_cast<std::size_t>(i)] != Flatness::Moving) flat_names_.push_back(name);
     }
   }
 
@@ -215,6 +211,20 @@ class CalibrationRange {
     return out + "; a sensor reads 0 when its range is within " + short_number(100.0 * config_.min_relative_range) + "% of its value" +
            (config_.min_range_to_noise > 0.0 ? " or below " + short_number(config_.min_range_to_noise) + " x its noise SD" : "") +
            " (a dead or unconnected channel, or a calibration that did not move it)";
+  }
+
+  /// @brief Moves the limits to `min` and `max` (per sensor, min <= max, finite; the caller checks)
+  /// in place, for a range that follows the wearer (calibration::ContinuousRange): each sensor's
+  /// flatness is decided again by the same rules, while flat_sensors() and flat_report() keep the
+  /// names of those flat when the range was built. Per-frame: no allocation. Returns
+  /// Status::SizeMismatch (nothing moved) for another size.
+  template <typename Low, typename High>
+  GLOVEPOSE_REALTIME Status move_limits(const Eigen::MatrixBase<Low>& min, const Eigen::MatrixBase<High>& max) noexcept {
+    if (min.size() != min_.size() || max.size() != max_.size()) return Status::SizeMismatch;
+    min_ = min;
+    max_ = max;
+    for (Eigen::Index i = 0; i < min_.size(); ++i) flatness_[static_cast<std::size_t>(i)] = flatness_of(i);
+    return Status::Ok;
   }
 
   /// @brief Maps readings to 2 (x - min) / (max - min) - 1, clamped to +-clamp_limit; flat sensors
@@ -306,6 +316,12 @@ class CalibrationRange {
 
  private:
   static constexpr const char* kFileHeader = "glovepose-calibration 2";
+
+  Flatness flatness_of(Eigen::Index i) const noexcept {
+    if (is_flat_range(min_(i), max_(i), config_)) return Flatness::FlatRange;
+    if (is_noise_only(min_(i), max_(i), noise_(i), config_)) return Flatness::NoiseOnly;
+    return Flatness::Moving;
+  }
   static constexpr const char* kFileHeaderWithoutNoise = "glovepose-calibration 1";
 
   // A figure for a message: 3 significant digits.

@@ -68,12 +68,19 @@ class FloatingCells {
   /// floating). Forgets which cells float.
   GLOVEPOSE_REALTIME void set_range(const CalibrationRange& range) noexcept {
     if (range.size() != bound_.size()) return;
+    follow_range(range);
+    clear_floating();
+  }
+
+  /// @brief Follows a range that moved (a continuous calibration's): the bounds move, the cells
+  /// that float go on floating.
+  GLOVEPOSE_REALTIME void follow_range(const CalibrationRange& range) noexcept {
+    if (range.size() != bound_.size()) return;
     for (Eigen::Index c = 0; c < bound_.size(); ++c) {
       const double low = range.min()(c);
       bound_(c) = low > 0.0 && !range.is_flat(static_cast<int>(c)) ? config_.below_share * low : -kInfinity;
       middle_(c) = 0.5 * (low + range.max()(c));
     }
-    clear_floating();
   }
 
   /// @brief Forgets which cells float (a new stream); the statistics stay.

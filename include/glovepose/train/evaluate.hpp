@@ -134,8 +134,8 @@ struct EvaluationResult {
 };
 
 /// @brief The selected frames of `data` as `model` sees them: its glove and joint limits, and its
-/// calibration mode unless `calibration` ("none", "training", "onthefly"; "guided" calibrates on
-/// the fly) overrides it. Throws glovepose::Error when the data's glove is not the model's.
+/// calibration mode unless `calibration` ("none", "training", "onthefly", "continuous"; "guided"
+/// calibrates on the fly) overrides it. Throws glovepose::Error when the data's glove is not the model's.
 inline std::pair<Samples, model::CalibrationMode> samples_for_model(const TrainedModel& trained, const io::Dataset& recorded,
                                                                     const FrameFilter& filter, int stride, const std::string& calibration) {
   std::optional<io::Dataset> storage;
@@ -143,10 +143,13 @@ inline std::pair<Samples, model::CalibrationMode> samples_for_model(const Traine
   if (data.glove_layout() != trained.glove.id())
     throw Error("the dataset was recorded with glove '" + data.glove_layout() + "', the model is for '" + trained.glove.id() + "'");
   const std::string requested = calibration == "guided" ? "onthefly" : calibration;
-  const model::CalibrationMode mode = requested.empty() ? trained.info.calibration : model::calibration_mode(requested);
+  const model::CalibrationMode mode = requested.empty() ? trained.info.calibration : model::evaluation_calibration_mode(requested);
   std::optional<sensor::CalibrationRange> range;
   if (mode == model::CalibrationMode::Training) range = trained.training_range();
-  return {make_samples(data, filter, mode, range ? &*range : nullptr, trained.info.joint_limits(), stride, trained.glove.calibration()),
+  if (mode == model::CalibrationMode::Continuous && !trained.info.range_map)
+    throw Error("calibration continuous: the model carries no range map, expected a model fitted by glovepose fit-guided");
+  return {make_samples(data, filter, mode, range ? &*range : nullptr, trained.info.joint_limits(), stride, trained.glove.calibration(),
+                       trained.info.range_map ? &*trained.info.range_map : nullptr),
           mode};
 }
 
@@ -192,8 +195,8 @@ inline bool evaluate_guided(const std::string& calibration, const TrainedModel& 
 /// the data lacks).
 inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset, const EvaluationOptions& options) {
   const std::string& choice = options.calibration;
-  if (!choice.empty() && choice != "none" && choice != "training" && choice != "onthefly" && choice != "guided")
-    throw Error("evaluation calibration '" + choice + "', expected none, training, onthefly or guided (or empty: the model's)");
+  if (!choice.empty() && choice != "none" && choice != "training" && choice != "onthefly" && choice != "guided" && choice != "continuous")
+    throw Error("evaluation calibration '" + choice + "', expected none, training, onthefly, guided or continuous (or empty: the model's)");
   std::optional<io::Dataset> replayed;
   if (options.replay) replay_rows(replayed.emplace(dataset), *options.replay);
   std::optional<io::Dataset> conditioned;

@@ -5,7 +5,10 @@
 ///   - training:  per-cell min-max over the training frames, stored in the model and applied to
 ///                every frame later ("generic model without calibration");
 ///   - onthefly:  per session, the min-max of that session's own calibration sequence with a
-///                20-frame median ("with calibration"): what a new user does in a minute.
+///                20-frame median ("with calibration"): what a new user does in a minute;
+///   - continuous: no calibration step: per run, the range the model's range map keeps from the
+///                run's free motion up to each frame (calibration/free_motion.hpp), as the
+///                estimator keeps it (evaluation only).
 /// Frames used are recording frames whose reference pose is not a collision outlier (the paper
 /// drops those, about 2%).
 #pragma once
@@ -15,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <map>
+#include <limits>
 #include <optional>
 #include <set>
 #include <string>
@@ -23,6 +27,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/free_motion.hpp"
 #include "../config.hpp"
 #include "../model/model_info.hpp"
 #include "../grid/glove_description.hpp"
@@ -47,6 +52,10 @@ struct FrameFilter {
   std::vector<int> sessions;   ///< Session ids to keep; empty: all.
   std::vector<int> gloves;     ///< Glove ids to keep; empty: all.
   bool keep_outliers = false;  ///< Keep frames flagged as collision outliers.
+  /// Session seconds (since the run's first recording frame) whose frames make_samples keeps:
+  /// [from_seconds, to_seconds).
+  double from_seconds = 0.0;
+  double to_seconds = std::numeric_limits<double>::infinity();
 
   /// @brief Whether recording frame `i` of `data` is kept (calibration frames never are).
   bool keeps(const io::Dataset& data, std::size_t i) const noexcept {
@@ -200,16 +209,28 @@ inline std::map<std::int64_t, sensor::CalibrationRange> onthefly_ranges(const io
 /// @brief The kept frames of `data`, every `stride`-th, calibrated by `mode` (`range` is the
 /// training range for CalibrationMode::Training) with targets normalised by `limits`. Throws
 /// glovepose::Error when the dataset has no angles, a run lacks its calibration sequence in
-/// on-the-fly mode, or no frame is kept. On the fly, the glove's `calibration` settings apply.
+/// on-the-fly mode, or no frame is kept. On the fly, the glove's `glove_calibration` settings apply.
+/// CalibrationMode::Continuous follows each run's free motion from its first recording frame with
+/// `range_map` (every recording frame of a selected run, kept or not, feeds it).
 inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, model::CalibrationMode mode,
                             const sensor::CalibrationRange* range, const hand::JointLimits& limits, int stride = 1,
-                            const grid::GloveCalibration& calibration = {}) {
+                            const grid::GloveCalibration& glove_calibration = {}, const glovepose::calibration::RangeMap* range_map = nullptr) {
   if (!data.has_angles()) throw Error("samples: the dataset has no ground-truth angles, expected a recording with angles");
   if (stride < 1) throw Error("samples: stride " + std::to_string(stride) + ", expected >= 1");
   if (mode == model::CalibrationMode::Training && (range == nullptr || static_cast<std::size_t>(range->size()) != data.cell_count))
     throw Error("samples: training calibration needs a range of " + std::to_string(data.cell_count) + " cells");
+  if (mode == model::CalibrationMode::Continuous && (range_map == nullptr || static_cast<std::size_t>(range_map->cells()) != data.cell_count))
+    throw Error("samples: continuous calibration needs a range map of " + std::to_string(data.cell_count) +
+                " cells, expected a model fitted by glovepose fit-guided");
+  // Per run under continuous calibration, the wearer's motion so far and the range it gives.
+  struct Following {
+    glovepose::calibration::ContinuousRange motion;
+    sensor::CalibrationRange range;
+  };
+  std::map<std::int64_t, Following> following;
+  std::map<std::int64_t, double> run_start;  // per run, its first recording frame's time
   const std::map<std::int64_t, sensor::CalibrationRange> runs =
-      mode == model::CalibrationMode::OnTheFly ? onthefly_ranges(data, calibration) : std::map<std::int64_t, sensor::CalibrationRange>{};
+      mode == model::CalibrationMode::OnTheFly ? onthefly_ranges(data, glove_calibration) : std::map<std::int64_t, sensor::CalibrationRange>{};
   Samples s;
   s.cells = static_cast<int>(data.cell_count);
   s.labelled = data.labelled_dofs();
@@ -218,14 +239,28 @@ inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, 
   Eigen::VectorXd raw(cells), normalized(cells);
   std::map<std::int64_t, long> seen;  // per run, kept frames so far (the stride counts within a run)
   for (std::size_t i = 0; i < data.frames(); ++i) {
-    if (!filter.keeps(data, i)) continue;
+    if (data.kind[i] != io::kKindRecording || !filter.selects_run(data, i)) continue;
     const std::int64_t key = run_key(data, i);
-    if (seen[key]++ % stride != 0) continue;
+    const double since = data.timestamps[i] - run_start.try_emplace(key, data.timestamps[i]).first->second;
     for (Eigen::Index c = 0; c < cells; ++c) raw(c) = data.cells[i * data.cell_count + static_cast<std::size_t>(c)];
+    Following* follow = nullptr;
+    if (mode == model::CalibrationMode::Continuous) {
+      auto it = following.find(key);
+      if (it == following.end())
+        it = following
+                 .emplace(key, Following{glovepose::calibration::ContinuousRange(*range_map),
+                                         sensor::CalibrationRange(range_map->prior_min(), range_map->prior_max(), cell_names(data.cell_count),
+                                                                  glove_calibration.config())})
+                 .first;
+      follow = &it->second;
+      if (raw.allFinite() && follow->motion.add(raw, data.timestamps[i])) (void)follow->range.move_limits(follow->motion.min(), follow->motion.max());
+    }
+    if (!filter.keeps(data, i) || !(since >= filter.from_seconds && since < filter.to_seconds)) continue;
+    if (seen[key]++ % stride != 0) continue;
     if (mode == model::CalibrationMode::None) {
       normalized = raw;
     } else {
-      const sensor::CalibrationRange* r = range;
+      const sensor::CalibrationRange* r = follow ? &follow->range : range;
       if (mode == model::CalibrationMode::OnTheFly) {
         const auto it = runs.find(key);
         if (it == runs.end())
