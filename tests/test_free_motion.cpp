@@ -208,6 +208,22 @@ TEST_CASE("range map: its JSON keeps every number, and a malformed one is refuse
   CHECK(refused(text.substr(0, text.size() / 2), "range map 'test'"));
 }
 
+TEST_CASE("free motion: the range follows the motion every period, also after the clock went back") {
+  RangeMap::Stage stage{20.0, Eigen::MatrixXd::Zero(1, kFeatures), Eigen::MatrixXd::Zero(1, kFeatures)};
+  stage.low(0, kMedian) = 1.0;  // both limits at the median: easy to predict
+  stage.high(0, kMedian) = 1.0;
+  const RangeMap map(values_of({0.0}), values_of({1.0}), {stage}, keep_all(50.0));
+  ContinuousRange follow(map, 0.25);
+  int updates = 0;
+  for (int f = 0; f < 600; ++f) updates += follow.add(values_of({0.2 + 0.001 * (f % 3)}), 100.0 + f / 60.0);  // 10 s at 60 Hz
+  CHECK(updates >= 39);  // one per 0.25 s
+  CHECK(updates <= 41);
+  CHECK(follow.min()(0) == doctest::Approx(0.201).epsilon(0.02));
+  // The glove's clock restarts at 0: the updates go on at once (not from t = 110 s on).
+  for (int f = 0; f < 300; ++f) (void)follow.add(values_of({0.7 + 0.001 * (f % 3)}), f / 60.0);
+  CHECK(follow.min()(0) == doctest::Approx(0.701).epsilon(0.02));
+}
+
 TEST_CASE("range map: fitted on people whose range is a known function of their motion, it finds that function") {
   // Each person's cells sweep [a, a + b] in the calibration sequence; their free motion spreads over
   // the middle of it (uniform over [a + 0.2 b, a + 0.8 b]: the q-th percentile is a + (0.2 + 0.6 q)

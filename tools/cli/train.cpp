@@ -233,19 +233,30 @@ int fit_guided_command(Options o) {
   core::ThreadPool pool(o.threads);
   const train::PoseOffsetFit fit = train::fit_pose_offset(model, sequence, data, o.filter, pool);
   std::optional<io::Dataset> conditioned;
-  const train::RangeMapFit ranges =
-      train::fit_range_map(train::conditioned_for(data, model.glove, conditioned), o.filter, model.glove.calibration());
+  std::optional<train::RangeMapFit> ranges;
+  try {
+    ranges = train::fit_range_map(train::conditioned_for(data, model.glove, conditioned), o.filter, model.glove.calibration());
+  } catch (const Error& e) {  // the pose offsets stand on their own: written without a range map, and said so
+    std::fprintf(stderr, "fit-guided: no range map (the continuous calibration): %s\n", e.what());
+  }
   io::TensorFile file = io::TensorFile::read(o.model, "model file");
   file.metadata["pose_offset"] = fit.model.to_json();
-  file.metadata["range_map"] = ranges.map.to_json();
+  if (ranges)
+    file.metadata["range_map"] = ranges->map.to_json();
+  else
+    file.metadata.erase("range_map");
   file.metadata["pose_offset_command"] = o.command_line;
   file.write(o.out, "model file");
   std::printf(
       "fit-guided: %ld people's calibrations; ridge %g; their mean offset %.3f deg, left after the fit %.3f deg (cross-validated)\n",
       fit.runs, fit.ridge, fit.baseline_error_deg, fit.cv_error_deg);
-  std::printf("fit-guided: range map from free motion, %ld runs; mean limit error in prior ranges (cross-validated), map / prior:", ranges.runs);
-  for (const train::RangeMapFit::StageFigures& s : ranges.stages) std::printf(" %g frames %.3f/%.3f", s.frames, s.map_error, s.prior_error);
-  std::printf("; wrote %s\n", o.out.c_str());
+  if (ranges) {
+    std::printf("fit-guided: range map from free motion, %ld runs; mean limit error in prior ranges (cross-validated), map / prior:",
+                ranges->runs);
+    for (const train::RangeMapFit::StageFigures& s : ranges->stages) std::printf(" %g frames %.3f/%.3f", s.frames, s.map_error, s.prior_error);
+    std::printf("\n");
+  }
+  std::printf("fit-guided: wrote %s\n", o.out.c_str());
   return 0;
 }
 

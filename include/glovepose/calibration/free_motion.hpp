@@ -94,8 +94,14 @@ class MotionHistogram {
   /// it was taken (the first, then those the cells moved to by an RMS `novelty` of their prior ranges).
   template <typename In>
   GLOVEPOSE_REALTIME bool add(const Eigen::MatrixBase<In>& cells) noexcept {
-    if (taken_ > 0 && ((cells - last_).array() / span_.array()).matrix().squaredNorm() < novelty_squared_) return false;
-    last_ = cells;
+    // Plain loops: an Eigen reduction over a few cells trips GCC's -Warray-bounds (mingw, AVX-512).
+    double moved = 0.0;
+    for (Eigen::Index c = 0; c < span_.size(); ++c) {
+      const double d = (cells(c) - last_(c)) / span_(c);
+      moved += d * d;
+    }
+    if (taken_ > 0 && moved < novelty_squared_) return false;
+    for (Eigen::Index c = 0; c < span_.size(); ++c) last_(c) = cells(c);
     if (weight_ > 1e200) {  // keep the weights finite: only their ratios matter
       counts_ /= weight_;
       total_ /= weight_;
@@ -363,8 +369,9 @@ class ContinuousRange {
   template <typename In>
   GLOVEPOSE_REALTIME bool add(const Eigen::MatrixBase<In>& cells, double timestamp) noexcept {
     const bool taken = histogram_.add(cells);
-    if (!taken || timestamp < next_update_) return false;
-    // A clock that went backwards starts the period over rather than stopping the updates.
+    // Within the period since the last update: wait. A clock that went back before the last update
+    // (a restart) starts the period over rather than stopping the updates until it catches up.
+    if (!taken || (timestamp < next_update_ && timestamp >= next_update_ - update_seconds_)) return false;
     next_update_ = timestamp + update_seconds_;
     update();
     return true;
