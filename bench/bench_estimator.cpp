@@ -14,6 +14,8 @@
 // - BM_EstimatorFrameContinuous/<0|1>: BM_EstimatorFrame/3 with the calibration fixed (as there) or
 //   continuous (calibration/free_motion.hpp: the motion's histograms fed every frame, the range
 //   re-derived every 0.25 s of stream time); needs a model with a range map (the shipped one).
+// - BM_EstimatorFrameConfidence/<0|1>: BM_EstimatorFrame/3 on the shipped model without and with its
+//   own errors (model/pose_error.hpp): the per-joint confidence's cost (25 erf, the rate's slope).
 // - BM_EstimatorFrameXr/3: BM_EstimatorFrame/3 plus joints_at (OpenXR joints, predicted, with velocities).
 // - BM_EstimatorRow/<storage>: one iteration = one push_row at the paper's cadence (a solve and a
 //   pose every 16 rows, 11.25 per 180-row cycle): the mean cost of a row as the glove streams.
@@ -25,6 +27,9 @@
 //   networks run (glovepose_isa, where the library has it). Linux only (dlopen).
 #include <glovepose/calibration/free_motion.hpp>
 #include <glovepose/estimator.hpp>
+#include <glovepose/model/model_file.hpp>
+#include <glovepose/model/pose_network.hpp>
+#include <glovepose/pose_model_options.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
 #include <benchmark/benchmark.h>
@@ -89,11 +94,30 @@ std::shared_ptr<const PoseModel> shipped_model(nn::WeightStorage storage) {
   return model;
 }
 
+// The shipped model with Fixed16 weights and without its own errors: a pose's confidence is then
+// its trust flag alone.
+std::shared_ptr<const PoseModel> model_without_errors() {
+  static std::shared_ptr<const PoseModel> model;
+  if (!model) {
+    const char* path = std::getenv("GLOVEPOSE_BENCH_MODEL");
+    model = model::load_model_file(path && *path ? path : std::string(GLOVEPOSE_SOURCE_DIR) + "/models/glovepose_fcn512.safetensors",
+                                   [](model::ModelFile&& file) {
+                                     file.info.pose_error.reset();
+                                     PoseModelOptions options;
+                                     options.storage = nn::WeightStorage::Fixed16;
+                                     PoseModel::Network network = PoseModel::Network::from_tensors(file.info, file.tensors, options.storage);
+                                     return std::make_shared<const PoseModel>(std::move(file.info), std::move(network), options);
+                                   });
+  }
+  return model;
+}
+
 // An estimator with smoothing and joint transforms, calibrated on the calibration sequence's frames.
-GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage, EstimatorConfig config = {}, const Recording& r = recording()) {
+GlovePoseEstimator calibrated_estimator(nn::WeightStorage storage, EstimatorConfig config = {}, const Recording& r = recording(),
+                                        std::shared_ptr<const PoseModel> model = nullptr) {
   config.smoothing = filter::OneEuroConfig{60.0, 1.0, 0.5, 1.0};
   config.joint_transforms = true;
-  GlovePoseEstimator estimator(shipped_model(storage), config);
+  GlovePoseEstimator estimator(model ? std::move(model) : shipped_model(storage), config);
   const io::Dataset& d = r.data;
   std::vector<double> frame(d.row_count);
   estimator.start_calibration();
@@ -192,6 +216,18 @@ void BM_EstimatorFrameContinuous(benchmark::State& state) {
   }
   push_frames(state, estimator, recording(), [] {});
   state.SetLabel(state.range(0) != 0 ? "Fixed16, continuous calibration" : "Fixed16, fixed calibration");
+}
+
+void BM_EstimatorFrameConfidence(benchmark::State& state) {
+  GlovePoseEstimator estimator =
+      state.range(0) != 0 ? calibrated_estimator(nn::WeightStorage::Fixed16)
+                          : calibrated_estimator(nn::WeightStorage::Fixed16, EstimatorConfig{}, recording(), model_without_errors());
+  if (state.range(0) != 0 && !estimator.model().pose_error()) {
+    state.SkipWithError("the model carries no errors of its own");
+    return;
+  }
+  push_frames(state, estimator, recording(), [] {});
+  state.SetLabel(state.range(0) != 0 ? "Fixed16, confidence from the model's errors" : "Fixed16, confidence from the trust flag");
 }
 
 // BM_EstimatorFrame plus the OpenXR joints an engine asks for (joints_at 11 ms past the newest
@@ -352,5 +388,6 @@ BENCHMARK(BM_EstimatorFrame)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameContact)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameFloating)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameContinuous)->Arg(0)->Arg(1)->UseRealTime();
+BENCHMARK(BM_EstimatorFrameConfidence)->Arg(0)->Arg(1)->UseRealTime();
 BENCHMARK(BM_EstimatorFrameXr)->Arg(3)->UseRealTime();
 BENCHMARK(BM_EstimatorRow)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->UseRealTime();

@@ -13,6 +13,7 @@
 #include <glovepose/hand/contact.hpp>
 #include <glovepose/hand/xr_hand.hpp>
 #include <glovepose/io/dataset.hpp>  // io::RowClock (glovepose_row_time)
+#include <glovepose/model/pose_error.hpp>  // PoseModel::pose_error()
 #include <glovepose/model/pose_network.hpp>
 #include <glovepose/pose_model_options.hpp>
 #include <glovepose/pose_prediction.hpp>
@@ -199,7 +200,7 @@ void copy_xr_hand(const glovepose::hand::XrHandJoints& in, glovepose_xr_hand& ou
   out.predicted = in.predicted ? 1 : 0;
   out.clamped = in.clamped ? 1 : 0;
   out.handedness = static_cast<int32_t>(in.side);
-  out.reserved = 0;
+  out.data_source = static_cast<int32_t>(in.data_source);
   out.time = in.time;
   out.horizon = in.horizon;
   std::memcpy(out.locations, in.locations.data(), sizeof out.locations);
@@ -416,6 +417,15 @@ int32_t glovepose_model_has_range_map(const glovepose_model* model) noexcept {
   return m->range_map() ? 1 : 0;
 }
 
+int32_t glovepose_model_has_pose_error(const glovepose_model* model) noexcept {
+  const glovepose::PoseModel* m = model_of(model);
+  if (m == nullptr) {
+    invalid_model();
+    return -1;
+  }
+  return m->pose_error() ? 1 : 0;
+}
+
 int32_t glovepose_model_calibration_step_count(const glovepose_model* model) noexcept {
   const glovepose::PoseModel* m = model_of(model);
   if (m == nullptr) {
@@ -616,6 +626,16 @@ glovepose_result glovepose_estimator_get_cells(const glovepose_estimator* estima
   if (static_cast<std::size_t>(count) != e->cells().size())
     return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_cells: count is not the model's cell count");
   std::memcpy(out, e->cells().data(), sizeof(double) * static_cast<std::size_t>(count));
+  return GLOVEPOSE_OK;
+}
+
+glovepose_result glovepose_estimator_get_confidence(const glovepose_estimator* estimator, double* out, int32_t count) noexcept {
+  const glovepose::GlovePoseEstimator* e = estimator_of(estimator);
+  if (e == nullptr) return invalid_estimator();
+  if (out == nullptr) return fail(GLOVEPOSE_ERROR_INVALID_ARGUMENT, "glovepose_estimator_get_confidence: out is NULL");
+  if (count != GLOVEPOSE_DOF_COUNT)
+    return fail(GLOVEPOSE_SIZE_MISMATCH, "glovepose_estimator_get_confidence: count is not GLOVEPOSE_DOF_COUNT (25)");
+  std::memcpy(out, e->pose().confidence.data(), sizeof(double) * static_cast<std::size_t>(count));
   return GLOVEPOSE_OK;
 }
 

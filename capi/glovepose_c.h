@@ -266,14 +266,21 @@ typedef struct glovepose_xr_joint_velocity {
   float angular_velocity[3]; /**< rad/s, axis times rate. */
 } glovepose_xr_joint_velocity;
 
-/** @brief One hand's OpenXR joints at one time. Set struct_size (glovepose_xr_hand_init) first. */
+/** @brief XR_HAND_TRACKING_DATA_SOURCE_UNOBSTRUCTED_EXT: the joints measured on the hand itself (a
+ * data glove), glovepose_xr_hand::data_source. */
+#define GLOVEPOSE_XR_DATA_SOURCE_UNOBSTRUCTED 1
+
+/** @brief One hand's OpenXR joints at one time. Set struct_size (glovepose_xr_hand_init) first.
+ * A joint's location_flags carry the TRACKED bits when the newest pose is trusted, the time is
+ * within max_prediction and the joint's confidence (the product of its digit's DoF confidences up
+ * to it, glovepose_estimator_get_confidence) is at least 0.5; the VALID bits whenever active. */
 typedef struct glovepose_xr_hand {
   uint32_t struct_size; /**< sizeof(glovepose_xr_hand) (1912 in ABI 1); set by the caller. */
   int32_t active;       /**< 1 when a pose exists (XrHandJointLocationsEXT::isActive). */
   int32_t predicted;    /**< 1 when extrapolated past the newest pose. */
   int32_t clamped;      /**< 1 when asked further ahead than max_prediction: located at the bound. */
   int32_t handedness;   /**< GLOVEPOSE_HAND_*. */
-  int32_t reserved;     /**< 0. */
+  int32_t data_source;  /**< XR_EXT_hand_tracking_data_source's XrHandTrackingDataSourceEXT: GLOVEPOSE_XR_DATA_SOURCE_UNOBSTRUCTED. */
   double time;          /**< The time located (the glove stream's clock, s). */
   double horizon;       /**< time minus the newest pose's timestamp, s (> 0 predicted). */
   glovepose_xr_joint_location locations[GLOVEPOSE_XR_JOINT_COUNT]; /**< XrHandJointEXT order. */
@@ -410,6 +417,10 @@ GLOVEPOSE_C_API int32_t glovepose_model_has_training_range(const glovepose_model
  * glovepose_calibration_use_continuous works and new estimators start with it), 0 when not, -1
  * for an invalid handle. */
 GLOVEPOSE_C_API int32_t glovepose_model_has_range_map(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
+/** @brief 1 when the model carries its own measured errors (the per-DoF confidence then comes from
+ * them: glovepose_estimator_get_confidence), 0 when not (the confidence is then 1 for a trusted
+ * pose, 0 otherwise), -1 for an invalid handle. */
+GLOVEPOSE_C_API int32_t glovepose_model_has_pose_error(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Steps of the model's guided calibration sequence (docs/calibration.md): 0 when the model
  * carries no pose-guided calibration (its calibration is min-max only), -1 for an invalid handle. */
 GLOVEPOSE_C_API int32_t glovepose_model_calibration_step_count(const glovepose_model* model) GLOVEPOSE_C_NOEXCEPT;
@@ -465,6 +476,14 @@ GLOVEPOSE_C_API glovepose_result glovepose_estimator_push_cells(glovepose_estima
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or _STRUCT_SIZE. */
 GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_pose(const glovepose_estimator* estimator,
                                                               glovepose_pose* out) GLOVEPOSE_C_NOEXCEPT;
+/** @brief The latest pose's per-DoF confidence into out[0..count) (glovepose_dof_name() order), 0..1:
+ * the probability that the angle is within 10 degrees of the truth, from the model's own errors
+ * measured on new people under the calibration in use, the DoF's speed and the cells stood in for
+ * (include/glovepose/model/pose_error.hpp); 0 for every DoF of a pose with a fault flag; zeros
+ * before the first pose. `count` must be GLOVEPOSE_DOF_COUNT. Per-frame: never allocates.
+ * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out) or GLOVEPOSE_SIZE_MISMATCH. */
+GLOVEPOSE_C_API glovepose_result glovepose_estimator_get_confidence(const glovepose_estimator* estimator, double* out,
+                                                                    int32_t count) GLOVEPOSE_C_NOEXCEPT;
 /** @brief Copies the latest joint list into out[0..count-1]; `count` must be GLOVEPOSE_JOINT_COUNT.
  * @return GLOVEPOSE_OK, _INVALID_HANDLE, _INVALID_ARGUMENT (NULL out), GLOVEPOSE_SIZE_MISMATCH
  * (wrong count) or _DISABLED (joint_transforms was off in the config). */

@@ -1,5 +1,6 @@
 /// @file calibration_files_fuzz.cpp
-/// @brief Fuzz target: the bytes through the four text readers of calibration:
+/// @brief Fuzz target: the bytes through the four text readers of calibration and the model's own
+/// errors (model::PoseErrorModel::parse, the "pose_error" metadata behind the confidence):
 /// calibration::Sequence::parse (a calibration sequence file), calibration::PoseOffsetModel::parse
 /// (the "pose_offset" metadata of model files), calibration::RangeMap::parse (their "range_map")
 /// and calibration::UserCalibration::load (a saved user calibration with its offsets, from a stream).
@@ -8,7 +9,8 @@
 /// that parses to the same text and has steps within the joint limits; an accepted offset model
 /// round-trips and maps zero features to its finite bias; an accepted range map round-trips and
 /// keeps a finite range with min <= max through frames at and beyond its prior; an accepted user
-/// calibration has finite offsets and a range that normalises to finite values.
+/// calibration has finite offsets and a range that normalises to finite values; an accepted pose
+/// error round-trips and gives confidences in [0, 1] under every condition, rate and stood-in cell.
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -19,6 +21,7 @@
 #include <glovepose/calibration/pose_offset.hpp>
 #include <glovepose/calibration/sequence.hpp>
 #include <glovepose/calibration/user_calibration.hpp>
+#include <glovepose/model/pose_error.hpp>
 
 #include "fuzz_check.hpp"
 
@@ -54,6 +57,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         GLOVEPOSE_FUZZ_REQUIRE(follow.min().allFinite() && follow.max().allFinite() && (follow.min().array() <= follow.max().array()).all());
       }
     }
+  } catch (const Error&) {
+  }
+  try {
+    const model::PoseErrorModel m = model::PoseErrorModel::parse(text, "fuzz");
+    const model::PoseErrorModel again = model::PoseErrorModel::parse(m.to_json(), "again");
+    GLOVEPOSE_FUZZ_REQUIRE(again.to_json() == m.to_json());
+    const int masked[] = {0, 1, -1, 1000000};
+    hand::Angles rate{}, out{};
+    rate.fill(1e300);
+    for (const model::ErrorCondition c : {model::ErrorCondition::Guided, model::ErrorCondition::MinMax, model::ErrorCondition::Training,
+                                          model::ErrorCondition::Continuous})
+      for (const double frames : {0.0, 30.0, 1e9})
+        if (m.confidence(c, frames, &rate, masked, 4, 0.17, out))
+          for (double v : out) GLOVEPOSE_FUZZ_REQUIRE(v >= 0.0 && v <= 1.0);
   } catch (const Error&) {
   }
   try {

@@ -1353,12 +1353,22 @@ TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed
   r = run("fit-guided --model " + kModel + " --data " + data + " --out " + guided);
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("10 people's calibrations") != std::string::npos);
+  CHECK(r.out.find("the model's own errors through the estimator, 10 runs") != std::string::npos);
   r = run("info --model " + guided);
   CHECK(r.out.find("pose-guided calibration: sequence 'glauser2019-guided' (10 steps, 30.0 s), 690 features") != std::string::npos);
+  CHECK(r.out.find("confidence: the model's own errors, ") != std::string::npos);
+  CHECK(run("info --model " + kModel).out.find("confidence: from the trust flags only") != std::string::npos);
   r = run("eval --model " + guided + " --data " + data + " --json");  // guided by default: the model carries one, the data followed it
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("\"calibration\": \"guided\"") != std::string::npos);
   const long all_frames = nlohmann::json::parse(r.out)["frames"].get<long>();
+  const nlohmann::json confidence = nlohmann::json::parse(r.out)["confidence"];  // the model's own errors: scored
+  REQUIRE(confidence.is_object());
+  CHECK(confidence["joint_frames"].get<long>() == all_frames * 25);
+  CHECK(confidence["mean_confidence"].get<double>() > 0.0);
+  CHECK(confidence["mean_confidence"].get<double>() < 1.0);
+  CHECK(confidence["tolerance_deg"].get<double>() == doctest::Approx(10.0));
+  CHECK(nlohmann::json::parse(run("eval --model " + kModel + " --data " + data + " --json").out)["confidence"].is_null());
   // The same fit carries a range map: continuous calibration, scored from 2 s into each 6 s session.
   r = run("info --model " + guided);
   CHECK(r.out.find("continuous calibration: range map of ") != std::string::npos);

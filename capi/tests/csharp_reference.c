@@ -93,7 +93,7 @@ static void write_layout(void) {
   OFFSET(glovepose_xr_hand, predicted);
   OFFSET(glovepose_xr_hand, clamped);
   OFFSET(glovepose_xr_hand, handedness);
-  OFFSET(glovepose_xr_hand, reserved);
+  OFFSET(glovepose_xr_hand, data_source);
   OFFSET(glovepose_xr_hand, time);
   OFFSET(glovepose_xr_hand, horizon);
   OFFSET(glovepose_xr_hand, locations);

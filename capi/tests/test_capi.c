@@ -157,6 +157,7 @@ static void test_model_errors(const char* model_path, const char* dir) {
   CHECK(glovepose_model_cell_name(NULL, 0) == NULL);
   CHECK(glovepose_model_has_training_range(NULL) == -1);
   CHECK(glovepose_model_has_range_map(NULL) == -1);
+  CHECK(glovepose_model_has_pose_error(NULL) == -1);
   glovepose_model_free(NULL); /* ignored */
 }
 
@@ -361,7 +362,7 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
   glovepose_estimator_config config;
   glovepose_calibration_progress progress;
   glovepose_pose pose;
-  double frame[180], lo[44], hi[44], lo2[44], hi2[44], cells[44];
+  double frame[180], lo[44], hi[44], lo2[44], hi2[44], cells[44], confidence[GLOVEPOSE_DOF_COUNT];
   int f, r, solved = 0, uncalibrated = 0, refused = 0;
   double t = 0.0;
   glovepose_estimator_config_default(&config);
@@ -372,6 +373,7 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
   /* The shipped model carries a range map: a new estimator calibrates from the wearer's motion,
    * its prior range in use at once; cleared, it waits for a calibration. */
   CHECK(glovepose_model_has_range_map(model) == 1);
+  CHECK(glovepose_model_has_pose_error(model) == 1); /* its own errors: the confidence */
   CHECK_RESULT(glovepose_calibration_get_progress(e, &progress), GLOVEPOSE_OK);
   CHECK(progress.source == GLOVEPOSE_CALIBRATION_CONTINUOUS);
   CHECK_RESULT(glovepose_calibration_get_range(e, lo, hi, 44), GLOVEPOSE_OK);
@@ -452,6 +454,13 @@ static void test_rows_and_calibration(glovepose_model* model, const char* dir) {
   CHECK(isfinite(cells[0]) && isfinite(cells[43]));
   CHECK_RESULT(glovepose_estimator_get_cells(e, cells, 43), GLOVEPOSE_SIZE_MISMATCH);
   CHECK_RESULT(glovepose_estimator_get_cells(e, NULL, 44), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  /* The confidence: per DoF in [0, 1]; this pose is trusted unless the readout saw a fault. */
+  CHECK_RESULT(glovepose_estimator_get_confidence(e, confidence, GLOVEPOSE_DOF_COUNT), GLOVEPOSE_OK);
+  for (f = 0; f < GLOVEPOSE_DOF_COUNT; ++f)
+    CHECK(confidence[f] >= 0.0 && confidence[f] <= 1.0 && ((pose.flags & GLOVEPOSE_POSE_FAULT_FLAGS) != 0 ? confidence[f] == 0.0 : confidence[f] > 0.0));
+  CHECK_RESULT(glovepose_estimator_get_confidence(e, confidence, 24), GLOVEPOSE_SIZE_MISMATCH);
+  CHECK_RESULT(glovepose_estimator_get_confidence(e, NULL, 25), GLOVEPOSE_ERROR_INVALID_ARGUMENT);
+  CHECK_RESULT(glovepose_estimator_get_confidence(NULL, confidence, 25), GLOVEPOSE_ERROR_INVALID_HANDLE);
 
   /* A whole C_m frame solves at once. */
   for (r = 0; r < 180; ++r) frame[r] = 30.0 + 0.01 * r;

@@ -115,6 +115,9 @@ struct EstimatorConfig {
   /// GLOVEPOSE_REALTIME's no-allocation promise but not its no-lock one (tests/test_realtime.cpp
   /// counts both).
   int network_threads = 1;
+  /// What Pose::confidence measures: per DoF, the probability that the angle's error is within this
+  /// tolerance (radians; default 10 degrees), from the model's own measured errors (model/pose_error.hpp).
+  double confidence_tolerance = 10.0 * 3.14159265358979323846 / 180.0;
 };
 
 /// @brief Where the estimator's calibration range comes from.

@@ -25,6 +25,9 @@ struct CalibrationProgress {
   /// way (index into the sequence's steps; -1 before the first frame and after the last step).
   double sequence_seconds = 0.0;
   int step = -1;
+  /// Continuous calibration: the free motion it has taken so far, in effective frames (frames that
+  /// moved the cells, older ones forgotten; calibration/free_motion.hpp); 0 otherwise.
+  double motion_frames = 0.0;
 };
 
 /// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
@@ -77,6 +80,12 @@ struct Pose {
   std::uint32_t flags = 0;       ///< PoseFlag bits.
   bool valid = false;            ///< False until the first pose.
   sensor::ReadoutHealth health;  ///< The readout's view of the frame (rows and C_m frames; zero for C_c frames).
+  /// Per DoF (hand::kDofs order), 0..1: the probability that the angle is within
+  /// EstimatorConfig::confidence_tolerance of the truth, from the model's own errors measured on new
+  /// people (model/pose_error.hpp) under the calibration in use, the DoF's speed and the cells stood
+  /// in for. 0 for every DoF of a pose that is not trusted(); 1 for every DoF of a trusted pose when
+  /// the model carries no measured errors (PoseModel::pose_error()).
+  hand::Angles confidence{};
   /// @brief Whether no fault flag (kPoseFaultFlags) is set.
   bool trusted() const noexcept { return valid && (flags & kPoseFaultFlags) == 0; }
 };
@@ -92,7 +101,12 @@ struct PredictedPose {
   bool clamped = false;     ///< Asked further ahead than EstimatorConfig::max_prediction: located at the bound.
   std::uint32_t flags = 0;  ///< The newest pose's PoseFlag bits.
   bool trusted = false;     ///< The newest pose's trusted().
+  hand::Angles confidence{};  ///< The newest pose's Pose::confidence.
 };
+
+/// @brief The confidence at or above which an OpenXR joint is reported tracked (locate()): the
+/// joint's angles more likely within the tolerance than not.
+inline constexpr double kTrackedConfidence = 0.5;
 
 /// @brief The hand at one moment, as a plain copy: what the glove's thread hands to an engine's
 /// update and render threads through LatestHand.

@@ -28,7 +28,8 @@ namespace grid {
 class GloveDescription;  // grid/glove_description.hpp
 }  // namespace grid
 namespace model {
-class PoseNetwork;  // model/pose_network.hpp
+class PoseNetwork;     // model/pose_network.hpp
+class PoseErrorModel;  // model/pose_error.hpp
 struct ModelInfo;   // model/model_info.hpp
 }  // namespace model
 namespace sensor {
@@ -90,6 +91,9 @@ class PoseModel {
   /// @brief The map from a wearer's free motion to their calibration range (the continuous
   /// calibration's; calibration/free_motion.hpp), if the model carries one.
   const std::optional<calibration::RangeMap>& range_map() const noexcept;
+  /// @brief The model's own per-DoF errors (model/pose_error.hpp), behind each pose's confidence, if
+  /// the model carries them.
+  const std::optional<model::PoseErrorModel>& pose_error() const noexcept;
 
   /// @brief The batch path, for evaluation and tests: `frames` rows of `cell_count()` solved
   /// capacitances C_c, normalised by `range`, through the network on `threads` threads -> one

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 
@@ -30,6 +31,7 @@ GLOVEPOSE_REALTIME inline Status predict(const Pose& pose, const hand::Angles& r
   out.has_rate = has_rate;
   out.flags = pose.flags;
   out.trusted = pose.trusted();
+  out.confidence = pose.confidence;
   out.angles = out.predicted ? locator.extrapolate(pose.angles, rate, out.horizon) : pose.angles;
   return Status::Ok;
 }
@@ -40,12 +42,18 @@ GLOVEPOSE_REALTIME inline Status predict(const HandState& state, const hand::XrH
   return predict(state.pose, state.rate, state.has_rate, locator, t, max_prediction, out);
 }
 
-/// @brief The OpenXR joints of a predicted pose: positions valid, tracked when the newest pose is
-/// trusted and the time was within the prediction bound; velocities when the rate is known.
+/// @brief The OpenXR joints of a predicted pose: positions valid; a joint tracked when the newest
+/// pose is trusted, the time was within the prediction bound and the joint's confidence
+/// (XrHandLocator::joint_confidence) is at least kTrackedConfidence; velocities when the rate is known.
 GLOVEPOSE_REALTIME inline void locate(const PredictedPose& pose, const hand::XrHandLocator& locator, hand::XrHandJoints& out) noexcept {
+  constexpr std::uint64_t kTracked = hand::kXrOrientationTracked | hand::kXrPositionTracked;
   std::uint64_t flags = hand::kXrOrientationValid | hand::kXrPositionValid;
-  if (pose.trusted && !pose.clamped) flags |= hand::kXrOrientationTracked | hand::kXrPositionTracked;
+  if (pose.trusted && !pose.clamped) flags |= kTracked;
   locator.locate(pose.angles, pose.has_rate ? &pose.rate : nullptr, flags, out);
+  std::array<double, hand::kXrJointCount> confidence;
+  locator.joint_confidence(pose.confidence, confidence);
+  for (std::size_t j = 0; j < hand::kXrJointCount; ++j)
+    if (confidence[j] < kTrackedConfidence) out.locations[j].location_flags &= ~kTracked;
   out.time = pose.time;
   out.horizon = pose.horizon;
   out.predicted = pose.predicted;

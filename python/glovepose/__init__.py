@@ -222,7 +222,8 @@ class PoseModel(_Closing):
     """A model file (weights_format.md) with its glove; shared by any number of estimators.
     cell_count, row_count (0: no wiring known, push_cells only), glove_id, cell_names,
     has_training_range (Estimator.use_training_calibration works), has_range_map (new estimators
-    calibrate from the wearer's free motion, Estimator.use_continuous_calibration works), and calibration_steps: the
+    calibrate from the wearer's free motion, Estimator.use_continuous_calibration works), has_pose_error (the model
+    carries its own measured errors, behind Estimator.confidence), and calibration_steps: the
     model's guided calibration sequence, a tuple of CalibrationStep (empty when the model's
     calibration is min-max only). weights: how the network holds them, "f32" (exact), "f16",
     "bf16", "fixed16", or "realtime": the fastest within 0.1 degree of F32 for `isa`."""
@@ -239,6 +240,7 @@ class PoseModel(_Closing):
         self.cell_names = tuple(_lib.glovepose_model_cell_name(self._handle, c).decode() for c in range(self.cell_count))
         self.has_training_range = _lib.glovepose_model_has_training_range(self._handle) == 1
         self.has_range_map = _lib.glovepose_model_has_range_map(self._handle) == 1
+        self.has_pose_error = _lib.glovepose_model_has_pose_error(self._handle) == 1
         steps = []
         for k in range(_lib.glovepose_model_calibration_step_count(self._handle)):
             step = _new(_library.CalibrationStep)
@@ -297,11 +299,13 @@ class XrHand:
 
     - positions (26, 3) m; orientations (26, 4) unit quaternions x, y, z, w (+Z along the bone away
       from the tip, +Y out of the back of the finger); radii (26,) m; location_flags (26,) uint64,
-      XR_*_VALID / XR_*_TRACKED bits (tracked when the newest pose is trusted and not clamped);
+      XR_*_VALID / XR_*_TRACKED bits (tracked when the newest pose is trusted and not clamped and
+      the joint's confidence, the product of its digit's DoF confidences up to it, is at least 0.5);
     - linear_velocities (26, 3) m/s; angular_velocities (26, 3) rad/s (axis times rate);
       velocity_flags (26,) uint64, XR_*_VELOCITY_VALID bits (0 before two poses give a rate);
     - active (False before the first pose: every flag 0, nothing to show, like OpenXR's isActive),
-      predicted, clamped (as PredictedPose), hand ("right" or "left"), time and horizon (s)."""
+      predicted, clamped (as PredictedPose), hand ("right" or "left"), time and horizon (s);
+    - data_source: XR_EXT_hand_tracking_data_source's source, 1 (unobstructed: a data glove)."""
 
     def __init__(self, raw: _library.XrHand):
         locations, velocities = np.ctypeslib.as_array(raw.locations), np.ctypeslib.as_array(raw.velocities)
@@ -315,6 +319,7 @@ class XrHand:
         self.active, self.predicted, self.clamped = bool(raw.active), bool(raw.predicted), bool(raw.clamped)
         self.hand = "left" if raw.handedness == _library.HAND_LEFT else "right"
         self.time, self.horizon = raw.time, raw.horizon
+        self.data_source = raw.data_source
 
 
 class XrAim:
@@ -479,6 +484,14 @@ class Estimator(_Closing):
         out = _aim_state()
         code = _check(_lib.glovepose_estimator_get_xr_aim(self._handle, ctypes.byref(out)))
         return XrAim(out, active=code == Status.OK)
+
+    def confidence(self) -> np.ndarray:
+        """The latest pose's per-DoF confidence (25,), 0..1 (DOF_NAMES order): the probability that
+        the angle is within 10 degrees of the truth, from the model's own errors measured on new people
+        (PoseModel.has_pose_error; without them 1 for a trusted pose); 0 for a pose with a fault flag."""
+        out = np.zeros(25, dtype=np.float64)
+        _check(_lib.glovepose_estimator_get_confidence(self._handle, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), out.size))
+        return out
 
     def cells(self) -> np.ndarray:
         """The latest solved cell capacitances (cell_count,), pF: the network's input before

@@ -438,6 +438,9 @@ class GuidedCalibration(unittest.TestCase):
         ends = np.cumsum([e["seconds"] for e in expected])
         with glovepose.PoseModel(MODEL) as model, glovepose.Estimator(model) as estimator:
             self.assertTrue(model.has_range_map)
+            self.assertTrue(model.has_pose_error)  # the shipped model measured its own errors: the confidence
+            self.assertEqual(estimator.confidence().shape, (25,))
+            self.assertTrue((estimator.confidence() == 0.0).all())  # no pose yet
             progress = estimator.calibration_progress()
             self.assertEqual((progress.collecting, progress.frames, progress.ready, progress.step, progress.sequence_seconds),
                              (False, 0, False, None, 0.0))

@@ -448,6 +448,7 @@ def main() -> int:
         check(len(state.get("joints", [])) == 26 and all(len(j) == 3 for j in state["joints"]), "26 OpenXR joints of 3 coordinates")
         check(state.get("joints", [[1]])[1] == [0.0, 0.0, 0.0], "the wrist joint is the origin")
         check(len(state.get("angles_deg", [])) == 25 and len(state.get("truth_deg") or []) == 25, "25 angles in degrees, and the truth's")
+        check(len(state.get("confidence", [])) == 25 and all(0.0 <= c <= 1.0 for c in state["confidence"]), "25 confidences in [0, 1]")
         check(len(state.get("truth_joints") or []) == 26, "the truth's joints (a simulated recording)")
         check(len(state.get("stretch", [])) == 2 and len(state.get("pose_map", [])) == 5, "two stretch maps and the pose map")
         check(len(state.get("pinch", [])) == 4 and all(0.0 <= p["strength"] <= 1.0 for p in state.get("pinch", [])),

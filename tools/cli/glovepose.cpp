@@ -223,6 +223,15 @@ int info(const std::string& model_path) {
     std::printf("continuous calibration: range map of %zu stages (from %g to %g frames of free motion)\n", map.stages().size(),
                 map.stages().empty() ? 0.0 : map.stages().front().frames, map.stages().empty() ? 0.0 : map.stages().back().frames);
   }
+  if (!model.pose_error()) {
+    std::printf("confidence: from the trust flags only (no measured errors)\n");
+  } else {
+    const model::PoseErrorModel& errors = *model.pose_error();
+    double guided = 0.0;
+    for (double e : errors.guided_deg()) guided += e * e / static_cast<double>(hand::kDofCount);
+    std::printf("confidence: the model's own errors, %.2f deg RMS still after a guided calibration, %zu continuous stages, %td cells\n",
+                std::sqrt(guided), errors.continuous().size(), static_cast<std::ptrdiff_t>(errors.cells()));
+  }
   // Provenance: the file's metadata beyond the model's own fields (those ModelInfo writes), such as
   // training_command, training_data and training_seed; pose_offset is shown above.
   nn::WeightFile fields;

@@ -181,6 +181,7 @@ json state_json(const ViewFrame& frame, std::uint64_t number, const ViewServer::
   out["seq"] = state.pose.sequence;
   out["angles"] = state.pose.angles;  // radians, for tools reading GET /state
   out["angles_deg"] = degrees(state.pose.angles);
+  out["confidence"] = state.pose.confidence;  // per DoF: the chance of being within 10 degrees
   out["trusted"] = state.pose.trusted();
   out["flags"] = state.pose.flags;
   out["flag_names"] = flags;

@@ -126,6 +126,8 @@ namespace GlovePose
         public bool HasTrainingRange { get { return Native.glovepose_model_has_training_range(Handle) == 1; } }
         /// <summary>Whether the model carries a range map: new estimators then calibrate from the wearer's free motion (no calibration step).</summary>
         public bool HasRangeMap { get { return Native.glovepose_model_has_range_map(Handle) == 1; } }
+        /// <summary>Whether the model carries its own measured errors, behind GetConfidence (else 1 for a trusted pose, 0 otherwise).</summary>
+        public bool HasPoseError { get { return Native.glovepose_model_has_pose_error(Handle) == 1; } }
         public int CalibrationStepCount { get { return Native.glovepose_model_calibration_step_count(Handle); } }
 
         /// <summary>Step `step` of the guided calibration sequence (what to show the user).</summary>
@@ -187,6 +189,8 @@ namespace GlovePose
         /// <summary>The 21-joint list into joints[0..20] (needs JointTransforms = 1).</summary>
         public Status GetJoints(Joint[] joints) { return (Status)Native.glovepose_estimator_get_joints(Handle, joints, joints == null ? 0 : joints.Length); }
         public Status GetCells(double[] cells) { return (Status)Native.glovepose_estimator_get_cells(Handle, cells, cells == null ? 0 : cells.Length); }
+        /// <summary>The latest pose's per-DoF confidence into confidence[0..24], 0..1: the probability that the angle is within 10 degrees.</summary>
+        public Status GetConfidence(double[] confidence) { return (Status)Native.glovepose_estimator_get_confidence(Handle, confidence, confidence == null ? 0 : confidence.Length); }
         public Status GetPoseAt(double time, ref PredictedPose pose) { return (Status)Native.glovepose_estimator_get_pose_at(Handle, time, ref pose); }
         /// <summary>The 26 OpenXR joints at `time` (the stream's clock), in the wrist joint's frame.</summary>
         public Status GetXrJoints(double time, ref XrHand hand) { return (Status)Native.glovepose_estimator_get_xr_joints(Handle, time, ref hand); }

@@ -38,6 +38,7 @@ namespace GlovePose
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr glovepose_model_cell_name(ModelHandle model, int cell);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_has_training_range(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_has_range_map(ModelHandle model);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_has_pose_error(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_calibration_step_count(ModelHandle model);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_model_get_calibration_step(ModelHandle model, int step, ref CalibrationStep output);
 
@@ -55,6 +56,7 @@ namespace GlovePose
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_get_pose_at(EstimatorHandle estimator, double time, ref PredictedPose output);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_get_xr_joints(EstimatorHandle estimator, double time, ref XrHand output);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_get_cells(EstimatorHandle estimator, [Out] double[] output, int count);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_get_confidence(EstimatorHandle estimator, [Out] double[] output, int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_get_xr_aim(EstimatorHandle estimator, ref XrAimState output);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int glovepose_estimator_reset(EstimatorHandle estimator);
 

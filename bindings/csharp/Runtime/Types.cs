@@ -227,7 +227,8 @@ namespace GlovePose
         public int Predicted;
         public int Clamped;
         public Hand Handedness;
-        public int Reserved;
+        /// <summary>XrHandTrackingDataSourceEXT (XR_EXT_hand_tracking_data_source): 1, unobstructed (a data glove).</summary>
+        public int DataSource;
         public double Time;
         public double Horizon;
         // The C arrays of structs, as bytes (C# has no fixed buffers of structs); Location(j) reads them.

@@ -184,6 +184,10 @@ static class PackageTest
                 var progress = CalibrationProgress.Create();
                 Check(model.HasRangeMap && estimator.GetCalibrationProgress(ref progress) == Status.Ok && progress.Source == CalibrationSource.Continuous,
                       "the shipped model carries a range map: a new estimator calibrates from the wearer's motion");
+                var confidence = new double[25];
+                Check(model.HasPoseError && estimator.GetConfidence(confidence) == Status.Ok && confidence[0] == 0.0 &&
+                      estimator.GetConfidence(new double[24]) == Status.SizeMismatch,
+                      "the shipped model measured its own errors; no pose yet: confidence 0; 24 values: SizeMismatch");
                 estimator.ClearCalibration();
                 Check(estimator.GetCalibrationProgress(ref progress) == Status.Ok && progress.Source == CalibrationSource.None, "cleared: no range");
                 estimator.UseContinuousCalibration();

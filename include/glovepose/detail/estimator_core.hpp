@@ -68,6 +68,9 @@ class EstimatorCore {
       throw Error("GlovePoseEstimator: prediction_window " + std::to_string(config_.prediction_window) + " s, expected a positive time");
     if (!(config_.max_prediction >= 0.0) || !std::isfinite(config_.max_prediction))
       throw Error("GlovePoseEstimator: max_prediction " + std::to_string(config_.max_prediction) + " s, expected a time of at least 0");
+    if (!(config_.confidence_tolerance >= 0.0) || !std::isfinite(config_.confidence_tolerance))
+      throw Error("GlovePoseEstimator: confidence_tolerance " + std::to_string(config_.confidence_tolerance) +
+                  " rad, expected a finite angle of at least 0");
     if (config_.clock_restart_frames < 1)
       throw Error("GlovePoseEstimator: clock_restart_frames " + std::to_string(config_.clock_restart_frames) + ", expected at least 1");
     if (config_.smoothing) smoothing_.emplace(*config_.smoothing);
@@ -169,7 +172,11 @@ class EstimatorCore {
   // ---- calibration -------------------------------------------------------------------------
 
   void start_calibration() noexcept { calibration_session_.start(); }
-  CalibrationProgress calibration_progress() const noexcept { return calibration_session_.progress(); }
+  CalibrationProgress calibration_progress() const noexcept {
+    CalibrationProgress progress = calibration_session_.progress();
+    if (source_ == CalibrationSource::Continuous) progress.motion_frames = continuous_->histogram().effective_frames();
+    return progress;
+  }
   const sensor::CalibrationRange& finish_calibration() {
     if (!calibration_session_.collecting())
       throw Error("GlovePoseEstimator::finish_calibration: no calibration running, expected start_calibration() first");
@@ -398,8 +405,28 @@ class EstimatorCore {
     (void)aim_tracker_.update(hand::pinch_distances(hand::fingertip_positions(kinematics_, skeleton_)), pose_.trusted(), timestamp,
                               pose_.sequence);
     rejected_ = 0;
+    set_confidence();
     pose_.compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return Status::Solved;
+  }
+
+  // Pose::confidence from the model's measured errors under the calibration in use, the angles'
+  // rate and the cells stood in for; 0 when the pose is not trusted, 1 when the model measured none.
+  void set_confidence() noexcept {
+    const bool trusted = pose_.trusted();
+    pose_.confidence.fill(trusted ? 1.0 : 0.0);
+    if (!trusted || !model_->pose_error()) return;
+    model::ErrorCondition condition = guided_ ? model::ErrorCondition::Guided : model::ErrorCondition::MinMax;
+    double frames = 0.0;
+    if (source_ == CalibrationSource::Training) condition = model::ErrorCondition::Training;
+    if (source_ == CalibrationSource::Continuous) {
+      condition = model::ErrorCondition::Continuous;
+      frames = continuous_->histogram().effective_frames();
+    }
+    const hand::Angles rate = trend_.slope();
+    const std::vector<int>& masked = floating_.floating();
+    (void)model_->pose_error()->confidence(condition, frames, trend_.has_slope() ? &rate : nullptr, masked.data(), masked.size(),
+                                           config_.confidence_tolerance, pose_.confidence);
   }
 
   std::shared_ptr<const PoseModel> model_;

@@ -59,6 +59,9 @@ struct PoseModel::Parts {
     if (info_.range_map && info_.range_map->cells() != glove_.cell_count())
       throw Error("metadata 'range_map' reads " + std::to_string(info_.range_map->cells()) + " cells, expected " +
                   std::to_string(glove_.cell_count()) + " (the glove's)");
+    if (info_.pose_error && info_.pose_error->cells() != glove_.cell_count())
+      throw Error("metadata 'pose_error' covers " + std::to_string(info_.pose_error->cells()) + " cells, expected " +
+                  std::to_string(glove_.cell_count()) + " (the glove's)");
     training_range_ = info_.training_range(glove_.cell_names(), glove_.calibration().config());
   }
 
@@ -108,6 +111,7 @@ GLOVEPOSE_INLINE const std::optional<calibration::PoseOffsetModel>& PoseModel::p
   return parts_->info_.pose_offset;
 }
 GLOVEPOSE_INLINE const std::optional<calibration::RangeMap>& PoseModel::range_map() const noexcept { return parts_->info_.range_map; }
+GLOVEPOSE_INLINE const std::optional<model::PoseErrorModel>& PoseModel::pose_error() const noexcept { return parts_->info_.pose_error; }
 
 GLOVEPOSE_INLINE hand::Angles PoseModel::model_outputs(const hand::Angles& normalized) const noexcept {
   if (parts_->all_labelled_) return normalized;

@@ -123,6 +123,13 @@ enum XrLocationFlag : std::uint64_t {
   kXrOrientationTracked = 0x4,  ///< XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT
   kXrPositionTracked = 0x8,     ///< XR_SPACE_LOCATION_POSITION_TRACKED_BIT
 };
+/// @brief Values of XrHandTrackingDataSourceEXT (XR_EXT_hand_tracking_data_source): where the joints
+/// come from. A data glove measures the hand itself, free to move: "unobstructed", which the
+/// extension names for data gloves and optical tracking alike.
+enum XrHandDataSource : std::uint32_t {
+  kXrDataSourceUnobstructed = 1,  ///< XR_HAND_TRACKING_DATA_SOURCE_UNOBSTRUCTED_EXT
+  kXrDataSourceController = 2,    ///< XR_HAND_TRACKING_DATA_SOURCE_CONTROLLER_EXT
+};
 /// @brief Bits of XrJointVelocity::velocity_flags (the values of XrSpaceVelocityFlags).
 enum XrVelocityFlag : std::uint64_t {
   kXrLinearVelocityValid = 0x1,   ///< XR_SPACE_VELOCITY_LINEAR_VALID_BIT

@@ -34,6 +34,9 @@ struct XrHandJoints {
   bool clamped = false;    ///< Asked further ahead than the prediction bound: located at the bound.
   bool active = false;     ///< Like XrHandJointLocationsEXT::isActive: a pose exists.
   hand::Handedness side = hand::Handedness::Right;  ///< The hand located.
+  /// XR_EXT_hand_tracking_data_source's XrHandTrackingDataSourceStateEXT::dataSource: the glove's
+  /// joints are the hand's own, unobstructed.
+  hand::XrHandDataSource data_source = hand::kXrDataSourceUnobstructed;
 };
 
 /// @brief Locates one hand's OpenXR joints from angles. Immutable after construction; every call
@@ -94,6 +97,24 @@ class XrHandLocator {
         set(out.velocities[phalanx_joint + k].angular_velocity, angular);
       }
       set(out.velocities[phalanx_joint + 3].angular_velocity, angular);  // the tip turns with its distal bone
+    }
+  }
+
+  /// @brief Per OpenXR joint, the confidence of the angles that place and turn it: the product of
+  /// the per-DoF `confidence` (Pose::confidence) of its phalanx and the phalanxes before it on the
+  /// digit (the tip: its distal phalanx's); joints on the palm, which no angle moves: 1.
+  GLOVEPOSE_REALTIME void joint_confidence(const hand::Angles& confidence, std::array<double, hand::kXrJointCount>& out) const noexcept {
+    out.fill(1.0);
+    for (std::size_t f = 0; f < hand::kFingerCount; ++f) {
+      const auto base = static_cast<std::size_t>(hand::kFingerBase[f]);
+      const std::size_t joint = hand::XrJointMapper::digit_joint(f);
+      double chain = 1.0;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto& dofs = phalanx_dofs_[base + k];
+        for (int n = 0; n < dofs[3]; ++n) chain *= confidence[static_cast<std::size_t>(dofs[static_cast<std::size_t>(n)])];
+        out[joint + k] = chain;
+      }
+      out[joint + 3] = chain;
     }
   }
 

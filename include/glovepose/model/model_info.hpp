@@ -24,6 +24,7 @@
 #include "../nn/weights.hpp"
 #include "../sensor/calibration.hpp"
 #include "architecture.hpp"
+#include "pose_error.hpp"
 
 namespace glovepose::model {
 
@@ -76,6 +77,10 @@ struct ModelInfo {
   /// The map from a wearer's free motion to their calibration range, fitted for this model
   /// (metadata 'range_map'); none: no calibration without a calibration step.
   std::optional<calibration::RangeMap> range_map;
+  /// The model's own per-DoF errors on people it was not trained on, from which poses get their
+  /// per-joint confidence (metadata 'pose_error'; pose_error.hpp); none: the confidence says only
+  /// whether the pose is trusted.
+  std::optional<PoseErrorModel> pose_error;
   /// The DoFs the model was trained on reference angles for (metadata 'labelled_dofs', absent when
   /// all 25). The others were trained toward the rest pose and read it (PoseModel).
   hand::DofSet labelled_dofs = hand::all_dofs();
@@ -160,6 +165,7 @@ struct ModelInfo {
     if (file.metadata.count("pose_offset"))  // the one parse of the pose offset's JSON
       info.pose_offset = calibration::PoseOffsetModel::parse(file.meta("pose_offset"), "metadata 'pose_offset'");
     if (file.metadata.count("range_map")) info.range_map = calibration::RangeMap::parse(file.meta("range_map"), "metadata 'range_map'");
+    if (file.metadata.count("pose_error")) info.pose_error = PoseErrorModel::parse(file.meta("pose_error"), "metadata 'pose_error'");
     if (file.metadata.count("labelled_dofs")) info.labelled_dofs = hand::parse_dof_set(file.meta("labelled_dofs"), "metadata 'labelled_dofs'");
     return info;
   }
@@ -185,6 +191,7 @@ struct ModelInfo {
     if (calibration_max) file.metadata["calibration_max"] = nn::WeightFile::format_numbers(*calibration_max);
     if (pose_offset) file.metadata["pose_offset"] = pose_offset->to_json();
     if (range_map) file.metadata["range_map"] = range_map->to_json();
+    if (pose_error) file.metadata["pose_error"] = pose_error->to_json();
     if (labelled_dofs != hand::all_dofs()) file.metadata["labelled_dofs"] = hand::dof_set_text(labelled_dofs);
   }
 

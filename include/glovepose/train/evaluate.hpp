@@ -20,11 +20,15 @@
 
 #include "../config.hpp"
 #include "../core/thread_pool.hpp"
+#include "../core/units.hpp"
+#include "../filter/trend.hpp"
 #include "../hand/contact.hpp"
 #include "../hand/pinch.hpp"
 #include "../io/atomic_file.hpp"
+#include "../model/pose_error.hpp"
 #include "../model/pose_network.hpp"
 #include "../nn/weight_storage.hpp"
+#include "confidence_metrics.hpp"
 #include "fingertip_metrics.hpp"
 #include "guided_calibration.hpp"
 #include "lag.hpp"
@@ -98,6 +102,12 @@ struct EvaluationOptions {
   /// network); F16, BF16 and Fixed16 score the real-time network (nn::UNet, nn::Fcn, as
   /// PoseModel loads it) holding them so. A linear map has only F32.
   nn::WeightStorage weights = nn::WeightStorage::F32;
+  /// The confidence scored (model/pose_error.hpp, when the model carries its errors): the
+  /// probability of an error within this tolerance (radians; the estimator's default, 10 degrees),
+  /// from the calibration scored, the continuous calibration's stage and the angles' rate of change
+  /// over `rate_window` seconds (the estimator's default prediction_window). No cell is stood in for.
+  double confidence_tolerance = 10.0 * core::kRadiansPerDegree;
+  double rate_window = 0.15;
 };
 
 /// @brief One frame's thumb-to-fingertip distances (mm), true and predicted, and the true pinches.
@@ -128,6 +138,9 @@ struct EvaluationResult {
   std::vector<float> labels;         ///< Per scored frame, 25 label angles (radians; NaN: not labelled).
   std::vector<float> predicted;      ///< Per scored frame, 25 predicted angles (radians).
   std::vector<PinchDistanceRow> pinch_distances;  ///< Per scored frame, when asked for.
+  /// The per-joint confidence scored against the errors (against the truth when the data has it),
+  /// when the model carries its own errors and the inputs were calibrated.
+  std::optional<ConfidenceReport> confidence;
 
   /// @brief Frames scored.
   long frames() const noexcept { return static_cast<long>(source.size()); }
@@ -234,6 +247,15 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   // The contact stage on each person's own hand (as an estimator configured with the user's hand),
   // its state starting over with every recording.
   std::optional<hand::ContactStage> contact;
+  // The confidence each frame would carry: the model's errors under the calibration scored.
+  const model::PoseErrorModel* own_errors = model.info.pose_error && mode != model::CalibrationMode::None ? &*model.info.pose_error : nullptr;
+  const model::ErrorCondition condition = guided                                    ? model::ErrorCondition::Guided
+                                          : mode == model::CalibrationMode::OnTheFly ? model::ErrorCondition::MinMax
+                                          : mode == model::CalibrationMode::Training ? model::ErrorCondition::Training
+                                                                                     : model::ErrorCondition::Continuous;
+  std::optional<ConfidenceAccumulator> confidence;
+  if (own_errors) confidence.emplace(options.confidence_tolerance * core::kDegreesPerRadian);
+  filter::Trend<hand::kDofCount> trend(options.rate_window);
   for (long f = 0; f < samples.frames(); ++f) {
     const auto at = static_cast<std::size_t>(f);
     hand::Angles n{};
@@ -250,6 +272,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
       tips.begin_run(run_hand);
       true_pinch.reset();
       if (options.contact) contact.emplace(run_hand, limits);
+      trend.reset();
     }
     const hand::Angles estimate = radians;  // what the contact stage sees
     if (contact) {
@@ -268,6 +291,15 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
     }
     errors.add(p, t);
     if (with_truth) truth_errors.add(p, q);
+    if (confidence) {
+      (void)trend.add(time, radians);
+      const hand::Angles rate = trend.slope();
+      const double frames = samples.motion_frames.empty() ? 0.0 : static_cast<double>(samples.motion_frames[at]);
+      hand::Angles c{};
+      if (own_errors->confidence(condition, frames, trend.has_slope() ? &rate : nullptr, nullptr, 0, options.confidence_tolerance, c))
+        for (std::size_t d = 0; d < hand::kDofCount; ++d)
+          if (scored[d] && std::isfinite(with_truth ? q[d] : t[d])) confidence->add(d, (p[d] - (with_truth ? q[d] : t[d])) * core::kDegreesPerRadian, c[d]);
+    }
     hand::Angles reference{};
     std::copy(with_truth ? q : t, (with_truth ? q : t) + hand::kDofCount, reference.begin());
     tips.add(radians, reference, time);
@@ -283,6 +315,7 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
   r.calibration = guided ? "guided" : model::to_string(mode);
   if (const auto window = data.metadata.find("mean_window"); window != data.metadata.end()) r.mean_window = window->second;
   r.vs_labels = errors.report();
+  if (confidence && !confidence->empty()) r.confidence = confidence->report();
   const double frame_ms = 1000.0 / data.frame_rate();
   r.lag_ms = lag_frames(r.predicted, samples.angles, samples.source, samples.run, options.stride) * frame_ms;
   if (with_truth) {
@@ -301,8 +334,9 @@ inline EvaluationResult evaluate(TrainedModel& model, const io::Dataset& dataset
 /// @brief The result as `glovepose eval --json` prints it: the angle-error report (to_json of
 /// metrics_report.hpp) with "calibration", "weights" (the storage, as --weights spells it: "f32",
 /// "f16", "bf16" or "fixed16"), "mean_window", "lag_ms", "scored_against", "vs_labels", "vs_truth",
-/// "fingertips", "contact" ({"adjusted_frames", "refused_frames"} or null) and "outside_limits"
-/// (predicted angles outside the joint limits, held at them).
+/// "fingertips", "contact" ({"adjusted_frames", "refused_frames"} or null), "outside_limits"
+/// (predicted angles outside the joint limits, held at them) and "confidence" (confidence_json, or
+/// null when the model carries no errors of its own or the inputs were not calibrated).
 inline std::string to_json(const EvaluationResult& r) {
   const std::string tips =
       r.fingertips ? to_json(*r.fingertips, {{"scored_against", r.fingertips_vs_truth ? "\"truth\"" : "\"labels\""}, {"hands", "\"" + r.hands + "\""}})
@@ -321,7 +355,8 @@ inline std::string to_json(const EvaluationResult& r) {
                                {"vs_truth", r.vs_truth ? summary_json(*r.vs_truth, r.truth_lag_ms) : "null"},
                                {"fingertips", tips},
                                {"contact", contact},
-                               {"outside_limits", std::to_string(r.outside_limits)}});
+                               {"outside_limits", std::to_string(r.outside_limits)},
+                               {"confidence", r.confidence ? confidence_json(*r.confidence) : "null"}});
 }
 
 /// @brief The result as `glovepose eval` prints it: the angle-error table, the lag, the scores
@@ -345,6 +380,14 @@ inline std::string format_text(const EvaluationResult& r) {
   if (r.contact) {
     std::snprintf(line, sizeof line, "Contact stage: %zu poses adjusted (%.1f%%), %zu adjustments refused (collision)\n", r.contact_adjusted,
                   100.0 * static_cast<double>(r.contact_adjusted) / static_cast<double>(std::max<long>(r.frames(), 1)), r.contact_refused);
+    out += line;
+  }
+  if (r.confidence) {
+    const ConfidenceReport& c = *r.confidence;
+    std::snprintf(line, sizeof line,
+                  "Confidence (within %.0f deg): mean %.3f, share within %.3f; the lowest-confidence quarter of joint-frames has %.2fx the "
+                  "error of the highest (within a DoF, median %.2fx)\n",
+                  c.tolerance_deg, c.mean_confidence, c.share_within, c.quarter_error_ratio, c.within_dof_ratio);
     out += line;
   }
   if (r.fingertips)

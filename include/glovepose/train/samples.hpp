@@ -83,6 +83,9 @@ struct Samples {
   std::map<std::int64_t, std::vector<std::string>> zeroed;
   std::vector<std::int64_t> run;     ///< Per frame: (subject, glove, session) packed, for splits.
   std::vector<std::int64_t> source;  ///< Per frame: its index in the dataset.
+  /// Per frame under CalibrationMode::Continuous: the free motion its run's calibration had taken,
+  /// in effective frames (calibration::MotionHistogram::effective_frames); empty otherwise.
+  std::vector<float> motion_frames;
 
   /// @brief Number of frames.
   long frames() const noexcept { return static_cast<long>(source.size()); }
@@ -98,6 +101,7 @@ struct Samples {
       s.angles.insert(s.angles.end(), angles.begin() + i * 25, angles.begin() + (i + 1) * 25);
       s.run.push_back(run[static_cast<std::size_t>(i)]);
       s.source.push_back(source[static_cast<std::size_t>(i)]);
+      if (!motion_frames.empty()) s.motion_frames.push_back(motion_frames[static_cast<std::size_t>(i)]);
     }
     return s;
   }
@@ -287,6 +291,7 @@ inline Samples make_samples(const io::Dataset& data, const FrameFilter& filter, 
     }
     s.run.push_back(key);
     s.source.push_back(static_cast<std::int64_t>(i));
+    if (follow) s.motion_frames.push_back(static_cast<float>(follow->motion.histogram().effective_frames()));
   }
   if (s.frames() == 0) throw Error("samples: no recording frame of the dataset passes the selection, expected at least one");
   if (mode == model::CalibrationMode::Training && !range->flat_sensors().empty()) s.zeroed[-1] = range->flat_sensors();

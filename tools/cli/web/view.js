@@ -295,7 +295,10 @@ function show(state) {
       const d = meta.dof_names.indexOf(name);
       if (d < 0) return "<td></td>";
       const truth = state.truth_deg ? `<br><span class="truth">${state.truth_deg[d].toFixed(1)}°</span>` : "";
-      return `<td>${state.angles_deg[d].toFixed(1)}°${truth}</td>`;
+      // Shaded by how little the estimator trusts the angle: the chance it is off by more than 10°.
+      const doubt = 1 - state.confidence[d];
+      return `<td style="background:rgba(229,115,115,${(0.7 * doubt).toFixed(2)})" title="confidence ${(100 * state.confidence[d]).toFixed(0)}%">` +
+        `${state.angles_deg[d].toFixed(1)}°${truth}</td>`;
     });
     return `<tr><td>${readable(rowName(names))}</td>${cells.join("")}</tr>`;
   });
