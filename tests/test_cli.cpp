@@ -1376,6 +1376,33 @@ TEST_CASE("cli: fit-guided fits a pose-guided calibration on people who followed
   REQUIRE_MESSAGE(r.status == 0, r.out);
   CHECK(r.out.find("\"calibration\": \"continuous\"") != std::string::npos);
   CHECK(nlohmann::json::parse(r.out)["frames"].get<long>() == doctest::Approx(all_frames * 4.0 / 6.0).epsilon(0.02));
+  // No calibration step in the tools: --calibration-seconds 0 gives a pose for every frame from the
+  // first, calibrated continuously; a model without a range map is refused by name.
+  {
+    const io::Dataset people = io::Dataset::read(data);
+    const std::vector<std::string> names = grid::GloveDescription::glauser2019().cell_names();
+    std::ofstream out(temp("guided_stream.csv"));
+    out << "timestamp";
+    for (const std::string& name : names) out << "," << name;
+    out << "\n";
+    long frames = 0;
+    for (std::size_t f = 0; f < people.frames(); ++f) {
+      if (people.subject[f] != 0) continue;
+      out << number17(people.timestamps[f]);
+      for (std::size_t c = 0; c < people.cell_count; ++c) out << "," << number17(people.cells[f * people.cell_count + c]);
+      out << "\n";
+      ++frames;
+    }
+    out.close();
+    Run streamed = run_stream("predict --model " + guided + " --raw --calibration-seconds 0 --in " + temp("guided_stream.csv"), 1);
+    REQUIRE_MESSAGE(streamed.status == 0, streamed.out);
+    CHECK(static_cast<long>(csv_numbers(streamed.out, true).size()) == frames);
+    streamed = run_stream("predict --model " + guided + " --raw --calibration-seconds 0 --in " + temp("guided_stream.csv"), 2);
+    CHECK(streamed.out.find("calibration: continuous from the first frame") != std::string::npos);
+    streamed = run("predict --model " + kModel + " --raw --calibration-seconds 0 --in " + temp("guided_stream.csv"));
+    CHECK(streamed.status == 1);
+    CHECK(streamed.out.find("carries no range map") != std::string::npos);
+  }
   r = run("eval --model " + guided + " --data " + data + " --seconds 5-2");
   CHECK(r.status == 2);
   CHECK(r.out.find("--seconds") != std::string::npos);

@@ -247,8 +247,9 @@ inline void add_glove_line_calibration(CLI::App& command, double& seconds, bool&
   CLI::Option* on_the_fly =
       add_number(command, "--calibration-seconds", "S", seconds,
                  "the first S seconds of stream time calibrate on the fly while the user moves through extreme poses (default 30; "
-                 "without it, a model trained with --calibration-mode training uses its training-set range)")
-          ->check(above(0.0))
+                 "without it, a model trained with --calibration-mode training uses its training-set range); 0: no calibration step, "
+                 "poses from the first frame, calibrated from the wearer's free motion (a model with a range map: glovepose fit-guided)")
+          ->check(at_least(0.0))
           ->each([&seconds_given](const std::string&) { seconds_given = true; });
   CLI::Option* saved = command
                            .add_option("--calibration", file,

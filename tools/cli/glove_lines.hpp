@@ -4,6 +4,7 @@
 // counting the lines it cannot use and telling why a stream cannot serve a pose.
 #pragma once
 
+#include <glovepose/calibration/free_motion.hpp>  // PoseModel::range_map()
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/csv_fields.hpp>
 #include <glovepose/io/number_text.hpp>
@@ -279,11 +280,13 @@ inline void read_glove_lines(const GloveLineSource& source, const GloveLineForma
 }
 
 /// How a stream's glove is calibrated: a saved calibration, the model's own (the training-set range
-/// of a model trained with it) or on the fly over the stream's first seconds.
+/// of a model trained with it), on the fly over the stream's first seconds, or continuously from
+/// the first frame (no calibration step).
 struct GloveCalibrationChoice {
   std::optional<double> on_the_fly;  ///< Seconds of stream time to calibrate over; none: no calibration on the fly.
   bool training_range = false;       ///< The model's training-set range (use_training_calibration()).
   std::string text;                  ///< The choice in words, for the user.
+  bool continuous = false;           ///< From the wearer's free motion, poses from the first frame (use_continuous_calibration()).
 
   /// Sets `estimator` up for it (a saved `file` is loaded by the caller, who may first look for one).
   /// On the fly, no pose comes before the calibration ends (the tools' documented behaviour), so the
@@ -291,6 +294,8 @@ struct GloveCalibrationChoice {
   void apply(GlovePoseEstimator& estimator) const {
     if (training_range)
       estimator.use_training_calibration();
+    else if (continuous)
+      estimator.use_continuous_calibration();
     else if (on_the_fly)
       estimator.clear_calibration();
   }
@@ -306,6 +311,12 @@ inline GloveCalibrationChoice choose_glove_calibration(const PoseModel& model, d
     throw Error("the model was trained on uncalibrated cells (--calibration-mode none), which a glove's stream cannot give (the estimator "
                 "calibrates every frame), expected a model trained with --calibration-mode onthefly or training");
   if (!file.empty()) return {std::nullopt, false, "the saved calibration '" + file + "'"};
+  if (seconds_given && seconds == 0.0) {
+    if (!model.range_map())
+      throw Error("--calibration-seconds 0 (no calibration step): the model carries no range map, expected a model fitted by glovepose "
+                  "fit-guided, or S > 0 seconds to calibrate over");
+    return {std::nullopt, false, "continuous from the first frame, from the wearer's free motion (no calibration step)", true};
+  }
   if (trained == model::CalibrationMode::Training && !seconds_given)
     return {std::nullopt, true,
             "the model's training-set range, as it was trained (--calibration-seconds S calibrates on the fly over the first S s "
