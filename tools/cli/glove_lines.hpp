@@ -4,10 +4,10 @@
 // counting the lines it cannot use and telling why a stream cannot serve a pose.
 #pragma once
 
-#include <glovepose/calibration/free_motion.hpp>  // PoseModel::range_map()
 #include <glovepose/estimator.hpp>
 #include <glovepose/io/csv_fields.hpp>
 #include <glovepose/io/number_text.hpp>
+#include <glovepose/model/model_info.hpp>  // CalibrationMode; PoseModel::range_map()'s type
 #include <glovepose/sensor/layout.hpp>
 #include <glovepose/sensor/solver.hpp>
 

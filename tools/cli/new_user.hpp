@@ -2,6 +2,7 @@
 // (glovepose demo, glovepose view).
 #pragma once
 
+#include <glovepose/calibration/pose_offset.hpp>  // PoseModel::pose_offset()'s type
 #include <glovepose/estimator.hpp>
 #include <glovepose/sim/corpus_dataset.hpp>
 
