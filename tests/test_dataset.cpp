@@ -344,8 +344,9 @@ TEST_CASE("dataset: validate names the tensor, the frame and what was expected")
   d.timestamps[4] = kInf;
   CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'timestamps': frame 4 is inf, expected finite seconds"), Error);
   d = good;
-  d.kind[5] = 2;
-  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'kind': frame 5 is 2, expected 0 (recording) or 1 (calibration)"), Error);
+  d.kind[5] = 3;
+  CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'kind': frame 5 is 3, expected 0 (recording), 1 (calibration) or 2 (removal)"),
+                       Error);
   d = good;
   d.outlier[5] = 7;
   CHECK_THROWS_WITH_AS(d.validate(), doctest::Contains("tensor 'outlier': frame 5 is 7, expected 0 or 1"), Error);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <set>
 #include <utility>
 
@@ -1202,4 +1203,77 @@ TEST_CASE("sim people: a calibration shortfall stops each visit short of its pos
   MESSAGE("mean shortfall " << mean << " of " << r.size() << " visits, expected " << expected);
   REQUIRE(r.size() > 300);
   CHECK(std::abs(mean - expected) < 3.0 * se);
+}
+
+TEST_CASE("sim: off the hand a removal reads the relaxed sheet, and the new donning's glove after it") {
+  const Subject subject = make_subjects(1, 5, {}).front();
+  const Glove glove = make_glove(0, 5);
+  core::Rng rng(8);
+  const GlovePhysics before(subject, glove, don_glove(subject, glove, rng));
+  const GlovePhysics after(subject, glove, don_glove(subject, glove, rng));
+  const MotionSequence motion(subject, pose_gallery(), 20.0, 3);
+  RemovalConfig removal;
+  removal.fold_sd = 0.0;
+  RecordingConfig config;
+  config.noise.session_gain_sd = 0.0;
+  const Recording r = record_removal(before, {}, 60.0, after, {}, motion, removal, 4, config);
+  REQUIRE(r.frames == static_cast<int>(std::floor(removal.seconds() * 60.0)));
+  CellArray relaxed{};
+  after.off_hand_capacitances(CellArray{}, relaxed);
+  // After the pull and the textile's relaxation (5 creep times), the off frames hold the relaxed sheet.
+  double worst = 0.0;
+  long off_frames = 0;
+  for (int f = 0; f < r.frames; ++f) {
+    const double t = r.timestamps[static_cast<std::size_t>(f)];
+    for (std::size_t d = 0; d < hand::kDofCount; ++d) CHECK(std::isnan(r.angles[static_cast<std::size_t>(f) * hand::kDofCount + d]));
+    if (t < removal.doff_seconds + 5.0 * kCreepTime || t > removal.doff_seconds + removal.off_seconds) continue;
+    ++off_frames;
+    for (std::size_t c = 0; c < kCells; ++c) worst = std::max(worst, std::abs(r.cells[static_cast<std::size_t>(f) * kCells + c] - relaxed[c]));
+  }
+  CHECK(off_frames > 200);
+  CHECK(worst < 0.5);  // pF: the readout's noise through the solve (0.3 pF per row)
+  // The last frames are the new donning's glove in the hand's pose.
+  CellArray worn{};
+  after.capacitances(motion.at(r.timestamps.back()), worn);
+  double last = 0.0;
+  for (std::size_t c = 0; c < kCells; ++c)
+    last = std::max(last, std::abs(r.cells[(static_cast<std::size_t>(r.frames) - 1) * kCells + c] - worn[c]) / worn[c]);
+  CHECK(last < 0.2);  // within the textile's lag (kCreepShare of a reading follows with a 1 s lag)
+  removal.doff_seconds = 0.0;
+  CHECK_THROWS_AS(record_removal(before, {}, 60.0, after, {}, motion, removal, 4, config), Error);
+}
+
+TEST_CASE("sim: a corpus with removals records one before each later donning, its frames carry no pose and validate") {
+  CorpusConfig config = CorpusConfig::one_session(11, 20.0, 0.0);
+  config.sessions = 3;
+  config.intra_sessions = 1;
+  config.removal.emplace();
+  config.removal->off_seconds = 4.0;
+  const std::vector<SessionRecording> corpus = simulate_corpus(config);
+  int removals = 0;
+  for (const SessionRecording& r : corpus)
+    if (r.kind == RecordingKind::Removal) {
+      ++removals;
+      CHECK(r.donning == r.session);
+      CHECK(r.recording.frames == static_cast<int>(std::floor(config.removal->seconds() * 60.0)));
+    }
+  CHECK(removals == 2);  // before sessions 1 and 2
+  const io::Dataset data = to_dataset(corpus, config);
+  data.validate();
+  std::map<int, std::pair<double, double>> clock;  // per session: removal's last time, the session's first
+  for (std::size_t i = 0; i < data.frames(); ++i) {
+    if (data.kind[i] == io::kKindRemoval) clock[data.session[i]].first = data.timestamps[i];
+    if (data.kind[i] == io::kKindRecording && clock[data.session[i]].second == 0.0) clock[data.session[i]].second = data.timestamps[i];
+  }
+  CHECK(clock[1].second > clock[1].first);  // the session continues the removal's clock
+  CHECK(clock[1].second - clock[1].first < 0.02);
+  // The dataset refuses a removal frame with a pose, and kinds beyond 2.
+  io::Dataset bad = data;
+  std::size_t removal_frame = 0;
+  while (bad.kind[removal_frame] != io::kKindRemoval) ++removal_frame;
+  bad.true_angles[removal_frame * hand::kDofCount] = 0.1f;
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("a removal frame has no pose"), Error);
+  bad = data;
+  bad.kind[0] = 3;
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("2 (removal)"), Error);
 }

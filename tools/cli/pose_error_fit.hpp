@@ -107,7 +107,7 @@ struct RunFrames {
 inline std::vector<RunFrames> runs_of(const io::Dataset& data, const train::FrameFilter& filter) {
   std::map<std::int64_t, RunFrames> runs;
   for (std::size_t i = 0; i < data.frames(); ++i) {
-    if (!filter.selects_run(data, i)) continue;
+    if (!filter.selects_run(data, i) || data.kind[i] == io::kKindRemoval) continue;  // a removal has no pose to score
     RunFrames& run = runs[train::run_key(data, i)];
     run.key = train::run_key(data, i);
     (data.kind[i] == io::kKindCalibration ? run.calibration : run.recording).push_back(i);

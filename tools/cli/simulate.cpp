@@ -25,6 +25,7 @@ struct SimulateOptions {
   DeviceStreamSettings device;
   std::vector<std::string> without, settings;
   std::vector<double> tear;  // --tear: trace, cells kept, seconds
+  double removal_seconds = -1.0;  // --removal-seconds: < 0 none
   bool report = false, print_sequence = false;
 };
 
@@ -57,6 +58,10 @@ int simulate(SimulateOptions o) {
     std::fprintf(stderr, "--tear: %s trace %d torn %g s into each session, %d cell(s) kept (%zu float: cells %s)\n",
                  trace < layout.bottom_traces() ? "bottom" : "top", trace < layout.bottom_traces() ? trace : trace - layout.bottom_traces(),
                  o.tear[2], tear.cells_kept, floating.size(), cells.empty() ? "none" : cells.c_str());
+  }
+  if (o.removal_seconds >= 0.0) {
+    config.removal.emplace();
+    config.removal->off_seconds = o.removal_seconds;
   }
   if (!o.sequence_file.empty()) {
     config.guided_calibration = calibration::Sequence::read(o.sequence_file);
@@ -126,6 +131,10 @@ Command add_simulate(CLI::App& tool) {
                       "float (docs/simulator.md, \"Readout\")")
       ->expected(3)
       ->type_name("TRACE KEPT SECONDS");
+  add_number(*command, "--removal-seconds", "S", o->removal_seconds,
+             "record the glove taken off and put on again before each later donning, off the hand for S seconds (kind 2 frames "
+             "without a pose; docs/simulator.md, \"Taking the glove off\"; default: not recorded)")
+      ->check(bounded(0.0, false, 3600.0));
   std::string worlds;
   for (const sim::World& w : sim::worlds()) worlds += std::string(worlds.empty() ? "" : "; ") + w.name + ": " + w.summary;
   std::vector<std::string> names;

@@ -5,9 +5,11 @@
 
 namespace glovepose::core {
 
+/// @brief pi.
+inline constexpr double kPi = 3.14159265358979323846;
 /// @brief Degrees per radian (180 / pi).
 inline constexpr double kDegreesPerRadian = 57.295779513082320876798;
 /// @brief Radians per degree (pi / 180).
-inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
+inline constexpr double kRadiansPerDegree = kPi / 180.0;
 
 }  // namespace glovepose::core

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "../config.hpp"
+#include "../core/units.hpp"
 #include "../status.hpp"
 #include "one_euro_config.hpp"
 
@@ -92,8 +93,7 @@ class OneEuroFilter {
 
  private:
   double alpha(double cutoff) const noexcept {
-    constexpr double kPi = 3.14159265358979323846;
-    const double tau = 1.0 / (2.0 * kPi * cutoff);
+    const double tau = 1.0 / (2.0 * core::kPi * cutoff);
     const double te = 1.0 / frequency_;
     return 1.0 / (1.0 + tau / te);
   }

@@ -38,6 +38,9 @@ inline constexpr const char* kDatasetVersion = "1";
 inline constexpr std::uint8_t kKindRecording = 0;
 /// @brief Value of `kind` for a frame of a calibration sequence.
 inline constexpr std::uint8_t kKindCalibration = 1;
+/// @brief Value of `kind` for a frame of the glove being taken off, lying off the hand and put on
+/// again (sim::RemovalConfig): cells only, no pose (its angles and true angles are NaN).
+inline constexpr std::uint8_t kKindRemoval = 2;
 
 /// @brief The readout's clock: a frame's R raw rows fill one readout cycle of 1 / frame_rate seconds
 /// that ends at the frame's timestamp, row r completing at the end of its slot (sim/recorder.hpp
@@ -73,7 +76,7 @@ struct Dataset {
   std::vector<std::int32_t> glove;    ///< N glove ids (>= 0): which physical glove.
   std::vector<std::int32_t>
       donning;                     ///< N donning ids (>= 0): the how-many-th time the subject put the glove on; sessions kept on share it.
-  std::vector<std::uint8_t> kind;  ///< N kinds: kKindRecording (0) or kKindCalibration (1).
+  std::vector<std::uint8_t> kind;  ///< N kinds: kKindRecording (0), kKindCalibration (1) or kKindRemoval (2).
   std::vector<std::uint8_t>
       outlier;  ///< N flags: 1 when the reference pose's collision energy exceeds hand::kCollisionOutlierThreshold (80), else 0.
   /// @brief String metadata: "format" (kDatasetFormat), "version" (kDatasetVersion), "glove_layout"
@@ -156,20 +159,27 @@ struct Dataset {
     check_count("cells", cells.size(), n, cell_count, "cell_count");
     check_count("raw_rows", raw_rows.size(), n, row_count, "row_count");
     if (has_angles()) check_count("angles", angles.size(), n, hand::kDofCount, "25 DoFs");
-    if (has_true_angles()) {
-      if (!has_angles()) throw Error("Dataset: tensor 'true_angles' without 'angles', expected the labels beside the true angles");
-      check_count("true_angles", true_angles.size(), n, hand::kDofCount, "25 DoFs");
-      for (std::size_t i = 0; i < true_angles.size(); ++i)
-        if (!std::isfinite(true_angles[i]))
-          throw Error("Dataset: tensor 'true_angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
-                      hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(true_angles[i]) + ", expected a finite angle (radians)");
-    }
     check_count("subject", subject.size(), n, 1, "");
     check_count("session", session.size(), n, 1, "");
     check_count("glove", glove.size(), n, 1, "");
     check_count("donning", donning.size(), n, 1, "");
     check_count("kind", kind.size(), n, 1, "");
     check_count("outlier", outlier.size(), n, 1, "");
+    for (std::size_t i = 0; i < n; ++i)
+      if (kind[i] > kKindRemoval)
+        throw Error("Dataset: tensor 'kind': frame " + std::to_string(i) + " is " + std::to_string(kind[i]) +
+                    ", expected 0 (recording), 1 (calibration) or 2 (removal)");
+    if (has_true_angles()) {
+      if (!has_angles()) throw Error("Dataset: tensor 'true_angles' without 'angles', expected the labels beside the true angles");
+      check_count("true_angles", true_angles.size(), n, hand::kDofCount, "25 DoFs");
+      for (std::size_t i = 0; i < true_angles.size(); ++i) {
+        const bool removal = kind[i / hand::kDofCount] == kKindRemoval;
+        if (removal ? !std::isnan(true_angles[i]) : !std::isfinite(true_angles[i]))
+          throw Error("Dataset: tensor 'true_angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
+                      hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(true_angles[i]) +
+                      (removal ? ", expected NaN (a removal frame has no pose)" : ", expected a finite angle (radians)"));
+      }
+    }
     for (std::size_t i = 0; i < cells.size(); ++i)
       if (!std::isfinite(cells[i]))
         throw Error("Dataset: tensor 'cells': frame " + std::to_string(i / cell_count) + ", cell " + std::to_string(i % cell_count) +
@@ -182,7 +192,13 @@ struct Dataset {
     for (std::size_t i = 0; i < angles.size(); ++i) {
       const bool has = labelled[i % hand::kDofCount];
       const std::size_t frame = i / hand::kDofCount;
-      if (has && std::isnan(angles[i]) && frame < kind.size() && kind[frame] == kKindCalibration) continue;  // a sensors-only calibration
+      if (has && std::isnan(angles[i]) && kind[frame] == kKindCalibration) continue;  // a sensors-only calibration
+      if (kind[frame] == kKindRemoval) {
+        if (!std::isnan(angles[i]))
+          throw Error("Dataset: tensor 'angles': frame " + std::to_string(frame) + ", DoF '" + hand::kDofs[i % hand::kDofCount].name +
+                      "' is " + io::number_text(angles[i]) + ", expected NaN (a removal frame has no pose)");
+        continue;
+      }
       if (has ? !std::isfinite(angles[i]) : !std::isnan(angles[i]))
         throw Error("Dataset: tensor 'angles': frame " + std::to_string(i / hand::kDofCount) + ", DoF '" +
                     hand::kDofs[i % hand::kDofCount].name + "' is " + io::number_text(angles[i]) +
@@ -196,9 +212,6 @@ struct Dataset {
           throw Error(std::string("Dataset: tensor '") + name + "': frame " + std::to_string(i) + " is " + std::to_string((*values)[i]) +
                       ", expected an id >= 0");
     for (std::size_t i = 0; i < n; ++i) {
-      if (kind[i] > kKindCalibration)
-        throw Error("Dataset: tensor 'kind': frame " + std::to_string(i) + " is " + std::to_string(kind[i]) +
-                    ", expected 0 (recording) or 1 (calibration)");
       if (outlier[i] > 1)
         throw Error("Dataset: tensor 'outlier': frame " + std::to_string(i) + " is " + std::to_string(outlier[i]) + ", expected 0 or 1");
       if (!std::isfinite(timestamps[i]))

@@ -3,7 +3,9 @@
 /// sessions of five minutes with the first glove, the glove kept on through the first three
 /// ("intra-session") and taken off and on again before each of the other two ("inter-session"),
 /// every session preceded by a short calibration sequence of extreme poses; a second glove ("Glove
-/// II", Table 3) is recorded in sessions of its own, each with a fresh donning.
+/// II", Table 3) is recorded in sessions of its own, each with a fresh donning. With
+/// CorpusConfig::removal, taking a glove off and putting it on again is recorded too, before each
+/// donning of a glove worn before.
 ///
 /// Every session is an independent job whose random streams derive from (seed, subject, glove,
 /// session): the corpus is identical for any number of threads.
@@ -51,6 +53,9 @@ struct CorpusConfig {
   /// The hand the glove is worn on: a left hand is the right one mirrored, wearing the right glove's
   /// sheet turned over (the same cells at the mirrored places).
   hand::Handedness handedness = hand::Handedness::Right;
+  /// When set, each donning of a glove after its first is preceded by a removal recording
+  /// (RecordingKind::Removal): the glove taken off the donning before, lying off the hand, put on.
+  std::optional<RemovalConfig> removal;
 
   /// @brief One person, one glove, one session of `seconds` after a `calibration_seconds`
   /// calibration sequence, on one thread: the simulated user of tests, benchmarks and examples.
@@ -76,11 +81,12 @@ struct CorpusConfig {
     need(gloves >= 1 && gloves <= 16, "--gloves " + std::to_string(gloves) + ", expected 1..16");
     need(other_glove_sessions >= 0, "sessions with other gloves " + std::to_string(other_glove_sessions) + ", expected >= 0");
     need(calibration_seconds >= 0.0, "calibration seconds " + std::to_string(calibration_seconds) + ", expected >= 0");
+    if (removal) removal->validate();
   }
 };
 
-/// @brief Recording kinds.
-enum class RecordingKind : std::uint8_t { Session = 0, Calibration = 1 };
+/// @brief Recording kinds: a session, its calibration sequence, a removal before a donning.
+enum class RecordingKind : std::uint8_t { Session = 0, Calibration = 1, Removal = 2 };
 
 /// @brief One recorded sequence and who, with which glove and donning, recorded it.
 struct SessionRecording {
@@ -88,7 +94,7 @@ struct SessionRecording {
   int glove = 0;                                ///< Glove id.
   int session = 0;                              ///< Session index within (subject, glove).
   int donning = 0;                              ///< Index of the donning within (subject, glove): sessions kept on share it.
-  RecordingKind kind = RecordingKind::Session;  ///< Session or its calibration sequence.
+  RecordingKind kind = RecordingKind::Session;  ///< Session, its calibration sequence or the removal before its donning.
   Recording recording;                          ///< The frames.
 };
 
@@ -149,7 +155,8 @@ inline calibration::Sequence guided_calibration_sequence(const std::vector<KeyPo
 }
 
 /// @brief The sessions of the protocol in a fixed order: subject, glove, session; each session's
-/// calibration sequence just before it.
+/// calibration sequence just before it, and before that the removal that starts its donning (when
+/// the glove was worn before and CorpusConfig::removal is set).
 inline std::vector<SessionRecording> plan_corpus(const CorpusConfig& config) {
   config.validate();
   std::vector<SessionRecording> plan;
@@ -163,6 +170,12 @@ inline std::vector<SessionRecording> plan_corpus(const CorpusConfig& config) {
         r.session = k;
         // First glove: sessions 0..intra-1 share donning 0; each later session is a new donning.
         r.donning = g == 0 ? std::max(0, k - config.intra_sessions + 1) : k;
+        const bool new_donning = g == 0 ? k >= config.intra_sessions : k > 0;
+        if (config.removal && new_donning) {
+          SessionRecording off = r;
+          off.kind = RecordingKind::Removal;
+          plan.push_back(off);
+        }
         if (config.calibration_seconds > 0.0) {
           SessionRecording c = r;
           c.kind = RecordingKind::Calibration;
@@ -270,16 +283,55 @@ inline TrackerSeeds tracker_seeds(const CorpusConfig& config, const SessionRecor
                       core::derive_seed(config.seed, {6, subject, glove, 2 * session + (job.kind == RecordingKind::Calibration ? 1 : 0)})};
 }
 
+/// @brief The session a removal job comes before (the job itself otherwise).
+inline SessionRecording session_of(SessionRecording job) {
+  if (job.kind == RecordingKind::Removal) job.kind = RecordingKind::Session;
+  return job;
+}
+
+/// @brief Records a removal job: the glove taken off its donning before (worn to the end of that
+/// donning's sessions, on that donning's drift path) and put on into the job's donning (whose path
+/// starts at the end of the removal). Its streams derive from (seed, subject, glove, session).
+inline Recording record_removal_job(const CorpusConfig& config, const CorpusWorld& world, const SessionRecording& job,
+                                    const RecordingConfig& recording) {
+  if (!config.removal || job.donning < 1) throw Error("record_removal_job: a removal job without a donning before it or a RemovalConfig");
+  const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
+  const Glove& glove = world.gloves[static_cast<std::size_t>(job.glove)];
+  const auto id = [&](std::uint64_t purpose, int index) {
+    return core::derive_seed(config.seed, {purpose, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
+                                           static_cast<std::uint64_t>(index)});
+  };
+  const RemovalConfig& removal = *config.removal;
+  const double loose = loose_fit_factor(subject, config.world.wear);
+  SessionRecording before = session_of(job);
+  before.donning = job.donning - 1;
+  const double before_worn = wear_times(config, before).second;
+  const auto drift_of = [&](int donning, double seconds) {
+    return WearDrift(config.world.wear.slip_sd * loose, config.world.wear.slip_time, config.world.material, seconds, 0.0, id(9, donning));
+  };
+  const GlovePhysics off(subject, glove, donning_fit(config, subject, glove, before.donning), config.handedness);
+  const GlovePhysics on(subject, glove, donning_fit(config, subject, glove, job.donning), config.handedness);
+  MotionConfig motion_config;
+  motion_config.independent = config.world.people.independent_fingers;
+  const MotionSequence motion(subject, world.gallery, removal.seconds() + 1.0, id(10, job.session), motion_config);
+  return record_removal(off, drift_of(before.donning, before_worn + removal.seconds() + 1.0), before_worn, on, drift_of(job.donning, 1.0),
+                        motion, removal, id(11, job.session), recording, config.world.material);
+}
+
 /// @brief Simulates the corpus. Deterministic in config.seed for any thread count.
 inline std::vector<SessionRecording> simulate_corpus(const CorpusConfig& config) {
   std::vector<SessionRecording> plan = plan_corpus(config);
   const CorpusWorld world(config);
   const auto run = [&](SessionRecording& job) {
+    RecordingConfig recording = config.recording;
+    if (job.kind != RecordingKind::Session) recording.tears.clear();  // a glove tears mid-session, after its calibration
+    if (job.kind == RecordingKind::Removal) {  // no pose to label
+      job.recording = record_removal_job(config, world, job, recording);
+      return;
+    }
     const SessionSetup setup = setup_session(config, world, job);
     const Subject& subject = world.subjects[static_cast<std::size_t>(job.subject)];
     const std::array<double, 16> radii = subject.distal_radius();
-    RecordingConfig recording = config.recording;
-    if (job.kind == RecordingKind::Calibration) recording.tears.clear();  // a glove tears mid-session, after its calibration
     job.recording = setup.record(radii, config, recording);
     label_recording(job.recording, setup.motion, setup.physics.kinematics(), radii, config.world.tracker, tracker_seeds(config, job),
                     subject.length_scale());

@@ -22,14 +22,15 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   out.angles.reserve(total * hand::kDofCount);
   out.true_angles.reserve(total * hand::kDofCount);
   if (raw) out.raw_rows.reserve(total * kRows);
-  // A session's clock starts with its calibration sequence: the recording that follows continues it.
+  // A session's clock starts with the removal before it, else its calibration sequence: each recording
+  // of the session that follows continues it.
   double offset = 0.0;
   const SessionRecording* previous = nullptr;
   for (const SessionRecording& s : corpus) {
     const Recording& r = s.recording;
-    const bool continues = previous && previous->kind == RecordingKind::Calibration && s.kind == RecordingKind::Session &&
+    const bool continues = previous && previous->kind != RecordingKind::Session && s.kind != RecordingKind::Removal &&
                            previous->subject == s.subject && previous->glove == s.glove && previous->session == s.session;
-    offset = continues && !previous->recording.timestamps.empty() ? previous->recording.timestamps.back() : 0.0;
+    offset = continues && !previous->recording.timestamps.empty() ? offset + previous->recording.timestamps.back() : 0.0;
     previous = &s;
     out.cells.insert(out.cells.end(), r.cells.begin(), r.cells.end());
     const std::vector<float>& labels = r.labels.empty() ? r.angles : r.labels;  // unlabelled: a perfect tracker
@@ -43,7 +44,10 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
     out.session.insert(out.session.end(), n, s.session);
     out.glove.insert(out.glove.end(), n, s.glove);
     out.donning.insert(out.donning.end(), n, s.donning);
-    out.kind.insert(out.kind.end(), n, s.kind == RecordingKind::Calibration ? io::kKindCalibration : io::kKindRecording);
+    out.kind.insert(out.kind.end(), n,
+                    s.kind == RecordingKind::Calibration ? io::kKindCalibration
+                    : s.kind == RecordingKind::Removal   ? io::kKindRemoval
+                                                         : io::kKindRecording);
   }
   char minutes[32];
   std::snprintf(minutes, sizeof minutes, "%g", config.minutes);
@@ -61,6 +65,12 @@ inline io::Dataset to_dataset(const std::vector<SessionRecording>& corpus, const
   out.metadata["calibration_seconds"] = std::to_string(config.calibration_seconds);
   out.metadata["mean_window"] = std::to_string(config.recording.readout.mean_window);
   if (config.guided_calibration) out.metadata["calibration_sequence"] = config.guided_calibration->id();
+  if (config.removal) {
+    char removal[96];
+    std::snprintf(removal, sizeof removal, "doff %g s, off %g s, don %g s", config.removal->doff_seconds, config.removal->off_seconds,
+                  config.removal->don_seconds);
+    out.metadata["removal"] = removal;
+  }
   std::string sizes = "[";
   for (const Subject& s : make_subjects(config.subjects, config.seed, config.world.people))
     sizes += (s.id ? ", [" : "[") + std::to_string(s.size.length) + ", " + std::to_string(s.size.width) + ", " +

@@ -366,6 +366,19 @@ class GlovePhysics {
     }
   }
 
+  /// @brief Cell capacitances C_c (pF) of the glove off the hand (sim::RemovalConfig): the sheet
+  /// without pre-stretch or any strain from a hand, each cell strained only by its fold `fold`
+  /// (along and across alike), through the same textile response and cut selectivity as stretch().
+  GLOVEPOSE_REALTIME void off_hand_capacitances(const CellArray& fold, CellArray& out) const noexcept {
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const double s = textile(fold[i]);
+      const double along = 1.0 + (sites_[i].along ? 1.0 : glove_.cross_gain[i]) * s;
+      const double across = 1.0 + (sites_[i].along ? glove_.cross_gain[i] : 1.0) * s;
+      const double area = along * across;
+      out[i] = glove_.base_capacitance[i] * area * area;
+    }
+  }
+
   /// @brief Cell capacitances C_c (pF) in the pose: C0 (A/A0)^2 with A/A0 = along * across; `slip` as
   /// in stretch().
   GLOVEPOSE_REALTIME void capacitances(const hand::Angles& a, CellArray& out, double slip = 0.0) const noexcept {

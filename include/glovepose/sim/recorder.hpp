@@ -32,6 +32,7 @@
 #include "glove.hpp"
 #include "motion.hpp"
 #include "../core/random.hpp"
+#include "../core/units.hpp"
 
 namespace glovepose::sim {
 
@@ -196,10 +197,15 @@ struct Recording {
   std::vector<std::uint8_t> outlier;
 };
 
-/// @brief Records `motion` through the glove physics, the glove's material and its slow drift.
-/// Deterministic in `seed`.
-inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii, std::uint64_t seed,
-                        const RecordingConfig& config = {}, const GloveMaterial& material = {}, const WearDrift& drift = {}) {
+namespace detail {
+
+/// @brief Reads a glove out through the real-time readout: `physical(t, out)` gives every cell's
+/// capacitance (pF) at time t before the material's response, `gains(t, out)` the slow gains that
+/// multiply it, `truth(t, angles, outlier)` the frame's true angles and outlier flag. The material,
+/// the noise, the tears and the frames as record() describes them.
+template <typename Physical, typename Gains, typename Truth>
+Recording read_out(double seconds, const CellArray& c0, std::uint64_t seed, const RecordingConfig& config, const GloveMaterial& material,
+                   Physical&& physical, Gains&& gains, Truth&& truth) {
   static const std::shared_ptr<const sensor::CapacitanceSolver> solver =
       std::make_shared<const sensor::CapacitanceSolver>(sensor::TraceLayout::glauser2019());
   // Cells each row sums (M's ones).
@@ -222,7 +228,7 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   const ReadoutNoise& noise = config.noise;
   const double gain = rng.normal(1.0, noise.session_gain_sd);
   sensor::Readout readout(solver, config.readout);
-  const int cycles = static_cast<int>(std::floor(motion.duration() * config.cycle_rate));
+  const int cycles = static_cast<int>(std::floor(seconds * config.cycle_rate));
 
   Recording rec;
   rec.frames = cycles;
@@ -234,26 +240,25 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
   std::vector<CellArray> knots(static_cast<std::size_t>(steps) + 1);  // C_c at the cycle's step boundaries
   const auto cycle_time = [&](int k, double fraction) { return (static_cast<double>(k) + fraction) / config.cycle_rate; };
   const double t0 = cycle_time(-config.warmup_cycles, 0.0);
-  physics.capacitances(motion.at(t0), knots[0], drift.slip(t0));
+  physical(t0, knots[0]);
   CellArray relaxed = knots[0];  // the lagging part of each cell's reading
   CellArray played = knots[0];   // the hysteretic part
-  CellArray drift_gain{};        // the drift's gains at the step
-  const CellArray& c0 = physics.glove().base_capacitance;
+  CellArray drift_gain{};        // the slow gains at the step
   const double relax = 1.0 - std::exp(-1.0 / (config.cycle_rate * steps * material.creep_time));
-  hand::Skeleton skeleton;
+  hand::Angles angles{};
   bool solved = false;
   for (int k = -config.warmup_cycles; k < cycles; ++k) {
     if (k > -config.warmup_cycles) knots[0] = knots[static_cast<std::size_t>(steps)];
     for (int j = 1; j <= steps; ++j) {
       CellArray& knot = knots[static_cast<std::size_t>(j)];
       const double t = cycle_time(k, static_cast<double>(j) / steps);
-      physics.capacitances(motion.at(t), knot, drift.slip(t));
-      drift.gains(t, drift_gain);
+      physical(t, knot);
+      gains(t, drift_gain);
       for (std::size_t c = 0; c < knot.size(); ++c) {
         relaxed[c] += relax * (knot[c] - relaxed[c]);
         played[c] = play(played[c], knot[c], material.hysteresis_width * c0[c]);
-        const double physical = knot[c];
-        knot[c] += material.creep_share * (relaxed[c] - physical) + material.hysteresis_share * (played[c] - physical);
+        const double physical_value = knot[c];
+        knot[c] += material.creep_share * (relaxed[c] - physical_value) + material.hysteresis_share * (played[c] - physical_value);
         knot[c] *= drift_gain[c];
       }
     }
@@ -281,15 +286,115 @@ inline Recording record(const GlovePhysics& physics, const MotionSequence& motio
     const double t_end = (static_cast<double>(k) + 1.0) / config.cycle_rate;
     const auto& frame = readout.frame();
     for (int c = 0; c < kCells; ++c) rec.cells.push_back(solved ? static_cast<float>(frame.cells(c)) : 0.0f);
-    const hand::Angles truth = motion.at(t_end);
-    for (double a : truth) rec.angles.push_back(static_cast<float>(a));
+    std::uint8_t outlier = 0;
+    truth(t_end, angles, outlier);
+    for (double a : angles) rec.angles.push_back(static_cast<float>(a));
     rec.timestamps.push_back(t_end);
     rec.oldest_age.push_back(t_end - frame.timestamp + frame.oldest_age);
-    physics.kinematics().pose(truth, skeleton);
-    rec.outlier.push_back(hand::collision_energy(physics.kinematics(), skeleton, radii) > hand::kCollisionOutlierThreshold ? 1 : 0);
+    rec.outlier.push_back(outlier);
     if (config.raw_rows) rec.raw_rows.insert(rec.raw_rows.end(), cycle_rows.begin(), cycle_rows.end());
   }
   return rec;
+}
+
+}  // namespace detail
+
+/// @brief Records `motion` through the glove physics, the glove's material and its slow drift.
+/// Deterministic in `seed`.
+inline Recording record(const GlovePhysics& physics, const MotionSequence& motion, const std::array<double, 16>& radii, std::uint64_t seed,
+                        const RecordingConfig& config = {}, const GloveMaterial& material = {}, const WearDrift& drift = {}) {
+  hand::Skeleton skeleton;
+  return detail::read_out(
+      motion.duration(), physics.glove().base_capacitance, seed, config, material,
+      [&](double t, CellArray& out) { physics.capacitances(motion.at(t), out, drift.slip(t)); },
+      [&](double t, CellArray& out) { drift.gains(t, out); },
+      [&](double t, hand::Angles& angles, std::uint8_t& outlier) {
+        angles = motion.at(t);
+        physics.kinematics().pose(angles, skeleton);
+        outlier = hand::collision_energy(physics.kinematics(), skeleton, radii) > hand::kCollisionOutlierThreshold ? 1 : 0;
+      });
+}
+
+/// @brief Taking the glove off and putting it on again. The physics is an assumption throughout (the
+/// paper's subjects took the glove off between sessions, Sec. 5.1, but it shows no reading of a
+/// glove off the hand): pulled off, each cell goes from its worn reading to the relaxed sheet's
+/// over `doff_seconds`, dragged over the knuckles on the way (a strain along the fingers that rises
+/// and falls, up to `pull_strain` times a uniform draw per cell); off the hand the sheet lies with
+/// folds (each cell's own strain, SD `fold_sd`), its gains going from the old donning's to the new
+/// one's; pulled on, the reverse over `don_seconds` into the new donning.
+struct RemovalConfig {
+  double doff_seconds = 2.0;  ///< Pulling the glove off.
+  double off_seconds = 10.0;  ///< Off the hand.
+  double don_seconds = 3.0;   ///< Pulling it on.
+  double pull_strain = 0.15;  ///< Largest strain along a cell while it is dragged over the knuckles.
+  double fold_sd = 0.02;      ///< SD of each cell's strain from the folds of the sheet lying off the hand.
+
+  /// @brief The whole removal's seconds.
+  double seconds() const noexcept { return doff_seconds + off_seconds + don_seconds; }
+  /// @brief Throws glovepose::Error naming the first setting out of range.
+  void validate() const {
+    if (!(doff_seconds > 0.0) || !(off_seconds >= 0.0) || !(don_seconds > 0.0) || !std::isfinite(seconds()) || !(pull_strain >= 0.0) ||
+        !(pull_strain < 1.0) || !(fold_sd >= 0.0) || !(fold_sd < 0.5))
+      throw Error("RemovalConfig: doff " + std::to_string(doff_seconds) + " s, off " + std::to_string(off_seconds) + " s, don " +
+                  std::to_string(don_seconds) + " s, pull strain " + std::to_string(pull_strain) + ", fold SD " + std::to_string(fold_sd) +
+                  ", expected finite times (doff and don > 0, off >= 0), a pull strain in [0, 1) and a fold SD in [0, 0.5)");
+  }
+};
+
+/// @brief Records a removal (RemovalConfig): the hand moves as `motion` says while it pulls the glove
+/// off `before` (worn `before_worn` seconds on the path `before_drift` starts at the donning) and
+/// into `after` (whose drift `after_drift` starts at the donning, the end of the removal). The
+/// frames carry no pose (angles NaN: nothing of the hand is in the glove for part of it).
+/// Deterministic in `seed`.
+inline Recording record_removal(const GlovePhysics& before, const WearDrift& before_drift, double before_worn, const GlovePhysics& after,
+                                const WearDrift& after_drift, const MotionSequence& motion, const RemovalConfig& removal, std::uint64_t seed,
+                                const RecordingConfig& config = {}, const GloveMaterial& material = {}) {
+  removal.validate();
+  if (before.glove().id != after.glove().id) throw Error("record_removal: gloves " + std::to_string(before.glove().id) + " and " +
+                                                         std::to_string(after.glove().id) + ", expected one glove taken off and put on");
+  core::Rng rng(core::derive_seed(seed, {1}));  // the removal's own draws: the readout's stream is `seed`'s
+  CellArray fold{}, pull{};
+  for (double& f : fold) f = rng.normal(0.0, removal.fold_sd);
+  for (double& p : pull) p = rng.uniform(0.0, removal.pull_strain);
+  CellArray off{}, worn{}, pulled{};
+  after.off_hand_capacitances(fold, off);
+  const double doffed = removal.doff_seconds, donning = removal.doff_seconds + removal.off_seconds;
+  // From a (worn) to b (off) or back as w goes 0 -> 1, the pull's area factor peaking half-way.
+  const auto blend = [&](const CellArray& a, const CellArray& b, double w, CellArray& out) {
+    for (std::size_t c = 0; c < out.size(); ++c) {
+      const double area = 1.0 + pull[c] * std::sin(core::kPi * w);
+      out[c] = ((1.0 - w) * a[c] + w * b[c]) * area * area;
+    }
+  };
+  CellArray gains_before{}, gains_after{};
+  before_drift.gains(before_worn + doffed, gains_before);
+  after_drift.gains(0.0, gains_after);
+  return detail::read_out(
+      removal.seconds(), after.glove().base_capacitance, seed, config, material,
+      [&](double t, CellArray& out) {
+        if (t < doffed) {
+          before.capacitances(motion.at(t), worn, before_drift.slip(before_worn + std::max(0.0, t)));
+          blend(worn, off, std::max(0.0, t) / removal.doff_seconds, out);
+        } else if (t < donning) {
+          out = off;
+        } else {
+          after.capacitances(motion.at(t), worn, after_drift.slip(0.0));
+          blend(worn, off, 1.0 - (t - donning) / removal.don_seconds, pulled);
+          out = pulled;
+        }
+      },
+      [&](double t, CellArray& out) {
+        if (t < doffed) {
+          before_drift.gains(before_worn + std::max(0.0, t), out);
+          return;
+        }
+        const double w = removal.off_seconds > 0.0 ? std::min(1.0, (t - doffed) / removal.off_seconds) : 1.0;
+        for (std::size_t c = 0; c < out.size(); ++c) out[c] = (1.0 - w) * gains_before[c] + w * gains_after[c];
+      },
+      [&](double, hand::Angles& angles, std::uint8_t& outlier) {
+        angles.fill(std::numeric_limits<double>::quiet_NaN());
+        outlier = 0;
+      });
 }
 
 }  // namespace glovepose::sim
