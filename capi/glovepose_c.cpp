@@ -76,6 +76,7 @@ static_assert(GLOVEPOSE_POSE_STUCK_ROWS == glovepose::kPoseStuckRows, "pose flag
 static_assert(GLOVEPOSE_POSE_DISCONNECTED_ROWS == glovepose::kPoseDisconnectedRows, "pose flags");
 static_assert(GLOVEPOSE_POSE_OUTLIER_ROWS == glovepose::kPoseOutlierRows, "pose flags");
 static_assert(GLOVEPOSE_POSE_MASKED_CELLS == glovepose::kPoseMaskedCells, "pose flags");
+static_assert(GLOVEPOSE_POSE_GLOVE_OFF == glovepose::kPoseGloveOff, "pose flags");
 static_assert(GLOVEPOSE_POSE_FAULT_FLAGS == glovepose::kPoseFaultFlags, "pose flags");
 static_assert(GLOVEPOSE_JOINT_COUNT == glovepose::hand::kJointCount, "joint count");
 static_assert(GLOVEPOSE_POSE_READINGS_REJECTED == glovepose::kPoseReadingsRejected, "pose flags");

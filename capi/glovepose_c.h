@@ -185,8 +185,10 @@ typedef int32_t glovepose_result;
 #define GLOVEPOSE_POSE_OUTLIER_ROWS 0x100u
 /** @brief Pose flag: cells stopped being measured (a torn trace) and were stood in for from the others; not a fault. */
 #define GLOVEPOSE_POSE_MASKED_CELLS 0x200u
+/** @brief Pose flag (fault): the cells look like the glove lying off the hand; no hand to estimate. */
+#define GLOVEPOSE_POSE_GLOVE_OFF 0x400u
 /** @brief The fault flags: a pose with any of them set cannot be trusted. */
-#define GLOVEPOSE_POSE_FAULT_FLAGS 0x1F0u
+#define GLOVEPOSE_POSE_FAULT_FLAGS 0x5F0u
 
 /* ---- handles and structs ----------------------------------------------------------------- */
 

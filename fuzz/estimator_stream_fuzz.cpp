@@ -138,7 +138,7 @@ class StreamChecker {
       GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(pose.oldest_age));
       GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(pose.compute_seconds) && pose.compute_seconds >= 0.0);
       GLOVEPOSE_FUZZ_REQUIRE(std::isfinite(pose.health.max_residual) && pose.health.max_residual >= 0.0);
-      constexpr std::uint32_t kAllFlags = (glovepose::kPoseMaskedCells << 1) - 1;
+      constexpr std::uint32_t kAllFlags = (1u << glovepose::kPoseFlagCount) - 1;
       GLOVEPOSE_FUZZ_REQUIRE((pose.flags & ~kAllFlags) == 0);
       if (joint_transforms_)
         for (const glovepose::hand::JointTransform& joint : estimator_.joints())

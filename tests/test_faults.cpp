@@ -223,7 +223,7 @@ TEST_CASE("faults: every PoseFlag bit has its own name, and only those bits") {
   const PoseFlag flags[] = {kPoseReadingsRejected, kPoseInputClamped,    kPoseTrainingCalibration,
                             kPoseCalibrating,      kPoseStaleReadings,   kPoseRecovering,
                             kPoseStuckRows,        kPoseDisconnectedRows, kPoseOutlierRows,
-                            kPoseMaskedCells};
+                            kPoseMaskedCells,      kPoseGloveOff};
   REQUIRE(std::size(flags) == static_cast<std::size_t>(kPoseFlagCount));
   std::set<std::string> names;
   for (int b = 0; b < kPoseFlagCount; ++b) {

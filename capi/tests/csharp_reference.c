@@ -180,6 +180,7 @@ static void write_constants(void) {
   CONST("PoseFlags", "DisconnectedRows", GLOVEPOSE_POSE_DISCONNECTED_ROWS);
   CONST("PoseFlags", "OutlierRows", GLOVEPOSE_POSE_OUTLIER_ROWS);
   CONST("PoseFlags", "MaskedCells", GLOVEPOSE_POSE_MASKED_CELLS);
+  CONST("PoseFlags", "GloveOff", GLOVEPOSE_POSE_GLOVE_OFF);
   CONST("PoseFlags", "FaultFlags", GLOVEPOSE_POSE_FAULT_FLAGS);
   CONST("XrLocationFlags", "OrientationValid", GLOVEPOSE_XR_ORIENTATION_VALID);
   CONST("XrLocationFlags", "PositionValid", GLOVEPOSE_XR_POSITION_VALID);

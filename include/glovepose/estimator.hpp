@@ -119,6 +119,9 @@ class GlovePoseEstimator {
   /// in for from the others (EstimatorConfig::floating_cells; the pose carries kPoseMaskedCells), in
   /// index order; empty when every cell is measured.
   const std::vector<int>& masked_cells() const noexcept;
+  /// @brief Whether the cells look like the glove lying off the hand (EstimatorConfig::donning; poses
+  /// carry kPoseGloveOff meanwhile). CalibrationProgress::donnings counts the times it was put on again.
+  bool glove_off() const noexcept;
 
   // ---- calibration -------------------------------------------------------------------------
 

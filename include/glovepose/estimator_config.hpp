@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "calibration/donning.hpp"
 #include "filter/one_euro_config.hpp"
 #include "hand/contact_config.hpp"
 #include "hand/handedness.hpp"
@@ -74,6 +75,13 @@ struct EstimatorConfig {
   /// the range refined as the wearer moves (CalibrationSource::Continuous). Off: Status::Uncalibrated
   /// until a range is set.
   bool continuous_calibration = true;
+  /// Taking the glove off and putting it on again, noticed from the calibrated cells
+  /// (calibration/donning.hpp; paused while a calibration collects). While the glove is off, poses
+  /// carry kPoseGloveOff (not trusted) and the continuous calibration takes no frames. When it is on
+  /// again, the calibration restarts as a continuous one from the range in use before the glove
+  /// came off (the wearer's profile), refined from their motion, where the model carries a range
+  /// map; without one the range is kept. None: not watched.
+  std::optional<calibration::DonningConfig> donning = calibration::DonningConfig{};
   /// For C_c frames (push_cells): this many consecutive frames timestamped before the last accepted
   /// one mean the clock restarted; the estimator then follows the new clock. Rows and C_m frames:
   /// ReadoutConfig::clock_restart_readings.

@@ -28,6 +28,9 @@ struct CalibrationProgress {
   /// Continuous calibration: the free motion it has taken so far, in effective frames (frames that
   /// moved the cells, older ones forgotten; calibration/free_motion.hpp); 0 otherwise.
   double motion_frames = 0.0;
+  /// Times the glove was noticed put on again after being off the hand (EstimatorConfig::donning;
+  /// calibration/donning.hpp) since the estimator was made.
+  long donnings = 0;
 };
 
 /// @brief Bits of Pose::flags: reasons to trust a pose less. 0 means none applies.
@@ -48,25 +51,27 @@ enum PoseFlag : std::uint32_t {
   kPoseOutlierRows =
       1u << 8,  ///< A row disagrees with the least-squares solve (ReadoutConfig::max_reading_residual): a spike or a failing cell.
   kPoseMaskedCells = 1u << 9,  ///< Cells stopped being measured (a torn trace): they were stood in for from the others (not a fault).
+  kPoseGloveOff = 1u << 10,    ///< The cells look like a glove lying off the hand (EstimatorConfig::donning): there is no hand to estimate.
 };
 
 /// @brief Number of PoseFlag bits (bits 0 .. kPoseFlagCount - 1).
-inline constexpr int kPoseFlagCount = 10;
-static_assert(kPoseMaskedCells == 1u << (kPoseFlagCount - 1), "kPoseFlagCount: the last PoseFlag is its highest bit");
+inline constexpr int kPoseFlagCount = 11;
+static_assert(kPoseGloveOff == 1u << (kPoseFlagCount - 1), "kPoseFlagCount: the last PoseFlag is its highest bit");
 
 /// @brief A short, stable name of PoseFlag bit `bit` (for logs and displays).
 constexpr const char* pose_flag_name(int bit) noexcept {
   constexpr const char* names[] = {"readings rejected", "input clamped",     "training calibration",
                                    "calibrating",       "stale readings",    "recovering",
                                    "stuck rows",        "disconnected rows", "outlier rows",
-                                   "masked cells"};  // in bit order
+                                   "masked cells",      "glove off"};  // in bit order
   static_assert(sizeof names / sizeof names[0] == kPoseFlagCount, "one name per PoseFlag bit");
   return name_of(bit, names, "unknown flag");  // a negative bit wraps to a large index: unknown
 }
 
-/// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame.
+/// @brief The flags that mean the pose cannot be trusted: the readout saw a fault in the frame, or
+/// the glove is off the hand.
 inline constexpr std::uint32_t kPoseFaultFlags =
-    kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows;
+    kPoseStaleReadings | kPoseRecovering | kPoseStuckRows | kPoseDisconnectedRows | kPoseOutlierRows | kPoseGloveOff;
 
 /// @brief One estimated hand pose.
 struct Pose {

@@ -78,7 +78,8 @@ class PoseFlag(enum.IntFlag):
     DISCONNECTED_ROWS = 0x80     #: (fault) a row reads (near) zero: a disconnected trace
     OUTLIER_ROWS = 0x100         #: (fault) a row disagrees with the least-squares solve
     MASKED_CELLS = 0x200         #: cells stopped being measured (a torn trace): stood in for from the others
-    FAULT_FLAGS = 0x1F0          #: the fault bits together
+    GLOVE_OFF = 0x400            #: (fault) the cells look like the glove lying off the hand
+    FAULT_FLAGS = 0x5F0          #: the fault bits together
 
 
 class XrAimFlag(enum.IntFlag):

@@ -56,8 +56,10 @@ namespace GlovePose
         OutlierRows = 0x100,
         /// <summary>Cells stopped being measured (a torn trace) and were stood in for from the others; not a fault.</summary>
         MaskedCells = 0x200,
+        /// <summary>The cells look like the glove lying off the hand: no hand to estimate.</summary>
+        GloveOff = 0x400,
         /// <summary>Any of these: the pose cannot be trusted.</summary>
-        FaultFlags = 0x1F0,
+        FaultFlags = 0x5F0,
     }
 
     /// <summary>OpenXR location flags (XrSpaceLocationFlags, GLOVEPOSE_XR_*).</summary>

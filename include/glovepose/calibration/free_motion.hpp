@@ -18,8 +18,9 @@
 /// held pose adds nothing, so it neither fills the percentiles nor ages them), every frame taken
 /// weighing 1 / (1 - 1/memory) times the one before (exponential forgetting by frames taken, so a
 /// drift or a slip leaves the range within a few memories). ContinuousRange applies the map to
-/// them: the prior at first, the map of the stage the histogram has reached after that
-/// (interpolated between stages in log frames taken), re-derived every update_seconds.
+/// them: the prior at first (the map's, or a user's own range when it restarts from a profile
+/// after a donning: calibration/donning.hpp), the map of the stage the histogram has reached after
+/// that (interpolated between stages in log frames taken), re-derived every update_seconds.
 ///
 /// Set-up (construction, fitting, parsing) allocates and throws glovepose::Error; add(), update()
 /// and reset() are per-frame (noexcept, no allocation).
@@ -234,7 +235,12 @@ class RangeMap {
   /// any, moving linearly to the first stage's map by its frames, then between stages linearly in
   /// log frames; min <= max (a crossed pair meets at its middle).
   GLOVEPOSE_REALTIME std::pair<double, double> range(Eigen::Index c, const double* features, double frames) const noexcept {
-    double low = prior_min_(c), high = prior_max_(c);
+    return range(c, features, frames, prior_min_(c), prior_max_(c));
+  }
+  /// @brief The same from another prior range [prior_low, prior_high] (a user's own, say).
+  GLOVEPOSE_REALTIME std::pair<double, double> range(Eigen::Index c, const double* features, double frames, double prior_low,
+                                                     double prior_high) const noexcept {
+    double low = prior_low, high = prior_high;
     if (stages_.empty() || !(frames > 0.0)) return {low, high};
     const auto apply = [&](const Stage& s) {
       double lo = 0.0, hi = 0.0;
@@ -353,15 +359,24 @@ class ContinuousRange {
       : map_(&map), histogram_(map.prior_min(), map.prior_max(), map.histogram()), update_seconds_(update_seconds) {
     if (!(update_seconds > 0.0) || !std::isfinite(update_seconds))
       throw Error("ContinuousRange: update period " + std::to_string(update_seconds) + " s, expected a finite time > 0");
-    min_ = map.prior_min();
-    max_ = map.prior_max();
+    min_ = start_min_ = map.prior_min();
+    max_ = start_max_ = map.prior_max();
   }
 
-  /// @brief Starts over from the prior range.
-  void reset() noexcept {
+  /// @brief Starts over from the map's prior range.
+  void reset() noexcept { reset(map_->prior_min(), map_->prior_max()); }
+  /// @brief Starts over from the range [min, max] (a user's profile: their range on an earlier
+  /// donning), which takes the prior's place while the motion is young. Sizes must match cells();
+  /// a cell whose limits are not finite with max > min starts from the map's prior.
+  void reset(const Eigen::VectorXd& min, const Eigen::VectorXd& max) noexcept {
     histogram_.reset();
-    min_ = map_->prior_min();
-    max_ = map_->prior_max();
+    for (Eigen::Index c = 0; c < start_min_.size(); ++c) {
+      const bool usable = c < min.size() && c < max.size() && std::isfinite(min(c)) && std::isfinite(max(c)) && max(c) > min(c);
+      start_min_(c) = usable ? min(c) : map_->prior_min()(c);
+      start_max_(c) = usable ? max(c) : map_->prior_max()(c);
+    }
+    min_ = start_min_;
+    max_ = start_max_;
     next_update_ = -std::numeric_limits<double>::infinity();
   }
 
@@ -384,7 +399,7 @@ class ContinuousRange {
     const double frames = histogram_.effective_frames();
     for (Eigen::Index c = 0; c < histogram_.cells(); ++c) {
       histogram_.features(c, features);
-      const auto [low, high] = map_->range(c, features, frames);
+      const auto [low, high] = map_->range(c, features, frames, start_min_(c), start_max_(c));
       if (!std::isfinite(low) || !std::isfinite(high) || !std::isfinite(high - low)) continue;
       min_(c) = low;
       max_(c) = high;
@@ -404,6 +419,8 @@ class ContinuousRange {
   double next_update_ = -std::numeric_limits<double>::infinity();
   Eigen::VectorXd min_;
   Eigen::VectorXd max_;
+  Eigen::VectorXd start_min_;  // the range before any motion: the map's prior or a profile (reset)
+  Eigen::VectorXd start_max_;
 };
 
 }  // namespace glovepose::calibration

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "../calibration/donning.hpp"
 #include "../calibration/free_motion.hpp"
 #include "../calibration/pose_offset.hpp"
 #include "../calibration/user_calibration.hpp"
@@ -87,6 +88,8 @@ class EstimatorCore {
     floating.enabled = floating.enabled && !conditioner_.active();  // de-meaned cells have no minimum to fall below
     floating_ = sensor::FloatingCells(model_->cell_count(), floating);
     skeleton_.fill(Eigen::Affine3d::Identity());
+    if (model_->range_map()) continuous_.emplace(*model_->range_map());  // also for a restart at a donning
+    if (config_.donning) donning_.emplace(model_->cell_count(), *config_.donning);
     if (config_.continuous_calibration && model_->range_map()) use_continuous_calibration();
     if (config_.calibration_method == CalibrationMethod::PoseGuided && !model_->pose_offset())
       throw Error(
@@ -175,6 +178,7 @@ class EstimatorCore {
   CalibrationProgress calibration_progress() const noexcept {
     CalibrationProgress progress = calibration_session_.progress();
     if (source_ == CalibrationSource::Continuous) progress.motion_frames = continuous_->histogram().effective_frames();
+    progress.donnings = donnings_;
     return progress;
   }
   const sensor::CalibrationRange& finish_calibration() {
@@ -221,7 +225,6 @@ class EstimatorCore {
   void use_continuous_calibration() {
     if (!model_->range_map())
       throw Error("GlovePoseEstimator::use_continuous_calibration: the model carries no range map, expected a model fitted by glovepose fit-guided");
-    if (!continuous_) continuous_.emplace(*model_->range_map());
     continuous_->reset();
     set_range(sensor::CalibrationRange(continuous_->min(), continuous_->max(), model_->glove().cell_names(), config_.calibration),
               CalibrationSource::Continuous);
@@ -250,7 +253,9 @@ class EstimatorCore {
     calibration_session_.restart_clock();
     conditioner_.reset();
     floating_.reset();
+    if (donning_) donning_->reset();
   }
+  bool glove_off() const noexcept { return donning_ && donning_->off(); }
   const PoseModel& model() const noexcept { return *model_; }
   const EstimatorConfig& config() const noexcept { return config_; }
 
@@ -290,6 +295,43 @@ class EstimatorCore {
     source_ = source;
     guided_ = offsets.has_value();
     offsets_ = offsets.value_or(hand::Angles{});
+    // A new calibration: the glove counts as worn, and the range is the profile a donning restarts from.
+    if (donning_) donning_->reset();
+    profile_min_ = recent_min_ = range_->min();
+    profile_max_ = recent_max_ = range_->max();
+    next_profile_ = -std::numeric_limits<double>::infinity();
+  }
+
+  // The profile a donning restarts from: the range of kProfileSeconds to twice that before now,
+  // so that the frames of the glove being pulled off (before it counts as off) are not in it.
+  static constexpr double kProfileSeconds = 4.0;
+  GLOVEPOSE_REALTIME void keep_profile(double timestamp) noexcept {
+    if (timestamp < next_profile_ && timestamp >= next_profile_ - kProfileSeconds) return;  // a clock gone back starts over
+    next_profile_ = timestamp + kProfileSeconds;
+    profile_min_ = recent_min_;
+    profile_max_ = recent_max_;
+    recent_min_ = range_->min();
+    recent_max_ = range_->max();
+  }
+
+  // The glove off the hand and on again (EstimatorConfig::donning): returns whether the range changed.
+  GLOVEPOSE_REALTIME bool watch_donning(double timestamp) noexcept {
+    if (!donning_ || calibration_session_.collecting()) return false;
+    if (source_ == CalibrationSource::Continuous && continuous_->histogram().effective_frames() < donning_->config().min_motion_frames) {
+      donning_->reset();  // too young a range to tell
+      return false;
+    }
+    const calibration::DonningEvent event = donning_->update(normalized_.data(), timestamp);
+    if (event != calibration::DonningEvent::Donned) return false;
+    ++donnings_;
+    if (!continuous_) return false;  // no range map: the range is kept
+    continuous_->reset(profile_min_, profile_max_);
+    (void)range_->move_limits(continuous_->min(), continuous_->max());
+    floating_.follow_range(*range_);
+    source_ = CalibrationSource::Continuous;
+    guided_ = false;
+    offsets_ = hand::Angles{};
+    return true;
   }
 
   // Calibrated cells -> network (the U-Net through the stretch maps and the pose map) -> angles (radians), the network's
@@ -373,13 +415,17 @@ class EstimatorCore {
     // become the new range's minimum.
     const int masked = floating_.apply(cells_, timestamp, health.outlier_rows == 0);
     calibration_session_.add(cells_, timestamp);  // takes the frame while a calibration collects
-    if (source_ == CalibrationSource::Continuous && cells_.allFinite() && continuous_->add(cells_, timestamp)) {
+    const bool off = glove_off();  // a glove lying off the hand teaches the calibration nothing
+    if (source_ == CalibrationSource::Continuous && !off && cells_.allFinite() && continuous_->add(cells_, timestamp)) {
       (void)range_->move_limits(continuous_->min(), continuous_->max());
       floating_.follow_range(*range_);
     }
     if (!range_) return Status::Uncalibrated;
+    if (!off) keep_profile(timestamp);
     if (range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;
-    std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u) | (masked > 0 ? kPoseMaskedCells : 0u);
+    if (watch_donning(timestamp) && range_->normalize(cells_, normalized_) != Status::Ok) return Status::NonFinite;
+    std::uint32_t flags = fault_flags(health) | (rejected_ > 0 ? kPoseReadingsRejected : 0u) | (masked > 0 ? kPoseMaskedCells : 0u) |
+                          (glove_off() ? kPoseGloveOff : 0u);
     if (normalized_.cwiseAbs().maxCoeff() >= config_.calibration.clamp_limit) flags |= kPoseInputClamped;
     if (source_ == CalibrationSource::Training) flags |= kPoseTrainingCalibration;
     if (calibration_session_.collecting()) flags |= kPoseCalibrating;
@@ -434,7 +480,12 @@ class EstimatorCore {
   std::optional<sensor::Readout> readout_;
   CalibrationSession calibration_session_;  // an on-the-fly calibration while it runs
   std::optional<sensor::CalibrationRange> range_;
-  std::optional<calibration::ContinuousRange> continuous_;  // the wearer's free motion, while source_ is Continuous
+  std::optional<calibration::ContinuousRange> continuous_;  // the wearer's free motion, while source_ is Continuous; any model with a range map
+  std::optional<calibration::DonningDetector> donning_;     // EstimatorConfig::donning
+  long donnings_ = 0;
+  Eigen::VectorXd profile_min_, profile_max_;  // the range a donning restarts from (keep_profile)
+  Eigen::VectorXd recent_min_, recent_max_;    // the range when the profile was last kept
+  double next_profile_ = -std::numeric_limits<double>::infinity();
   CalibrationSource source_ = CalibrationSource::None;
   bool guided_ = false;               // offsets_ apply (pose-guided calibration in use)
   hand::Angles offsets_{};            // per-user angle offsets, radians

@@ -43,6 +43,7 @@ GLOVEPOSE_INLINE Status GlovePoseEstimator::pose_at(double t, PredictedPose& out
 GLOVEPOSE_INLINE Status GlovePoseEstimator::joints_at(double t, hand::XrHandJoints& out) const noexcept { return core_->joints_at(t, out); }
 GLOVEPOSE_INLINE const hand::XrHandAim& GlovePoseEstimator::aim() const noexcept { return core_->aim(); }
 GLOVEPOSE_INLINE const std::vector<int>& GlovePoseEstimator::masked_cells() const noexcept { return core_->masked_cells(); }
+GLOVEPOSE_INLINE bool GlovePoseEstimator::glove_off() const noexcept { return core_->glove_off(); }
 GLOVEPOSE_INLINE const hand::XrHandLocator& GlovePoseEstimator::locator() const noexcept { return core_->locator(); }
 
 GLOVEPOSE_INLINE void GlovePoseEstimator::start_calibration() noexcept { core_->start_calibration(); }
