@@ -229,6 +229,15 @@ inline double calibration_length(const CorpusConfig& config) {
   return config.guided_calibration ? config.guided_calibration->total_seconds() : config.calibration_seconds;
 }
 
+/// @brief The slip and gain path of `subject`'s donning `donning` of glove `glove`, `seconds` long,
+/// from `start` seconds after the donning: one path for every recording of the donning.
+inline WearDrift donning_drift(const CorpusConfig& config, const Subject& subject, int glove, int donning, double seconds, double start) {
+  return WearDrift(config.world.wear.slip_sd * loose_fit_factor(subject, config.world.wear), config.world.wear.slip_time,
+                   config.world.material, seconds, start,
+                   core::derive_seed(config.seed, {9, static_cast<std::uint64_t>(subject.id), static_cast<std::uint64_t>(glove),
+                                                   static_cast<std::uint64_t>(donning)}));
+}
+
 /// @brief When a planned recording starts (s after its donning) and how long its donning is worn
 /// (s): the sessions of a donning follow each other, each after its calibration sequence.
 inline std::pair<double, double> wear_times(const CorpusConfig& config, const SessionRecording& job) {
@@ -249,10 +258,7 @@ inline SessionSetup setup_session(const CorpusConfig& config, const CorpusWorld&
   const Glove& glove = world.gloves[static_cast<std::size_t>(job.glove)];
   const GloveFit fit = donning_fit(config, subject, glove, job.donning);
   const auto [start, worn] = wear_times(config, job);
-  const double loose = loose_fit_factor(subject, config.world.wear);
-  WearDrift drift(config.world.wear.slip_sd * loose, config.world.wear.slip_time, config.world.material, worn + 1.0, start,
-                  core::derive_seed(config.seed, {9, static_cast<std::uint64_t>(job.subject), static_cast<std::uint64_t>(job.glove),
-                                                  static_cast<std::uint64_t>(job.donning)}));
+  WearDrift drift = donning_drift(config, subject, job.glove, job.donning, worn + 1.0, start);
   const bool calibration = job.kind == RecordingKind::Calibration;
   MotionConfig motion_config;
   motion_config.independent = config.world.people.independent_fingers;
@@ -283,12 +289,6 @@ inline TrackerSeeds tracker_seeds(const CorpusConfig& config, const SessionRecor
                       core::derive_seed(config.seed, {6, subject, glove, 2 * session + (job.kind == RecordingKind::Calibration ? 1 : 0)})};
 }
 
-/// @brief The session a removal job comes before (the job itself otherwise).
-inline SessionRecording session_of(SessionRecording job) {
-  if (job.kind == RecordingKind::Removal) job.kind = RecordingKind::Session;
-  return job;
-}
-
 /// @brief Records a removal job: the glove taken off its donning before (worn to the end of that
 /// donning's sessions, on that donning's drift path) and put on into the job's donning (whose path
 /// starts at the end of the removal). Its streams derive from (seed, subject, glove, session).
@@ -302,20 +302,17 @@ inline Recording record_removal_job(const CorpusConfig& config, const CorpusWorl
                                            static_cast<std::uint64_t>(index)});
   };
   const RemovalConfig& removal = *config.removal;
-  const double loose = loose_fit_factor(subject, config.world.wear);
-  SessionRecording before = session_of(job);
+  SessionRecording before = job;
   before.donning = job.donning - 1;
-  const double before_worn = wear_times(config, before).second;
-  const auto drift_of = [&](int donning, double seconds) {
-    return WearDrift(config.world.wear.slip_sd * loose, config.world.wear.slip_time, config.world.material, seconds, 0.0, id(9, donning));
-  };
+  const double before_worn = wear_times(config, before).second;  // the donning's length: its sessions and their calibrations
   const GlovePhysics off(subject, glove, donning_fit(config, subject, glove, before.donning), config.handedness);
   const GlovePhysics on(subject, glove, donning_fit(config, subject, glove, job.donning), config.handedness);
   MotionConfig motion_config;
   motion_config.independent = config.world.people.independent_fingers;
   const MotionSequence motion(subject, world.gallery, removal.seconds() + 1.0, id(10, job.session), motion_config);
-  return record_removal(off, drift_of(before.donning, before_worn + removal.seconds() + 1.0), before_worn, on, drift_of(job.donning, 1.0),
-                        motion, removal, id(11, job.session), recording, config.world.material);
+  return record_removal(off, donning_drift(config, subject, job.glove, before.donning, before_worn + removal.seconds() + 1.0, 0.0),
+                        before_worn, on, donning_drift(config, subject, job.glove, job.donning, 1.0, 0.0), motion, removal,
+                        id(11, job.session), recording, config.world.material);
 }
 
 /// @brief Simulates the corpus. Deterministic in config.seed for any thread count.

@@ -356,7 +356,7 @@ inline Recording record_removal(const GlovePhysics& before, const WearDrift& bef
   CellArray fold{}, pull{};
   for (double& f : fold) f = rng.normal(0.0, removal.fold_sd);
   for (double& p : pull) p = rng.uniform(0.0, removal.pull_strain);
-  CellArray off{}, worn{}, pulled{};
+  CellArray off{}, worn{};
   after.off_hand_capacitances(fold, off);
   const double doffed = removal.doff_seconds, donning = removal.doff_seconds + removal.off_seconds;
   // From a (worn) to b (off) or back as w goes 0 -> 1, the pull's area factor peaking half-way.
@@ -379,8 +379,7 @@ inline Recording record_removal(const GlovePhysics& before, const WearDrift& bef
           out = off;
         } else {
           after.capacitances(motion.at(t), worn, after_drift.slip(0.0));
-          blend(worn, off, 1.0 - (t - donning) / removal.don_seconds, pulled);
-          out = pulled;
+          blend(worn, off, 1.0 - (t - donning) / removal.don_seconds, out);
         }
       },
       [&](double t, CellArray& out) {
