@@ -8,12 +8,13 @@
 /// detector watches one number per frame, a high quantile over the cells of their calibrated values
 /// (`quantile`: with 0.75, the value three quarters of the cells are at or below): below `off_level`
 /// for `off_seconds` the glove is off; above `on_level` for `on_seconds` after that it is on again
-/// (a donning). In the fitted world (docs/results.md, "Taking the glove off") the quantile of a
-/// glove lying off the hand is about -0.9 in the -1..1 units of the calibrated range, of a worn
-/// hand above -0.66 in 999 of 1000 half-second windows, of the guided sequence's hand pressed flat
-/// on a table down to -0.86 (the calibration pauses the detector). It cannot see every removal: on
-/// a hand smaller than the glove the relaxed sheet reads like the relaxed hand (3 in 4 removals
-/// noticed there, none noticed that was not one in 240 worn minutes).
+/// (a donning). In the fitted world (docs/results.md, "Taking the glove off") a glove lying off
+/// the hand sits near -0.9 in the -1..1 units of the calibrated range, a worn hand rarely below
+/// -0.7 for long, and the guided sequence's hand pressed flat on a table nearly as low as the
+/// glove off the hand (the calibration pauses the detector). It cannot see every removal: on a
+/// hand no bigger than the glove's relaxed hand the relaxed sheet reads much like the relaxed hand
+/// (3 in 4 removals noticed there; with the continuous calibration none noticed that was not one
+/// in 240 worn minutes).
 ///
 /// Per frame: update() is noexcept and allocation-free; the constructor allocates.
 #pragma once
